@@ -1,0 +1,289 @@
+//! The cascaded α/β estimator: one [`Estimator::step`] per 20 Hz sensor frame.
+//!
+//! # What bad input gives
+//! | input | result |
+//! |---|---|
+//! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`, the last good estimate is held (`HELD`), or zeros with `NO_ESTIMATE` if there is none |
+//! | a noisy channel (IMU, GPS) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR`, held as above |
+//! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
+//! | GPS speed below [`MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
+//! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
+//!
+//! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
+//! the step panic or return anything but the integers described here.
+
+use crate::channels::{CHANNELS, Channel, SensorFrame};
+use crate::features::{Feature, FeatureValues};
+use crate::nn::Layer;
+use crate::normalize::{Envelope, Norm};
+
+/// Frames with an unchanged noisy channel before it counts as stuck (1 s at 20 Hz).
+pub const STUCK_FRAMES: u16 = 20;
+
+/// Estimate flags (bit set).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Flags(pub u16);
+
+impl Flags {
+    /// A channel used by α or β is invalid.
+    pub const INVALID_INPUT: u16 = 1 << 0;
+    /// A feature or an output was outside the training envelope and clamped.
+    pub const OUT_OF_ENVELOPE: u16 = 1 << 1;
+    /// A noisy channel used by α or β has not changed for [`STUCK_FRAMES`] frames.
+    pub const STUCK_SENSOR: u16 = 1 << 2;
+    /// α is the last good value, not computed from this frame.
+    pub const ALPHA_HELD: u16 = 1 << 3;
+    /// β is the last good value, not computed from this frame.
+    pub const BETA_HELD: u16 = 1 << 4;
+    /// No good estimate has been computed yet: the angles are zero and meaningless.
+    pub const NO_ESTIMATE: u16 = 1 << 5;
+    /// The estimator has no compiled-in model (a build without weights).
+    pub const NO_MODEL: u16 = 1 << 6;
+
+    pub fn has(self, bit: u16) -> bool {
+        self.0 & bit != 0
+    }
+
+    /// Neither angle was computed from this frame's data.
+    pub fn is_usable(self) -> bool {
+        self.0 & (Self::NO_ESTIMATE | Self::NO_MODEL | Self::ALPHA_HELD | Self::BETA_HELD) == 0
+    }
+}
+
+/// One estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Estimate {
+    /// Sequence number and time of the sensor frame it answers.
+    pub seq: u16,
+    pub time_ms: u32,
+    /// Angle of attack, millidegrees.
+    pub alpha_mdeg: i32,
+    /// Sideslip angle, millidegrees.
+    pub beta_mdeg: i32,
+    /// Part 1 of the α cascade: body z air-relative velocity, mm/s.
+    pub w_aero_mms: i32,
+    /// Part 1 of the β cascade: body y air-relative velocity, mm/s.
+    pub v_aero_mms: i32,
+    pub flags: Flags,
+}
+
+impl Estimate {
+    pub fn alpha_deg(&self) -> f64 {
+        self.alpha_mdeg as f64 * 1e-3
+    }
+    pub fn beta_deg(&self) -> f64 {
+        self.beta_mdeg as f64 * 1e-3
+    }
+}
+
+/// A cascaded network for one angle, as the estimator sees it.
+pub trait AngleNet: Sync {
+    /// The features it reads, in input order.
+    fn features(&self) -> &[Feature];
+    /// Runs both parts on the selected, clamped, normalised features. Returns
+    /// `(intermediate, angle)` in (mm/s, millidegrees) and whether anything was clamped.
+    fn run(&self, values: &FeatureValues) -> (i32, i32, bool);
+    /// Multiply-accumulates per run.
+    fn macs(&self) -> usize;
+    /// Channels the features are computed from.
+    fn sources(&self) -> u16 {
+        self.features().iter().fold(0, |m, f| m | f.sources())
+    }
+}
+
+/// Part 1 maps the `N` features to the intermediate; part 2 maps the features plus the normalised
+/// intermediate (`N1 = N + 1`, checked at compile time) to the angle.
+pub struct CascadeNet<P1, P2, const N: usize, const N1: usize> {
+    pub features: [Feature; N],
+    pub norm: [Norm; N],
+    pub envelope: [Envelope; N],
+    pub part1: P1,
+    /// Intermediate (mm/s) → part 2 input.
+    pub mid_norm: Norm,
+    pub part2: P2,
+    /// Training range of the angle, millidegrees.
+    pub out_range: Envelope,
+}
+
+impl<P1, P2, const N: usize, const N1: usize> CascadeNet<P1, P2, N, N1>
+where
+    P1: Layer<N, 1, Out = i32>,
+    P2: Layer<N1, 1, Out = i32>,
+{
+    const SHAPE_OK: () = assert!(
+        N1 == N + 1,
+        "part 2 takes the features plus one intermediate"
+    );
+
+    fn inputs(&self, values: &FeatureValues) -> ([i16; N], bool) {
+        let mut clamped = false;
+        let mut x = [0i16; N];
+        for (((x, f), n), e) in x
+            .iter_mut()
+            .zip(&self.features)
+            .zip(&self.norm)
+            .zip(&self.envelope)
+        {
+            let (v, out) = e.clamp(values.get(*f));
+            clamped |= out;
+            *x = n.apply(v);
+        }
+        (x, clamped)
+    }
+}
+
+impl<P1, P2, const N: usize, const N1: usize> AngleNet for CascadeNet<P1, P2, N, N1>
+where
+    P1: Layer<N, 1, Out = i32> + Sync,
+    P2: Layer<N1, 1, Out = i32> + Sync,
+{
+    fn features(&self) -> &[Feature] {
+        &self.features
+    }
+
+    fn run(&self, values: &FeatureValues) -> (i32, i32, bool) {
+        let () = Self::SHAPE_OK;
+        let (x, mut clamped) = self.inputs(values);
+        let mut mid = [0i32; 1];
+        self.part1.forward(&x, &mut mid);
+        let mut x1 = [0i16; N1];
+        for (d, s) in x1.iter_mut().zip(x.iter()) {
+            *d = *s;
+        }
+        if let Some(last) = x1.last_mut() {
+            *last = self.mid_norm.apply(mid[0]);
+        }
+        let mut out = [0i32; 1];
+        self.part2.forward(&x1, &mut out);
+        let (angle, out_clamped) = self.out_range.clamp(out[0]);
+        clamped |= out_clamped || values.low_speed && self.sources() & Channel::GpsSpeed.bit() != 0;
+        (mid[0], angle, clamped)
+    }
+
+    fn macs(&self) -> usize {
+        self.part1.macs() + self.part2.macs()
+    }
+}
+
+/// The 20 Hz estimator: both cascades plus the per-channel health state.
+pub struct Estimator<'m> {
+    alpha: Option<&'m dyn AngleNet>,
+    beta: Option<&'m dyn AngleNet>,
+    last_raw: [i32; CHANNELS],
+    repeats: [u16; CHANNELS],
+    last_alpha: Option<(i32, i32)>,
+    last_beta: Option<(i32, i32)>,
+}
+
+impl<'m> Estimator<'m> {
+    pub fn new(alpha: &'m dyn AngleNet, beta: &'m dyn AngleNet) -> Self {
+        Self::with(Some(alpha), Some(beta))
+    }
+
+    fn with(alpha: Option<&'m dyn AngleNet>, beta: Option<&'m dyn AngleNet>) -> Self {
+        Estimator {
+            alpha,
+            beta,
+            last_raw: [0; CHANNELS],
+            repeats: [0; CHANNELS],
+            last_alpha: None,
+            last_beta: None,
+        }
+    }
+
+    /// The compiled-in model, or an estimator that flags `NO_MODEL` on every step if this build has none.
+    pub fn shipped() -> Estimator<'static> {
+        #[cfg(estimator_weights)]
+        {
+            Estimator::new(&crate::model::ALPHA, &crate::model::BETA)
+        }
+        #[cfg(not(estimator_weights))]
+        {
+            Estimator::with(None, None)
+        }
+    }
+
+    /// Multiply-accumulates per step.
+    pub fn macs(&self) -> usize {
+        self.alpha.map_or(0, |n| n.macs()) + self.beta.map_or(0, |n| n.macs())
+    }
+
+    /// Forgets health history and held values (e.g. after a long link outage).
+    pub fn reset(&mut self) {
+        *self = Self::with(self.alpha, self.beta);
+    }
+
+    /// Bit per channel: noisy channels unchanged for [`STUCK_FRAMES`] frames.
+    fn update_stuck(&mut self, frame: &SensorFrame) -> u16 {
+        let mut stuck = 0u16;
+        for (((c, raw), last), n) in Channel::ALL
+            .iter()
+            .zip(&frame.raw)
+            .zip(self.last_raw.iter_mut())
+            .zip(self.repeats.iter_mut())
+        {
+            if !c.is_noisy() {
+                continue;
+            }
+            *n = if *raw == *last {
+                n.saturating_add(1)
+            } else {
+                0
+            };
+            *last = *raw;
+            if *n + 1 >= STUCK_FRAMES {
+                stuck |= c.bit();
+            }
+        }
+        stuck
+    }
+
+    pub fn step(&mut self, frame: &SensorFrame) -> Estimate {
+        let stuck = self.update_stuck(frame);
+        let mut e = Estimate {
+            seq: frame.seq,
+            time_ms: frame.time_ms,
+            ..Estimate::default()
+        };
+        let (Some(alpha), Some(beta)) = (self.alpha, self.beta) else {
+            e.flags.0 = Flags::NO_MODEL | Flags::NO_ESTIMATE;
+            return e;
+        };
+        let values = FeatureValues::compute(frame);
+        let mut flags = 0u16;
+        let mut angle =
+            |net: &dyn AngleNet, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
+                let src = net.sources();
+                let invalid = src & !frame.valid != 0;
+                let is_stuck = src & stuck != 0;
+                if invalid {
+                    flags |= Flags::INVALID_INPUT;
+                }
+                if is_stuck {
+                    flags |= Flags::STUCK_SENSOR;
+                }
+                if invalid || is_stuck {
+                    flags |= held_flag;
+                    return match *last {
+                        Some(v) => v,
+                        None => {
+                            flags |= Flags::NO_ESTIMATE;
+                            (0, 0)
+                        }
+                    };
+                }
+                let (mid, out, clamped) = net.run(&values);
+                if clamped {
+                    flags |= Flags::OUT_OF_ENVELOPE;
+                }
+                *last = Some((mid, out));
+                (mid, out)
+            };
+        (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD);
+        (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD);
+        e.flags = Flags(flags);
+        e
+    }
+}

@@ -1,0 +1,41 @@
+//! # estimator-core
+//!
+//! The flight code of the synthetic air data system: it estimates angle of attack (α) and sideslip (β)
+//! from inertial, GPS, control-surface and throttle data with two small cascaded, quantized neural
+//! networks, following Karali et al., AIAA Aviation 2023.
+//!
+//! `#![no_std]`, no allocator, no floats on the estimation path, and no panics: every input, including
+//! arbitrary bytes off a serial line, has a defined result.
+//!
+//! This crate is the single source of truth for
+//! * the sensed channels, their order and integer units ([`channels`]),
+//! * the candidate model inputs and how they are computed ([`features`]),
+//! * normalisation ([`normalize`]) and the quantized layers ([`nn`]),
+//! * the frame formats on the serial link ([`wire`]).
+//!
+//! Data flow of one step: bytes → [`wire::Accumulator`] → [`wire::sensor`] → [`SensorFrame`] →
+//! [`Estimator::step`] (features → envelope → normalise → cascade part 1 → part 2) → [`Estimate`] →
+//! [`wire::estimate`] → bytes.
+#![cfg_attr(not(test), no_std)]
+#![deny(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+pub mod channels;
+pub mod estimator;
+pub mod features;
+pub mod model;
+pub mod nn;
+pub mod normalize;
+pub mod wire;
+
+pub use channels::{CHANNELS, Channel, SensorFrame};
+pub use estimator::{AngleNet, CascadeNet, Estimate, Estimator, Flags};
+pub use features::{FEATURE_COUNT, Feature, FeatureValues};

@@ -1,0 +1,60 @@
+//! Fixed-size quantized MLP layers: int8 weights, int16 activations, int32 accumulation.
+//!
+//! Shapes are const generics, so a weight table of the wrong shape does not compile, and a network is
+//! a nested [`Chain`] of layers whose widths must line up at compile time.
+//!
+//! Number format (symmetric, no zero points): a layer's real input is `x_q * s_x`, its weights are
+//! `w_q[o][i] * s_w[o]` (one scale per output channel), and its bias is pre-scaled to the accumulator,
+//! `b_q[o] = round(b[o] / (s_x * s_w[o]))`. The int32 accumulator `acc[o] = b_q[o] + Σ x_q[i] w_q[o][i]`
+//! is requantized to the next layer's scale with an integer multiplier and a right shift
+//! ([`Requant`]). Hidden layers saturate to int16 after ReLU; output layers keep int32.
+//!
+//! Overflow cannot happen: `|x_q| ≤ 32767`, `|w_q| ≤ 127` and `IN ≤` [`MAX_IN`], and every bias is
+//! checked against the remaining head-room when the layer is built (at compile time for the
+//! generated statics). Both kernels still use wrapping adds, so they agree bit for bit in all cases.
+
+mod dense;
+#[cfg(any(test, feature = "float-ref"))]
+pub mod float;
+pub mod kernel;
+
+pub use dense::{Dense, Hidden, Output, Requant};
+
+/// Largest layer input width: `MAX_IN * 32767 * 127` stays below `i32::MAX` with room for a bias.
+pub const MAX_IN: usize = 512;
+
+/// Largest magnitude of the worst-case sum of products for `inputs` inputs.
+pub const fn max_products(inputs: usize) -> i64 {
+    inputs as i64 * 32767 * 127
+}
+
+/// A layer (or a chain of layers) mapping `IN` int16 activations to `OUT` outputs.
+pub trait Layer<const IN: usize, const OUT: usize> {
+    /// int16 for hidden layers, int32 for output layers.
+    type Out: Copy + Default;
+    fn forward(&self, x: &[i16; IN], y: &mut [Self::Out; OUT]);
+    /// Multiply-accumulates per forward pass (for benchmarks: instructions per MAC).
+    fn macs(&self) -> usize;
+}
+
+/// Two layers in sequence, with the intermediate width `MID` checked by the type system.
+pub struct Chain<A, B, const MID: usize>(pub A, pub B);
+
+impl<A, B, const IN: usize, const MID: usize, const OUT: usize> Layer<IN, OUT> for Chain<A, B, MID>
+where
+    A: Layer<IN, MID, Out = i16>,
+    B: Layer<MID, OUT>,
+{
+    type Out = B::Out;
+
+    #[inline]
+    fn forward(&self, x: &[i16; IN], y: &mut [Self::Out; OUT]) {
+        let mut mid = [0i16; MID];
+        self.0.forward(x, &mut mid);
+        self.1.forward(&mid, y);
+    }
+
+    fn macs(&self) -> usize {
+        self.0.macs() + self.1.macs()
+    }
+}

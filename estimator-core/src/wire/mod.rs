@@ -1,0 +1,311 @@
+//! Frames on the serial link between `hil-sim` (or the aircraft's sensor bus) and the estimator.
+//!
+//! ```text
+//! on the wire:  COBS( body | crc32 ) 0x00
+//! body:         header (8 bytes) | payload (sensor: 50 bytes, estimate: 35 bytes)
+//! header:       version u8 | kind u8 | seq u16 | time_ms u32          (all little-endian)
+//! crc32:        CRC-32/ISO-HDLC of the body, little-endian
+//! ```
+//!
+//! COBS removes every 0x00 from the frame, so 0x00 marks frame ends: after garbage, a dropped byte or a
+//! bit flip, the receiver discards at most the frame in progress and is in step again at the next
+//! delimiter. The CRC rejects corrupted frames (all 1-, 2- and 3-bit errors and all bursts up to 32
+//! bits in these lengths). Each payload has a zero-copy checked view (`*Packet<T: AsRef<[u8]>>`) and a
+//! validated representation that parses from and emits into it ([`SensorFrame`](crate::SensorFrame),
+//! [`EstimateFrame`](estimate::EstimateFrame)). Nothing here panics on any input.
+
+pub mod estimate;
+pub mod sensor;
+
+/// Wire format version carried in every header.
+pub const VERSION: u8 = 1;
+/// Frame delimiter.
+pub const DELIMITER: u8 = 0;
+/// Header length.
+pub const HEADER_LEN: usize = 8;
+/// CRC length.
+pub const CRC_LEN: usize = 4;
+/// Longest body (header + payload) of any frame kind.
+pub const MAX_BODY: usize = HEADER_LEN + sensor::PAYLOAD_LEN;
+/// Longest encoded frame including the delimiter.
+pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_BODY + CRC_LEN) + 1;
+
+const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Byte offsets of the header.
+pub(crate) mod field {
+    use core::ops::Range;
+    pub const VERSION: usize = 0;
+    pub const KIND: usize = 1;
+    pub const SEQ: Range<usize> = 2..4;
+    pub const TIME: Range<usize> = 4..8;
+}
+
+/// Why a frame was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// Fewer bytes than the frame kind needs.
+    Truncated,
+    /// More bytes than the frame kind has.
+    TooLong,
+    /// The COBS stuffing is broken.
+    Cobs,
+    /// The CRC does not match: bits were corrupted.
+    Crc,
+    /// A wire format version this build does not speak.
+    Version(u8),
+    /// The header names another frame kind.
+    Kind(u8),
+    /// The output buffer is too small.
+    Buffer,
+}
+
+/// Frame kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Kind {
+    Sensor = 1,
+    Estimate = 2,
+}
+
+/// The header fields common to every frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Header {
+    pub kind: Kind,
+    pub seq: u16,
+    pub time_ms: u32,
+}
+
+pub(crate) fn read_u16(b: &[u8], at: core::ops::Range<usize>) -> u16 {
+    b.get(at)
+        .and_then(|s| <[u8; 2]>::try_from(s).ok())
+        .map_or(0, u16::from_le_bytes)
+}
+
+pub(crate) fn read_u32(b: &[u8], at: core::ops::Range<usize>) -> u32 {
+    b.get(at)
+        .and_then(|s| <[u8; 4]>::try_from(s).ok())
+        .map_or(0, u32::from_le_bytes)
+}
+
+pub(crate) fn write(b: &mut [u8], at: core::ops::Range<usize>, v: &[u8]) {
+    if let Some(d) = b.get_mut(at) {
+        for (d, s) in d.iter_mut().zip(v) {
+            *d = *s;
+        }
+    }
+}
+
+/// Checks the header of a body of `kind` with a payload of `payload_len` bytes.
+pub(crate) fn check_header(body: &[u8], kind: Kind, payload_len: usize) -> Result<(), Error> {
+    let want = HEADER_LEN + payload_len;
+    match body.len() {
+        n if n < want => return Err(Error::Truncated),
+        n if n > want => return Err(Error::TooLong),
+        _ => {}
+    }
+    let version = body.get(field::VERSION).copied().unwrap_or(0);
+    if version != VERSION {
+        return Err(Error::Version(version));
+    }
+    let k = body.get(field::KIND).copied().unwrap_or(0);
+    if k != kind as u8 {
+        return Err(Error::Kind(k));
+    }
+    Ok(())
+}
+
+pub(crate) fn header_of(body: &[u8]) -> (u16, u32) {
+    (read_u16(body, field::SEQ), read_u32(body, field::TIME))
+}
+
+pub(crate) fn emit_header(body: &mut [u8], kind: Kind, seq: u16, time_ms: u32) {
+    write(body, field::VERSION..field::VERSION + 1, &[VERSION]);
+    write(body, field::KIND..field::KIND + 1, &[kind as u8]);
+    write(body, field::SEQ, &seq.to_le_bytes());
+    write(body, field::TIME, &time_ms.to_le_bytes());
+}
+
+/// Appends the CRC to `body`, COBS-encodes it and the delimiter into `out`. Returns the encoded length.
+pub fn encode(body: &[u8], out: &mut [u8]) -> Result<usize, Error> {
+    let mut buf = [0u8; MAX_BODY + CRC_LEN];
+    let n = body.len();
+    let framed = buf.get_mut(..n + CRC_LEN).ok_or(Error::Buffer)?;
+    let (b, c) = framed.split_at_mut(n);
+    b.copy_from_slice(body);
+    c.copy_from_slice(&CRC.checksum(body).to_le_bytes());
+    let len = cobs::try_encode(framed, out).map_err(|_| Error::Buffer)?;
+    let d = out.get_mut(len).ok_or(Error::Buffer)?;
+    *d = DELIMITER;
+    Ok(len + 1)
+}
+
+/// Decodes one COBS frame (without its delimiter) into `out` and checks its CRC. Returns the body.
+pub fn decode<'o>(encoded: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], Error> {
+    if encoded.is_empty() {
+        return Err(Error::Truncated);
+    }
+    let n = cobs::decode(encoded, out)
+        .map_err(|_| Error::Cobs)?
+        .frame_size();
+    let framed = out.get(..n).ok_or(Error::Cobs)?;
+    if n < HEADER_LEN + CRC_LEN {
+        return Err(Error::Truncated);
+    }
+    let (body, crc) = framed.split_at(n - CRC_LEN);
+    if read_u32(crc, 0..CRC_LEN) != CRC.checksum(body) {
+        return Err(Error::Crc);
+    }
+    Ok(body)
+}
+
+/// Collects bytes off a stream into frames. `N` bounds the encoded frame; longer runs without a
+/// delimiter are garbage and are dropped up to the next delimiter.
+pub struct Accumulator<const N: usize> {
+    buf: [u8; N],
+    len: usize,
+    overflow: bool,
+    out: [u8; N],
+}
+
+impl<const N: usize> Default for Accumulator<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Accumulator<N> {
+    pub const fn new() -> Self {
+        Accumulator {
+            buf: [0; N],
+            len: 0,
+            overflow: false,
+            out: [0; N],
+        }
+    }
+
+    /// Feeds one byte. At a delimiter, returns the decoded, CRC-checked body of the frame it ends, or
+    /// why it was rejected. Empty frames (two delimiters in a row) are skipped silently.
+    pub fn push(&mut self, byte: u8) -> Option<Result<&[u8], Error>> {
+        if byte != DELIMITER {
+            match self.buf.get_mut(self.len) {
+                Some(slot) => {
+                    *slot = byte;
+                    self.len += 1;
+                }
+                None => self.overflow = true,
+            }
+            return None;
+        }
+        let (len, overflow) = (self.len, self.overflow);
+        self.len = 0;
+        self.overflow = false;
+        if overflow {
+            return Some(Err(Error::TooLong));
+        }
+        if len == 0 {
+            return None;
+        }
+        let encoded = self.buf.get(..len).unwrap_or(&[]);
+        Some(decode(encoded, &mut self.out))
+    }
+
+    /// Drops a partial frame (e.g. after a receiver overrun).
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.overflow = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::channels::{ALL_VALID, CHANNELS, SensorFrame};
+    use proptest::prelude::*;
+
+    fn frame(seq: u16) -> SensorFrame {
+        let mut raw = [0i32; CHANNELS];
+        for (i, r) in raw.iter_mut().enumerate() {
+            *r = (i as i32 - 8) * 1000 + (seq % 1000) as i32;
+        }
+        raw[crate::Channel::Throttle.index()] = 5000;
+        SensorFrame {
+            seq,
+            time_ms: seq as u32 * 50,
+            raw,
+            valid: ALL_VALID,
+        }
+    }
+
+    #[test]
+    fn sensor_frame_round_trips_through_the_stream() {
+        let mut acc = Accumulator::<MAX_FRAME>::new();
+        let mut got = 0;
+        for seq in [0u16, 1, 255, 256, 65535] {
+            let mut wire = [0u8; MAX_FRAME];
+            let n = frame(seq).encode(&mut wire).unwrap();
+            assert!(!wire[..n - 1].contains(&0));
+            for b in &wire[..n] {
+                if let Some(r) = acc.push(*b) {
+                    assert_eq!(SensorFrame::parse(r.unwrap()).unwrap(), frame(seq));
+                    got += 1;
+                }
+            }
+        }
+        assert_eq!(got, 5);
+    }
+
+    #[test]
+    fn every_single_bit_flip_is_rejected() {
+        let mut wire = [0u8; MAX_FRAME];
+        let n = frame(42).encode(&mut wire).unwrap();
+        for bit in 0..(n - 1) * 8 {
+            let mut w = wire;
+            w[bit / 8] ^= 1 << (bit % 8);
+            let mut acc = Accumulator::<MAX_FRAME>::new();
+            let mut accepted = 0;
+            for b in &w[..n] {
+                if let Some(Ok(body)) = acc.push(*b)
+                    && SensorFrame::parse(body).is_ok()
+                {
+                    accepted += 1;
+                }
+            }
+            assert_eq!(accepted, 0, "bit {bit} flipped and still accepted");
+        }
+    }
+
+    #[test]
+    fn resynchronises_after_garbage_within_one_frame() {
+        let mut acc = Accumulator::<MAX_FRAME>::new();
+        let garbage = [0x13u8; 500];
+        let mut wire = [0u8; MAX_FRAME];
+        let n = frame(9).encode(&mut wire).unwrap();
+        let mut results = std::vec::Vec::new();
+        for b in garbage.iter().chain(&[0u8]).chain(&wire[..n]) {
+            if let Some(r) = acc.push(*b) {
+                results.push(r.map(SensorFrame::parse));
+            }
+        }
+        assert_eq!(results.len(), 2);
+        assert_eq!(results[0], Err(Error::TooLong));
+        assert_eq!(results[1], Ok(Ok(frame(9))));
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+            let mut acc = Accumulator::<MAX_FRAME>::new();
+            for b in &bytes {
+                if let Some(Ok(body)) = acc.push(*b) {
+                    let _ = SensorFrame::parse(body);
+                    let _ = estimate::EstimateFrame::parse(body);
+                }
+            }
+            let mut out = [0u8; 512];
+            let _ = decode(&bytes, &mut out);
+        }
+    }
+}
