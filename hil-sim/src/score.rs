@@ -1,0 +1,1 @@
+//! Owned by the HIL work (issue 6); being written.

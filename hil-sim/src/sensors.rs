@@ -1,0 +1,1 @@
+//! Owned by the data-side work (issue 4); being written.
