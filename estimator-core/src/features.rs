@@ -16,6 +16,9 @@ pub const FEATURE_COUNT: usize = CHANNELS + 5;
 /// flagged out of envelope.
 pub const MIN_SPEED_MMS: i32 = 20_000;
 
+/// GPS speeds are clamped to this (mm/s, ≈ Mach 6) before squaring, so `ρV²` cannot overflow i64.
+pub const MAX_SPEED_MMS: i32 = 2_000_000;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Feature {
@@ -120,7 +123,7 @@ impl FeatureValues {
         for (r, v) in raw.iter_mut().zip(frame.raw.iter()) {
             *r = *v;
         }
-        let speed = frame.get(Channel::GpsSpeed).max(0) as i64;
+        let speed = frame.get(Channel::GpsSpeed).clamp(0, MAX_SPEED_MMS) as i64;
         let alt_cm = frame.get(Channel::GpsAlt);
         let (rho, sound) = isa(alt_cm);
         // ρ [1e-6 kg/m³] × V² [1e-6 m²/s²] = 1e-12 Pa; keep µPa (1e-6 Pa).

@@ -1,0 +1,209 @@
+//! Behaviour of `Estimator::step` on bad input, with a small fixed network (a test fixture, not a
+//! trained model): α reads the GPS speed and the elevator, β reads the rudder and the roll gyro.
+
+use estimator_core::channels::{ALL_VALID, CHANNELS};
+use estimator_core::estimator::STUCK_FRAMES;
+use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
+use estimator_core::normalize::{Envelope, Norm};
+use estimator_core::{AngleNet, CascadeNet, Channel, Estimator, Feature, Flags, SensorFrame};
+
+type Part1 = Chain<Hidden<2, 3>, Output<3, 1>, 3>;
+type Part2 = Chain<Hidden<3, 2>, Output<2, 1>, 2>;
+
+const RQ: Requant = Requant {
+    mult: 1 << 20,
+    shift: 24,
+    offset: 0,
+};
+
+fn net(a: Channel, b: Channel, env_hi: i32) -> CascadeNet<Part1, Part2, 2, 3> {
+    CascadeNet {
+        features: [Feature::Sensor(a), Feature::Sensor(b)],
+        norm: [Norm {
+            center: 0,
+            mult: 1,
+            shift: 4,
+        }; 2],
+        envelope: [Envelope {
+            lo: -env_hi,
+            hi: env_hi,
+        }; 2],
+        part1: Chain(
+            Hidden(Dense::new(
+                [[10, 20], [30, -40], [5, 5]],
+                [100, 0, -100],
+                [RQ; 3],
+            )),
+            Output(Dense::new([[1, 2, 3]], [7], [Requant::ONE])),
+        ),
+        mid_norm: Norm {
+            center: 0,
+            mult: 1,
+            shift: 2,
+        },
+        part2: Chain(
+            Hidden(Dense::new([[3, -2, 1], [1, 1, 1]], [0, 50], [RQ; 2])),
+            Output(Dense::new(
+                [[4, -5]],
+                [1000],
+                [Requant {
+                    mult: 1 << 30,
+                    shift: 30,
+                    offset: 250,
+                }],
+            )),
+        ),
+        out_range: Envelope {
+            lo: -90_000,
+            hi: 90_000,
+        },
+    }
+}
+
+fn nets() -> (
+    CascadeNet<Part1, Part2, 2, 3>,
+    CascadeNet<Part1, Part2, 2, 3>,
+) {
+    (
+        net(Channel::GpsSpeed, Channel::Elevator, 400_000),
+        net(Channel::Rudder, Channel::GyroP, 400_000),
+    )
+}
+
+fn frame(seq: u16) -> SensorFrame {
+    let mut raw = [0i32; CHANNELS];
+    for (i, r) in raw.iter_mut().enumerate() {
+        // Noisy channels change every frame; surfaces are constant.
+        *r = if Channel::ALL[i].is_noisy() {
+            1000 * i as i32 + (seq as i32 % 7) * 13
+        } else {
+            150 * i as i32
+        };
+    }
+    raw[Channel::GpsSpeed.index()] = 200_000 + seq as i32;
+    SensorFrame {
+        seq,
+        time_ms: seq as u32 * 50,
+        raw,
+        valid: ALL_VALID,
+    }
+}
+
+#[test]
+fn good_frames_give_live_estimates_without_flags() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    for s in 0..50 {
+        let out = e.step(&frame(s));
+        assert_eq!(out.flags, Flags(0), "frame {s}");
+        assert_eq!(out.seq, s);
+    }
+    assert_eq!(e.macs(), 2 * (2 * 3 + 3 + 3 * 2 + 2));
+}
+
+#[test]
+fn same_frames_give_same_estimates() {
+    let (a, b) = nets();
+    let (mut e1, mut e2) = (Estimator::new(&a, &b), Estimator::new(&a, &b));
+    for s in 0..30 {
+        assert_eq!(e1.step(&frame(s)), e2.step(&frame(s)));
+    }
+}
+
+#[test]
+fn invalid_channel_holds_only_the_angle_that_uses_it() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    let good = e.step(&frame(1));
+    let mut bad = frame(2);
+    bad.valid &= !Channel::Rudder.bit();
+    let out = e.step(&bad);
+    assert!(out.flags.has(Flags::INVALID_INPUT));
+    assert!(out.flags.has(Flags::BETA_HELD));
+    assert!(!out.flags.has(Flags::ALPHA_HELD));
+    assert_eq!(out.beta_mdeg, good.beta_mdeg);
+    assert_eq!(out.v_aero_mms, good.v_aero_mms);
+    assert!(!out.flags.is_usable());
+}
+
+#[test]
+fn invalid_before_any_good_frame_gives_zero_and_no_estimate() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    let si = [f64::NAN; CHANNELS];
+    let out = e.step(&SensorFrame::from_si(0, 0, &si));
+    assert!(out.flags.has(Flags::NO_ESTIMATE | Flags::INVALID_INPUT));
+    assert_eq!(
+        (
+            out.alpha_mdeg,
+            out.beta_mdeg,
+            out.w_aero_mms,
+            out.v_aero_mms
+        ),
+        (0, 0, 0, 0)
+    );
+}
+
+#[test]
+fn a_stuck_gyro_is_detected_after_stuck_frames_and_recovers() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    let mut flagged_at = None;
+    for s in 0..(STUCK_FRAMES + 5) {
+        let mut f = frame(s);
+        f.raw[Channel::GyroP.index()] = 4242;
+        let out = e.step(&f);
+        if out.flags.has(Flags::STUCK_SENSOR) && flagged_at.is_none() {
+            flagged_at = Some(s);
+            assert!(out.flags.has(Flags::BETA_HELD));
+            assert!(!out.flags.has(Flags::ALPHA_HELD));
+        }
+    }
+    assert_eq!(flagged_at, Some(STUCK_FRAMES - 1));
+    let out = e.step(&frame(100));
+    assert!(!out.flags.has(Flags::STUCK_SENSOR));
+}
+
+#[test]
+fn out_of_envelope_inputs_are_clamped_and_flagged() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    let mut f = frame(3);
+    f.raw[Channel::Elevator.index()] = 500_000;
+    let out = e.step(&f);
+    assert!(out.flags.has(Flags::OUT_OF_ENVELOPE));
+    assert!(!out.flags.has(Flags::ALPHA_HELD));
+    let mut g = frame(3);
+    g.raw[Channel::Elevator.index()] = 400_000; // exactly the envelope edge
+    let mut e2 = Estimator::new(&a, &b);
+    assert_eq!(e.step(&f).alpha_mdeg, e2.step(&g).alpha_mdeg);
+}
+
+#[test]
+fn extreme_raw_values_never_panic() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    for (s, v) in [i32::MIN, i32::MAX, 0, -1, 1].into_iter().enumerate() {
+        let f = SensorFrame {
+            seq: s as u16,
+            time_ms: 0,
+            raw: [v; CHANNELS],
+            valid: u16::MAX,
+        };
+        let out = e.step(&f);
+        assert!(out.alpha_mdeg.abs() <= 90_000);
+    }
+}
+
+#[test]
+fn sources_cover_derived_features() {
+    let n = net(Channel::GpsSpeed, Channel::Elevator, 1);
+    assert_eq!(
+        n.sources(),
+        Channel::GpsSpeed.bit() | Channel::Elevator.bit()
+    );
+    assert_eq!(
+        Feature::FzOverRhoV2.sources(),
+        Channel::GpsSpeed.bit() | Channel::GpsAlt.bit() | Channel::AccelZ.bit()
+    );
+}
