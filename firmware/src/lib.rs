@@ -1,1 +1,30 @@
-//! Being written (issue 6).
+//! # firmware
+//!
+//! The estimator's application logic, independent of the board: bytes in → [`ByteQueue`] (filled by
+//! the receive interrupt) → [`App`] (frame accumulation, one [`Estimator`](estimator_core::Estimator)
+//! step per valid sensor frame, link and deadline counters) → encoded estimate frames out.
+//!
+//! Everything here is `no_std`, heap-free and tested on the host; the Cortex-M4F board layer
+//! (`src/main.rs`) only moves bytes between USART1 and this library and reads a [`Clock`].
+#![cfg_attr(not(test), no_std)]
+#![deny(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+#[macro_use]
+mod fmt;
+
+pub mod app;
+pub mod clock;
+pub mod queue;
+
+pub use app::{App, Config, Stats};
+pub use clock::{Clock, NoClock};
+pub use queue::ByteQueue;

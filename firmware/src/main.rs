@@ -1,4 +1,27 @@
+//! The flight image for a Cortex-M4F: STM32F405/407 (USART1 on PA9/PA10) or QEMU's `netduinoplus2`
+//! (whose first `-serial` is the same USART1). Build it with `cargo fw` from the workspace root.
+//!
+//! The board layer is kept thin; everything testable lives in the `firmware` library:
+//! * USART1 receive interrupt → [`ByteQueue`] (critical section) → main loop → [`App::push`] → estimate
+//!   frame → USART1, transmitted by polling TXE. Receiving in the interrupt is what keeps the link
+//!   whole on silicon: a step can take milliseconds, during which a 115 200 Bd line delivers tens of
+//!   bytes that a polling loop would lose to overruns. Transmission is a 45-byte burst once per frame
+//!   and may block.
+//! * Clocks stay at the 16 MHz HSI (no PLL): nothing waits on RCC ready flags, which QEMU does not
+//!   model. Peripheral clocks are enabled by plain RCC register writes (ignored by QEMU).
+//! * Step timing: the DWT cycle counter on silicon; if it does not advance (QEMU), TIM2 with PSC = 0,
+//!   which counts one per instruction under `-icount shift=0`.
 #![cfg_attr(target_os = "none", no_std, no_main)]
-//! Being written (issue 6).
+
 #[cfg(not(target_os = "none"))]
-fn main() {}
+fn main() {
+    eprintln!(
+        "This is the Cortex-M4F flight image; on the host it does nothing.\n\
+         Build it with `cargo fw` (target/thumbv7em-none-eabihf/firmware/firmware),\n\
+         run it in QEMU with `hil-sim run --firmware qemu ...`, or flash it with `probe-rs run`.\n\
+         The application logic is the `firmware` library, tested with `cargo test -p firmware`."
+    );
+}
+
+#[cfg(target_os = "none")]
+mod board;

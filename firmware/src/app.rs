@@ -1,0 +1,347 @@
+//! One estimator step per valid sensor frame, with the link and deadline accounting that travels back
+//! in every estimate frame ([`Health`]).
+//!
+//! Sequence numbers (u16, wrapping) classify each accepted frame by `d = seq - last_seq` (mod 2¹⁶):
+//! * `d == 1`: in order.
+//! * `1 < d < 2¹⁵`: `d - 1` frames were lost on the way (`rx_lost`); the frame is stepped.
+//! * `d == 0`: a duplicate: not stepped again (it would count as a stuck sensor) and not answered.
+//! * `d ≥ 2¹⁵`: the sender went backwards, i.e. restarted its flight: the estimator forgets its history
+//!   and the frame is stepped as the first of a new sequence.
+//!
+//! A step's ticks run from the frame's delimiter (decode, CRC, parse) to the end of the estimator
+//! step; encoding the reply is a constant few hundred instructions and is left out.
+
+use crate::clock::{Clock, elapsed};
+use estimator_core::wire::estimate::{EstimateFrame, Health};
+use estimator_core::wire::{Accumulator, MAX_FRAME};
+use estimator_core::{Estimator, SensorFrame};
+
+/// Board-dependent settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// The step budget in clock ticks: 50 ms at the board clock (800 000 at the 16 MHz HSI clock).
+    pub budget_ticks: u32,
+}
+
+impl Config {
+    /// The 50 ms budget for a clock of `ticks_per_s` ticks per second.
+    pub const fn fifty_ms_at(ticks_per_s: u32) -> Config {
+        Config {
+            budget_ticks: ticks_per_s / 20,
+        }
+    }
+}
+
+/// Counters that do not travel on the wire.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Sensor frames stepped (and answered).
+    pub stepped: u32,
+    /// Frames with the previous frame's seq, dropped unanswered.
+    pub duplicates: u32,
+    /// Backward sequence jumps (sender restarts).
+    pub restarts: u32,
+    /// The most ticks any step took.
+    pub max_step_ticks: u32,
+}
+
+/// The application: owns the frame accumulator, the estimator and the counters.
+pub struct App<'m, C: Clock> {
+    acc: Accumulator<MAX_FRAME>,
+    estimator: Estimator<'m>,
+    clock: C,
+    config: Config,
+    last_seq: Option<u16>,
+    health: Health,
+    stats: Stats,
+}
+
+impl<'m, C: Clock> App<'m, C> {
+    pub fn new(estimator: Estimator<'m>, clock: C, config: Config) -> Self {
+        let health = Health {
+            tick_source: clock.source(),
+            ..Health::default()
+        };
+        App {
+            acc: Accumulator::new(),
+            estimator,
+            clock,
+            config,
+            last_seq: None,
+            health,
+            stats: Stats::default(),
+        }
+    }
+
+    /// The counters sent with the last estimate.
+    pub fn health(&self) -> Health {
+        self.health
+    }
+
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Feeds one received byte. When it completes a new valid sensor frame, runs one step and writes
+    /// the encoded estimate frame (COBS, CRC, delimiter) to `out`, returning its length.
+    pub fn push(&mut self, byte: u8, out: &mut [u8; MAX_FRAME]) -> Option<usize> {
+        let start = self.clock.now();
+        let frame = match self.acc.push(byte)? {
+            Ok(body) => SensorFrame::parse(body),
+            Err(e) => Err(e),
+        };
+        let frame = match frame {
+            Ok(f) => f,
+            Err(e) => {
+                self.health.rx_corrupt = self.health.rx_corrupt.saturating_add(1);
+                warn!("frame rejected: {}", e);
+                return None;
+            }
+        };
+        if !self.accept_seq(frame.seq) {
+            return None;
+        }
+        let estimate = self.estimator.step(&frame);
+        let ticks = elapsed(start, self.clock.now());
+        self.health.step_ticks = ticks;
+        if ticks > self.config.budget_ticks {
+            self.health.deadline_misses = self.health.deadline_misses.saturating_add(1);
+            warn!("deadline miss: seq {} took {} ticks", frame.seq, ticks);
+        }
+        self.stats.stepped = self.stats.stepped.saturating_add(1);
+        self.stats.max_step_ticks = self.stats.max_step_ticks.max(ticks);
+        let reply = EstimateFrame {
+            estimate,
+            health: self.health,
+        };
+        // An estimate frame always fits MAX_FRAME (it is shorter than a sensor frame).
+        reply.encode(out).ok()
+    }
+
+    /// Updates the sequence bookkeeping; false: do not step this frame.
+    fn accept_seq(&mut self, seq: u16) -> bool {
+        let Some(last) = self.last_seq else {
+            self.last_seq = Some(seq);
+            return true;
+        };
+        let d = seq.wrapping_sub(last);
+        if d == 0 {
+            self.stats.duplicates = self.stats.duplicates.saturating_add(1);
+            return false;
+        }
+        if d >= 0x8000 {
+            self.stats.restarts = self.stats.restarts.saturating_add(1);
+            info!("sequence restarted at {} (was {})", seq, last);
+            self.estimator.reset();
+        } else {
+            self.health.rx_lost = self.health.rx_lost.saturating_add(u32::from(d - 1));
+        }
+        self.last_seq = Some(seq);
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use estimator_core::channels::ALL_VALID;
+    use estimator_core::wire::estimate::TickSource;
+    use estimator_core::{CHANNELS, Channel, Flags};
+
+    /// A clock that advances a fixed amount per reading.
+    struct Stepping {
+        t: u32,
+        per_read: u32,
+    }
+    impl Clock for Stepping {
+        fn now(&mut self) -> u32 {
+            self.t = self.t.wrapping_add(self.per_read);
+            self.t
+        }
+        fn source(&self) -> TickSource {
+            TickSource::Instructions
+        }
+    }
+
+    fn app(per_read: u32, budget: u32) -> App<'static, Stepping> {
+        App::new(
+            Estimator::shipped(),
+            Stepping {
+                t: u32::MAX - 5,
+                per_read,
+            },
+            Config {
+                budget_ticks: budget,
+            },
+        )
+    }
+
+    fn frame(seq: u16) -> SensorFrame {
+        let mut raw = [0i32; CHANNELS];
+        for (i, r) in raw.iter_mut().enumerate() {
+            *r = (i as i32 - 8) * 100 + i32::from(seq % 500);
+        }
+        raw[Channel::Throttle.index()] = 5000;
+        SensorFrame {
+            seq,
+            time_ms: u32::from(seq) * 50,
+            raw,
+            valid: ALL_VALID,
+        }
+    }
+
+    fn wire(seq: u16) -> Vec<u8> {
+        let mut out = [0u8; MAX_FRAME];
+        let n = frame(seq).encode(&mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    /// Feeds bytes, returns the decoded replies.
+    fn feed<C: Clock>(app: &mut App<'_, C>, bytes: &[u8]) -> Vec<EstimateFrame> {
+        let mut replies = Vec::new();
+        let mut out = [0u8; MAX_FRAME];
+        for b in bytes {
+            if let Some(n) = app.push(*b, &mut out) {
+                let mut acc = Accumulator::<MAX_FRAME>::new();
+                let mut decoded = None;
+                for b in &out[..n] {
+                    if let Some(body) = acc.push(*b) {
+                        decoded = Some(EstimateFrame::parse(body.unwrap()).unwrap());
+                    }
+                }
+                replies.push(decoded.unwrap());
+            }
+        }
+        replies
+    }
+
+    #[test]
+    fn one_reply_per_frame_echoing_seq_time_and_the_estimator() {
+        let mut a = app(10, 1000);
+        let mut reference = Estimator::shipped();
+        for seq in 0..5u16 {
+            let r = feed(&mut a, &wire(seq));
+            assert_eq!(r.len(), 1);
+            assert_eq!(r[0].estimate, reference.step(&frame(seq)));
+            assert_eq!(r[0].estimate.seq, seq);
+            assert_eq!(r[0].estimate.time_ms, u32::from(seq) * 50);
+            assert_eq!(r[0].health.tick_source, TickSource::Instructions);
+            assert_eq!(r[0].health.rx_lost, 0);
+            assert_eq!(r[0].health.rx_corrupt, 0);
+        }
+        if !estimator_core::model::HAS_MODEL {
+            let r = feed(&mut a, &wire(5));
+            assert!(r[0].estimate.flags.has(Flags::NO_MODEL));
+        }
+        assert_eq!(
+            a.stats().stepped,
+            6 - u32::from(estimator_core::model::HAS_MODEL)
+        );
+    }
+
+    #[test]
+    fn step_ticks_wrap_and_the_budget_is_a_parameter() {
+        // The clock starts 6 ticks before the wrap and advances 10 per reading: the step spans it.
+        let mut a = app(10, 10);
+        let r = feed(&mut a, &wire(0));
+        assert_eq!(r[0].health.step_ticks, 10);
+        assert_eq!(r[0].health.deadline_misses, 0);
+        let mut tight = app(10, 9);
+        let r = feed(&mut tight, &[wire(0), wire(1)].concat());
+        assert_eq!(r[0].health.deadline_misses, 1);
+        assert_eq!(r[1].health.deadline_misses, 2);
+        assert_eq!(tight.stats().max_step_ticks, 10);
+    }
+
+    #[test]
+    fn gaps_count_lost_frames_across_the_u16_wrap() {
+        let mut a = app(1, 1000);
+        let seqs = [65533u16, 65534, 1, 2, 5];
+        let r = feed(
+            &mut a,
+            &seqs.iter().flat_map(|s| wire(*s)).collect::<Vec<_>>(),
+        );
+        let lost: Vec<u32> = r.iter().map(|e| e.health.rx_lost).collect();
+        // 65535 and 0 missing, then 3 and 4.
+        assert_eq!(lost, [0, 0, 2, 2, 4]);
+    }
+
+    #[test]
+    fn duplicates_are_neither_stepped_nor_answered() {
+        let mut a = app(1, 1000);
+        let r = feed(&mut a, &[wire(7), wire(7), wire(8)].concat());
+        assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [7, 8]);
+        assert_eq!(r[1].health.rx_lost, 0);
+        assert_eq!(a.stats().duplicates, 1);
+        assert_eq!(a.stats().stepped, 2);
+    }
+
+    #[test]
+    fn a_backward_jump_is_a_restart_not_a_loss() {
+        let mut a = app(1, 1000);
+        let r = feed(&mut a, &[wire(500), wire(501), wire(0), wire(1)].concat());
+        assert_eq!(r.len(), 4);
+        assert!(r.iter().all(|e| e.health.rx_lost == 0));
+        assert_eq!(a.stats().restarts, 1);
+    }
+
+    #[test]
+    fn garbage_is_counted_and_the_next_frame_still_decodes() {
+        let mut a = app(1, 1000);
+        let mut bytes = wire(1);
+        bytes.extend_from_slice(&[0x55; 300]); // longer than any frame: overflow
+        bytes.push(0);
+        bytes.extend_from_slice(&[0x12, 0x34, 0x00]); // too short
+        bytes.extend_from_slice(&[0x00, 0x00]); // empty frames are skipped
+        bytes.extend(wire(2));
+        let r = feed(&mut a, &bytes);
+        assert_eq!(r.len(), 2);
+        assert_eq!(r[1].estimate.seq, 2);
+        assert_eq!(r[1].health.rx_corrupt, 2);
+        assert_eq!(r[1].health.rx_lost, 0);
+    }
+
+    #[test]
+    fn corrupted_frames_are_rejected_and_counted() {
+        let mut a = app(1, 1000);
+        let good = wire(3);
+        let mut flipped = wire(4);
+        flipped[10] ^= 0x04;
+        let mut truncated = wire(5);
+        truncated.remove(20);
+        let mut estimate_kind = [0u8; MAX_FRAME];
+        let n = EstimateFrame::default().encode(&mut estimate_kind).unwrap();
+        let bytes = [
+            good,
+            flipped,
+            truncated,
+            estimate_kind[..n].to_vec(),
+            wire(6),
+        ]
+        .concat();
+        let r = feed(&mut a, &bytes);
+        assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [3, 6]);
+        assert_eq!(r[1].health.rx_corrupt, 3);
+        assert_eq!(r[1].health.rx_lost, 2);
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic_and_every_reply_decodes() {
+        let mut a = app(3, 1000);
+        // A deterministic pseudo-random stream with frames mixed in.
+        let mut x = 0x1234_5678u32;
+        let mut bytes = Vec::new();
+        for seq in 0..200u16 {
+            for _ in 0..(x % 40) {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                bytes.push((x >> 24) as u8);
+            }
+            bytes.extend(wire(seq));
+        }
+        let r = feed(&mut a, &bytes);
+        assert!(!r.is_empty());
+        assert!(r.windows(2).all(|w| w[1].estimate.seq > w[0].estimate.seq));
+    }
+}

@@ -1,0 +1,194 @@
+//! STM32F4 / netduinoplus2 board layer: registers, interrupt, clocks, the main loop.
+#![allow(unsafe_code)]
+
+use core::cell::RefCell;
+use core::ptr::{read_volatile, write_volatile};
+
+use cortex_m::interrupt::{self, Mutex};
+use cortex_m_rt::{entry, exception};
+use defmt_rtt as _;
+use estimator_core::Estimator;
+use estimator_core::wire::MAX_FRAME;
+use estimator_core::wire::estimate::TickSource;
+use firmware::{App, ByteQueue, Clock, Config};
+use panic_probe as _;
+
+/// HSI, the reset clock, which this firmware never changes.
+const SYSCLK_HZ: u32 = 16_000_000;
+const BAUD: u32 = 115_200;
+/// Room for several sensor frames (64 bytes each) while a step runs.
+const RX_CAPACITY: usize = 512;
+
+mod reg {
+    pub const RCC: usize = 0x4002_3800;
+    pub const RCC_AHB1ENR: usize = RCC + 0x30;
+    pub const RCC_APB1ENR: usize = RCC + 0x40;
+    pub const RCC_APB2ENR: usize = RCC + 0x44;
+    pub const GPIOA: usize = 0x4002_0000;
+    pub const GPIOA_MODER: usize = GPIOA;
+    pub const GPIOA_AFRH: usize = GPIOA + 0x24;
+    pub const USART1: usize = 0x4001_1000;
+    pub const USART1_SR: usize = USART1;
+    pub const USART1_DR: usize = USART1 + 0x04;
+    pub const USART1_BRR: usize = USART1 + 0x08;
+    pub const USART1_CR1: usize = USART1 + 0x0C;
+    pub const SR_RXNE: u32 = 1 << 5;
+    pub const SR_TXE: u32 = 1 << 7;
+    pub const CR1_UE: u32 = 1 << 13;
+    pub const CR1_RXNEIE: u32 = 1 << 5;
+    pub const CR1_TE: u32 = 1 << 3;
+    pub const CR1_RE: u32 = 1 << 2;
+    pub const TIM2: usize = 0x4000_0000;
+    pub const TIM2_CR1: usize = TIM2;
+    pub const TIM2_EGR: usize = TIM2 + 0x14;
+    pub const TIM2_CNT: usize = TIM2 + 0x24;
+    pub const TIM2_PSC: usize = TIM2 + 0x28;
+    pub const TIM2_ARR: usize = TIM2 + 0x2C;
+    /// USART1 global interrupt, IRQ 37 on every STM32F4.
+    pub const USART1_IRQ: i16 = 37;
+}
+
+fn rd(addr: usize) -> u32 {
+    // SAFETY: `addr` is one of the fixed, aligned peripheral registers in `reg`.
+    unsafe { read_volatile(addr as *const u32) }
+}
+
+fn wr(addr: usize, v: u32) {
+    // SAFETY: as in `rd`; these registers have no memory-safety side effects.
+    unsafe { write_volatile(addr as *mut u32, v) }
+}
+
+fn modify(addr: usize, f: impl FnOnce(u32) -> u32) {
+    wr(addr, f(rd(addr)));
+}
+
+static RX: Mutex<RefCell<ByteQueue<RX_CAPACITY>>> = Mutex::new(RefCell::new(ByteQueue::new()));
+
+#[derive(Clone, Copy)]
+struct Usart1Irq;
+// SAFETY: 37 is USART1's position in the STM32F4 vector table.
+unsafe impl cortex_m::interrupt::InterruptNumber for Usart1Irq {
+    fn number(self) -> u16 {
+        reg::USART1_IRQ as u16
+    }
+}
+
+/// The step clock chosen at start-up.
+enum BoardClock {
+    Cycles,
+    Instructions,
+}
+
+impl Clock for BoardClock {
+    fn now(&mut self) -> u32 {
+        match self {
+            BoardClock::Cycles => cortex_m::peripheral::DWT::cycle_count(),
+            BoardClock::Instructions => rd(reg::TIM2_CNT),
+        }
+    }
+    fn source(&self) -> TickSource {
+        match self {
+            BoardClock::Cycles => TickSource::Cycles,
+            BoardClock::Instructions => TickSource::Instructions,
+        }
+    }
+}
+
+fn init_clocks_and_pins() {
+    modify(reg::RCC_AHB1ENR, |v| v | 1); // GPIOA
+    modify(reg::RCC_APB2ENR, |v| v | 1 << 4); // USART1
+    modify(reg::RCC_APB1ENR, |v| v | 1); // TIM2
+    // PA9 (TX), PA10 (RX): alternate function 7.
+    modify(reg::GPIOA_MODER, |v| (v & !(0b1111 << 18)) | 0b1010 << 18);
+    modify(reg::GPIOA_AFRH, |v| (v & !(0xFF << 4)) | 0x77 << 4);
+}
+
+fn init_usart() {
+    wr(reg::USART1_BRR, (SYSCLK_HZ + BAUD / 2) / BAUD);
+    wr(
+        reg::USART1_CR1,
+        reg::CR1_UE | reg::CR1_TE | reg::CR1_RE | reg::CR1_RXNEIE,
+    );
+}
+
+/// DWT cycles if the counter runs, else TIM2 counting instructions (QEMU `-icount shift=0`).
+fn init_step_clock(mut core: cortex_m::Peripherals) -> BoardClock {
+    core.DCB.enable_trace();
+    core.DWT.enable_cycle_counter();
+    let before = cortex_m::peripheral::DWT::cycle_count();
+    cortex_m::asm::delay(100);
+    if cortex_m::peripheral::DWT::cycle_count() != before {
+        return BoardClock::Cycles;
+    }
+    wr(reg::TIM2_PSC, 0);
+    wr(reg::TIM2_ARR, u32::MAX);
+    wr(reg::TIM2_EGR, 1); // load PSC now
+    wr(reg::TIM2_CR1, 1);
+    BoardClock::Instructions
+}
+
+fn send(bytes: &[u8]) {
+    for b in bytes {
+        while rd(reg::USART1_SR) & reg::SR_TXE == 0 {}
+        wr(reg::USART1_DR, u32::from(*b));
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(core) = cortex_m::Peripherals::take() else {
+        // Only reachable if something else took them first; there is nothing to run without them.
+        loop {
+            cortex_m::asm::wfi();
+        }
+    };
+    init_clocks_and_pins();
+    let clock = init_step_clock(core);
+    defmt::info!("estimator firmware up; step clock {}", clock.source());
+    init_usart();
+    // SAFETY: the handler only touches `RX` inside a critical section.
+    unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
+
+    let mut app = App::new(Estimator::shipped(), clock, Config::fifty_ms_at(SYSCLK_HZ));
+    let mut out = [0u8; MAX_FRAME];
+    let mut batch = [0u8; 64];
+    loop {
+        let n = interrupt::free(|cs| {
+            let mut q = RX.borrow(cs).borrow_mut();
+            let mut n = 0;
+            for slot in batch.iter_mut() {
+                match q.pop() {
+                    Some(b) => {
+                        *slot = b;
+                        n += 1;
+                    }
+                    None => break,
+                }
+            }
+            if n == 0 {
+                // Sleep with interrupts masked: a byte arriving after the check still wakes the core.
+                cortex_m::asm::wfi();
+            }
+            n
+        });
+        for b in batch.iter().take(n) {
+            if let Some(len) = app.push(*b, &mut out) {
+                send(out.get(..len).unwrap_or(&[]));
+            }
+        }
+    }
+}
+
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    if irqn != reg::USART1_IRQ {
+        return;
+    }
+    interrupt::free(|cs| {
+        let mut q = RX.borrow(cs).borrow_mut();
+        // Reading SR then DR also clears an overrun.
+        while rd(reg::USART1_SR) & reg::SR_RXNE != 0 {
+            let _ = q.push(rd(reg::USART1_DR) as u8);
+        }
+    });
+}
