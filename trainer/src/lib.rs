@@ -1,1 +1,17 @@
-//! Being written (issue 5).
+//! Trainer of the synthetic air data estimator: dataset loading with the estimator's exact input
+//! contract, feature sets and leakage guard, burn models, quantization and code generation of
+//! `estimator-core/src/model/weights.rs`, an independent integer reference and test vectors,
+//! baselines, feature analysis and reports.
+pub mod baselines;
+pub mod data;
+pub mod error;
+pub mod export;
+pub mod features;
+pub mod metrics;
+pub mod model;
+pub mod pipeline;
+pub mod plots;
+pub mod prep;
+pub mod quant;
+
+pub use error::{Error, Result};

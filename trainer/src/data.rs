@@ -1,0 +1,282 @@
+//! Dataset loading (format: docs/architecture.md) and the exact estimator input contract: every row
+//! becomes `SensorFrame::from_si` of the 16 sensed SI columns, then `FeatureValues::compute`.
+use crate::error::{Error, Result, io};
+use estimator_core::{CHANNELS, Channel, FEATURE_COUNT, FeatureValues, SensorFrame};
+use serde::Deserialize;
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Deserialize)]
+pub struct ManifestFlight {
+    pub file: String,
+    pub name: String,
+    pub split: String,
+    #[serde(default)]
+    pub profile: Option<String>,
+    #[serde(default)]
+    pub seed: Option<u64>,
+    #[serde(default)]
+    pub cut: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+pub struct Manifest {
+    pub format: u32,
+    #[serde(default)]
+    pub preset: Option<String>,
+    pub flights: Vec<ManifestFlight>,
+}
+
+/// Which part of the experiment a flight belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Role {
+    Train,
+    /// A training flight held out for model selection.
+    Val,
+    /// A manifest test flight: unseen until evaluation.
+    Test,
+}
+
+/// Truth columns used as targets (the intermediate in SI; converted to mm/s and millidegrees by users).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    AlphaDeg,
+    BetaDeg,
+    WAero,
+    VAero,
+}
+
+impl Target {
+    pub const ALL: [Target; 4] = [
+        Target::AlphaDeg,
+        Target::BetaDeg,
+        Target::WAero,
+        Target::VAero,
+    ];
+    pub fn column(self) -> &'static str {
+        match self {
+            Target::AlphaDeg => "alpha_deg",
+            Target::BetaDeg => "beta_deg",
+            Target::WAero => "w_aero_mps",
+            Target::VAero => "v_aero_mps",
+        }
+    }
+}
+
+/// One flight: frames exactly as the estimator would receive them, their features, and the truth.
+#[derive(Debug, Clone)]
+pub struct Flight {
+    pub name: String,
+    pub role: Role,
+    pub time_s: Vec<f64>,
+    pub frames: Vec<SensorFrame>,
+    pub features: Vec<FeatureValues>,
+    /// Truth, indexed by `Target as usize`: α, β (deg), w, v (m/s).
+    pub truth: [Vec<f64>; 4],
+}
+
+impl Flight {
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+    pub fn truth(&self, t: Target) -> &[f64] {
+        &self.truth[t as usize]
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub dir: PathBuf,
+    /// SHA-256 of manifest.json (which carries each flight's own SHA-256).
+    pub manifest_sha256: String,
+    pub preset: Option<String>,
+    pub flights: Vec<Flight>,
+}
+
+/// How many training flights to hold out for validation: every `k`-th one, at least one when there
+/// are two or more training flights.
+pub fn validation_indices(n_train: usize, fraction: f64) -> Vec<usize> {
+    if n_train < 2 {
+        return Vec::new();
+    }
+    let n_val = ((n_train as f64 * fraction).round() as usize).clamp(1, n_train - 1);
+    let step = n_train as f64 / n_val as f64;
+    (0..n_val)
+        .map(|k| (((k as f64 + 0.5) * step) as usize).min(n_train - 1))
+        .collect()
+}
+
+impl Dataset {
+    /// Loads every flight of `dir/manifest.json`. `val_fraction` of the training flights (by flight,
+    /// evenly spread) become validation flights.
+    pub fn load(dir: &Path, val_fraction: f64) -> Result<Dataset> {
+        let mpath = dir.join("manifest.json");
+        let bytes = std::fs::read(&mpath).map_err(io(&mpath))?;
+        let manifest: Manifest =
+            serde_json::from_slice(&bytes).map_err(|source| Error::Manifest {
+                path: mpath.clone(),
+                source,
+            })?;
+        let manifest_sha256 = hex(&Sha256::digest(&bytes));
+        let train_names: Vec<&str> = manifest
+            .flights
+            .iter()
+            .filter(|f| f.split == "train")
+            .map(|f| f.name.as_str())
+            .collect();
+        let val: Vec<&str> = validation_indices(train_names.len(), val_fraction)
+            .into_iter()
+            .map(|i| train_names[i])
+            .collect();
+        let mut flights = Vec::new();
+        for mf in &manifest.flights {
+            let role = match mf.split.as_str() {
+                "train" if val.contains(&mf.name.as_str()) => Role::Val,
+                "train" => Role::Train,
+                "test" => Role::Test,
+                other => {
+                    return Err(Error::Split(
+                        dir.to_path_buf(),
+                        format!(
+                            "flight {} has split {other:?}: expected train or test",
+                            mf.name
+                        ),
+                    ));
+                }
+            };
+            flights.push(load_flight(&dir.join(&mf.file), &mf.name, role)?);
+        }
+        for role in [Role::Train, Role::Test] {
+            if !flights.iter().any(|f| f.role == role) {
+                return Err(Error::Split(
+                    dir.to_path_buf(),
+                    format!("no {role:?} flight in the manifest"),
+                ));
+            }
+        }
+        Ok(Dataset {
+            dir: dir.to_path_buf(),
+            manifest_sha256,
+            preset: manifest.preset,
+            flights,
+        })
+    }
+
+    pub fn flights(&self, role: Role) -> impl Iterator<Item = &Flight> {
+        self.flights.iter().filter(move |f| f.role == role)
+    }
+
+    pub fn rows(&self, role: Role) -> usize {
+        self.flights(role).map(|f| f.len()).sum()
+    }
+}
+
+pub fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Reads one flight CSV.
+pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
+    let csv_err = |source| Error::Csv {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut rd = csv::Reader::from_path(path).map_err(csv_err)?;
+    let headers = rd.headers().map_err(csv_err)?.clone();
+    let col = |name: &str| -> Result<usize> {
+        headers
+            .iter()
+            .position(|h| h.trim() == name)
+            .ok_or_else(|| Error::MissingColumn {
+                path: path.to_path_buf(),
+                column: name.to_string(),
+            })
+    };
+    let ch_cols: Vec<usize> = Channel::ALL
+        .iter()
+        .map(|c| col(c.name()))
+        .collect::<Result<_>>()?;
+    let t_col = col("time_s")?;
+    let truth_cols: Vec<usize> = Target::ALL
+        .iter()
+        .map(|t| col(t.column()))
+        .collect::<Result<_>>()?;
+    let mut fl = Flight {
+        name: name.to_string(),
+        role,
+        time_s: Vec::new(),
+        frames: Vec::new(),
+        features: Vec::new(),
+        truth: Default::default(),
+    };
+    for (i, rec) in rd.records().enumerate() {
+        let rec = rec.map_err(csv_err)?;
+        let num = |c: usize| -> Result<f64> {
+            let s = rec.get(c).unwrap_or("").trim();
+            s.parse::<f64>().map_err(|_| Error::BadNumber {
+                path: path.to_path_buf(),
+                line: i + 2,
+                column: headers.get(c).unwrap_or("?").to_string(),
+                value: s.to_string(),
+            })
+        };
+        let t = num(t_col)?;
+        let mut si = [0f64; CHANNELS];
+        for (v, c) in si.iter_mut().zip(&ch_cols) {
+            *v = num(*c)?;
+        }
+        let frame = frame_from_row(i, t, &si);
+        fl.features.push(FeatureValues::compute(&frame));
+        fl.frames.push(frame);
+        fl.time_s.push(t);
+        for (k, c) in truth_cols.iter().enumerate() {
+            fl.truth[k].push(num(*c)?);
+        }
+    }
+    Ok(fl)
+}
+
+/// The frame the link would deliver for dataset row `index` (sequence number wraps like the wire's).
+pub fn frame_from_row(index: usize, time_s: f64, si: &[f64; CHANNELS]) -> SensorFrame {
+    let time_ms = (time_s * 1000.0).round().max(0.0) as u32;
+    SensorFrame::from_si(index as u16, time_ms, si)
+}
+
+/// The float value of a feature the model is trained on: the quantized raw value times its LSB.
+pub fn feature_si(v: &FeatureValues, f: estimator_core::Feature) -> f64 {
+    v.get(f) as f64 * f.lsb()
+}
+
+/// Indices `0..FEATURE_COUNT` in `Feature::ALL` order (for analyses over every candidate).
+pub fn all_feature_indices() -> std::ops::Range<usize> {
+    0..FEATURE_COUNT
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validation_is_held_out_by_flight_and_never_everything() {
+        assert!(validation_indices(1, 0.2).is_empty());
+        assert_eq!(validation_indices(2, 0.2), vec![1]);
+        let v = validation_indices(20, 0.15);
+        assert_eq!(v.len(), 3);
+        assert!(v.windows(2).all(|w| w[0] < w[1]));
+        assert!(v.iter().all(|&i| i < 20));
+    }
+
+    #[test]
+    fn rows_become_frames_exactly_like_from_si() {
+        let mut si = [0.0; CHANNELS];
+        si[Channel::GpsSpeed.index()] = 201.2345;
+        si[Channel::AccelZ.index()] = -9.80665;
+        let f = frame_from_row(70_000, 12.3456, &si);
+        assert_eq!(f, SensorFrame::from_si(70_000u32 as u16, 12_346, &si));
+        assert_eq!(f.get(Channel::GpsSpeed), 201_235); // 201.2345 m/s → mm/s, rounded
+    }
+}

@@ -1,0 +1,50 @@
+//! Typed errors of the trainer library.
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error(
+        "{path} is not a valid dataset manifest: {source} (generate one with `hil-sim generate --out DIR`)"
+    )]
+    Manifest {
+        path: PathBuf,
+        source: serde_json::Error,
+    },
+    #[error("{path}: {source}")]
+    Csv { path: PathBuf, source: csv::Error },
+    #[error("{path}: missing column `{column}` (dataset format in docs/architecture.md)")]
+    MissingColumn { path: PathBuf, column: String },
+    #[error("{path} line {line}: column `{column}` is not a number: {value:?}")]
+    BadNumber {
+        path: PathBuf,
+        line: usize,
+        column: String,
+        value: String,
+    },
+    #[error("dataset {0}: {1}")]
+    Split(PathBuf, String),
+    #[error("unknown feature `{0}` (known: {1})")]
+    UnknownFeature(String, String),
+    #[error(
+        "`{0}` is air data and can never be a model input (it is what the model estimates, or derived from it)"
+    )]
+    Leakage(String),
+    #[error("model file {path}: {msg}")]
+    Model { path: PathBuf, msg: String },
+    #[error("{0}")]
+    Plot(String),
+    #[error("numerical problem: {0}")]
+    Numeric(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+pub(crate) fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Error {
+    let path = path.into();
+    move |source| Error::Io { path, source }
+}

@@ -1,0 +1,174 @@
+//! Input feature sets and the leakage guard: air data can never become a model input.
+use crate::error::{Error, Result};
+use estimator_core::{Channel, Feature};
+
+/// Dataset truth columns straight from the simulator: air data (what the model estimates, or derived
+/// from it) and the other truth values. None of them can ever be a model input.
+pub const AIR_DATA_COLUMNS: [&str; 17] = [
+    "alpha_deg",
+    "beta_deg",
+    "u_aero_mps",
+    "v_aero_mps",
+    "w_aero_mps",
+    "vt_mps",
+    "mach",
+    "qbar_pa",
+    "alt_msl_m",
+    "p_true_rps",
+    "q_true_rps",
+    "r_true_rps",
+    "phi_deg",
+    "theta_deg",
+    "psi_deg",
+    "nz_g",
+    "mass_kg",
+];
+
+/// Parses a feature name. Air-data names are refused with [`Error::Leakage`] before any lookup, and
+/// only names of [`Feature::ALL`] (sensed channels and features derived from them) are accepted.
+pub fn parse_feature(name: &str) -> Result<Feature> {
+    let name = name.trim();
+    if AIR_DATA_COLUMNS.contains(&name) {
+        return Err(Error::Leakage(name.to_string()));
+    }
+    Feature::from_name(name).ok_or_else(|| {
+        Error::UnknownFeature(
+            name.to_string(),
+            Feature::ALL
+                .iter()
+                .map(|f| f.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+        )
+    })
+}
+
+/// The paper's Table 1 inputs for α.
+pub const TABLE1_ALPHA: [Feature; 10] = [
+    Feature::Sensor(Channel::Elevator),
+    Feature::Sensor(Channel::Lef),
+    Feature::Sensor(Channel::Tef),
+    Feature::Sensor(Channel::Flaperon),
+    Feature::Sensor(Channel::Speedbrake),
+    Feature::Sensor(Channel::AccelX),
+    Feature::Sensor(Channel::AccelZ),
+    Feature::Sensor(Channel::GpsSpeed),
+    Feature::Sensor(Channel::Throttle),
+    Feature::Sensor(Channel::GpsAlt),
+];
+
+/// The paper's Table 1 inputs for β.
+pub const TABLE1_BETA: [Feature; 5] = [
+    Feature::Sensor(Channel::Rudder),
+    Feature::Sensor(Channel::Aileron),
+    Feature::Sensor(Channel::GyroR),
+    Feature::Sensor(Channel::GyroP),
+    Feature::Sensor(Channel::AccelY),
+];
+
+/// Physics features (IMU + GPS only) added by the `physics` feature set.
+pub const PHYSICS_ALPHA: [Feature; 3] = [
+    Feature::FxOverRhoV2,
+    Feature::FzOverRhoV2,
+    Feature::MachProxy,
+];
+pub const PHYSICS_BETA: [Feature; 3] = [Feature::FyOverRhoV2, Feature::MachProxy, Feature::RhoV2];
+
+/// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), or explicit
+/// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FeatureSet {
+    pub name: String,
+    pub alpha: Vec<Feature>,
+    pub beta: Vec<Feature>,
+}
+
+impl FeatureSet {
+    pub fn parse(spec: &str) -> Result<FeatureSet> {
+        match spec {
+            "table1" => Ok(FeatureSet {
+                name: "table1".into(),
+                alpha: TABLE1_ALPHA.to_vec(),
+                beta: TABLE1_BETA.to_vec(),
+            }),
+            "physics" => Ok(FeatureSet {
+                name: "physics".into(),
+                alpha: TABLE1_ALPHA.iter().chain(&PHYSICS_ALPHA).copied().collect(),
+                beta: TABLE1_BETA.iter().chain(&PHYSICS_BETA).copied().collect(),
+            }),
+            custom => {
+                let mut alpha = None;
+                let mut beta = None;
+                for part in custom.split(';') {
+                    let (k, v) = part.split_once('=').ok_or_else(|| {
+                        Error::UnknownFeature(
+                            part.into(),
+                            "feature sets: table1, physics, or alpha=a,b;beta=c,d".into(),
+                        )
+                    })?;
+                    let list = v
+                        .split(',')
+                        .map(parse_feature)
+                        .collect::<Result<Vec<_>>>()?;
+                    match k.trim() {
+                        "alpha" => alpha = Some(list),
+                        "beta" => beta = Some(list),
+                        other => {
+                            return Err(Error::UnknownFeature(other.into(), "alpha, beta".into()));
+                        }
+                    }
+                }
+                Ok(FeatureSet {
+                    name: custom.into(),
+                    alpha: alpha.unwrap_or_else(|| TABLE1_ALPHA.to_vec()),
+                    beta: beta.unwrap_or_else(|| TABLE1_BETA.to_vec()),
+                })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn air_data_can_never_become_an_input() {
+        for col in AIR_DATA_COLUMNS {
+            assert!(
+                matches!(parse_feature(col), Err(Error::Leakage(_))),
+                "{col}"
+            );
+            let spec = format!("alpha=elevator_deg,{col}");
+            assert!(FeatureSet::parse(&spec).is_err(), "{spec}");
+            // No candidate feature (sensed channel or derived) carries an air-data column's name.
+            assert!(Feature::ALL.iter().all(|f| f.name() != col));
+        }
+        // Every candidate is computed from sensed channels only.
+        for f in Feature::ALL {
+            assert_ne!(f.sources(), 0);
+            assert_eq!(f.sources() & !estimator_core::channels::ALL_VALID, 0);
+        }
+        for set in ["table1", "physics"] {
+            let s = FeatureSet::parse(set).unwrap();
+            for f in s.alpha.iter().chain(&s.beta) {
+                assert!(!AIR_DATA_COLUMNS.contains(&f.name()));
+            }
+        }
+    }
+
+    #[test]
+    fn table1_and_custom_sets_parse() {
+        let t = FeatureSet::parse("table1").unwrap();
+        assert_eq!((t.alpha.len(), t.beta.len()), (10, 5));
+        let p = FeatureSet::parse("physics").unwrap();
+        assert_eq!((p.alpha.len(), p.beta.len()), (13, 8));
+        let c = FeatureSet::parse("alpha=elevator_deg,mach_proxy;beta=accel_y_mps2").unwrap();
+        assert_eq!(
+            c.alpha,
+            vec![Feature::Sensor(Channel::Elevator), Feature::MachProxy]
+        );
+        assert_eq!(c.beta, vec![Feature::Sensor(Channel::AccelY)]);
+        assert!(FeatureSet::parse("alpha=airspeed").is_err());
+    }
+}

@@ -1,0 +1,346 @@
+//! The networks in burn (flex backend: pure Rust, bit-deterministic): a plain MLP and the cascade of
+//! Fig. 7 (part 1 → intermediate; part 2 on the features plus the intermediate), trained jointly on
+//! MSE(intermediate) + MSE(angle) with Adam.
+use burn::module::Module;
+use burn::nn::{Linear, LinearConfig};
+use burn::optim::{AdamConfig, GradientsParams};
+use burn::tensor::activation::relu;
+use burn::tensor::{Device, Tensor, TensorData};
+use indicatif::{ProgressBar, ProgressStyle};
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
+
+/// A float dense layer as exported from burn: `weights[o][i]`, `bias[o]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FloatLayer {
+    pub weights: Vec<Vec<f32>>,
+    pub bias: Vec<f32>,
+}
+
+impl FloatLayer {
+    pub fn n_in(&self) -> usize {
+        self.weights.first().map_or(0, |r| r.len())
+    }
+    pub fn n_out(&self) -> usize {
+        self.weights.len()
+    }
+}
+
+/// Float forward pass of an exported MLP (ReLU between layers), recording every hidden activation.
+pub fn float_forward(
+    layers: &[FloatLayer],
+    x: &[f32],
+    mut hidden: impl FnMut(usize, &[f32]),
+) -> f32 {
+    let mut cur = x.to_vec();
+    for (k, l) in layers.iter().enumerate() {
+        let last = k + 1 == layers.len();
+        let mut y: Vec<f32> = l
+            .weights
+            .iter()
+            .zip(&l.bias)
+            .map(|(row, b)| row.iter().zip(&cur).fold(*b, |s, (w, x)| s + w * x))
+            .collect();
+        if !last {
+            for v in &mut y {
+                *v = v.max(0.0);
+            }
+            hidden(k, &y);
+        }
+        cur = y;
+    }
+    cur.first().copied().unwrap_or(0.0)
+}
+
+#[derive(Module, Debug)]
+pub struct Mlp {
+    layers: Vec<Linear>,
+}
+
+impl Mlp {
+    /// `dims = [in, h1, ..., out]`.
+    pub fn new(dims: &[usize], device: &Device) -> Mlp {
+        Mlp {
+            layers: dims
+                .windows(2)
+                .map(|w| LinearConfig::new(w[0], w[1]).init(device))
+                .collect(),
+        }
+    }
+
+    pub fn forward(&self, mut x: Tensor<2>) -> Tensor<2> {
+        let n = self.layers.len();
+        for (k, l) in self.layers.iter().enumerate() {
+            x = l.forward(x);
+            if k + 1 < n {
+                x = relu(x);
+            }
+        }
+        x
+    }
+
+    /// Weights out of burn (`Linear` stores `[in, out]`, y = xW + b) into `[out][in]` rows.
+    pub fn export(&self) -> Vec<FloatLayer> {
+        self.layers
+            .iter()
+            .map(|l| {
+                let [n_in, n_out] = l.weight.val().dims();
+                let w = l
+                    .weight
+                    .val()
+                    .into_data()
+                    .try_to_vec::<f32>()
+                    .unwrap_or_default();
+                let b = l
+                    .bias
+                    .as_ref()
+                    .map(|b| b.val().into_data().try_to_vec::<f32>().unwrap_or_default())
+                    .unwrap_or_else(|| vec![0.0; n_out]);
+                FloatLayer {
+                    weights: (0..n_out)
+                        .map(|o| (0..n_in).map(|i| w[i * n_out + o]).collect())
+                        .collect(),
+                    bias: b,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Paper Fig. 7: one network per angle, two parts.
+#[derive(Module, Debug)]
+pub struct Cascade {
+    pub part1: Mlp,
+    pub part2: Mlp,
+}
+
+impl Cascade {
+    pub fn new(n_in: usize, hidden: &[usize], device: &Device) -> Cascade {
+        let dims = |n: usize| {
+            let mut d = vec![n];
+            d.extend_from_slice(hidden);
+            d.push(1);
+            d
+        };
+        Cascade {
+            part1: Mlp::new(&dims(n_in), device),
+            part2: Mlp::new(&dims(n_in + 1), device),
+        }
+    }
+
+    /// (intermediate, angle), both normalised.
+    pub fn forward(&self, x: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
+        let mid = self.part1.forward(x.clone());
+        let out = self.part2.forward(Tensor::cat(vec![x, mid.clone()], 1));
+        (mid, out)
+    }
+}
+
+/// What is trained: the cascade (both losses) or a plain MLP (angle loss only).
+pub trait Net: Module + Sized {
+    /// Per-head losses `[intermediate, angle]` (a plain MLP reports 0 for the intermediate).
+    fn losses(&self, x: Tensor<2>, ym: Tensor<2>, yo: Tensor<2>) -> (Tensor<1>, Tensor<1>);
+    /// Predicted normalised (intermediate, angle) per row.
+    fn predict(&self, x: Tensor<2>) -> (Vec<f32>, Vec<f32>);
+}
+
+fn mse(a: Tensor<2>, b: Tensor<2>) -> Tensor<1> {
+    let d = a - b;
+    (d.clone() * d).mean()
+}
+
+fn to_vec(t: Tensor<2>) -> Vec<f32> {
+    t.into_data().try_to_vec::<f32>().unwrap_or_default()
+}
+
+impl Net for Cascade {
+    fn losses(&self, x: Tensor<2>, ym: Tensor<2>, yo: Tensor<2>) -> (Tensor<1>, Tensor<1>) {
+        let (m, o) = self.forward(x);
+        (mse(m, ym), mse(o, yo))
+    }
+    fn predict(&self, x: Tensor<2>) -> (Vec<f32>, Vec<f32>) {
+        let (m, o) = self.forward(x);
+        (to_vec(m), to_vec(o))
+    }
+}
+
+impl Net for Mlp {
+    fn losses(&self, x: Tensor<2>, ym: Tensor<2>, yo: Tensor<2>) -> (Tensor<1>, Tensor<1>) {
+        let o = self.forward(x);
+        (mse(ym.clone(), ym), mse(o, yo))
+    }
+    fn predict(&self, x: Tensor<2>) -> (Vec<f32>, Vec<f32>) {
+        let o = to_vec(self.forward(x));
+        (vec![0.0; o.len()], o)
+    }
+}
+
+/// Rows of a design matrix with both targets.
+pub struct Matrix<'a> {
+    pub x: &'a [f32],
+    pub ym: &'a [f32],
+    pub yo: &'a [f32],
+    pub n_in: usize,
+}
+
+impl Matrix<'_> {
+    pub fn rows(&self) -> usize {
+        self.yo.len()
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct TrainConfig {
+    pub epochs: usize,
+    pub batch: usize,
+    pub lr: f64,
+    pub seed: u64,
+    pub label: String,
+    pub progress: bool,
+}
+
+/// Per-epoch mean losses `[mid, angle]` of the training batches and of the validation set.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct Curves {
+    pub train: Vec<[f64; 2]>,
+    pub val: Vec<[f64; 2]>,
+    pub epoch_s: Vec<f64>,
+    pub best_epoch: usize,
+}
+
+/// Predictions (normalised) in batches on the plain device.
+pub fn predict_all<M: Net>(model: &M, x: &[f32], n_in: usize) -> (Vec<f32>, Vec<f32>) {
+    let dev = Device::flex();
+    let n = x.len() / n_in.max(1);
+    let (mut pm, mut po) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for start in (0..n).step_by(8192) {
+        let end = (start + 8192).min(n);
+        let t = Tensor::<2>::from_data(
+            TensorData::new(x[start * n_in..end * n_in].to_vec(), [end - start, n_in]),
+            &dev,
+        );
+        let (m, o) = model.predict(t);
+        pm.extend(m);
+        po.extend(o);
+    }
+    (pm, po)
+}
+
+fn val_losses<M: Net>(model: &M, val: &Matrix) -> [f64; 2] {
+    let (pm, po) = predict_all(model, val.x, val.n_in);
+    let n = val.rows().max(1) as f64;
+    let m = pm
+        .iter()
+        .zip(val.ym)
+        .map(|(p, y)| ((p - y) as f64).powi(2))
+        .sum::<f64>()
+        / n;
+    let o = po
+        .iter()
+        .zip(val.yo)
+        .map(|(p, y)| ((p - y) as f64).powi(2))
+        .sum::<f64>()
+        / n;
+    [m, o]
+}
+
+static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Trains with Adam (cosine-decayed learning rate), mini-batches shuffled by a seeded ChaCha8, and keeps
+/// the epoch with the lowest validation loss (sum of both heads). Deterministic for a given seed.
+pub fn train<M: Net>(
+    init: impl FnOnce(&Device) -> M,
+    cfg: &TrainConfig,
+    train: &Matrix,
+    val: &Matrix,
+) -> (M, Curves) {
+    let device = Device::flex().autodiff();
+    // The backend's RNG is process-global: seeding and initialising under one lock keeps concurrent
+    // trainings (tests, report runs) deterministic.
+    let mut model = {
+        let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        device.seed(cfg.seed);
+        Device::flex().seed(cfg.seed);
+        init(&device)
+    };
+    let mut optim = AdamConfig::new().init();
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let n = train.rows();
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut curves = Curves::default();
+    let mut best: Option<(f64, M)> = None;
+    let pb = if cfg.progress {
+        let pb = ProgressBar::new(cfg.epochs as u64);
+        pb.set_style(
+            ProgressStyle::with_template("{prefix} [{bar:30}] epoch {pos}/{len} {msg} ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        pb.set_prefix(cfg.label.clone());
+        pb
+    } else {
+        ProgressBar::hidden()
+    };
+    let n_in = train.n_in;
+    let (mut bx, mut bm, mut bo) = (Vec::new(), Vec::new(), Vec::new());
+    for epoch in 0..cfg.epochs {
+        let t0 = Instant::now();
+        let lr = cfg.lr
+            * (0.05
+                + 0.95
+                    * 0.5
+                    * (1.0 + (std::f64::consts::PI * epoch as f64 / cfg.epochs as f64).cos()));
+        order.shuffle(&mut rng);
+        let (mut sm, mut so, mut nb) = (0f64, 0f64, 0usize);
+        for chunk in order.chunks(cfg.batch) {
+            bx.clear();
+            bm.clear();
+            bo.clear();
+            for &i in chunk {
+                bx.extend_from_slice(&train.x[i * n_in..(i + 1) * n_in]);
+                bm.push(train.ym[i]);
+                bo.push(train.yo[i]);
+            }
+            let b = chunk.len();
+            let x = Tensor::<2>::from_data(TensorData::new(bx.clone(), [b, n_in]), &device);
+            let ym = Tensor::<2>::from_data(TensorData::new(bm.clone(), [b, 1]), &device);
+            let yo = Tensor::<2>::from_data(TensorData::new(bo.clone(), [b, 1]), &device);
+            let (lm, lo) = model.losses(x, ym, yo);
+            let loss = lm.clone() + lo.clone();
+            sm += lm.into_scalar::<f32>() as f64;
+            so += lo.into_scalar::<f32>() as f64;
+            nb += 1;
+            let grads = GradientsParams::from_grads(loss.backward(), &model);
+            model = optim.step(lr, model, grads);
+        }
+        let nbf = nb.max(1) as f64;
+        curves.train.push([sm / nbf, so / nbf]);
+        let v = if val.rows() > 0 {
+            val_losses(&model.valid(), val)
+        } else {
+            [sm / nbf, so / nbf]
+        };
+        curves.val.push(v);
+        curves.epoch_s.push(t0.elapsed().as_secs_f64());
+        let score = v[0] + v[1];
+        if best.as_ref().is_none_or(|(s, _)| score < *s) {
+            best = Some((score, model.valid()));
+            curves.best_epoch = epoch;
+        }
+        pb.set_message(format!(
+            "train {:.4}/{:.4} val {:.4}/{:.4}",
+            sm / nbf,
+            so / nbf,
+            v[0],
+            v[1]
+        ));
+        pb.inc(1);
+    }
+    pb.finish();
+    let model = match best {
+        Some((_, m)) => m,
+        None => model.valid(),
+    };
+    (model, curves)
+}

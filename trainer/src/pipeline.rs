@@ -1,0 +1,215 @@
+//! Train → quantize → evaluate one angle's cascade; evaluate the compiled-in model.
+use crate::data::{Dataset, Flight, Role};
+use crate::metrics::FlightMetrics;
+use crate::model::{Cascade, Curves, FloatLayer, Matrix, TrainConfig, predict_all, train};
+use crate::prep::{Angle, Prep};
+use crate::quant::{QCascade, quantize_cascade};
+use estimator_core::{Estimator, Feature};
+
+/// Network sizes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Size {
+    /// CI: α 32-16, β 16-8 per part.
+    Small,
+    /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
+    Paper,
+}
+
+impl Size {
+    pub fn parse(s: &str) -> Option<Size> {
+        match s {
+            "small" => Some(Size::Small),
+            "paper" => Some(Size::Paper),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Size::Small => "small",
+            Size::Paper => "paper",
+        }
+    }
+    pub fn hidden(self, a: Angle) -> &'static [usize] {
+        match (self, a) {
+            (Size::Small, Angle::Alpha) => &[32, 16],
+            (Size::Small, Angle::Beta) => &[16, 8],
+            (Size::Paper, Angle::Alpha) => &[512, 256, 128, 64, 32],
+            (Size::Paper, Angle::Beta) => &[32, 16, 8, 4, 2],
+        }
+    }
+}
+
+/// A trained and quantized cascade with its test metrics.
+pub struct Trained {
+    pub angle: Angle,
+    pub model: Cascade,
+    pub part1: Vec<FloatLayer>,
+    pub part2: Vec<FloatLayer>,
+    pub q: QCascade,
+    pub curves: Curves,
+    pub float_test: FlightMetrics,
+    pub int_test: FlightMetrics,
+    /// Float and int8 predictions (degrees) per test flight, for plots.
+    pub series: Vec<(String, Vec<f64>, Vec<f64>, Vec<f64>)>,
+}
+
+pub fn flights(ds: &Dataset, role: Role) -> Vec<&Flight> {
+    ds.flights(role).collect()
+}
+
+/// Evenly spread training rows' inputs for activation calibration.
+pub fn calibration(prep: &Prep, train: &[&Flight], max_rows: usize) -> Vec<Vec<f32>> {
+    let total: usize = train.iter().map(|f| f.len()).sum();
+    let step = total.div_ceil(max_rows.max(1)).max(1);
+    let mut out = Vec::new();
+    let mut k = 0usize;
+    for fl in train {
+        for v in &fl.features {
+            if k.is_multiple_of(step) {
+                let mut x = Vec::new();
+                prep.input(v, &mut x);
+                out.push(x);
+            }
+            k += 1;
+        }
+    }
+    out
+}
+
+pub fn train_angle(
+    ds: &Dataset,
+    angle: Angle,
+    features: &[Feature],
+    size: Size,
+    cfg: &TrainConfig,
+) -> Trained {
+    let tr = flights(ds, Role::Train);
+    let va = flights(ds, Role::Val);
+    let prep = Prep::fit(angle, features, &tr);
+    let (x, ym, yo) = prep.matrix(&tr);
+    let (vx, vym, vyo) = prep.matrix(&va);
+    let n_in = prep.n_inputs();
+    let hidden = size.hidden(angle);
+    let (model, curves) = train(
+        |d| Cascade::new(n_in, hidden, d),
+        cfg,
+        &Matrix {
+            x: &x,
+            ym: &ym,
+            yo: &yo,
+            n_in,
+        },
+        &Matrix {
+            x: &vx,
+            ym: &vym,
+            yo: &vyo,
+            n_in,
+        },
+    );
+    let part1 = model.part1.export();
+    let part2 = model.part2.export();
+    let calib = calibration(&prep, &tr, 20_000);
+    let q = quantize_cascade(&prep, &part1, &part2, &calib);
+    let (float_test, int_test, series) = evaluate(&model, &q, ds);
+    Trained {
+        angle,
+        model,
+        part1,
+        part2,
+        q,
+        curves,
+        float_test,
+        int_test,
+        series,
+    }
+}
+
+/// Float and integer-reference metrics of a cascade on the test flights.
+#[allow(clippy::type_complexity)]
+pub fn evaluate(
+    model: &Cascade,
+    q: &QCascade,
+    ds: &Dataset,
+) -> (
+    FlightMetrics,
+    FlightMetrics,
+    Vec<(String, Vec<f64>, Vec<f64>, Vec<f64>)>,
+) {
+    let prep = &q.prep;
+    let mut fl_f = Vec::new();
+    let mut fl_i = Vec::new();
+    let mut series = Vec::new();
+    for fl in ds.flights(Role::Test) {
+        let (x, _, _) = prep.matrix(&[fl]);
+        let (_, po) = predict_all(model, &x, prep.n_inputs());
+        let pf: Vec<f64> = po.iter().map(|z| prep.out_deg(*z as f64)).collect();
+        let pi: Vec<f64> = fl
+            .features
+            .iter()
+            .map(|v| q.reference(v).angle as f64 / 1000.0)
+            .collect();
+        let truth = fl.truth(prep.angle.target()).to_vec();
+        fl_f.push((fl.name.clone(), pf.clone(), truth.clone()));
+        fl_i.push((fl.name.clone(), pi.clone(), truth.clone()));
+        series.push((fl.name.clone(), truth, pf, pi));
+    }
+    (FlightMetrics::of(&fl_f), FlightMetrics::of(&fl_i), series)
+}
+
+/// Result of running the compiled-in model through `Estimator::shipped()` on the test flights.
+pub struct ShippedEval {
+    pub alpha: FlightMetrics,
+    pub beta: FlightMetrics,
+    /// Frames whose estimate was held, out of envelope, or missing, per flight.
+    pub flagged: Vec<(String, usize, usize)>,
+    pub provenance: Option<&'static str>,
+}
+
+/// Steps a fresh `Estimator::shipped()` through every test flight, frame by frame, exactly as the
+/// firmware would (including held values on invalid or stuck channels).
+pub fn eval_shipped(ds: &Dataset) -> ShippedEval {
+    let mut a = Vec::new();
+    let mut b = Vec::new();
+    let mut flagged = Vec::new();
+    for fl in ds.flights(Role::Test) {
+        let mut est = Estimator::shipped();
+        let (mut pa, mut pb) = (Vec::new(), Vec::new());
+        let (mut held, mut env) = (0usize, 0usize);
+        for f in &fl.frames {
+            let e = est.step(f);
+            if !e.flags.is_usable() {
+                held += 1;
+            }
+            if e.flags.has(estimator_core::Flags::OUT_OF_ENVELOPE) {
+                env += 1;
+            }
+            pa.push(e.alpha_deg());
+            pb.push(e.beta_deg());
+        }
+        a.push((
+            fl.name.clone(),
+            pa,
+            fl.truth(Angle::Alpha.target()).to_vec(),
+        ));
+        b.push((fl.name.clone(), pb, fl.truth(Angle::Beta.target()).to_vec()));
+        flagged.push((fl.name.clone(), held, env));
+    }
+    ShippedEval {
+        alpha: FlightMetrics::of(&a),
+        beta: FlightMetrics::of(&b),
+        flagged,
+        provenance: shipped_provenance(),
+    }
+}
+
+/// PROVENANCE of the compiled-in model, if this build has one.
+pub fn shipped_provenance() -> Option<&'static str> {
+    #[cfg(trainer_has_model)]
+    {
+        Some(estimator_core::model::PROVENANCE)
+    }
+    #[cfg(not(trainer_has_model))]
+    {
+        None
+    }
+}

@@ -1,0 +1,239 @@
+//! PNG plots (plotters, bitmap backend, embedded DejaVu Sans so no system fonts are needed).
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use std::path::Path;
+use std::sync::Once;
+
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+fn font() {
+    REGISTER.call_once(|| {
+        // The embedded font is a valid TTF; if registration failed, text drawing reports the error.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+fn perr<E: std::fmt::Display>(e: E) -> Error {
+    Error::Plot(e.to_string())
+}
+
+const COLORS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// One line of a line chart.
+pub struct Series<'a> {
+    pub name: String,
+    pub points: &'a [(f64, f64)],
+}
+
+/// Several panels of line charts side by side, each `(title, x label, y label, log y, series)`.
+pub fn line_panels(
+    path: &Path,
+    panels: &[(String, &str, &str, bool, Vec<Series>)],
+    panel_w: u32,
+    h: u32,
+) -> Result<()> {
+    font();
+    let root = BitMapBackend::new(path, (panel_w * panels.len() as u32, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let areas = root.split_evenly((1, panels.len()));
+    for ((title, xl, yl, logy, series), area) in panels.iter().zip(areas) {
+        let pts = series.iter().flat_map(|s| s.points.iter());
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for (x, y) in pts {
+            if !x.is_finite() || !y.is_finite() || (*logy && *y <= 0.0) {
+                continue;
+            }
+            x0 = x0.min(*x);
+            x1 = x1.max(*x);
+            y0 = y0.min(*y);
+            y1 = y1.max(*y);
+        }
+        if x0 > x1 {
+            continue;
+        }
+        if x1 <= x0 {
+            x1 = x0 + 1.0;
+        }
+        if y1 <= y0 {
+            y1 = y0 + 1e-9_f64.max(y0.abs() * 0.1);
+        }
+        let mut b = ChartBuilder::on(&area);
+        b.caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60);
+        macro_rules! draw {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(*xl)
+                    .y_desc(*yl)
+                    .draw()
+                    .map_err(perr)?;
+                for (k, s) in series.iter().enumerate() {
+                    let c = COLORS[k % COLORS.len()];
+                    chart
+                        .draw_series(LineSeries::new(
+                            s.points.iter().copied().filter(|(x, y)| {
+                                x.is_finite() && y.is_finite() && (!*logy || *y > 0.0)
+                            }),
+                            c.stroke_width(2),
+                        ))
+                        .map_err(perr)?
+                        .label(s.name.clone())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(perr)?;
+            }};
+        }
+        if *logy {
+            draw!(
+                b.build_cartesian_2d(x0..x1, (y0 * 0.9..y1 * 1.1).log_scale())
+                    .map_err(perr)?
+            );
+        } else {
+            let pad = (y1 - y0) * 0.05;
+            draw!(
+                b.build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)
+                    .map_err(perr)?
+            );
+        }
+    }
+    root.present().map_err(perr)?;
+    Ok(())
+}
+
+/// Horizontal bar chart (e.g. mean |SHAP| per feature), largest first.
+pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> Result<()> {
+    font();
+    let mut items = items.to_vec();
+    items.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let h = 80 + 28 * items.len() as u32;
+    let root = BitMapBackend::new(path, (800, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let max = items.iter().map(|i| i.1).fold(0.0, f64::max).max(1e-12);
+    let n = items.len();
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(150)
+        .build_cartesian_2d(0.0..max * 1.1, (0..n).into_segmented())
+        .map_err(perr)?;
+    let names: Vec<String> = items.iter().map(|i| i.0.clone()).collect();
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_labels(n)
+        .y_label_formatter(&|v| match v {
+            SegmentValue::CenterOf(i) => names.get(n - 1 - *i).cloned().unwrap_or_default(),
+            _ => String::new(),
+        })
+        .draw()
+        .map_err(perr)?;
+    chart
+        .draw_series(items.iter().enumerate().map(|(i, (_, v))| {
+            let y = n - 1 - i;
+            let mut r = Rectangle::new(
+                [
+                    (0.0, SegmentValue::Exact(y)),
+                    (*v, SegmentValue::Exact(y + 1)),
+                ],
+                COLORS[0].filled(),
+            );
+            r.set_margin(3, 3, 0, 0);
+            r
+        }))
+        .map_err(perr)?;
+    root.present().map_err(perr)?;
+    Ok(())
+}
+
+/// Correlation heatmap, values in -1..=1 (blue negative, red positive).
+pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Result<()> {
+    font();
+    let n = names.len();
+    let cell = 34u32;
+    let side = 190 + cell * n as u32;
+    let root = BitMapBackend::new(path, (side + 20, side + 40)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 18))
+        .margin(10)
+        .x_label_area_size(170)
+        .y_label_area_size(170)
+        .build_cartesian_2d((0..n).into_segmented(), (0..n).into_segmented())
+        .map_err(perr)?;
+    let label = |v: &SegmentValue<usize>| match v {
+        SegmentValue::CenterOf(i) => names.get(*i).cloned().unwrap_or_default(),
+        _ => String::new(),
+    };
+    let ylabel = |v: &SegmentValue<usize>| match v {
+        SegmentValue::CenterOf(i) => names.get(n - 1 - *i).cloned().unwrap_or_default(),
+        _ => String::new(),
+    };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(n)
+        .y_labels(n)
+        .x_label_formatter(&label)
+        .y_label_formatter(&ylabel)
+        .x_label_style(
+            ("sans-serif", 12)
+                .into_font()
+                .transform(FontTransform::Rotate90),
+        )
+        .y_label_style(("sans-serif", 12))
+        .draw()
+        .map_err(perr)?;
+    for (i, row) in m.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            let v = if v.is_finite() {
+                v.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            let t = (v.abs() * 255.0) as u8;
+            let c = if v >= 0.0 {
+                RGBColor(255, 255 - t, 255 - t)
+            } else {
+                RGBColor(255 - t, 255 - t, 255)
+            };
+            let y = n - 1 - i;
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [
+                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    c.filled(),
+                )))
+                .map_err(perr)?;
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("{:.1}", v),
+                    (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
+                    ("sans-serif", 10).into_font().color(&BLACK),
+                )))
+                .map_err(perr)?;
+        }
+    }
+    root.present().map_err(perr)?;
+    Ok(())
+}

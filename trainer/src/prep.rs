@@ -1,0 +1,218 @@
+//! Normalisation shared by training, quantization and the integer reference: the float model is
+//! trained on exactly the scaling the integer `Norm`s apply (integer centers, `mult / 2^shift` slopes).
+use crate::data::{Flight, Target};
+use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
+use estimator_core::{Feature, FeatureValues};
+
+/// Largest `|z|` the int16 input can carry (32767 / 4096).
+pub const Z_MAX: f64 = i16::MAX as f64 / ONE_SIGMA as f64;
+
+/// `(mult, shift)` with `mult / 2^shift ≈ ratio`, `1 ≤ shift ≤ 62`, `0 < mult ≤ limit`.
+pub fn fixed_point(ratio: f64, limit: i64) -> (i32, u8) {
+    let mut best = (1i32, 62u8);
+    for shift in (1..=62u8).rev() {
+        let m = (ratio * (1u64 << shift) as f64).round();
+        if m >= 1.0 && m <= limit as f64 {
+            best = (m as i32, shift);
+            break;
+        }
+    }
+    best
+}
+
+/// Real value of `mult / 2^shift`.
+pub fn fp_value(mult: i32, shift: u8) -> f64 {
+    mult as f64 / (1u64 << shift) as f64
+}
+
+/// A `Norm` mapping `center ± sigma` (raw units) to `±ONE_SIGMA`; `mult ≤ 2^30` so `(raw - center) ×
+/// mult` cannot overflow i64 even for the full i32 range.
+pub fn norm_for(center: i32, sigma: f64) -> Norm {
+    let sigma = if sigma.is_finite() && sigma > 0.0 {
+        sigma
+    } else {
+        1.0
+    };
+    let (mult, shift) = fixed_point(ONE_SIGMA as f64 / sigma, 1 << 30);
+    Norm {
+        center,
+        mult,
+        shift,
+    }
+}
+
+/// Float image of `Norm::apply` divided by ONE_SIGMA (no rounding, same slope and center).
+pub fn norm_z(n: Norm, raw: f64) -> f64 {
+    (raw - n.center as f64) * fp_value(n.mult, n.shift) / ONE_SIGMA as f64
+}
+
+fn mean_std(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let (mut n, mut s, mut s2) = (0f64, 0f64, 0f64);
+    for x in v {
+        n += 1.0;
+        s += x;
+        s2 += x * x;
+    }
+    let m = s / n.max(1.0);
+    (m, (s2 / n.max(1.0) - m * m).max(0.0).sqrt())
+}
+
+/// Which angle a cascade estimates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Angle {
+    Alpha,
+    Beta,
+}
+
+impl Angle {
+    pub fn target(self) -> Target {
+        match self {
+            Angle::Alpha => Target::AlphaDeg,
+            Angle::Beta => Target::BetaDeg,
+        }
+    }
+    pub fn intermediate(self) -> Target {
+        match self {
+            Angle::Alpha => Target::WAero,
+            Angle::Beta => Target::VAero,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Angle::Alpha => "alpha",
+            Angle::Beta => "beta",
+        }
+    }
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Angle::Alpha => "α",
+            Angle::Beta => "β",
+        }
+    }
+}
+
+/// Scaling of one angle's cascade, fitted on training flights only.
+#[derive(Debug, Clone)]
+pub struct Prep {
+    pub angle: Angle,
+    pub features: Vec<Feature>,
+    pub norm: Vec<Norm>,
+    pub envelope: Vec<Envelope>,
+    /// Intermediate (mm/s) → part-2 input.
+    pub mid_norm: Norm,
+    /// Angle (millidegrees) center and standard deviation.
+    pub out_center: i32,
+    pub out_sigma: f64,
+    pub out_range: Envelope,
+}
+
+impl Prep {
+    pub fn fit<'a>(angle: Angle, features: &[Feature], train: &[&'a Flight]) -> Prep {
+        let rows = || train.iter().flat_map(|f| f.features.iter());
+        let mut norm = Vec::new();
+        let mut envelope = Vec::new();
+        for f in features {
+            let vals = rows().map(|v| v.get(*f) as f64);
+            let (m, s) = mean_std(vals);
+            norm.push(norm_for(m.round() as i32, s));
+            let lo = rows().map(|v| v.get(*f)).min().unwrap_or(0);
+            let hi = rows().map(|v| v.get(*f)).max().unwrap_or(0);
+            envelope.push(Envelope { lo, hi });
+        }
+        let mid = || {
+            train
+                .iter()
+                .flat_map(|f| f.truth(angle.intermediate()).iter().map(|v| v * 1000.0))
+        };
+        let (mm, ms) = mean_std(mid());
+        let out = || {
+            train
+                .iter()
+                .flat_map(|f| f.truth(angle.target()).iter().map(|v| v * 1000.0))
+        };
+        let (om, os) = mean_std(out());
+        let lo = out().fold(f64::INFINITY, f64::min).floor() as i32;
+        let hi = out().fold(f64::NEG_INFINITY, f64::max).ceil() as i32;
+        Prep {
+            angle,
+            features: features.to_vec(),
+            norm,
+            envelope,
+            mid_norm: norm_for(mm.round() as i32, ms),
+            out_center: om.round() as i32,
+            out_sigma: if os > 0.0 { os } else { 1.0 },
+            out_range: Envelope { lo, hi },
+        }
+    }
+
+    pub fn n_inputs(&self) -> usize {
+        self.features.len()
+    }
+
+    /// Network input (in σ) of one frame: clamped to the envelope and the int16 range like the target.
+    pub fn input(&self, v: &FeatureValues, out: &mut Vec<f32>) {
+        for ((f, n), e) in self.features.iter().zip(&self.norm).zip(&self.envelope) {
+            let (raw, _) = e.clamp(v.get(*f));
+            out.push(norm_z(*n, raw as f64).clamp(-Z_MAX, Z_MAX) as f32);
+        }
+    }
+
+    /// Normalised intermediate target from m/s.
+    pub fn mid_z(&self, mps: f64) -> f32 {
+        norm_z(self.mid_norm, mps * 1000.0) as f32
+    }
+    /// m/s from a normalised intermediate.
+    pub fn mid_mps(&self, z: f64) -> f64 {
+        (z * ONE_SIGMA as f64 / fp_value(self.mid_norm.mult, self.mid_norm.shift)
+            + self.mid_norm.center as f64)
+            / 1000.0
+    }
+    /// Normalised angle target from degrees.
+    pub fn out_z(&self, deg: f64) -> f32 {
+        ((deg * 1000.0 - self.out_center as f64) / self.out_sigma) as f32
+    }
+    /// Degrees from a normalised angle, clamped to the training range like the estimator.
+    pub fn out_deg(&self, z: f64) -> f64 {
+        let mdeg = z * self.out_sigma + self.out_center as f64;
+        mdeg.clamp(self.out_range.lo as f64, self.out_range.hi as f64) / 1000.0
+    }
+
+    /// Inputs and both normalised targets of every row of `flights`.
+    pub fn matrix(&self, flights: &[&Flight]) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+        let mut x = Vec::new();
+        let mut ym = Vec::new();
+        let mut yo = Vec::new();
+        for fl in flights {
+            for (i, v) in fl.features.iter().enumerate() {
+                self.input(v, &mut x);
+                ym.push(self.mid_z(fl.truth(self.angle.intermediate())[i]));
+                yo.push(self.out_z(fl.truth(self.angle.target())[i]));
+            }
+        }
+        (x, ym, yo)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_is_close_and_in_range() {
+        for r in [1e-9, 3.3e-5, 0.0137, 1.0, 4096.0 / 3.0, 4096.0] {
+            let (m, s) = fixed_point(r, 1 << 30);
+            assert!((1..=62).contains(&s));
+            assert!(m >= 1 && m <= 1 << 30);
+            assert!((fp_value(m, s) - r).abs() / r < 1e-6, "{r}");
+        }
+    }
+
+    #[test]
+    fn norm_for_maps_one_sigma_to_4096() {
+        let n = norm_for(1000, 250.0);
+        assert_eq!(n.apply(1000), 0);
+        assert_eq!(n.apply(1250), 4096);
+        assert_eq!(n.apply(750), -4096);
+        assert!((norm_z(n, 1250.0) - 1.0).abs() < 1e-9);
+    }
+}

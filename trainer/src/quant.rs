@@ -1,0 +1,483 @@
+//! Post-training quantization (scheme: estimator-core/src/nn/mod.rs), an independent i64 integer
+//! reference of the deployed network, the `weights.rs` code generator and the test-vector writer.
+use crate::model::{FloatLayer, float_forward};
+use crate::prep::{Angle, Prep, fixed_point, fp_value};
+use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
+use estimator_core::{Channel, Feature, FeatureValues, SensorFrame};
+use std::fmt::Write;
+
+/// One quantized layer: `weights[o][i]` int8, bias in accumulator units, requant per output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QLayer {
+    pub weights: Vec<Vec<i8>>,
+    pub bias: Vec<i32>,
+    /// `(mult, shift, offset)` per output.
+    pub requant: Vec<(i32, u8, i32)>,
+    pub hidden: bool,
+}
+
+impl QLayer {
+    pub fn n_in(&self) -> usize {
+        self.weights.first().map_or(0, |r| r.len())
+    }
+    pub fn n_out(&self) -> usize {
+        self.weights.len()
+    }
+}
+
+/// A quantized cascade for one angle.
+#[derive(Debug, Clone)]
+pub struct QCascade {
+    pub prep: Prep,
+    pub part1: Vec<QLayer>,
+    pub part2: Vec<QLayer>,
+}
+
+/// Largest accumulator bias for a layer with `n_in` inputs (the check `Dense::new` applies).
+pub fn bias_headroom(n_in: usize) -> i64 {
+    i32::MAX as i64 - n_in as i64 * 32767 * 127
+}
+
+/// Percentile of |values| (q in 0..=1); 0 for an empty set.
+pub fn percentile_abs(values: &mut [f32], q: f64) -> f32 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    for v in values.iter_mut() {
+        *v = v.abs();
+    }
+    values.sort_by(f32::total_cmp);
+    let k = ((values.len() - 1) as f64 * q).round() as usize;
+    values[k.min(values.len() - 1)]
+}
+
+/// Quantizes one MLP. `s_in` is the real value of one input step, `calib` the float inputs used to
+/// calibrate the hidden activation scales (99.99th percentile of |activation| per layer), and
+/// `out_per_real` the output units per real output (mm/s or millidegrees per normalised unit) with
+/// `offset` added after requantization.
+pub fn quantize_mlp(
+    layers: &[FloatLayer],
+    s_in: f64,
+    calib: &[Vec<f32>],
+    out_per_real: f64,
+    offset: i32,
+) -> Vec<QLayer> {
+    let n_hidden = layers.len().saturating_sub(1);
+    let mut acts: Vec<Vec<f32>> = vec![Vec::new(); n_hidden];
+    for x in calib {
+        float_forward(layers, x, |k, y| acts[k].extend_from_slice(y));
+    }
+    let scales: Vec<f64> = acts
+        .iter_mut()
+        .map(|a| {
+            let p = percentile_abs(a, 0.9999) as f64;
+            if p > 0.0 { p / 32767.0 } else { 1.0 / 32767.0 }
+        })
+        .collect();
+    let mut out = Vec::new();
+    let mut s_x = s_in;
+    for (k, l) in layers.iter().enumerate() {
+        let hidden = k < n_hidden;
+        let headroom = bias_headroom(l.n_in());
+        let mut q = QLayer {
+            weights: Vec::new(),
+            bias: Vec::new(),
+            requant: Vec::new(),
+            hidden,
+        };
+        for (row, b) in l.weights.iter().zip(&l.bias) {
+            let m = row.iter().fold(0f32, |m, w| m.max(w.abs())) as f64;
+            let s_w = if m > 0.0 { m / 127.0 } else { 1.0 };
+            q.weights.push(
+                row.iter()
+                    .map(|w| (*w as f64 / s_w).round().clamp(-127.0, 127.0) as i8)
+                    .collect(),
+            );
+            let bq = (*b as f64 / (s_x * s_w))
+                .round()
+                .clamp(-headroom as f64, headroom as f64);
+            q.bias.push(bq as i32);
+            let ratio = if hidden {
+                s_x * s_w / scales[k]
+            } else {
+                s_x * s_w * out_per_real
+            };
+            let (mult, shift) = fixed_point(ratio, i32::MAX as i64);
+            q.requant
+                .push((mult, shift, if hidden { 0 } else { offset }));
+        }
+        if hidden {
+            s_x = scales[k];
+        }
+        out.push(q);
+    }
+    out
+}
+
+/// Quantizes a trained cascade. `calib` are float inputs (normalised) of training rows.
+pub fn quantize_cascade(
+    prep: &Prep,
+    part1: &[FloatLayer],
+    part2: &[FloatLayer],
+    calib: &[Vec<f32>],
+) -> QCascade {
+    let s_in = 1.0 / ONE_SIGMA as f64;
+    let mid_scale = fp_value(prep.mid_norm.mult, prep.mid_norm.shift) / ONE_SIGMA as f64;
+    let q1 = quantize_mlp(part1, s_in, calib, 1.0 / mid_scale, prep.mid_norm.center);
+    let calib2: Vec<Vec<f32>> = calib
+        .iter()
+        .map(|x| {
+            let mut v = x.clone();
+            v.push(float_forward(part1, x, |_, _| {}));
+            v
+        })
+        .collect();
+    let q2 = quantize_mlp(part2, s_in, &calib2, prep.out_sigma, prep.out_center);
+    QCascade {
+        prep: prep.clone(),
+        part1: q1,
+        part2: q2,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Independent integer reference (i64), written from the documented scheme, not from the layers.
+
+fn ref_norm(center: i32, mult: i32, shift: u8, raw: i64) -> i64 {
+    let s = (shift as u32).clamp(1, 62);
+    let v = ((raw - center as i64) * mult as i64 + (1i64 << (s - 1))) >> s;
+    v.clamp(-32768, 32767)
+}
+
+fn ref_layer(l: &QLayer, x: &[i64]) -> Vec<i64> {
+    l.weights
+        .iter()
+        .zip(&l.bias)
+        .zip(&l.requant)
+        .map(|((row, b), (mult, shift, offset))| {
+            let mut acc = *b as i64;
+            for (w, xi) in row.iter().zip(x) {
+                acc += *w as i64 * xi;
+            }
+            // The target accumulates in i32 with wrapping adds; by construction it never wraps.
+            let acc = acc as i32 as i64;
+            let s = (*shift as u32).clamp(1, 62);
+            let y = ((acc * *mult as i64 + (1i64 << (s - 1))) >> s) + *offset as i64;
+            if l.hidden {
+                y.clamp(0, 32767)
+            } else {
+                y.clamp(i32::MIN as i64, i32::MAX as i64)
+            }
+        })
+        .collect()
+}
+
+fn ref_mlp(layers: &[QLayer], x: Vec<i64>) -> i64 {
+    layers
+        .iter()
+        .fold(x, |x, l| ref_layer(l, &x))
+        .first()
+        .copied()
+        .unwrap_or(0)
+}
+
+/// Result of the integer reference for one angle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RefOut {
+    /// Intermediate, mm/s.
+    pub mid: i32,
+    /// Angle, millidegrees.
+    pub angle: i32,
+    /// A feature or the output was clamped to the training envelope (or GPS speed too low).
+    pub clamped: bool,
+}
+
+impl QCascade {
+    /// The deployed integer network on one frame's features.
+    pub fn reference(&self, v: &FeatureValues) -> RefOut {
+        let p = &self.prep;
+        let mut clamped = false;
+        let mut x = Vec::with_capacity(p.features.len() + 1);
+        for ((f, n), e) in p.features.iter().zip(&p.norm).zip(&p.envelope) {
+            let raw = v.get(*f) as i64;
+            let c = raw.clamp(e.lo as i64, e.hi as i64);
+            clamped |= c != raw;
+            x.push(ref_norm(n.center, n.mult, n.shift, c));
+        }
+        let mid = ref_mlp(&self.part1, x.clone());
+        x.push(ref_norm(
+            p.mid_norm.center,
+            p.mid_norm.mult,
+            p.mid_norm.shift,
+            mid,
+        ));
+        let out = ref_mlp(&self.part2, x);
+        let angle = out.clamp(p.out_range.lo as i64, p.out_range.hi as i64);
+        clamped |= angle != out;
+        let uses_speed = p
+            .features
+            .iter()
+            .any(|f| f.sources() & Channel::GpsSpeed.bit() != 0);
+        clamped |= v.low_speed && uses_speed;
+        RefOut {
+            mid: mid as i32,
+            angle: angle as i32,
+            clamped,
+        }
+    }
+
+    /// Parameter count (weights + biases).
+    pub fn params(&self) -> usize {
+        self.part1
+            .iter()
+            .chain(&self.part2)
+            .map(|l| l.n_out() * (l.n_in() + 1))
+            .sum()
+    }
+
+    /// Hidden widths, e.g. "512-256-128-64-32".
+    pub fn widths(&self) -> String {
+        self.part1
+            .iter()
+            .filter(|l| l.hidden)
+            .map(|l| l.n_out().to_string())
+            .collect::<Vec<_>>()
+            .join("-")
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Code generation.
+
+fn feature_path(f: Feature) -> String {
+    match f {
+        Feature::Sensor(c) => format!("crate::Feature::Sensor(crate::Channel::{c:?})"),
+        other => format!("crate::Feature::{other:?}"),
+    }
+}
+
+fn chain_type(layers: &[QLayer]) -> String {
+    match layers {
+        [] => String::new(),
+        [last] => format!("crate::nn::Output<{}, {}>", last.n_in(), last.n_out()),
+        [first, rest @ ..] => format!(
+            "crate::nn::Chain<crate::nn::Hidden<{}, {}>, {}, {}>",
+            first.n_in(),
+            first.n_out(),
+            chain_type(rest),
+            first.n_out()
+        ),
+    }
+}
+
+fn dense_expr(l: &QLayer, out: &mut String) {
+    out.push_str("crate::nn::Dense::new(\n[");
+    for row in &l.weights {
+        out.push('[');
+        for w in row {
+            let _ = write!(out, "{w},");
+        }
+        out.push_str("],\n");
+    }
+    out.push_str("],\n[");
+    for b in &l.bias {
+        let _ = write!(out, "{b},");
+    }
+    out.push_str("],\n[");
+    for (m, s, o) in &l.requant {
+        let _ = write!(
+            out,
+            "crate::nn::Requant {{ mult: {m}, shift: {s}, offset: {o} }},"
+        );
+    }
+    out.push_str("],\n)");
+}
+
+fn chain_expr(layers: &[QLayer], out: &mut String) {
+    match layers {
+        [] => {}
+        [last] => {
+            out.push_str("crate::nn::Output(");
+            dense_expr(last, out);
+            out.push(')');
+        }
+        [first, rest @ ..] => {
+            out.push_str("crate::nn::Chain(crate::nn::Hidden(");
+            dense_expr(first, out);
+            out.push_str("),\n");
+            chain_expr(rest, out);
+            out.push(')');
+        }
+    }
+}
+
+fn norm_expr(n: &Norm) -> String {
+    format!(
+        "crate::normalize::Norm {{ center: {}, mult: {}, shift: {} }}",
+        n.center, n.mult, n.shift
+    )
+}
+
+fn env_expr(e: &Envelope) -> String {
+    format!(
+        "crate::normalize::Envelope {{ lo: {}, hi: {} }}",
+        e.lo, e.hi
+    )
+}
+
+fn static_item(name: &str, q: &QCascade, out: &mut String) {
+    let p = &q.prep;
+    let n = p.features.len();
+    let _ = writeln!(
+        out,
+        "/// {} cascade: {} features, hidden {} per part, {} parameters.",
+        p.angle.symbol(),
+        n,
+        q.widths(),
+        q.params()
+    );
+    let _ = writeln!(
+        out,
+        "pub static {name}: crate::CascadeNet<\n{},\n{},\n{n},\n{},\n> = crate::CascadeNet {{",
+        chain_type(&q.part1),
+        chain_type(&q.part2),
+        n + 1
+    );
+    out.push_str("features: [");
+    for f in &p.features {
+        let _ = write!(out, "{}, ", feature_path(*f));
+    }
+    out.push_str("],\nnorm: [\n");
+    for nm in &p.norm {
+        let _ = writeln!(out, "{},", norm_expr(nm));
+    }
+    out.push_str("],\nenvelope: [\n");
+    for e in &p.envelope {
+        let _ = writeln!(out, "{},", env_expr(e));
+    }
+    out.push_str("],\npart1: ");
+    chain_expr(&q.part1, out);
+    let _ = write!(out, ",\nmid_norm: {},\npart2: ", norm_expr(&p.mid_norm));
+    chain_expr(&q.part2, out);
+    let _ = writeln!(out, ",\nout_range: {},\n}};\n", env_expr(&p.out_range));
+}
+
+/// The complete `weights.rs`: header, `ALPHA`, `BETA`, `PROVENANCE`.
+pub fn generate(alpha: &QCascade, beta: &QCascade, provenance: &str) -> String {
+    let mut out = String::new();
+    out.push_str(
+        "// @generated by `trainer train` (trainer/src/quant.rs). Do not edit: retrain and export instead.\n\
+         // Included inside `mod generated` of estimator-core/src/model/mod.rs, hence the `crate::` paths.\n\
+         // Every layer is built with the const fn `Dense::new`, so shapes, int8 range and accumulator\n\
+         // head-room are checked at compile time.\n\n",
+    );
+    static_item("ALPHA", alpha, &mut out);
+    static_item("BETA", beta, &mut out);
+    let _ = writeln!(
+        out,
+        "/// Where this model came from: dataset, seed, command, git revision and its test metrics.\n\
+         pub const PROVENANCE: &str = {provenance:?};"
+    );
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Test vectors.
+
+/// One vector: a sensor frame and the integer outputs the deployed model must produce for it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Vector {
+    pub frame: SensorFrame,
+    pub alpha: RefOut,
+    pub beta: RefOut,
+}
+
+pub const VECTOR_COLUMNS: &str = "seq time_ms valid raw0..raw15 w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped";
+
+/// Vectors for `frames`, computed by the integer reference.
+pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[SensorFrame]) -> Vec<Vector> {
+    frames
+        .iter()
+        .map(|f| {
+            let v = FeatureValues::compute(f);
+            Vector {
+                frame: *f,
+                alpha: alpha.reference(&v),
+                beta: beta.reference(&v),
+            }
+        })
+        .collect()
+}
+
+/// Text format: `#` comment lines, then one line per vector of whitespace-separated integers
+/// ([`VECTOR_COLUMNS`]): 3 + 16 + 6 = 25 numbers.
+pub fn format_vectors(vs: &[Vector], header: &str) -> String {
+    let mut out = String::new();
+    for line in header.lines() {
+        let _ = writeln!(out, "# {line}");
+    }
+    let _ = writeln!(out, "# columns: {VECTOR_COLUMNS}");
+    for v in vs {
+        let f = &v.frame;
+        let _ = write!(out, "{} {} {}", f.seq, f.time_ms, f.valid);
+        for r in &f.raw {
+            let _ = write!(out, " {r}");
+        }
+        let _ = writeln!(
+            out,
+            " {} {} {} {} {} {}",
+            v.alpha.mid,
+            v.alpha.angle,
+            v.alpha.clamped as u8,
+            v.beta.mid,
+            v.beta.angle,
+            v.beta.clamped as u8
+        );
+    }
+    out
+}
+
+/// Parses [`format_vectors`] output.
+pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
+    let mut out = Vec::new();
+    for line in text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with('#') && !l.trim().is_empty())
+    {
+        let n: Vec<i64> = line
+            .split_whitespace()
+            .map(|t| t.parse().ok())
+            .collect::<Option<_>>()?;
+        if n.len() != 25 {
+            return None;
+        }
+        let mut frame = SensorFrame {
+            seq: n[0] as u16,
+            time_ms: n[1] as u32,
+            valid: n[2] as u16,
+            ..SensorFrame::default()
+        };
+        for (r, v) in frame.raw.iter_mut().zip(&n[3..19]) {
+            *r = *v as i32;
+        }
+        let ro = |k: usize| RefOut {
+            mid: n[k] as i32,
+            angle: n[k + 1] as i32,
+            clamped: n[k + 2] != 0,
+        };
+        out.push(Vector {
+            frame,
+            alpha: ro(19),
+            beta: ro(22),
+        });
+    }
+    Some(out)
+}
+
+/// Name of an angle's static in the generated file.
+pub fn static_name(a: Angle) -> &'static str {
+    match a {
+        Angle::Alpha => "ALPHA",
+        Angle::Beta => "BETA",
+    }
+}
