@@ -1,1 +1,429 @@
-//! Owned by the data-side work (issue 4); being written.
+//! Flights in memory and on disk: one CSV per flight plus `manifest.json` (format in
+//! `docs/architecture.md`, "Dataset format").
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use estimator_core::{CHANNELS, Channel};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+/// Truth columns, in CSV order (after `time_s`).
+pub const TRUTH_COLUMNS: [&str; 17] = [
+    "alpha_deg",
+    "beta_deg",
+    "u_aero_mps",
+    "v_aero_mps",
+    "w_aero_mps",
+    "vt_mps",
+    "mach",
+    "qbar_pa",
+    "alt_msl_m",
+    "p_true_rps",
+    "q_true_rps",
+    "r_true_rps",
+    "phi_deg",
+    "theta_deg",
+    "psi_deg",
+    "nz_g",
+    "mass_kg",
+];
+
+/// Truth straight from JSBSim at a sample instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Truth {
+    pub alpha_deg: f64,
+    pub beta_deg: f64,
+    pub u_aero_mps: f64,
+    pub v_aero_mps: f64,
+    pub w_aero_mps: f64,
+    pub vt_mps: f64,
+    pub mach: f64,
+    pub qbar_pa: f64,
+    pub alt_msl_m: f64,
+    pub p_true_rps: f64,
+    pub q_true_rps: f64,
+    pub r_true_rps: f64,
+    pub phi_deg: f64,
+    pub theta_deg: f64,
+    pub psi_deg: f64,
+    pub nz_g: f64,
+    pub mass_kg: f64,
+}
+
+impl Truth {
+    /// Values in [`TRUTH_COLUMNS`] order.
+    pub fn to_array(&self) -> [f64; 17] {
+        [
+            self.alpha_deg,
+            self.beta_deg,
+            self.u_aero_mps,
+            self.v_aero_mps,
+            self.w_aero_mps,
+            self.vt_mps,
+            self.mach,
+            self.qbar_pa,
+            self.alt_msl_m,
+            self.p_true_rps,
+            self.q_true_rps,
+            self.r_true_rps,
+            self.phi_deg,
+            self.theta_deg,
+            self.psi_deg,
+            self.nz_g,
+            self.mass_kg,
+        ]
+    }
+
+    /// Inverse of [`Truth::to_array`].
+    pub fn from_array(a: &[f64; 17]) -> Truth {
+        Truth {
+            alpha_deg: a[0],
+            beta_deg: a[1],
+            u_aero_mps: a[2],
+            v_aero_mps: a[3],
+            w_aero_mps: a[4],
+            vt_mps: a[5],
+            mach: a[6],
+            qbar_pa: a[7],
+            alt_msl_m: a[8],
+            p_true_rps: a[9],
+            q_true_rps: a[10],
+            r_true_rps: a[11],
+            phi_deg: a[12],
+            theta_deg: a[13],
+            psi_deg: a[14],
+            nz_g: a[15],
+            mass_kg: a[16],
+        }
+    }
+}
+
+/// One 20 Hz sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub time_s: f64,
+    pub truth: Truth,
+    /// The 16 sensed channels in [`Channel`] order and SI units (degrees for surfaces).
+    pub sensed: [f64; CHANNELS],
+}
+
+/// One flight at 20 Hz.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Flight {
+    pub name: String,
+    pub samples: Vec<Sample>,
+    /// Why the flight stops early (ground contact, NaN), or `None` if it ran to its end.
+    pub cut: Option<String>,
+}
+
+/// Dataset read/write failures.
+#[derive(Debug, thiserror::Error)]
+pub enum DatasetError {
+    #[error("cannot {action} {path}: {source}")]
+    Io {
+        action: &'static str,
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Csv { path: PathBuf, message: String },
+    #[error("{path}: missing column `{column}` (is this a hil-sim flight CSV?)")]
+    MissingColumn { path: PathBuf, column: String },
+    #[error("{path} line {line}: column `{column}`: `{value}` is not a number")]
+    BadValue {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        value: String,
+    },
+    #[error("manifest {path}: {message}")]
+    Manifest { path: PathBuf, message: String },
+}
+
+/// All CSV column names in file order.
+pub fn columns() -> Vec<&'static str> {
+    let mut c = vec!["time_s"];
+    c.extend_from_slice(&TRUTH_COLUMNS);
+    c.extend(Channel::ALL.iter().map(|c| c.name()));
+    c
+}
+
+impl Flight {
+    /// Duration from the first to the last sample, s.
+    pub fn duration_s(&self) -> f64 {
+        match (self.samples.first(), self.samples.last()) {
+            (Some(a), Some(b)) => b.time_s - a.time_s,
+            _ => 0.0,
+        }
+    }
+
+    /// Writes the CSV bytes (`{}` formatting: shortest exact round trip, so reading gives the same f64s).
+    pub fn write_csv_to<W: Write>(&self, w: W) -> Result<(), csv::Error> {
+        let mut wr = csv::Writer::from_writer(w);
+        wr.write_record(columns())?;
+        let mut rec: Vec<String> = Vec::with_capacity(1 + 17 + CHANNELS);
+        for s in &self.samples {
+            rec.clear();
+            rec.push(format!("{}", s.time_s));
+            rec.extend(s.truth.to_array().iter().map(|v| format!("{v}")));
+            rec.extend(s.sensed.iter().map(|v| format!("{v}")));
+            wr.write_record(&rec)?;
+        }
+        wr.flush()?;
+        Ok(())
+    }
+
+    /// Writes the flight as a CSV file.
+    pub fn write_csv(&self, path: &Path) -> Result<(), DatasetError> {
+        let f = std::fs::File::create(path).map_err(|source| DatasetError::Io {
+            action: "create",
+            path: path.to_path_buf(),
+            source,
+        })?;
+        self.write_csv_to(std::io::BufWriter::new(f))
+            .map_err(|e| DatasetError::Csv {
+                path: path.to_path_buf(),
+                message: e.to_string(),
+            })
+    }
+
+    /// Reads a flight CSV (columns found by name; extra columns are ignored). The name is the file stem;
+    /// `cut` is not stored in the CSV (it is in the manifest).
+    pub fn read_csv(path: &Path) -> Result<Flight, DatasetError> {
+        let f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
+            action: "open",
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut rd = csv::Reader::from_reader(std::io::BufReader::new(f));
+        let csv_err = |e: csv::Error| DatasetError::Csv {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let header = rd.headers().map_err(csv_err)?.clone();
+        let find = |name: &str| {
+            header
+                .iter()
+                .position(|h| h == name)
+                .ok_or_else(|| DatasetError::MissingColumn {
+                    path: path.to_path_buf(),
+                    column: name.to_string(),
+                })
+        };
+        let idx: Vec<usize> = columns()
+            .iter()
+            .map(|c| find(c))
+            .collect::<Result<_, _>>()?;
+        let mut samples = Vec::new();
+        for rec in rd.records() {
+            let rec = rec.map_err(csv_err)?;
+            let line = rec.position().map(|p| p.line()).unwrap_or(0);
+            let mut vals = [0.0f64; 1 + 17 + CHANNELS];
+            for (k, (&i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
+                let s = rec.get(i).unwrap_or("");
+                *v = s
+                    .trim()
+                    .parse::<f64>()
+                    .map_err(|_| DatasetError::BadValue {
+                        path: path.to_path_buf(),
+                        line,
+                        column: columns()[k].to_string(),
+                        value: s.to_string(),
+                    })?;
+            }
+            let mut truth = [0.0; 17];
+            truth.copy_from_slice(&vals[1..18]);
+            let mut sensed = [0.0; CHANNELS];
+            sensed.copy_from_slice(&vals[18..]);
+            samples.push(Sample {
+                time_s: vals[0],
+                truth: Truth::from_array(&truth),
+                sensed,
+            });
+        }
+        Ok(Flight {
+            name: path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            samples,
+            cut: None,
+        })
+    }
+}
+
+/// Train or test split.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Split {
+    Train,
+    Test,
+}
+
+/// One flight of a dataset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlightEntry {
+    /// CSV file name, relative to the dataset directory.
+    pub file: String,
+    pub name: String,
+    pub split: Split,
+    pub profile: String,
+    pub seed: u64,
+    pub duration_s: f64,
+    pub samples: usize,
+    /// SHA-256 of the CSV file, hex.
+    pub sha256: String,
+    pub cut: Option<String>,
+}
+
+/// `manifest.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub format: u32,
+    pub preset: String,
+    pub jsbsim_version: String,
+    pub git_rev: String,
+    pub config: serde_json::Value,
+    pub flights: Vec<FlightEntry>,
+    /// SHA-256 of the other files written with the dataset (maneuver XML, plots), by file name.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub files: std::collections::BTreeMap<String, String>,
+}
+
+impl Manifest {
+    pub const FORMAT: u32 = 1;
+
+    pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
+        let path = dir.join("manifest.json");
+        let text = serde_json::to_string_pretty(self).map_err(|e| DatasetError::Manifest {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        std::fs::write(&path, text + "\n").map_err(|source| DatasetError::Io {
+            action: "write",
+            path: path.clone(),
+            source,
+        })?;
+        Ok(path)
+    }
+
+    /// Reads `DIR/manifest.json`.
+    pub fn read(dir: &Path) -> Result<Manifest, DatasetError> {
+        let path = dir.join("manifest.json");
+        let text = std::fs::read_to_string(&path).map_err(|source| DatasetError::Io {
+            action: "read",
+            path: path.clone(),
+            source,
+        })?;
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| DatasetError::Manifest {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        if m.format != Self::FORMAT {
+            return Err(DatasetError::Manifest {
+                path,
+                message: format!("format {} (this build reads {})", m.format, Self::FORMAT),
+            });
+        }
+        Ok(m)
+    }
+}
+
+/// SHA-256 of a file, lowercase hex.
+pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {
+    let mut f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
+        action: "open",
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf).map_err(|source| DatasetError::Io {
+            action: "read",
+            path: path.to_path_buf(),
+            source,
+        })?;
+        if n == 0 {
+            break;
+        }
+        h.update(&buf[..n]);
+    }
+    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
+/// The workspace's git revision (`-dirty` when the tree has changes), or `unknown`.
+pub fn git_rev() -> String {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(dir)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    match run(&["rev-parse", "HEAD"]) {
+        Some(rev) => match run(&["status", "--porcelain", "--untracked-files=no"]) {
+            Some(s) if !s.is_empty() => format!("{rev}-dirty"),
+            _ => rev,
+        },
+        None => "unknown".into(),
+    }
+}
+
+/// Writes one flight's CSV into `dir` and returns its manifest entry.
+pub fn write_flight(
+    dir: &Path,
+    flight: &Flight,
+    split: Split,
+    profile: &str,
+    seed: u64,
+) -> Result<FlightEntry, DatasetError> {
+    let file = format!("{}.csv", flight.name);
+    let path = dir.join(&file);
+    flight.write_csv(&path)?;
+    Ok(FlightEntry {
+        file,
+        name: flight.name.clone(),
+        split,
+        profile: profile.to_string(),
+        seed,
+        duration_s: flight.duration_s(),
+        samples: flight.samples.len(),
+        sha256: sha256_file(&path)?,
+        cut: flight.cut.clone(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_round_trip_is_exact() {
+        let mut s = Sample {
+            time_s: 0.05,
+            truth: Truth::default(),
+            sensed: [0.0; CHANNELS],
+        };
+        s.truth.alpha_deg = 1.0 / 3.0;
+        s.truth.mass_kg = 9876.54321;
+        s.sensed[3] = -1e-7;
+        s.sensed[15] = 0.123456789012345;
+        let f = Flight {
+            name: "t".into(),
+            samples: vec![s, s],
+            cut: None,
+        };
+        let dir = std::env::temp_dir().join(format!("hil-ds-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("t.csv");
+        f.write_csv(&p).unwrap();
+        let g = Flight::read_csv(&p).unwrap();
+        assert_eq!(f, g);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

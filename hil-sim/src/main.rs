@@ -1,4 +1,6 @@
-use anyhow::Result;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 /// Flight simulation and hardware-in-the-loop runner for the synthetic air data estimator.
@@ -10,9 +12,93 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Cmd {}
+enum Cmd {
+    /// Fly one JSBSim runscript (aircraft f16) and write a one-flight dataset (CSV + manifest).
+    Fly(hil_sim_cli::FlyArgs),
+}
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
-    match cli.cmd {}
+    match cli.cmd {
+        Cmd::Fly(a) => hil_sim_cli::fly(a),
+    }
+}
+
+/// The data-side subcommands (issue 4).
+mod hil_sim_cli {
+    use super::*;
+    use hil_sim::dataset::{self, Manifest, Split};
+    use hil_sim::plant::{self, FlyConfig};
+    use hil_sim::sensors::SensorConfig;
+
+    #[derive(clap::Args)]
+    pub struct FlyArgs {
+        /// JSBSim runscript; its initialize file is taken from beside it, else from the aircraft folder.
+        #[arg(long)]
+        script: PathBuf,
+        /// Dataset directory to write (created).
+        #[arg(long, default_value = "datasets/fly")]
+        out: PathBuf,
+        /// Seed of the sensor error models.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Sensor model parameters (TOML; see docs/sensors.md). Defaults: LN-200-class IMU.
+        #[arg(long)]
+        sensors: Option<PathBuf>,
+        /// Stop after this many simulated seconds.
+        #[arg(long)]
+        max_time_s: Option<f64>,
+    }
+
+    pub fn fly(a: FlyArgs) -> Result<()> {
+        let sensors = match &a.sensors {
+            Some(p) => SensorConfig::load(p)?,
+            None => SensorConfig::default(),
+        };
+        let cfg = FlyConfig {
+            seed: a.seed,
+            sensors: sensors.clone(),
+            max_time_s: a.max_time_s,
+            name: None,
+        };
+        let started = std::time::Instant::now();
+        let mut bridge = plant::Plant::spawn()?;
+        let version = bridge.jsbsim_version().to_string();
+        let flight = plant::fly_script_with(&mut bridge, &a.script, &cfg)?;
+        drop(bridge);
+        std::fs::create_dir_all(&a.out)
+            .with_context(|| format!("cannot create dataset directory {}", a.out.display()))?;
+        let entry = dataset::write_flight(&a.out, &flight, Split::Test, "script", a.seed)?;
+        let manifest = Manifest {
+            format: Manifest::FORMAT,
+            preset: "fly".into(),
+            jsbsim_version: version,
+            git_rev: dataset::git_rev(),
+            config: serde_json::json!({
+                "script": a.script.display().to_string(),
+                "max_time_s": a.max_time_s,
+                "sensors": sensors,
+            }),
+            flights: vec![entry.clone()],
+            files: Default::default(),
+        };
+        let mpath = manifest.write(&a.out)?;
+        println!(
+            "flew {} for {:.1} s ({} samples at 20 Hz) in {:.1} s wall{}",
+            a.script.display(),
+            entry.duration_s,
+            entry.samples,
+            started.elapsed().as_secs_f64(),
+            match &entry.cut {
+                Some(c) => format!("; CUT: {c}"),
+                None => String::new(),
+            }
+        );
+        println!(
+            "wrote {} and {}",
+            a.out.join(&entry.file).display(),
+            mpath.display()
+        );
+        Ok(())
+    }
 }

@@ -1,1 +1,514 @@
-//! Owned by the data-side work (issue 4); being written.
+//! The plant: JSBSim's F-16, stepped by a pinned Python bridge (`bridge/jsbsim_bridge.py`).
+//!
+//! The bridge only loads scripts, writes properties and steps; everything else (which properties,
+//! sampling, sensors, cutting a bad flight) is here. [`fly_script`] runs a JSBSim runscript to its
+//! end at 120 Hz, feeding the sensor models every step and keeping truth + sensed values at 20 Hz.
+
+use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::{Arc, Mutex};
+
+use crate::dataset::{Flight, Sample, Truth};
+use crate::sensors::{SensorConfig, SensorInput, SensorModel};
+
+/// JSBSim integration rate. The stock F-16 FCS is tuned for it.
+pub const SIM_HZ: u32 = 120;
+/// Dataset / frame rate.
+pub const SAMPLE_HZ: u32 = 20;
+/// 120 Hz steps per 20 Hz sample.
+pub const STEPS_PER_SAMPLE: u32 = SIM_HZ / SAMPLE_HZ;
+/// Below this height above ground an airborne flight counts as having hit the ground.
+pub const GROUND_CUT_AGL_FT: f64 = 10.0;
+/// A flight counts as airborne once it has been this high above the ground.
+const AIRBORNE_AGL_FT: f64 = 50.0;
+
+const BRIDGE_SOURCE: &str = include_str!("../bridge/jsbsim_bridge.py");
+
+/// Everything that can go wrong between a script file and a flight.
+#[derive(Debug, thiserror::Error)]
+pub enum PlantError {
+    #[error(
+        "the JSBSim bridge cannot start with {python}: {why}. Run `scripts/bootstrap` to create the \
+         pinned .venv with jsbsim, or point HIL_PYTHON at a Python that has jsbsim==1.3.3"
+    )]
+    BridgeUnavailable { python: PathBuf, why: String },
+    #[error("cannot read JSBSim script {path}: {source}")]
+    ScriptUnreadable {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path} is not a JSBSim runscript: {why}")]
+    NotAScript { path: PathBuf, why: String },
+    #[error("{path} is a script for aircraft `{aircraft}`; hil-sim only flies the JSBSim `f16`")]
+    WrongAircraft { path: PathBuf, aircraft: String },
+    #[error("JSBSim rejected {path}: {message}")]
+    ScriptRejected { path: PathBuf, message: String },
+    #[error("JSBSim bridge error in `{command}`: {message}")]
+    Bridge { command: String, message: String },
+    #[error("JSBSim bridge died ({why}); its last messages:\n{stderr_tail}")]
+    BridgeDied { why: String, stderr_tail: String },
+}
+
+/// Which Python runs the bridge: `HIL_PYTHON`, else the workspace's `.venv` made by `scripts/bootstrap`.
+pub fn python_path() -> PathBuf {
+    match std::env::var_os("HIL_PYTHON") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join(".venv")
+            .join("bin")
+            .join("python"),
+    }
+}
+
+/// A running JSBSim bridge process.
+pub struct Plant {
+    child: Child,
+    stdin: BufWriter<ChildStdin>,
+    stdout: BufReader<ChildStdout>,
+    stderr_tail: Arc<Mutex<String>>,
+    watched: usize,
+    version: String,
+}
+
+impl Plant {
+    /// Starts the bridge and waits for its hello (the JSBSim version).
+    pub fn spawn() -> Result<Plant, PlantError> {
+        let python = python_path();
+        let unavailable = |why: String| PlantError::BridgeUnavailable {
+            python: python.clone(),
+            why,
+        };
+        if !python.exists() {
+            return Err(unavailable("that file does not exist".into()));
+        }
+        let mut child = Command::new(&python)
+            .arg("-u")
+            .arg("-c")
+            .arg(BRIDGE_SOURCE)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| unavailable(e.to_string()))?;
+        let (Some(stdin), Some(stdout), Some(stderr)) =
+            (child.stdin.take(), child.stdout.take(), child.stderr.take())
+        else {
+            let _ = child.kill();
+            return Err(unavailable("no pipes to the child process".into()));
+        };
+        // JSBSim talks a lot on stderr; drain it so the pipe never blocks, keeping the tail for errors.
+        let stderr_tail = Arc::new(Mutex::new(String::new()));
+        let tail = Arc::clone(&stderr_tail);
+        std::thread::spawn(move || {
+            let mut r = BufReader::new(stderr);
+            let mut line = String::new();
+            while r.read_line(&mut line).unwrap_or(0) > 0 {
+                if let Ok(mut t) = tail.lock() {
+                    t.push_str(&line);
+                    if t.len() > 8192 {
+                        let cut = t.len() - 4096;
+                        let cut = (cut..t.len()).find(|i| t.is_char_boundary(*i)).unwrap_or(0);
+                        t.drain(..cut);
+                    }
+                }
+                line.clear();
+            }
+        });
+        let mut plant = Plant {
+            child,
+            stdin: BufWriter::new(stdin),
+            stdout: BufReader::new(stdout),
+            stderr_tail,
+            watched: 0,
+            version: String::new(),
+        };
+        match plant.read_frame("start") {
+            Ok(v) => plant.version = String::from_utf8_lossy(&v).into_owned(),
+            Err(PlantError::Bridge { message, .. }) => return Err(unavailable(message)),
+            Err(PlantError::BridgeDied { why, stderr_tail }) => {
+                return Err(unavailable(format!("{why}: {stderr_tail}")));
+            }
+            Err(e) => return Err(e),
+        }
+        Ok(plant)
+    }
+
+    /// The JSBSim version the bridge imported.
+    pub fn jsbsim_version(&self) -> &str {
+        &self.version
+    }
+
+    fn died(&mut self, why: String) -> PlantError {
+        // Give the stderr thread a moment to collect the traceback.
+        let _ = self.child.wait();
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        let stderr_tail = self
+            .stderr_tail
+            .lock()
+            .map(|t| t.clone())
+            .unwrap_or_default();
+        PlantError::BridgeDied { why, stderr_tail }
+    }
+
+    fn read_frame(&mut self, command: &str) -> Result<Vec<u8>, PlantError> {
+        let mut head = [0u8; 5];
+        if let Err(e) = self.stdout.read_exact(&mut head) {
+            return Err(self.died(format!("no reply to `{command}`: {e}")));
+        }
+        let len = u32::from_le_bytes([head[1], head[2], head[3], head[4]]) as usize;
+        let mut payload = vec![0u8; len];
+        if let Err(e) = self.stdout.read_exact(&mut payload) {
+            return Err(self.died(format!("truncated reply to `{command}`: {e}")));
+        }
+        match head[0] {
+            b'O' => Ok(payload),
+            b'E' => Err(PlantError::Bridge {
+                command: command.to_string(),
+                message: String::from_utf8_lossy(&payload).into_owned(),
+            }),
+            other => Err(self.died(format!("bad reply status byte {other:#x}"))),
+        }
+    }
+
+    fn request(&mut self, fields: &[&str]) -> Result<Vec<u8>, PlantError> {
+        // Tabs and newlines are the protocol's separators: a field holding one cannot be sent.
+        if let Some(bad) = fields.iter().find(|f| f.contains(['\t', '\n'])) {
+            return Err(PlantError::Bridge {
+                command: fields.first().copied().unwrap_or("").to_string(),
+                message: format!("argument {bad:?} contains a tab or newline"),
+            });
+        }
+        let line = fields.join("\t");
+        if let Err(e) = writeln!(self.stdin, "{line}").and_then(|_| self.stdin.flush()) {
+            return Err(self.died(format!("cannot send `{}`: {e}", fields[0])));
+        }
+        self.read_frame(fields.first().copied().unwrap_or(""))
+    }
+
+    /// Loads a runscript (`initfile`: an initialize file path, or `None` to let JSBSim look in the
+    /// aircraft folder) and runs its initial conditions.
+    pub fn load_script(
+        &mut self,
+        script: &Path,
+        initfile: Option<&Path>,
+    ) -> Result<(), PlantError> {
+        let s = script.to_string_lossy();
+        let i = initfile.map(|p| p.to_string_lossy()).unwrap_or_default();
+        self.request(&["load", &s, &i]).map(|_| ())
+    }
+
+    /// Chooses the properties returned after every step.
+    pub fn watch(&mut self, props: &[&str]) -> Result<(), PlantError> {
+        let mut f = vec!["watch"];
+        f.extend_from_slice(props);
+        self.request(&f)?;
+        self.watched = props.len();
+        Ok(())
+    }
+
+    /// Writes one property.
+    pub fn set(&mut self, prop: &str, value: f64) -> Result<(), PlantError> {
+        let v = format!("{value:e}");
+        self.request(&["set", prop, &v]).map(|_| ())
+    }
+
+    /// Runs up to `n` steps; returns one row of watched values per step done. Fewer rows than `n`
+    /// means the script reached its end.
+    pub fn step(&mut self, n: u32) -> Result<Vec<Vec<f64>>, PlantError> {
+        let payload = self.request(&["step", &n.to_string()])?;
+        let bad = |why: &str| PlantError::Bridge {
+            command: "step".into(),
+            message: why.into(),
+        };
+        let (count, body) = payload
+            .split_first_chunk::<4>()
+            .ok_or_else(|| bad("reply shorter than its count"))?;
+        let count = u32::from_le_bytes(*count) as usize;
+        if body.len() != count * self.watched * 8 {
+            return Err(bad("reply length does not match the watched properties"));
+        }
+        Ok(body
+            .chunks_exact(self.watched * 8)
+            .map(|row| {
+                row.chunks_exact(8)
+                    .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+                    .collect()
+            })
+            .collect())
+    }
+}
+
+impl Drop for Plant {
+    fn drop(&mut self) {
+        let _ = writeln!(self.stdin, "quit").and_then(|_| self.stdin.flush());
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Properties read after every step, in this order (indices below).
+const WATCH: [&str; 33] = [
+    "simulation/sim-time-sec",
+    "aero/alpha-deg",
+    "aero/beta-deg",
+    "velocities/u-aero-fps",
+    "velocities/v-aero-fps",
+    "velocities/w-aero-fps",
+    "velocities/vt-fps",
+    "velocities/mach",
+    "aero/qbar-psf",
+    "position/h-sl-ft",
+    "position/h-agl-ft",
+    "velocities/p-rad_sec",
+    "velocities/q-rad_sec",
+    "velocities/r-rad_sec",
+    "attitude/phi-rad",
+    "attitude/theta-rad",
+    "attitude/psi-rad",
+    "accelerations/pdot-rad_sec2",
+    "accelerations/qdot-rad_sec2",
+    "accelerations/rdot-rad_sec2",
+    "forces/fbx-total-lbs",
+    "forces/fby-total-lbs",
+    "forces/fbz-total-lbs",
+    "inertia/mass-slugs",
+    "velocities/ned-velocity-mag-fps",
+    "fcs/elevator-pos-deg",
+    "fcs/aileron-pos-rad",
+    "fcs/rudder-pos-deg",
+    "fcs/lef-pos-deg",
+    "fcs/tef-control",
+    "fcs/left-flaperon-norm",
+    "fcs/speedbrake-pos-deg",
+    "fcs/throttle-cmd-norm",
+];
+
+pub const FT_TO_M: f64 = 0.3048;
+const SLUG_TO_KG: f64 = 14.593_902_937;
+const PSF_TO_PA: f64 = 47.880_258_98;
+const G0_FPS2: f64 = 32.174_048_56;
+/// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (F-16: about 20° each way); the model has no deg property.
+pub const FLAPERON_DEG_PER_NORM: f64 = 20.0;
+/// `fcs/tef-control` = 1 is 20° of trailing-edge flap.
+pub const TEF_DEG_PER_UNIT: f64 = 20.0;
+
+/// Settings of one flight.
+#[derive(Clone, Debug, Default)]
+pub struct FlyConfig {
+    /// Seed of the sensor error models.
+    pub seed: u64,
+    pub sensors: SensorConfig,
+    /// Stop after this much simulated time even if the script goes on.
+    pub max_time_s: Option<f64>,
+    /// Name stored with the flight (default: the script file stem).
+    pub name: Option<String>,
+}
+
+/// What `<use aircraft=… initialize=…/>` of a runscript says.
+#[derive(Debug, PartialEq)]
+pub struct ScriptUse {
+    pub aircraft: String,
+    pub initialize: Option<String>,
+}
+
+fn attr(tag: &str, name: &str) -> Option<String> {
+    let key = format!("{name}=");
+    let at = tag.find(&key)? + key.len();
+    let rest = tag.get(at..)?.trim_start();
+    let q = rest.chars().next().filter(|c| *c == '"' || *c == '\'')?;
+    let body = rest.get(1..)?;
+    Some(body.get(..body.find(q)?)?.trim().to_string())
+}
+
+/// Reads the aircraft and initialize file a runscript names. Enough XML for that one tag: JSBSim
+/// itself parses the file fully (and the bridge reports its XML errors with line numbers).
+pub fn script_use(path: &Path) -> Result<ScriptUse, PlantError> {
+    let text = std::fs::read_to_string(path).map_err(|source| PlantError::ScriptUnreadable {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let not = |why: &str| PlantError::NotAScript {
+        path: path.to_path_buf(),
+        why: why.to_string(),
+    };
+    if !text.contains("<runscript") {
+        return Err(not("no <runscript> element"));
+    }
+    let at = text
+        .find("<use ")
+        .ok_or_else(|| not("no <use aircraft=… initialize=…/> element"))?;
+    let tag = &text[at..at
+        + text[at..]
+            .find('>')
+            .ok_or_else(|| not("unclosed <use> tag"))?];
+    let aircraft = attr(tag, "aircraft").ok_or_else(|| not("<use> has no aircraft attribute"))?;
+    Ok(ScriptUse {
+        aircraft,
+        initialize: attr(tag, "initialize"),
+    })
+}
+
+/// Truth at one step, in dataset units.
+fn truth_of(r: &[f64]) -> Truth {
+    Truth {
+        alpha_deg: r[1],
+        beta_deg: r[2],
+        u_aero_mps: r[3] * FT_TO_M,
+        v_aero_mps: r[4] * FT_TO_M,
+        w_aero_mps: r[5] * FT_TO_M,
+        vt_mps: r[6] * FT_TO_M,
+        mach: r[7],
+        qbar_pa: r[8] * PSF_TO_PA,
+        alt_msl_m: r[9] * FT_TO_M,
+        p_true_rps: r[11],
+        q_true_rps: r[12],
+        r_true_rps: r[13],
+        phi_deg: r[14].to_degrees(),
+        theta_deg: r[15].to_degrees(),
+        psi_deg: r[16].to_degrees(),
+        // Load factor along -z body from the total (non-gravity) force: 1 in level flight.
+        nz_g: -r[22] / (r[23] * G0_FPS2),
+        mass_kg: r[23] * SLUG_TO_KG,
+    }
+}
+
+/// What the sensors see at one step, in SI (surfaces in degrees).
+fn sensor_input(r: &[f64]) -> SensorInput {
+    let m = r[23];
+    SensorInput {
+        omega_rps: [r[11], r[12], r[13]],
+        omega_dot_rps2: [r[17], r[18], r[19]],
+        // Specific force at the CG: total non-gravity force over mass (not accelerations/N*, which lag a step).
+        f_cg_mps2: [
+            r[20] / m * FT_TO_M,
+            r[21] / m * FT_TO_M,
+            r[22] / m * FT_TO_M,
+        ],
+        gps_speed_mps: r[24] * FT_TO_M,
+        alt_msl_m: r[9] * FT_TO_M,
+        elevator_deg: r[25],
+        aileron_deg: r[26].to_degrees(),
+        rudder_deg: r[27],
+        lef_deg: r[28],
+        tef_deg: r[29] * TEF_DEG_PER_UNIT,
+        flaperon_deg: r[30] * FLAPERON_DEG_PER_NORM,
+        speedbrake_deg: r[31],
+        throttle_norm: r[32],
+    }
+}
+
+/// Flies a JSBSim runscript (aircraft `f16`) to its end (or `cfg.max_time_s`) at 120 Hz and returns
+/// the 20 Hz flight. The initialize file is taken from beside the script when it is there, else
+/// JSBSim looks in the aircraft folder (where the stock `reset*` files live). A flight that hits the
+/// ground or goes NaN is cut there and says so in [`Flight::cut`].
+pub fn fly_script(script: &Path, cfg: &FlyConfig) -> Result<Flight, PlantError> {
+    let mut plant = Plant::spawn()?;
+    fly_script_with(&mut plant, script, cfg)
+}
+
+/// [`fly_script`] on an already started bridge (one process per flight keeps flights independent;
+/// callers that want that start a fresh [`Plant`] each time).
+pub fn fly_script_with(
+    plant: &mut Plant,
+    script: &Path,
+    cfg: &FlyConfig,
+) -> Result<Flight, PlantError> {
+    let script = std::fs::canonicalize(script).map_err(|source| PlantError::ScriptUnreadable {
+        path: script.to_path_buf(),
+        source,
+    })?;
+    let uses = script_use(&script)?;
+    if uses.aircraft != "f16" {
+        return Err(PlantError::WrongAircraft {
+            path: script.clone(),
+            aircraft: uses.aircraft,
+        });
+    }
+    let beside = uses.initialize.as_ref().and_then(|name| {
+        let dir = script.parent()?;
+        [dir.join(name), dir.join(format!("{name}.xml"))]
+            .into_iter()
+            .find(|p| p.is_file())
+    });
+    plant
+        .load_script(&script, beside.as_deref())
+        .map_err(|e| match e {
+            PlantError::Bridge { message, .. } => PlantError::ScriptRejected {
+                path: script.clone(),
+                message,
+            },
+            other => other,
+        })?;
+    plant.watch(&WATCH)?;
+
+    let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
+    let name = cfg.name.clone().unwrap_or_else(|| {
+        script
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "flight".into())
+    });
+    let mut flight = Flight {
+        name,
+        samples: Vec::new(),
+        cut: None,
+    };
+    let mut step_count: u64 = 0;
+    let mut airborne = false;
+    'outer: loop {
+        let rows = plant.step(SIM_HZ * 5)?;
+        let ended = rows.len() < (SIM_HZ * 5) as usize;
+        for r in &rows {
+            step_count += 1;
+            let t = r[0];
+            if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
+                break 'outer;
+            }
+            if r.iter().any(|v| !v.is_finite()) {
+                flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
+                break 'outer;
+            }
+            airborne |= r[10] > AIRBORNE_AGL_FT;
+            if airborne && r[10] < GROUND_CUT_AGL_FT {
+                flight.cut = Some(format!(
+                    "ground contact at t={t:.3} s (h-agl {:.1} ft)",
+                    r[10]
+                ));
+                break 'outer;
+            }
+            let si = sensors.step(&sensor_input(r));
+            if step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE)) {
+                flight.samples.push(Sample {
+                    // Whole steps / 120 Hz: JSBSim's summed dt drifts in the last bits (0.04999…).
+                    time_s: step_count as f64 / f64::from(SIM_HZ),
+                    truth: truth_of(r),
+                    sensed: si,
+                });
+            }
+        }
+        if ended {
+            break;
+        }
+    }
+    Ok(flight)
+}
+
+/// JSBSim version the bridge reports (starts a bridge just to ask).
+pub fn jsbsim_version() -> Result<String, PlantError> {
+    Ok(Plant::spawn()?.jsbsim_version().to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn use_tag_attributes_are_read() {
+        let tag = r#"<use aircraft="f16" initialize='reset00'/"#;
+        assert_eq!(attr(tag, "aircraft").as_deref(), Some("f16"));
+        assert_eq!(attr(tag, "initialize").as_deref(), Some("reset00"));
+        assert_eq!(attr(tag, "missing"), None);
+    }
+}

@@ -1,1 +1,610 @@
-//! Owned by the data-side work (issue 4); being written.
+//! Sensor error models: IMU (LN-200 class), GPS, control-surface position sensors.
+//!
+//! Fed with truth at every 120 Hz JSBSim step; returns the 16 sensed channels (SI, degrees for
+//! surfaces) in [`estimator_core::Channel`] order. The IMU path is: truth at the IMU location,
+//! plus turn-on bias, Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv
+//! quantization (residual carried, as an integrating IMU does), a first-order lag and a 2nd-order
+//! Butterworth anti-alias low-pass, so that the 20 Hz decimation does not fold vibration and noise
+//! into the band. Defaults and their sources: `docs/sensors.md`.
+
+use std::collections::VecDeque;
+use std::path::Path;
+
+use estimator_core::{CHANNELS, Channel};
+use rand::SeedableRng;
+use rand_chacha::ChaCha12Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::plant::SIM_HZ;
+
+const DT: f64 = 1.0 / SIM_HZ as f64;
+const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
+const G0: f64 = 9.80665;
+
+/// Errors of one inertial sensor type, the same for its three axes (units of the sensor: rad/s or m/s²).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InertialErrors {
+    /// 1σ of the bias drawn once per flight (per axis).
+    pub turn_on_bias_sigma: f64,
+    /// Steady-state 1σ of the first-order Gauss-Markov in-run bias.
+    pub in_run_bias_sigma: f64,
+    /// Correlation time of the in-run bias, s.
+    pub in_run_bias_tau_s: f64,
+    /// White noise density, unit/√Hz (angle / velocity random walk).
+    pub noise_density: f64,
+    /// Output quantum of the integrated quantity (Δθ in rad, Δv in m/s); 0 = none.
+    pub quantum: f64,
+}
+
+/// IMU model parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ImuConfig {
+    /// Gyro errors, rad/s.
+    pub gyro: InertialErrors,
+    /// Accelerometer errors, m/s².
+    pub accel: InertialErrors,
+    /// g-dependent gyro bias: rad/s per m/s² of specific force along the same axis.
+    pub gyro_g_sensitivity_rps_per_mps2: f64,
+    /// IMU position relative to the CG, body axes (x forward, y right, z down), m.
+    pub lever_arm_m: [f64; 3],
+    /// First-order measurement lag (sensor bandwidth), s; 0 = none.
+    pub lag_tau_s: f64,
+    /// Anti-alias low-pass (2nd-order Butterworth) cut-off before 20 Hz decimation, Hz; 0 = none.
+    pub antialias_cutoff_hz: f64,
+}
+
+impl Default for ImuConfig {
+    fn default() -> Self {
+        ImuConfig {
+            gyro: InertialErrors {
+                turn_on_bias_sigma: 1.0 * DEG_PER_H,
+                in_run_bias_sigma: 0.35 * DEG_PER_H,
+                in_run_bias_tau_s: 100.0,
+                // 0.07 °/√h ARW
+                noise_density: 0.07 * std::f64::consts::PI / 180.0 / 60.0,
+                quantum: 2f64.powi(-19),
+            },
+            accel: InertialErrors {
+                turn_on_bias_sigma: 300e-6 * G0,
+                in_run_bias_sigma: 50e-6 * G0,
+                in_run_bias_tau_s: 60.0,
+                noise_density: 35e-6 * G0,
+                // 2^-14 ft/s per Δv count
+                quantum: 2f64.powi(-14) * 0.3048,
+            },
+            gyro_g_sensitivity_rps_per_mps2: 1.0 * DEG_PER_H / G0,
+            lever_arm_m: [0.5, 0.0, 0.2],
+            lag_tau_s: 0.003,
+            antialias_cutoff_hz: 6.0,
+        }
+    }
+}
+
+/// GPS model parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GpsConfig {
+    /// White noise 1σ on the 3-D speed, m/s.
+    pub speed_noise_sigma_mps: f64,
+    /// White noise 1σ on altitude, m.
+    pub alt_noise_sigma_m: f64,
+    /// Slowly wandering altitude error (Gauss-Markov) 1σ, m.
+    pub alt_bias_sigma_m: f64,
+    pub alt_bias_tau_s: f64,
+    /// Age of a fix when it is delivered, s.
+    pub latency_s: f64,
+    /// Fix rate, Hz (held between fixes).
+    pub update_hz: f64,
+}
+
+impl Default for GpsConfig {
+    fn default() -> Self {
+        GpsConfig {
+            speed_noise_sigma_mps: 0.05,
+            alt_noise_sigma_m: 0.5,
+            alt_bias_sigma_m: 3.0,
+            alt_bias_tau_s: 600.0,
+            latency_s: 0.1,
+            update_hz: 10.0,
+        }
+    }
+}
+
+/// Surface position sensors (RVDT/LVDT through an ADC) and the throttle lever.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceConfig {
+    pub noise_sigma_deg: f64,
+    pub quantum_deg: f64,
+    pub throttle_noise_sigma: f64,
+    pub throttle_quantum: f64,
+}
+
+impl Default for SurfaceConfig {
+    fn default() -> Self {
+        SurfaceConfig {
+            noise_sigma_deg: 0.02,
+            quantum_deg: 0.05,
+            throttle_noise_sigma: 0.0,
+            throttle_quantum: 1.0 / 1024.0,
+        }
+    }
+}
+
+/// All sensor parameters (`--sensors FILE.toml`; missing sections/fields take the defaults).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SensorConfig {
+    pub imu: ImuConfig,
+    pub gps: GpsConfig,
+    pub surfaces: SurfaceConfig,
+}
+
+/// Why a sensor configuration cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum SensorConfigError {
+    #[error("cannot read sensor config {path}: {source}")]
+    Read {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("sensor config {path} is not valid: {message}")]
+    Parse {
+        path: std::path::PathBuf,
+        message: String,
+    },
+    #[error("sensor config: {field} = {value} is invalid ({why})")]
+    Invalid {
+        field: &'static str,
+        value: f64,
+        why: &'static str,
+    },
+}
+
+impl SensorConfig {
+    /// Loads and validates a TOML file.
+    pub fn load(path: &Path) -> Result<SensorConfig, SensorConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SensorConfigError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let cfg: SensorConfig = toml::from_str(&text).map_err(|e| SensorConfigError::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// Rejects negative σ, non-finite values and settings the 120 Hz model cannot honour.
+    pub fn validate(&self) -> Result<(), SensorConfigError> {
+        let nonneg: [(&'static str, f64); 20] = [
+            (
+                "imu.gyro.turn_on_bias_sigma",
+                self.imu.gyro.turn_on_bias_sigma,
+            ),
+            (
+                "imu.gyro.in_run_bias_sigma",
+                self.imu.gyro.in_run_bias_sigma,
+            ),
+            ("imu.gyro.noise_density", self.imu.gyro.noise_density),
+            ("imu.gyro.quantum", self.imu.gyro.quantum),
+            (
+                "imu.accel.turn_on_bias_sigma",
+                self.imu.accel.turn_on_bias_sigma,
+            ),
+            (
+                "imu.accel.in_run_bias_sigma",
+                self.imu.accel.in_run_bias_sigma,
+            ),
+            ("imu.accel.noise_density", self.imu.accel.noise_density),
+            ("imu.accel.quantum", self.imu.accel.quantum),
+            ("imu.lag_tau_s", self.imu.lag_tau_s),
+            ("imu.antialias_cutoff_hz", self.imu.antialias_cutoff_hz),
+            ("gps.speed_noise_sigma_mps", self.gps.speed_noise_sigma_mps),
+            ("gps.alt_noise_sigma_m", self.gps.alt_noise_sigma_m),
+            ("gps.alt_bias_sigma_m", self.gps.alt_bias_sigma_m),
+            ("gps.latency_s", self.gps.latency_s),
+            ("surfaces.noise_sigma_deg", self.surfaces.noise_sigma_deg),
+            ("surfaces.quantum_deg", self.surfaces.quantum_deg),
+            (
+                "surfaces.throttle_noise_sigma",
+                self.surfaces.throttle_noise_sigma,
+            ),
+            ("surfaces.throttle_quantum", self.surfaces.throttle_quantum),
+            (
+                "imu.gyro_g_sensitivity_rps_per_mps2",
+                self.imu.gyro_g_sensitivity_rps_per_mps2.abs(),
+            ),
+            ("gps.update_hz", self.gps.update_hz),
+        ];
+        for (field, value) in nonneg {
+            if !value.is_finite() || value < 0.0 {
+                return Err(SensorConfigError::Invalid {
+                    field,
+                    value,
+                    why: "must be finite and >= 0",
+                });
+            }
+        }
+        let positive: [(&'static str, f64); 4] = [
+            (
+                "imu.gyro.in_run_bias_tau_s",
+                self.imu.gyro.in_run_bias_tau_s,
+            ),
+            (
+                "imu.accel.in_run_bias_tau_s",
+                self.imu.accel.in_run_bias_tau_s,
+            ),
+            ("gps.alt_bias_tau_s", self.gps.alt_bias_tau_s),
+            ("gps.update_hz", self.gps.update_hz),
+        ];
+        for (field, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(SensorConfigError::Invalid {
+                    field,
+                    value,
+                    why: "must be > 0",
+                });
+            }
+        }
+        if self.imu.antialias_cutoff_hz >= SIM_HZ as f64 / 2.0 {
+            return Err(SensorConfigError::Invalid {
+                field: "imu.antialias_cutoff_hz",
+                value: self.imu.antialias_cutoff_hz,
+                why: "must be below 60 Hz (half the 120 Hz simulation rate)",
+            });
+        }
+        if self.gps.update_hz > SIM_HZ as f64 {
+            return Err(SensorConfigError::Invalid {
+                field: "gps.update_hz",
+                value: self.gps.update_hz,
+                why: "cannot exceed the 120 Hz simulation rate",
+            });
+        }
+        if self.imu.lever_arm_m.iter().any(|v| !v.is_finite()) {
+            return Err(SensorConfigError::Invalid {
+                field: "imu.lever_arm_m",
+                value: f64::NAN,
+                why: "must be finite",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Truth the sensors see at one 120 Hz step (SI; surfaces in degrees).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SensorInput {
+    /// Body rates p, q, r, rad/s.
+    pub omega_rps: [f64; 3],
+    /// Body angular accelerations, rad/s².
+    pub omega_dot_rps2: [f64; 3],
+    /// Specific force at the CG, body axes, m/s² (no gravity).
+    pub f_cg_mps2: [f64; 3],
+    pub gps_speed_mps: f64,
+    pub alt_msl_m: f64,
+    pub elevator_deg: f64,
+    pub aileron_deg: f64,
+    pub rudder_deg: f64,
+    pub lef_deg: f64,
+    pub tef_deg: f64,
+    pub flaperon_deg: f64,
+    pub speedbrake_deg: f64,
+    pub throttle_norm: f64,
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Specific force at a point `r` from the CG of a rigid body: f_cg + ω̇×r + ω×(ω×r).
+pub fn specific_force_at(
+    f_cg: [f64; 3],
+    omega: [f64; 3],
+    omega_dot: [f64; 3],
+    r: [f64; 3],
+) -> [f64; 3] {
+    let t = cross(omega_dot, r);
+    let c = cross(omega, cross(omega, r));
+    [
+        f_cg[0] + t[0] + c[0],
+        f_cg[1] + t[1] + c[1],
+        f_cg[2] + t[2] + c[2],
+    ]
+}
+
+/// First-order Gauss-Markov process with steady-state σ and correlation time τ, stepped at 120 Hz.
+#[derive(Clone, Debug)]
+struct GaussMarkov {
+    phi: f64,
+    drive: f64,
+    x: f64,
+}
+
+impl GaussMarkov {
+    fn new(sigma: f64, tau_s: f64, rng: &mut ChaCha12Rng) -> Self {
+        let phi = (-DT / tau_s).exp();
+        let x0: f64 = StandardNormal.sample(rng);
+        GaussMarkov {
+            phi,
+            drive: sigma * (1.0 - phi * phi).sqrt(),
+            // Start in steady state: the flight did not just switch the IMU on.
+            x: sigma * x0,
+        }
+    }
+    fn step(&mut self, rng: &mut ChaCha12Rng) -> f64 {
+        let w: f64 = StandardNormal.sample(rng);
+        self.x = self.phi * self.x + self.drive * w;
+        self.x
+    }
+}
+
+/// 2nd-order Butterworth low-pass (bilinear transform, prewarped), direct form I.
+#[derive(Clone, Debug)]
+struct Biquad {
+    b: [f64; 3],
+    a: [f64; 2],
+    x: [f64; 2],
+    y: [f64; 2],
+    primed: bool,
+}
+
+impl Biquad {
+    fn lowpass(cutoff_hz: f64) -> Option<Self> {
+        if cutoff_hz <= 0.0 {
+            return None;
+        }
+        let k = (std::f64::consts::PI * cutoff_hz * DT).tan();
+        let q = std::f64::consts::FRAC_1_SQRT_2;
+        let norm = 1.0 / (1.0 + k / q + k * k);
+        let b0 = k * k * norm;
+        Some(Biquad {
+            b: [b0, 2.0 * b0, b0],
+            a: [2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm],
+            x: [0.0; 2],
+            y: [0.0; 2],
+            primed: false,
+        })
+    }
+    fn step(&mut self, x: f64) -> f64 {
+        if !self.primed {
+            // Start at rest on the first input instead of ringing up from zero.
+            self.x = [x; 2];
+            self.y = [x; 2];
+            self.primed = true;
+        }
+        let y = self.b[0] * x + self.b[1] * self.x[0] + self.b[2] * self.x[1]
+            - self.a[0] * self.y[0]
+            - self.a[1] * self.y[1];
+        self.x = [x, self.x[0]];
+        self.y = [y, self.y[0]];
+        y
+    }
+}
+
+/// One IMU axis: errors, quantization, lag and anti-alias filter.
+#[derive(Clone, Debug)]
+pub struct ImuAxis {
+    turn_on: f64,
+    in_run: GaussMarkov,
+    noise_sigma: f64,
+    quantum: f64,
+    residual: f64,
+    lag_alpha: f64,
+    lag: Option<f64>,
+    aa: Option<Biquad>,
+}
+
+impl ImuAxis {
+    fn new(e: &InertialErrors, lag_tau_s: f64, aa_hz: f64, rng: &mut ChaCha12Rng) -> Self {
+        let t: f64 = StandardNormal.sample(rng);
+        ImuAxis {
+            turn_on: e.turn_on_bias_sigma * t,
+            in_run: GaussMarkov::new(e.in_run_bias_sigma, e.in_run_bias_tau_s, rng),
+            // Discrete white noise at 120 Hz from a density: σ = N·√fs.
+            noise_sigma: e.noise_density / DT.sqrt(),
+            quantum: e.quantum,
+            residual: 0.0,
+            lag_alpha: if lag_tau_s > 0.0 {
+                1.0 - (-DT / lag_tau_s).exp()
+            } else {
+                1.0
+            },
+            lag: None,
+            aa: Biquad::lowpass(aa_hz),
+        }
+    }
+
+    /// The raw 120 Hz output (errors + quantization), before lag and anti-alias filtering.
+    pub fn raw(&mut self, truth: f64, extra_bias: f64, rng: &mut ChaCha12Rng) -> f64 {
+        let w: f64 = StandardNormal.sample(rng);
+        let v = truth + self.turn_on + self.in_run.step(rng) + extra_bias + self.noise_sigma * w;
+        if self.quantum > 0.0 {
+            // An integrating IMU outputs whole Δθ/Δv counts and carries the remainder to the next
+            // interval, so quantization error does not accumulate in the integral.
+            let acc = v * DT + self.residual;
+            let counts = (acc / self.quantum).round();
+            self.residual = acc - counts * self.quantum;
+            counts * self.quantum / DT
+        } else {
+            v
+        }
+    }
+
+    fn step(&mut self, truth: f64, extra_bias: f64, rng: &mut ChaCha12Rng) -> f64 {
+        let raw = self.raw(truth, extra_bias, rng);
+        let lagged = match self.lag {
+            None => raw,
+            Some(y) => y + self.lag_alpha * (raw - y),
+        };
+        self.lag = Some(lagged);
+        match &mut self.aa {
+            Some(f) => f.step(lagged),
+            None => lagged,
+        }
+    }
+
+    /// The turn-on bias drawn for this flight.
+    pub fn turn_on_bias(&self) -> f64 {
+        self.turn_on
+    }
+}
+
+fn quantize(v: f64, q: f64) -> f64 {
+    if q > 0.0 { (v / q).round() * q } else { v }
+}
+
+/// The stateful sensor suite of one flight.
+pub struct SensorModel {
+    cfg: SensorConfig,
+    rng: ChaCha12Rng,
+    gyro: [ImuAxis; 3],
+    accel: [ImuAxis; 3],
+    gps_alt_bias: GaussMarkov,
+    gps_delay: VecDeque<(f64, f64)>,
+    gps_delay_steps: usize,
+    gps_every_steps: u64,
+    gps_held: (f64, f64),
+    steps: u64,
+}
+
+impl SensorModel {
+    /// A fresh suite; `seed` fixes every random draw (same seed, same inputs → same outputs).
+    pub fn new(cfg: &SensorConfig, seed: u64) -> Self {
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
+        let i = &cfg.imu;
+        let mut axis =
+            |e: &InertialErrors| ImuAxis::new(e, i.lag_tau_s, i.antialias_cutoff_hz, &mut rng);
+        let gyro = [axis(&i.gyro), axis(&i.gyro), axis(&i.gyro)];
+        let accel = [axis(&i.accel), axis(&i.accel), axis(&i.accel)];
+        let gps_alt_bias =
+            GaussMarkov::new(cfg.gps.alt_bias_sigma_m, cfg.gps.alt_bias_tau_s, &mut rng);
+        SensorModel {
+            gyro,
+            accel,
+            gps_alt_bias,
+            gps_delay: VecDeque::new(),
+            gps_delay_steps: (cfg.gps.latency_s * SIM_HZ as f64).round() as usize,
+            gps_every_steps: ((SIM_HZ as f64 / cfg.gps.update_hz).round() as u64).max(1),
+            gps_held: (f64::NAN, f64::NAN),
+            steps: 0,
+            cfg: cfg.clone(),
+            rng,
+        }
+    }
+
+    /// The per-axis IMU models (gyro p, q, r), e.g. to read the drawn turn-on biases.
+    pub fn gyro_axes(&self) -> &[ImuAxis; 3] {
+        &self.gyro
+    }
+
+    /// One 120 Hz step: the 16 sensed channels at this instant.
+    pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
+        let mut out = [0.0; CHANNELS];
+        let f_imu = specific_force_at(
+            t.f_cg_mps2,
+            t.omega_rps,
+            t.omega_dot_rps2,
+            self.cfg.imu.lever_arm_m,
+        );
+        let gsens = self.cfg.imu.gyro_g_sensitivity_rps_per_mps2;
+        for k in 0..3 {
+            out[Channel::GyroP.index() + k] =
+                self.gyro[k].step(t.omega_rps[k], gsens * f_imu[k], &mut self.rng);
+        }
+        for k in 0..3 {
+            out[Channel::AccelX.index() + k] = self.accel[k].step(f_imu[k], 0.0, &mut self.rng);
+        }
+
+        // GPS: a fix is the truth `latency` ago plus noise, refreshed at the fix rate and held.
+        self.gps_delay.push_back((t.gps_speed_mps, t.alt_msl_m));
+        while self.gps_delay.len() > self.gps_delay_steps + 1 {
+            self.gps_delay.pop_front();
+        }
+        let alt_bias = self.gps_alt_bias.step(&mut self.rng);
+        if self.steps.is_multiple_of(self.gps_every_steps) {
+            let (v, h) = self
+                .gps_delay
+                .front()
+                .copied()
+                .unwrap_or((t.gps_speed_mps, t.alt_msl_m));
+            let nv: f64 = StandardNormal.sample(&mut self.rng);
+            let nh: f64 = StandardNormal.sample(&mut self.rng);
+            self.gps_held = (
+                v + self.cfg.gps.speed_noise_sigma_mps * nv,
+                h + alt_bias + self.cfg.gps.alt_noise_sigma_m * nh,
+            );
+        }
+        out[Channel::GpsSpeed.index()] = self.gps_held.0;
+        out[Channel::GpsAlt.index()] = self.gps_held.1;
+
+        let s = &self.cfg.surfaces;
+        let surfaces = [
+            (Channel::Elevator, t.elevator_deg),
+            (Channel::Aileron, t.aileron_deg),
+            (Channel::Rudder, t.rudder_deg),
+            (Channel::Lef, t.lef_deg),
+            (Channel::Tef, t.tef_deg),
+            (Channel::Flaperon, t.flaperon_deg),
+            (Channel::Speedbrake, t.speedbrake_deg),
+        ];
+        for (c, v) in surfaces {
+            let n: f64 = StandardNormal.sample(&mut self.rng);
+            out[c.index()] = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
+        }
+        let n: f64 = StandardNormal.sample(&mut self.rng);
+        out[Channel::Throttle.index()] = quantize(
+            t.throttle_norm + s.throttle_noise_sigma * n,
+            s.throttle_quantum,
+        );
+        self.steps += 1;
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lever_arm_pull_up_adds_centripetal_and_tangential_terms() {
+        // Pitching at 0.5 rad/s with 1 rad/s² pitch acceleration, IMU 2 m ahead of the CG.
+        let f = specific_force_at(
+            [0.0, 0.0, -9.8],
+            [0.0, 0.5, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+        );
+        // ω̇×r = (0,1,0)×(2,0,0) = (0,0,-2); ω×(ω×r) = -(0.25)·(2,0,0) = (-0.5,0,0).
+        assert!((f[0] + 0.5).abs() < 1e-12);
+        assert!((f[2] + 11.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn butterworth_passes_dc_and_attenuates_near_nyquist() {
+        let mut f = Biquad::lowpass(6.0).unwrap();
+        let mut y = 0.0;
+        for _ in 0..2000 {
+            y = f.step(1.0);
+        }
+        assert!((y - 1.0).abs() < 1e-9);
+        let mut f = Biquad::lowpass(6.0).unwrap();
+        let mut peak: f64 = 0.0;
+        for k in 0..4000 {
+            // 50 Hz: would alias to 10 Hz at 20 Hz sampling.
+            let v = f.step((2.0 * std::f64::consts::PI * 50.0 * k as f64 * DT).sin());
+            if k > 1000 {
+                peak = peak.max(v.abs());
+            }
+        }
+        assert!(peak < 0.03, "50 Hz gain {peak}");
+    }
+}
