@@ -13,6 +13,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Stream a flight through the simulated serial link to the firmware (in-process, QEMU or a
+    /// board) and score its estimates.
+    Run(hil_sim::runner::cli::RunArgs),
     /// Fly one JSBSim runscript (aircraft f16) and write a one-flight dataset (CSV + manifest).
     Fly(hil_sim_cli::FlyArgs),
 }
@@ -20,6 +23,7 @@ enum Cmd {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
+        Cmd::Run(a) => hil_sim::runner::cli::run(&a).map(|_| ()).map_err(Into::into),
         Cmd::Fly(a) => hil_sim_cli::fly(a),
     }
 }

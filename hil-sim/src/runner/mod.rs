@@ -1,0 +1,271 @@
+//! Streams a flight's sensor frames through the [`link`](crate::link) to a firmware [`Target`] and
+//! collects its estimate frames, matched to the truth by sequence number.
+//!
+//! One sensor frame per 50 ms of flight time. Real-time pacing sends each byte when the link model
+//! says it arrives; `fast` sends each frame as soon as the previous one is answered. In fast mode the
+//! runner waits for the firmware's reply before the next frame: long when the frame (and the one
+//! before, whose delimiter it relies on) went through untouched, briefly when the link altered it
+//! (the firmware will then normally drop it). The wait is pacing only: replies are matched by seq
+//! whenever they arrive, and frames never answered count as lost, never scored.
+
+pub mod cli;
+pub mod target;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use estimator_core::SensorFrame;
+use estimator_core::wire::estimate::EstimateFrame;
+use estimator_core::wire::{Accumulator, MAX_FRAME};
+
+use crate::link::{Link, LinkConfig, LinkStats};
+pub use target::{InProcess, Qemu, Serial, Target};
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error("no firmware image at {0}: run `cargo fw` first (or pass --elf)")]
+    NoElf(PathBuf),
+    #[error("cannot start {0}: {1} (is it installed? apt-get install qemu-system-arm)")]
+    Spawn(String, std::io::Error),
+    #[error("QEMU exited before accepting the serial connection ({0}): {1}")]
+    QemuExited(String, String),
+    #[error("cannot {0}: {1}")]
+    Io(String, std::io::Error),
+    #[error("{0} closed while frames were still in flight")]
+    Closed(String),
+    #[error("serial port {0}: {1}")]
+    Serial(PathBuf, String),
+    #[error(transparent)]
+    Link(#[from] crate::link::LinkError),
+    #[error(transparent)]
+    Dataset(#[from] crate::dataset::DatasetError),
+    #[error(transparent)]
+    Plant(#[from] crate::plant::PlantError),
+    #[error("the flight has no samples")]
+    EmptyFlight,
+    #[error("cannot write {0}: {1}")]
+    Output(PathBuf, String),
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    pub link: LinkConfig,
+    pub seed: u64,
+    /// Send as fast as the firmware answers instead of every 50 ms of wall time.
+    pub fast: bool,
+    /// Fast mode: how long to wait for the reply to an untouched frame.
+    pub reply_timeout: Duration,
+    /// Fast mode: how long to wait for the reply to a frame the link altered.
+    pub altered_grace: Duration,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig {
+            link: LinkConfig::default(),
+            seed: 1,
+            fast: true,
+            reply_timeout: Duration::from_secs(10),
+            altered_grace: Duration::from_millis(50),
+        }
+    }
+}
+
+/// Sample period of the flight and the estimator.
+pub const PERIOD_S: f64 = 0.05;
+
+/// One sensor frame sent and what came back for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRecord {
+    pub seq: u16,
+    pub time_s: f64,
+    pub alpha_true_deg: f64,
+    pub beta_true_deg: f64,
+    /// The estimate frame that came back intact, if any.
+    pub reply: Option<EstimateFrame>,
+}
+
+/// Everything a run produced.
+#[derive(Clone, Debug, Default)]
+pub struct RunOutcome {
+    pub target: &'static str,
+    pub records: Vec<FrameRecord>,
+    pub uplink: LinkStats,
+    pub downlink: LinkStats,
+    /// Estimate frames hil-sim rejected (COBS, CRC, length, version, kind).
+    pub downlink_rejected: u32,
+    /// Intact estimate frames whose seq matched no frame sent.
+    pub unmatched_replies: u32,
+    pub wall_s: f64,
+}
+
+/// A frame to send and the truth to score its estimate against.
+#[derive(Clone, Copy, Debug)]
+pub struct Sample {
+    pub frame: SensorFrame,
+    pub time_s: f64,
+    pub alpha_true_deg: f64,
+    pub beta_true_deg: f64,
+}
+
+/// Collects the firmware's output: a clean decoder for pacing, then the downlink model, then the
+/// receiver hil-sim really has.
+struct Downlink {
+    raw: Accumulator<MAX_FRAME>,
+    pending: Vec<u8>,
+    host: Accumulator<MAX_FRAME>,
+    replies: Vec<EstimateFrame>,
+    rejected: u32,
+}
+
+impl Downlink {
+    /// Feeds raw firmware bytes; returns the seqs the firmware answered (before link faults).
+    fn feed(&mut self, link: &mut Link, t_s: f64, bytes: &[u8]) -> Vec<u16> {
+        let mut answered = Vec::new();
+        for &b in bytes {
+            if let Some(Ok(body)) = self.raw.push(b)
+                && let Ok(f) = EstimateFrame::parse(body)
+            {
+                answered.push(f.estimate.seq);
+            }
+            self.pending.push(b);
+            if b == estimator_core::wire::DELIMITER {
+                let d = link.down.transmit(t_s, &self.pending);
+                self.pending.clear();
+                for &r in &d.bytes {
+                    match self.host.push(r) {
+                        Some(Ok(body)) => match EstimateFrame::parse(body) {
+                            Ok(f) => self.replies.push(f),
+                            Err(_) => self.rejected += 1,
+                        },
+                        Some(Err(_)) => self.rejected += 1,
+                        None => {}
+                    }
+                }
+            }
+        }
+        answered
+    }
+}
+
+/// Runs a flight through the link to `target`.
+pub fn run(
+    target: &mut dyn Target,
+    samples: &[Sample],
+    cfg: &RunConfig,
+) -> Result<RunOutcome, RunError> {
+    cfg.link.validate()?;
+    let mut link = Link::new(&cfg.link, cfg.seed);
+    let mut down = Downlink {
+        raw: Accumulator::new(),
+        pending: Vec::new(),
+        host: Accumulator::new(),
+        replies: Vec::new(),
+        rejected: 0,
+    };
+    let mut records: Vec<FrameRecord> = Vec::with_capacity(samples.len());
+    let mut index_of: HashMap<u16, usize> = HashMap::new();
+    let mut unmatched = 0u32;
+    let start = Instant::now();
+    let sync = target.synchronous();
+    let mut prev_altered = false;
+    let mut buf = Vec::new();
+    let mut wire = [0u8; MAX_FRAME];
+
+    for (i, s) in samples.iter().enumerate() {
+        let t = i as f64 * PERIOD_S;
+        let n = s.frame.encode(&mut wire).unwrap_or(0);
+        let d = link.up.transmit(t, wire.get(..n).unwrap_or(&[]));
+        records.push(FrameRecord {
+            seq: s.frame.seq,
+            time_s: s.time_s,
+            alpha_true_deg: s.alpha_true_deg,
+            beta_true_deg: s.beta_true_deg,
+            reply: None,
+        });
+        index_of.insert(s.frame.seq, i);
+        if cfg.fast {
+            target.send(&d.bytes)?;
+        } else {
+            // Each byte leaves when the line model says it arrives.
+            let mut from = 0;
+            for (k, at) in d.arrival_s.iter().enumerate() {
+                let due = start + Duration::from_secs_f64(*at);
+                if due > Instant::now() + Duration::from_millis(1) {
+                    target.send(d.bytes.get(from..k).unwrap_or(&[]))?;
+                    from = k;
+                    std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                }
+            }
+            target.send(d.bytes.get(from..).unwrap_or(&[]))?;
+        }
+        let expect = !d.altered && !prev_altered;
+        prev_altered = d.altered;
+        let deadline = if !cfg.fast {
+            start + Duration::from_secs_f64((i + 1) as f64 * PERIOD_S)
+        } else if sync {
+            Instant::now()
+        } else if expect {
+            Instant::now() + cfg.reply_timeout
+        } else {
+            Instant::now() + cfg.altered_grace
+        };
+        loop {
+            buf.clear();
+            let wait = deadline.saturating_duration_since(Instant::now());
+            target.recv(wait, &mut buf)?;
+            let answered = down.feed(&mut link, t, &buf);
+            let done = cfg.fast && answered.contains(&s.frame.seq);
+            if done || sync || Instant::now() >= deadline {
+                break;
+            }
+        }
+    }
+    // Late replies.
+    if !sync {
+        let until = Instant::now() + cfg.altered_grace;
+        loop {
+            buf.clear();
+            target.recv(until.saturating_duration_since(Instant::now()), &mut buf)?;
+            down.feed(&mut link, samples.len() as f64 * PERIOD_S, &buf);
+            if Instant::now() >= until {
+                break;
+            }
+        }
+    }
+    for f in &down.replies {
+        match index_of
+            .get(&f.estimate.seq)
+            .and_then(|&i| records.get_mut(i))
+        {
+            Some(r) if r.reply.is_none() => r.reply = Some(*f),
+            _ => unmatched += 1,
+        }
+    }
+    Ok(RunOutcome {
+        target: target.name(),
+        records,
+        uplink: link.up.stats(),
+        downlink: link.down.stats(),
+        downlink_rejected: down.rejected,
+        unmatched_replies: unmatched,
+        wall_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Samples of a recorded flight: frames numbered from 0 (wrapping at u16), truth from the CSV.
+pub fn samples_of(flight: &crate::dataset::Flight) -> Vec<Sample> {
+    flight
+        .samples
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Sample {
+            frame: crate::frames::sample_to_frame(i as u16, s),
+            time_s: s.time_s,
+            alpha_true_deg: s.truth.alpha_deg,
+            beta_true_deg: s.truth.beta_deg,
+        })
+        .collect()
+}

@@ -1,0 +1,283 @@
+//! The three firmware targets behind one trait: in-process, QEMU, a flashed board on a serial port.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::time::{Duration, Instant};
+
+use estimator_core::Estimator;
+use estimator_core::wire::MAX_FRAME;
+use estimator_core::wire::estimate::TickSource;
+use firmware::{App, Clock, Config};
+
+use super::RunError;
+
+/// A firmware that takes bytes and answers with bytes.
+pub trait Target {
+    fn name(&self) -> &'static str;
+    /// Writes bytes to the firmware's receive line.
+    fn send(&mut self, bytes: &[u8]) -> Result<(), RunError>;
+    /// Appends what the firmware has sent, waiting at most `timeout` for the first bytes.
+    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError>;
+    /// Whether replies are complete as soon as `send` returns (no waiting needed).
+    fn synchronous(&self) -> bool {
+        false
+    }
+}
+
+/// Host time in nanoseconds (wrapping u32: steps are far shorter than the 4.3 s wrap).
+pub struct HostClock(Instant);
+
+impl Clock for HostClock {
+    fn now(&mut self) -> u32 {
+        self.0.elapsed().as_nanos() as u32
+    }
+    fn source(&self) -> TickSource {
+        TickSource::HostNanos
+    }
+}
+
+/// The firmware's `App` in this process, with the host clock (50 ms budget in ns).
+pub struct InProcess {
+    app: App<'static, HostClock>,
+    pending: Vec<u8>,
+}
+
+impl Default for InProcess {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl InProcess {
+    pub fn new() -> InProcess {
+        InProcess {
+            app: App::new(
+                Estimator::shipped(),
+                HostClock(Instant::now()),
+                Config::fifty_ms_at(1_000_000_000),
+            ),
+            pending: Vec::new(),
+        }
+    }
+
+    pub fn app(&self) -> &App<'static, HostClock> {
+        &self.app
+    }
+}
+
+impl Target for InProcess {
+    fn name(&self) -> &'static str {
+        "host"
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), RunError> {
+        let mut out = [0u8; MAX_FRAME];
+        for b in bytes {
+            if let Some(n) = self.app.push(*b, &mut out) {
+                self.pending.extend_from_slice(out.get(..n).unwrap_or(&[]));
+            }
+        }
+        Ok(())
+    }
+    fn recv(&mut self, _timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
+        out.append(&mut self.pending);
+        Ok(())
+    }
+    fn synchronous(&self) -> bool {
+        true
+    }
+}
+
+/// Reads a byte stream on a thread, so waiting with a timeout works the same for sockets and ttys.
+struct Reader {
+    rx: Receiver<Vec<u8>>,
+}
+
+impl Reader {
+    fn spawn(mut r: impl Read + Send + 'static) -> Reader {
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            loop {
+                match r.read(&mut buf) {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => {
+                        if tx.send(buf[..n].to_vec()).is_err() {
+                            break;
+                        }
+                    }
+                }
+            }
+        });
+        Reader { rx }
+    }
+
+    /// Ok(false): the stream ended.
+    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> bool {
+        match self.rx.recv_timeout(timeout) {
+            Ok(chunk) => out.extend_from_slice(&chunk),
+            Err(RecvTimeoutError::Timeout) => return true,
+            Err(RecvTimeoutError::Disconnected) => return false,
+        }
+        while let Ok(chunk) = self.rx.try_recv() {
+            out.extend_from_slice(&chunk);
+        }
+        true
+    }
+}
+
+/// Where `cargo fw` puts the image.
+pub fn default_elf() -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    root.join("target/thumbv7em-none-eabihf/firmware/firmware")
+}
+
+/// The flight image in QEMU's netduinoplus2, its USART1 on a local TCP socket, `-icount shift=0`
+/// so that TIM2 counts instructions. QEMU is killed when this is dropped.
+pub struct Qemu {
+    child: Child,
+    stream: TcpStream,
+    reader: Reader,
+}
+
+impl Qemu {
+    pub fn start(qemu: &str, elf: &Path) -> Result<Qemu, RunError> {
+        if !elf.is_file() {
+            return Err(RunError::NoElf(elf.to_path_buf()));
+        }
+        let port = TcpListener::bind("127.0.0.1:0")
+            .and_then(|l| l.local_addr())
+            .map_err(|e| RunError::Io("find a free TCP port for QEMU".into(), e))?
+            .port();
+        let mut child = Command::new(qemu)
+            .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
+            .args(["-icount", "shift=0", "-kernel"])
+            .arg(elf)
+            .arg("-serial")
+            .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|e| RunError::Spawn(qemu.to_string(), e))?;
+        let started = Instant::now();
+        let stream = loop {
+            if let Ok(Some(status)) = child.try_wait() {
+                let mut err = String::new();
+                if let Some(mut s) = child.stderr.take() {
+                    let _ = s.read_to_string(&mut err);
+                }
+                return Err(RunError::QemuExited(status.to_string(), err));
+            }
+            match TcpStream::connect(("127.0.0.1", port)) {
+                Ok(s) => break s,
+                Err(_) if started.elapsed() < Duration::from_secs(15) => {
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                Err(e) => {
+                    let _ = child.kill();
+                    return Err(RunError::Io(
+                        format!("connect to QEMU's serial on port {port}"),
+                        e,
+                    ));
+                }
+            }
+        };
+        let _ = stream.set_nodelay(true);
+        let read_half = stream
+            .try_clone()
+            .map_err(|e| RunError::Io("clone the QEMU socket".into(), e))?;
+        Ok(Qemu {
+            child,
+            stream,
+            reader: Reader::spawn(read_half),
+        })
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.stream.shutdown(std::net::Shutdown::Both);
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Target for Qemu {
+    fn name(&self) -> &'static str {
+        "qemu"
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), RunError> {
+        self.stream
+            .write_all(bytes)
+            .map_err(|e| RunError::Io("write to QEMU's serial".into(), e))
+    }
+    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
+        if self.reader.recv(timeout, out) {
+            Ok(())
+        } else {
+            Err(RunError::Closed("QEMU's serial".into()))
+        }
+    }
+}
+
+/// A flashed board on a serial device. The line is set up with `stty` (coreutils; raw 8N1) rather
+/// than a serial-port crate: that is all the configuration a USB-serial adapter needs here, and it
+/// keeps udev/libc bindings out of the build.
+pub struct Serial {
+    port: std::fs::File,
+    reader: Reader,
+}
+
+impl Serial {
+    pub fn open(path: &Path, baud: u32) -> Result<Serial, RunError> {
+        let status = Command::new("stty")
+            .arg("-F")
+            .arg(path)
+            .arg(baud.to_string())
+            .args([
+                "raw", "-echo", "cs8", "-cstopb", "-parenb", "-crtscts", "min", "1", "time", "0",
+            ])
+            .status()
+            .map_err(|e| RunError::Spawn("stty".into(), e))?;
+        if !status.success() {
+            return Err(RunError::Serial(
+                path.to_path_buf(),
+                format!("stty failed ({status})"),
+            ));
+        }
+        let port = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)
+            .map_err(|e| RunError::Serial(path.to_path_buf(), e.to_string()))?;
+        let read_half = port
+            .try_clone()
+            .map_err(|e| RunError::Serial(path.to_path_buf(), e.to_string()))?;
+        Ok(Serial {
+            port,
+            reader: Reader::spawn(read_half),
+        })
+    }
+}
+
+impl Target for Serial {
+    fn name(&self) -> &'static str {
+        "serial"
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), RunError> {
+        self.port
+            .write_all(bytes)
+            .and_then(|()| self.port.flush())
+            .map_err(|e| RunError::Io("write to the serial port".into(), e))
+    }
+    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
+        if self.reader.recv(timeout, out) {
+            Ok(())
+        } else {
+            Err(RunError::Closed("the serial port".into()))
+        }
+    }
+}

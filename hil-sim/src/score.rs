@@ -1,1 +1,0 @@
-//! Owned by the HIL work (issue 6); being written.

@@ -1,0 +1,216 @@
+//! Scores a run: α/β error statistics over the frames that came back with a computed estimate, link
+//! and firmware counters, step timing; writes the per-frame CSV, the JSON summary and a PNG plot.
+
+use std::path::Path;
+
+use estimator_core::Flags;
+use estimator_core::wire::estimate::TickSource;
+use serde::Serialize;
+
+use crate::link::LinkStats;
+use crate::runner::{FrameRecord, RunOutcome};
+
+/// Error statistics of one angle, degrees.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ErrorStats {
+    pub mae: f64,
+    pub rmse: f64,
+    pub max: f64,
+}
+
+impl ErrorStats {
+    /// None when there is nothing to score.
+    pub fn of(errors: &[f64]) -> Option<ErrorStats> {
+        if errors.is_empty() {
+            return None;
+        }
+        let n = errors.len() as f64;
+        Some(ErrorStats {
+            mae: errors.iter().map(|e| e.abs()).sum::<f64>() / n,
+            rmse: (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt(),
+            max: errors.iter().fold(0.0, |m: f64, e| m.max(e.abs())),
+        })
+    }
+}
+
+/// The `--json` object. Angles in degrees; `null` where there is nothing to measure.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub firmware: String,
+    pub has_model: bool,
+    pub alpha_mae_deg: Option<f64>,
+    pub beta_mae_deg: Option<f64>,
+    pub alpha_rmse_deg: Option<f64>,
+    pub beta_rmse_deg: Option<f64>,
+    pub alpha_max_abs_err_deg: Option<f64>,
+    pub beta_max_abs_err_deg: Option<f64>,
+    pub frames_sent: usize,
+    /// Estimates received intact.
+    pub frames_answered: usize,
+    /// Estimates scored: answered and computed (not `NO_MODEL`/`NO_ESTIMATE`).
+    pub frames_scored: usize,
+    /// Frames with no intact estimate back (lost or corrupted either way): counted, not scored.
+    pub frames_lost: usize,
+    /// Frames rejected on both sides: firmware `rx_corrupt` plus estimate frames hil-sim rejected.
+    pub frames_corrupt_rejected: u64,
+    pub firmware_rx_corrupt: u64,
+    pub firmware_rx_lost: u64,
+    pub host_rx_corrupt: u64,
+    pub unmatched_replies: u64,
+    pub deadline_misses: u64,
+    pub tick_source: String,
+    pub step_ticks_max: Option<u32>,
+    pub step_ticks_median: Option<u32>,
+    pub step_instructions_max: Option<u32>,
+    pub step_instructions_median: Option<u32>,
+    pub flight_s: f64,
+    pub wall_s: f64,
+    pub uplink: LinkStats,
+    pub downlink: LinkStats,
+}
+
+/// Whether the estimate in a record is one the estimator computed.
+pub fn scorable(r: &FrameRecord) -> bool {
+    r.reply
+        .is_some_and(|f| !f.estimate.flags.has(Flags::NO_MODEL | Flags::NO_ESTIMATE))
+}
+
+fn median(v: &mut [u32]) -> Option<u32> {
+    v.sort_unstable();
+    v.get(v.len() / 2).copied()
+}
+
+pub fn summarize(o: &RunOutcome) -> Summary {
+    let scored: Vec<&FrameRecord> = o.records.iter().filter(|r| scorable(r)).collect();
+    let err = |f: fn(&FrameRecord) -> f64| -> Vec<f64> { scored.iter().map(|r| f(r)).collect() };
+    let a = ErrorStats::of(&err(|r| {
+        r.reply.map_or(0.0, |f| f.estimate.alpha_deg()) - r.alpha_true_deg
+    }));
+    let b = ErrorStats::of(&err(|r| {
+        r.reply.map_or(0.0, |f| f.estimate.beta_deg()) - r.beta_true_deg
+    }));
+    let replies: Vec<_> = o.records.iter().filter_map(|r| r.reply).collect();
+    let last = |f: fn(&estimator_core::wire::estimate::Health) -> u32| {
+        replies.iter().map(|r| f(&r.health)).max().unwrap_or(0) as u64
+    };
+    let source = replies
+        .last()
+        .map_or(TickSource::None, |r| r.health.tick_source);
+    let mut ticks: Vec<u32> = replies.iter().map(|r| r.health.step_ticks).collect();
+    let tmax = ticks.iter().copied().max();
+    let tmed = median(&mut ticks);
+    let instr = source == TickSource::Instructions;
+    let fw_corrupt = last(|h| h.rx_corrupt);
+    Summary {
+        firmware: o.target.to_string(),
+        has_model: estimator_core::model::HAS_MODEL,
+        alpha_mae_deg: a.map(|s| s.mae),
+        beta_mae_deg: b.map(|s| s.mae),
+        alpha_rmse_deg: a.map(|s| s.rmse),
+        beta_rmse_deg: b.map(|s| s.rmse),
+        alpha_max_abs_err_deg: a.map(|s| s.max),
+        beta_max_abs_err_deg: b.map(|s| s.max),
+        frames_sent: o.records.len(),
+        frames_answered: replies.len(),
+        frames_scored: scored.len(),
+        frames_lost: o.records.len() - replies.len(),
+        frames_corrupt_rejected: fw_corrupt + u64::from(o.downlink_rejected),
+        firmware_rx_corrupt: fw_corrupt,
+        firmware_rx_lost: last(|h| h.rx_lost),
+        host_rx_corrupt: u64::from(o.downlink_rejected),
+        unmatched_replies: u64::from(o.unmatched_replies),
+        deadline_misses: last(|h| h.deadline_misses),
+        tick_source: format!("{source:?}"),
+        step_ticks_max: tmax,
+        step_ticks_median: tmed,
+        step_instructions_max: tmax.filter(|_| instr),
+        step_instructions_median: tmed.filter(|_| instr),
+        flight_s: o.records.len() as f64 * crate::runner::PERIOD_S,
+        wall_s: o.wall_s,
+        uplink: o.uplink,
+        downlink: o.downlink,
+    }
+}
+
+/// Per-frame CSV: truth, the estimate as sent (integer fields exactly), step ticks.
+pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error> {
+    let mut w = csv::Writer::from_path(path)?;
+    w.write_record([
+        "seq",
+        "time_s",
+        "alpha_true_deg",
+        "beta_true_deg",
+        "received",
+        "alpha_mdeg",
+        "beta_mdeg",
+        "w_aero_mms",
+        "v_aero_mms",
+        "flags",
+        "step_ticks",
+        "tick_source",
+    ])?;
+    for r in records {
+        let mut row = vec![
+            r.seq.to_string(),
+            format!("{:.3}", r.time_s),
+            format!("{:.6}", r.alpha_true_deg),
+            format!("{:.6}", r.beta_true_deg),
+        ];
+        match r.reply {
+            Some(f) => {
+                let e = f.estimate;
+                row.extend([
+                    "1".to_string(),
+                    e.alpha_mdeg.to_string(),
+                    e.beta_mdeg.to_string(),
+                    e.w_aero_mms.to_string(),
+                    e.v_aero_mms.to_string(),
+                    e.flags.0.to_string(),
+                    f.health.step_ticks.to_string(),
+                    format!("{:?}", f.health.tick_source),
+                ]);
+            }
+            None => row.extend(
+                ["0".to_string()]
+                    .into_iter()
+                    .chain((0..7).map(|_| String::new())),
+            ),
+        }
+        w.write_record(&row)?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// Columns of the CSV that must match bit for bit between two firmwares running the same flight.
+pub const ESTIMATE_COLUMNS: [&str; 7] = [
+    "seq",
+    "received",
+    "alpha_mdeg",
+    "beta_mdeg",
+    "w_aero_mms",
+    "v_aero_mms",
+    "flags",
+];
+
+/// The estimate columns of a per-frame CSV, for bit-exact comparisons.
+pub fn read_estimate_columns(path: &Path) -> Result<Vec<Vec<String>>, csv::Error> {
+    let mut r = csv::Reader::from_path(path)?;
+    let headers = r.headers()?.clone();
+    let idx: Vec<usize> = ESTIMATE_COLUMNS
+        .iter()
+        .filter_map(|c| headers.iter().position(|h| h == *c))
+        .collect();
+    let mut rows = Vec::new();
+    for rec in r.records() {
+        let rec = rec?;
+        rows.push(
+            idx.iter()
+                .map(|&i| rec.get(i).unwrap_or("").to_string())
+                .collect(),
+        );
+    }
+    Ok(rows)
+}
+
+pub mod plot;
