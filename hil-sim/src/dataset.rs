@@ -4,7 +4,7 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimator_core::{CHANNELS, Channel};
+use estimator_core::{Channel, CHANNELS};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -426,4 +426,130 @@ mod tests {
         assert_eq!(f, g);
         std::fs::remove_dir_all(&dir).ok();
     }
+}
+
+/// Why `generate` failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GenerateError {
+    #[error(transparent)]
+    Plant(#[from] crate::plant::PlantError),
+    #[error(transparent)]
+    Maneuver(#[from] crate::maneuver::ManeuverError),
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    #[error("flight {name}: {source}")]
+    Flight {
+        name: String,
+        source: Box<GenerateError>,
+    },
+}
+
+/// Sensor seed of a flight: distinct from the maneuver seed so the two random streams are unrelated.
+pub fn sensor_seed(flight_seed: u64) -> u64 {
+    flight_seed ^ 0x5e45_5e45_5e45_5e45
+}
+
+/// Generates a dataset: writes each planned maneuver (`NAME.xml` + `NAME_init.xml`) into `out`,
+/// flies it through [`crate::plant::fly_script`] (the same path as `hil-sim fly --script`) on
+/// `workers` threads, and writes the CSVs and `manifest.json`. Flights are written in plan order
+/// whatever order the workers finish in, so the manifest is deterministic.
+pub fn generate(
+    preset: crate::maneuver::Preset,
+    base_seed: u64,
+    out: &Path,
+    sensors: &crate::sensors::SensorConfig,
+    workers: usize,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Manifest, GenerateError> {
+    use crate::maneuver::{self, Profile};
+    use crate::plant::FlyConfig;
+    std::fs::create_dir_all(out).map_err(|source| DatasetError::Io {
+        action: "create",
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let plan = preset.plan(base_seed);
+    let mut files = std::collections::BTreeMap::new();
+    let mut scripts = Vec::new();
+    for f in &plan {
+        let m = maneuver::generate(&Profile::preset(f.profile), f.seed, &f.name, f.duration_s)?;
+        let path = m.write(out)?;
+        for p in [path.clone(), out.join(format!("{}_init.xml", f.name))] {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            files.insert(name, sha256_file(&p)?);
+        }
+        scripts.push(path);
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: std::sync::Mutex<Vec<Option<Result<FlightEntry, GenerateError>>>> =
+        std::sync::Mutex::new((0..plan.len()).map(|_| None).collect());
+    let version = std::sync::Mutex::new(String::new());
+    std::thread::scope(|scope| {
+        for _ in 0..workers.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                let (Some(f), Some(script)) = (plan.get(i), scripts.get(i)) else {
+                    break;
+                };
+                let cfg = FlyConfig {
+                    seed: sensor_seed(f.seed),
+                    sensors: sensors.clone(),
+                    max_time_s: None,
+                    name: Some(f.name.clone()),
+                };
+                let r = (|| -> Result<FlightEntry, GenerateError> {
+                    let mut plant = crate::plant::Plant::spawn()?;
+                    if let Ok(mut v) = version.lock() {
+                        *v = plant.jsbsim_version().to_string();
+                    }
+                    let flight = crate::plant::fly_script_with(&mut plant, script, &cfg)?;
+                    Ok(write_flight(
+                        out,
+                        &flight,
+                        f.split,
+                        f.profile.name(),
+                        f.seed,
+                    )?)
+                })()
+                .map_err(|e| GenerateError::Flight {
+                    name: f.name.clone(),
+                    source: Box::new(e),
+                });
+                if let Some(pb) = progress {
+                    pb.inc(1);
+                }
+                if let Some(slot) = results.lock().ok().as_mut().and_then(|r| r.get_mut(i)) {
+                    *slot = Some(r);
+                }
+            });
+        }
+    });
+    let mut flights = Vec::new();
+    for r in results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .flatten()
+    {
+        flights.push(r?);
+    }
+    let manifest = Manifest {
+        format: Manifest::FORMAT,
+        preset: preset.name().to_string(),
+        jsbsim_version: version.into_inner().unwrap_or_default(),
+        git_rev: git_rev(),
+        config: serde_json::json!({
+            "seed": base_seed,
+            "plan": plan,
+            "profiles": crate::maneuver::ProfileKind::ALL.iter().map(|k| Profile::preset(*k)).collect::<Vec<_>>(),
+            "sensors": sensors,
+        }),
+        flights,
+        files,
+    };
+    manifest.write(out)?;
+    Ok(manifest)
 }

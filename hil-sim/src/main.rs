@@ -18,13 +18,18 @@ enum Cmd {
     Run(hil_sim::runner::cli::RunArgs),
     /// Fly one JSBSim runscript (aircraft f16) and write a one-flight dataset (CSV + manifest).
     Fly(hil_sim_cli::FlyArgs),
+    /// Generate a random-maneuver dataset (maneuver XML, CSV per flight, manifest, plots, report).
+    Generate(hil_sim_cli::GenerateArgs),
 }
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.cmd {
-        Cmd::Run(a) => hil_sim::runner::cli::run(&a).map(|_| ()).map_err(Into::into),
+        Cmd::Run(a) => hil_sim::runner::cli::run(&a)
+            .map(|_| ())
+            .map_err(Into::into),
         Cmd::Fly(a) => hil_sim_cli::fly(a),
+        Cmd::Generate(a) => hil_sim_cli::generate(a),
     }
 }
 
@@ -103,6 +108,58 @@ mod hil_sim_cli {
             a.out.join(&entry.file).display(),
             mpath.display()
         );
+        Ok(())
+    }
+
+    #[derive(clap::Args)]
+    pub struct GenerateArgs {
+        /// `paper`: 16 training flights of 15–20 min + 4 test flights; `ci`: 5 flights of 3 min.
+        #[arg(long, value_enum)]
+        preset: hil_sim::maneuver::Preset,
+        /// Dataset directory to write (created).
+        #[arg(long)]
+        out: PathBuf,
+        /// Base seed; flight and sensor seeds derive from it.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Sensor model parameters (TOML; see docs/sensors.md).
+        #[arg(long)]
+        sensors: Option<PathBuf>,
+        /// Parallel flights (one JSBSim bridge process each).
+        #[arg(long, default_value_t = 2)]
+        workers: usize,
+    }
+
+    pub fn generate(a: GenerateArgs) -> Result<()> {
+        let sensors = match &a.sensors {
+            Some(p) => SensorConfig::load(p)?,
+            None => SensorConfig::default(),
+        };
+        let started = std::time::Instant::now();
+        let n = a.preset.plan(a.seed).len();
+        let pb = indicatif::ProgressBar::new(n as u64);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:30}] {pos}/{len} flights",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        let m = dataset::generate(a.preset, a.seed, &a.out, &sensors, a.workers, Some(&pb))?;
+        pb.finish_and_clear();
+        let samples: usize = m.flights.iter().map(|f| f.samples).sum();
+        let cut = m.flights.iter().filter(|f| f.cut.is_some()).count();
+        println!(
+            "generated {} flights ({} samples, {:.1} min of flight, {} cut) in {:.1} s wall",
+            m.flights.len(),
+            samples,
+            samples as f64 / 20.0 / 60.0,
+            cut,
+            started.elapsed().as_secs_f64()
+        );
+        for f in m.flights.iter().filter(|f| f.cut.is_some()) {
+            println!("  {} cut: {}", f.name, f.cut.as_deref().unwrap_or(""));
+        }
+        println!("wrote {}", a.out.display());
         Ok(())
     }
 }

@@ -1,1 +1,749 @@
-//! Owned by the data-side work (issue 4); being written.
+//! Random maneuver generator (Karali et al. 2023, Fig. 3) producing complete JSBSim runscripts.
+//!
+//! A generated flight is a plain JSBSim runscript plus its initialize file: random commands are
+//! timed events writing `maneuver/*` properties, and the zone logic is continuous events whose
+//! `<set>` is a `<function>` of aircraft properties. Flight Zone: random attitude / α targets with
+//! random stick perturbations, rudder, throttle and speedbrake held for random durations. Danger
+//! Zone (low, too high, steep bank or pitch, slow, α near the limiter): a recovery law (wings level,
+//! pitch toward a safe altitude and speed, power by speed) holds until the aircraft is back well
+//! inside the Flight Zone. g protection (the F-16 model has no g-limiter) eases the stick when the
+//! load factor leaves the profile's band. Because everything is in the script, flying the saved
+//! file through JSBSim's own loader reproduces the flight.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha12Rng;
+use serde::{Deserialize, Serialize};
+
+/// The four training profiles of the paper preset.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProfileKind {
+    Gentle,
+    HighAlpha,
+    ClimbDescent,
+    Aggressive,
+}
+
+impl ProfileKind {
+    pub const ALL: [ProfileKind; 4] = [
+        ProfileKind::Gentle,
+        ProfileKind::HighAlpha,
+        ProfileKind::ClimbDescent,
+        ProfileKind::Aggressive,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Gentle => "gentle",
+            ProfileKind::HighAlpha => "high-alpha",
+            ProfileKind::ClimbDescent => "climb-descent",
+            ProfileKind::Aggressive => "aggressive",
+        }
+    }
+}
+
+/// A closed interval to draw uniformly from.
+pub type Range = (f64, f64);
+
+/// Everything that shapes one family of random flights.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Profile {
+    pub kind: ProfileKind,
+    /// Initial altitude and calibrated airspeed.
+    pub init_alt_ft: Range,
+    pub init_vc_kts: Range,
+    /// Fuel per main tank (2 tanks), lb; frozen so each flight has its own constant mass.
+    pub fuel_per_tank_lbs: Range,
+    /// Pitch-attitude targets, deg, and how long each is held, s.
+    pub theta_target_deg: Range,
+    pub target_hold_s: Range,
+    /// Share of pitch segments that track an α target instead of a pitch attitude.
+    pub alpha_mode_share: f64,
+    pub alpha_target_deg: Range,
+    /// Bank targets (sign random), deg.
+    pub bank_target_deg: Range,
+    /// Open-loop stick perturbations added to the laws (normalised stick), and their hold times.
+    pub pitch_stick_amp: f64,
+    pub roll_stick_amp: f64,
+    pub stick_hold_s: Range,
+    pub rudder_amp: f64,
+    pub rudder_hold_s: Range,
+    pub throttle: Range,
+    pub throttle_hold_s: Range,
+    /// Probability that a speedbrake segment deploys it.
+    pub speedbrake_share: f64,
+    /// Danger Zone limits.
+    pub min_agl_ft: f64,
+    pub ceiling_ft: f64,
+    pub max_bank_deg: f64,
+    pub max_pitch_deg: f64,
+    pub min_vc_kts: f64,
+    /// Calibrated airspeed the recovery law climbs back to before handing back.
+    pub recover_vc_kts: f64,
+    pub max_alpha_deg: f64,
+    /// Below this α (the aero tables end at −10°) the Danger Zone takes over too.
+    pub min_alpha_deg: f64,
+    /// Time constant of the ramp to each new attitude / α target, s.
+    pub target_ramp_s: f64,
+    /// g protection band.
+    pub max_nz_g: f64,
+    pub min_nz_g: f64,
+    /// Dryden turbulence severity (0 = off … 7), drawn as an integer from this range.
+    pub turb_severity: (u32, u32),
+    /// Steady wind magnitude, ft/s (random direction).
+    pub steady_wind_fps: Range,
+    /// 1-cosine gusts: magnitude (ft/s) and interval between gusts (s).
+    pub gust_fps: Range,
+    pub gust_interval_s: Range,
+}
+
+impl Profile {
+    /// The preset profiles.
+    pub fn preset(kind: ProfileKind) -> Profile {
+        let base = Profile {
+            kind,
+            init_alt_ft: (8_000.0, 25_000.0),
+            init_vc_kts: (280.0, 420.0),
+            fuel_per_tank_lbs: (600.0, 3_000.0),
+            theta_target_deg: (-8.0, 12.0),
+            target_hold_s: (6.0, 20.0),
+            alpha_mode_share: 0.0,
+            alpha_target_deg: (2.0, 10.0),
+            bank_target_deg: (0.0, 35.0),
+            pitch_stick_amp: 0.08,
+            roll_stick_amp: 0.1,
+            stick_hold_s: (0.5, 3.0),
+            rudder_amp: 0.2,
+            rudder_hold_s: (1.0, 6.0),
+            throttle: (0.3, 0.7),
+            throttle_hold_s: (10.0, 40.0),
+            speedbrake_share: 0.1,
+            min_agl_ft: 2_500.0,
+            ceiling_ft: 45_000.0,
+            max_bank_deg: 95.0,
+            max_pitch_deg: 45.0,
+            min_vc_kts: 150.0,
+            recover_vc_kts: 250.0,
+            max_alpha_deg: 22.0,
+            min_alpha_deg: -8.0,
+            target_ramp_s: 3.0,
+            max_nz_g: 7.5,
+            min_nz_g: -2.5,
+            turb_severity: (0, 3),
+            steady_wind_fps: (0.0, 40.0),
+            gust_fps: (5.0, 25.0),
+            gust_interval_s: (40.0, 150.0),
+        };
+        match kind {
+            ProfileKind::Gentle => base,
+            // Slow, low thrust, sustained pulls (wind-up turns) at α targets near the limiter.
+            ProfileKind::HighAlpha => Profile {
+                init_alt_ft: (12_000.0, 30_000.0),
+                init_vc_kts: (220.0, 320.0),
+                theta_target_deg: (-5.0, 15.0),
+                target_hold_s: (8.0, 20.0),
+                alpha_mode_share: 0.9,
+                alpha_target_deg: (14.0, 28.0),
+                bank_target_deg: (20.0, 75.0),
+                pitch_stick_amp: 0.1,
+                throttle: (0.2, 0.6),
+                min_vc_kts: 90.0,
+                recover_vc_kts: 180.0,
+                target_ramp_s: 2.0,
+                max_alpha_deg: 31.0,
+                max_bank_deg: 110.0,
+                max_pitch_deg: 50.0,
+                turb_severity: (0, 4),
+                ..base
+            },
+            ProfileKind::ClimbDescent => Profile {
+                init_alt_ft: (5_000.0, 35_000.0),
+                theta_target_deg: (-25.0, 25.0),
+                target_hold_s: (8.0, 30.0),
+                alpha_mode_share: 0.1,
+                bank_target_deg: (0.0, 45.0),
+                throttle: (0.2, 1.0),
+                turb_severity: (0, 5),
+                ..base
+            },
+            // High energy, big stick, rolls past 90°, pushes to negative α, afterburner dives.
+            ProfileKind::Aggressive => Profile {
+                init_alt_ft: (10_000.0, 35_000.0),
+                init_vc_kts: (350.0, 550.0),
+                theta_target_deg: (-35.0, 30.0),
+                target_hold_s: (3.0, 10.0),
+                alpha_mode_share: 0.2,
+                alpha_target_deg: (-6.0, 18.0),
+                bank_target_deg: (0.0, 140.0),
+                pitch_stick_amp: 0.5,
+                roll_stick_amp: 0.6,
+                stick_hold_s: (0.3, 2.0),
+                rudder_amp: 0.6,
+                throttle: (0.5, 1.0),
+                max_bank_deg: 160.0,
+                max_pitch_deg: 60.0,
+                max_nz_g: 8.0,
+                min_nz_g: -3.0,
+                target_ramp_s: 1.0,
+                speedbrake_share: 0.2,
+                turb_severity: (2, 6),
+                ..base
+            },
+        }
+    }
+}
+
+/// One generated flight.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Maneuver {
+    pub name: String,
+    pub script_xml: String,
+    pub init_xml: String,
+    pub duration_s: f64,
+}
+
+/// Why a maneuver cannot be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ManeuverError {
+    #[error("cannot write maneuver file {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("maneuver name {0:?} must be letters, digits, '-' or '_' (it becomes a file name)")]
+    BadName(String),
+    #[error("maneuver duration {0} s must be between 1 and 7200 s")]
+    BadDuration(f64),
+}
+
+fn draw(rng: &mut ChaCha12Rng, r: Range) -> f64 {
+    if r.1 > r.0 {
+        rng.random_range(r.0..=r.1)
+    } else {
+        r.0
+    }
+}
+
+fn signed(rng: &mut ChaCha12Rng, r: Range) -> f64 {
+    let v = draw(rng, r);
+    if rng.random_bool(0.5) {
+        v
+    } else {
+        -v
+    }
+}
+
+/// Timed event: at `t`, ramp `prop` to `value` over `tc` seconds.
+fn timed(out: &mut String, t: f64, sets: &[(&str, f64)], tc: f64) {
+    let _ = writeln!(out, "    <event>");
+    let _ = writeln!(
+        out,
+        "      <condition> simulation/sim-time-sec ge {t:.3} </condition>"
+    );
+    for (prop, value) in sets {
+        if tc > 0.0 {
+            let _ = writeln!(
+                out,
+                "      <set name=\"{prop}\" value=\"{value:.4}\" action=\"FG_RAMP\" tc=\"{tc:.2}\"/>"
+            );
+        } else {
+            let _ = writeln!(out, "      <set name=\"{prop}\" value=\"{value:.4}\"/>");
+        }
+    }
+    let _ = writeln!(out, "    </event>");
+}
+
+/// Continuous event computing `prop` from a function body.
+fn law(out: &mut String, name: &str, prop: &str, function: &str) {
+    let _ = write!(
+        out,
+        "    <event name=\"{name}\" continuous=\"true\">\n      <condition> simulation/sim-time-sec ge 1.0 </condition>\n      <set name=\"{prop}\">\n        <function>\n{function}        </function>\n      </set>\n    </event>\n"
+    );
+}
+
+fn clamp(lo: f64, hi: f64, inner: &str) -> String {
+    format!("<max><value>{lo}</value><min><value>{hi}</value>{inner}</min></max>")
+}
+
+/// Generates the flight `name` (used for its file names) of `duration_s` seconds.
+pub fn generate(
+    profile: &Profile,
+    seed: u64,
+    name: &str,
+    duration_s: f64,
+) -> Result<Maneuver, ManeuverError> {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(ManeuverError::BadName(name.to_string()));
+    }
+    if !(1.0..=7200.0).contains(&duration_s) {
+        return Err(ManeuverError::BadDuration(duration_s));
+    }
+    let p = profile;
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    let init_name = format!("{name}_init");
+    let alt = draw(&mut rng, p.init_alt_ft);
+    let vc = draw(&mut rng, p.init_vc_kts);
+    let psi = draw(&mut rng, (0.0, 360.0));
+    let lat = draw(&mut rng, (-50.0, 60.0));
+    let lon = draw(&mut rng, (-170.0, 170.0));
+    // Latitude/longitude before vc: JSBSim re-derives the speed when position changes afterwards.
+    let init_xml = format!(
+        "<?xml version=\"1.0\"?>\n<!-- hil-sim maneuver {name}: airborne start (profile {}, seed {seed}). -->\n<initialize name=\"{init_name}\">\n  <latitude unit=\"DEG\"> {lat:.4} </latitude>\n  <longitude unit=\"DEG\"> {lon:.4} </longitude>\n  <altitude unit=\"FT\"> {alt:.1} </altitude>\n  <vc unit=\"KTS\"> {vc:.1} </vc>\n  <psi unit=\"DEG\"> {psi:.1} </psi>\n  <phi unit=\"DEG\"> 0.0 </phi>\n  <gamma unit=\"DEG\"> 0.0 </gamma>\n  <running> -1 </running>\n</initialize>\n",
+        p.kind.name()
+    );
+
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<?xml version=\"1.0\"?>\n<!-- Generated by hil-sim (profile {}, seed {seed}); a plain JSBSim runscript: the\n     initialize file {init_name}.xml sits beside it. -->\n<runscript name=\"hil-sim maneuver {name}\">\n  <use aircraft=\"f16\" initialize=\"{init_name}\"/>\n  <run start=\"0.0\" end=\"{duration_s:.3}\" dt=\"0.00833333333333\">\n",
+        p.kind.name()
+    );
+    for (prop, v) in [
+        ("maneuver/theta-target-deg", 0.0),
+        ("maneuver/alpha-target-deg", 5.0),
+        ("maneuver/alpha-mode", 0.0),
+        ("maneuver/bank-target-deg", 0.0),
+        ("maneuver/pitch-stick", 0.0),
+        ("maneuver/roll-stick", 0.0),
+        ("maneuver/rudder", 0.0),
+        ("maneuver/throttle", 0.6),
+        ("maneuver/speedbrake", 0.0),
+        ("maneuver/danger", 0.0),
+        ("maneuver/theta-recover-deg", 0.0),
+        ("maneuver/nz-g", 1.0),
+        ("maneuver/g-protect", 0.0),
+    ] {
+        let _ = writeln!(s, "    <property value=\"{v}\"> {prop} </property>");
+    }
+
+    let fuel = draw(&mut rng, p.fuel_per_tank_lbs);
+    let throttle0 = draw(&mut rng, p.throttle);
+    let _ = write!(
+        s,
+        "    <event name=\"fuel and trim\">\n      <condition> simulation/sim-time-sec ge 0.0 </condition>\n      <set name=\"propulsion/tank[0]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/tank[1]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/fuel_freeze\" value=\"1\"/>\n      <set name=\"simulation/do_simple_trim\" value=\"1\"/>\n    </event>\n"
+    );
+
+    // Wind: Dryden turbulence (repeatable through its own seed), steady wind, gusts below.
+    let sev = rng.random_range(p.turb_severity.0..=p.turb_severity.1.max(p.turb_severity.0));
+    let wind = draw(&mut rng, p.steady_wind_fps);
+    let wdir = draw(&mut rng, (0.0, std::f64::consts::TAU));
+    let turb_seed = rng.random_range(1..1_000_000u32);
+    let _ = write!(
+        s,
+        "    <event name=\"wind\">\n      <condition> simulation/sim-time-sec ge 0.5 </condition>\n      <set name=\"atmosphere/randomseed\" value=\"{turb_seed}\"/>\n      <set name=\"atmosphere/turb-type\" value=\"{}\"/>\n      <set name=\"atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps\" value=\"{:.1}\"/>\n      <set name=\"atmosphere/turbulence/milspec/severity\" value=\"{sev}\"/>\n      <set name=\"atmosphere/wind-north-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n      <set name=\"atmosphere/wind-east-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n      <set name=\"maneuver/throttle\" value=\"{throttle0:.3}\"/>\n    </event>\n",
+        if sev > 0 { 3 } else { 0 },
+        15.0 + 5.0 * f64::from(sev),
+        wind * wdir.cos(),
+        wind * wdir.sin(),
+    );
+
+    // Zone logic, evaluated every step in this order.
+    let trigger = format!(
+        "<or><lt><property>position/h-agl-ft</property><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
+        p.min_agl_ft,
+        p.ceiling_ft,
+        p.max_bank_deg,
+        p.max_pitch_deg,
+        p.min_vc_kts,
+        p.max_alpha_deg,
+        p.min_alpha_deg
+    );
+    let recovered = format!(
+        "<and><gt><property>position/h-agl-ft</property><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>30</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>20</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>12</value></lt><gt><property>aero/alpha-deg</property><value>-3</value></gt></and>",
+        p.min_agl_ft + 2_500.0,
+        p.ceiling_ft - 3_000.0,
+        p.recover_vc_kts
+    );
+    law(
+        &mut s,
+        "zone: Danger Zone latches until recovered",
+        "maneuver/danger",
+        &format!(
+            "          <or>{trigger}<and><property>maneuver/danger</property><not>{recovered}</not></and></or>\n"
+        ),
+    );
+    let mid_alt = (p.min_agl_ft + 4_000.0).max((p.init_alt_ft.0 + p.init_alt_ft.1) / 2.0);
+    law(
+        &mut s,
+        "recovery pitch target: toward a safe altitude, nose down while slow",
+        "maneuver/theta-recover-deg",
+        &format!(
+            "          {}\n",
+            clamp(
+                -15.0,
+                15.0,
+                &format!(
+                    "<sum><product><value>0.004</value><difference><value>{mid_alt:.0}</value><property>position/h-sl-ft</property></difference></product><product><value>0.2</value><min><value>0</value><difference><property>velocities/vc-kts</property><value>{}</value></difference></min></product></sum>",
+                    p.recover_vc_kts
+                )
+            )
+        ),
+    );
+    law(
+        &mut s,
+        "load factor from the total non-gravity force",
+        "maneuver/nz-g",
+        "          <quotient><product><value>-1</value><property>forces/fbz-total-lbs</property></product><property>inertia/weight-lbs</property></quotient>\n",
+    );
+    law(
+        &mut s,
+        "g protection: push when above the band, pull when below (the FCS has no g-limiter)",
+        "maneuver/g-protect",
+        &format!(
+            "          <sum><product><value>0.6</value><max><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></max></product><product><value>0.6</value><min><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></min></product></sum>\n",
+            p.max_nz_g, p.min_nz_g
+        ),
+    );
+    // α mode: at low speed the F-16 stick roughly commands α (full aft ≈ the ~28° limiter), so a
+    // feed-forward of the target plus a proportional correction holds it.
+    let flight_elev = "<sum><property>maneuver/pitch-stick</property><product><difference><value>1</value><property>maneuver/alpha-mode</property></difference><value>0.04</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-target-deg</property></difference></product><product><property>maneuver/alpha-mode</property><sum><product><value>-0.036</value><property>maneuver/alpha-target-deg</property></product><product><value>0.1</value><difference><property>aero/alpha-deg</property><property>maneuver/alpha-target-deg</property></difference></product></sum></product></sum>";
+    // Recovery pitches only once the wings are within 60° of level (pulling inverted dives).
+    let rec_elev = "<product><lt><abs><property>attitude/phi-deg</property></abs><value>60</value></lt><value>0.05</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-recover-deg</property></difference></product>";
+    let blend = |flight: &str, rec: &str| {
+        format!(
+            "<sum><product><difference><value>1</value><property>maneuver/danger</property></difference>{flight}</product><product><property>maneuver/danger</property>{rec}</product></sum>"
+        )
+    };
+    law(
+        &mut s,
+        "elevator: Flight Zone targets + stick, or recovery; then g protection",
+        "fcs/elevator-cmd-norm",
+        &format!(
+            "          {}\n",
+            clamp(
+                -1.0,
+                0.44,
+                &format!(
+                    "<sum>{}<property>maneuver/g-protect</property></sum>",
+                    blend(flight_elev, rec_elev)
+                )
+            )
+        ),
+    );
+    let flight_ail = "<sum><property>maneuver/roll-stick</property><product><value>0.02</value><difference><property>maneuver/bank-target-deg</property><property>attitude/phi-deg</property></difference></product></sum>";
+    let rec_ail = "<product><value>-0.03</value><property>attitude/phi-deg</property></product>";
+    law(
+        &mut s,
+        "aileron: bank target + stick, or wings level",
+        "fcs/aileron-cmd-norm",
+        &format!(
+            "          {}\n",
+            clamp(-1.0, 1.0, &blend(flight_ail, rec_ail))
+        ),
+    );
+    law(
+        &mut s,
+        "rudder: random in the Flight Zone only",
+        "fcs/rudder-cmd-norm",
+        &format!(
+            "          {}\n",
+            clamp(
+                -1.0,
+                1.0,
+                &blend("<property>maneuver/rudder</property>", "<value>0</value>")
+            )
+        ),
+    );
+    law(
+        &mut s,
+        "throttle: random, or by airspeed in recovery",
+        "fcs/throttle-cmd-norm",
+        &format!(
+            "          {}\n",
+            clamp(
+                0.05,
+                1.0,
+                &blend(
+                    "<property>maneuver/throttle</property>",
+                    &format!(
+                        "<sum><value>0.6</value><product><value>0.01</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
+                        p.recover_vc_kts + 30.0
+                    )
+                )
+            )
+        ),
+    );
+    law(
+        &mut s,
+        "speedbrake: random in the Flight Zone only",
+        "fcs/speedbrake-cmd-norm",
+        &format!(
+            "          {}\n",
+            blend(
+                "<property>maneuver/speedbrake</property>",
+                "<value>0</value>"
+            )
+        ),
+    );
+
+    // Random commands, each channel its own sequence of held values.
+    let start = 8.0;
+    let mut t = start;
+    while t < duration_s {
+        let alpha_mode = rng.random_bool(p.alpha_mode_share.clamp(0.0, 1.0));
+        let theta = draw(&mut rng, p.theta_target_deg);
+        let alpha = draw(&mut rng, p.alpha_target_deg);
+        let bank = signed(&mut rng, p.bank_target_deg);
+        timed(
+            &mut s,
+            t,
+            &[("maneuver/alpha-mode", if alpha_mode { 1.0 } else { 0.0 })],
+            0.0,
+        );
+        // Targets move smoothly: a step would be a full-stick jerk the profile does not ask for.
+        timed(
+            &mut s,
+            t,
+            &[
+                ("maneuver/theta-target-deg", theta),
+                ("maneuver/alpha-target-deg", alpha),
+                ("maneuver/bank-target-deg", bank),
+            ],
+            p.target_ramp_s,
+        );
+        t += draw(&mut rng, p.target_hold_s);
+    }
+    let channel = |s: &mut String,
+                   rng: &mut ChaCha12Rng,
+                   prop: &str,
+                   hold: Range,
+                   tc: f64,
+                   value: &mut dyn FnMut(&mut ChaCha12Rng) -> f64| {
+        let mut t = start + draw(rng, (0.0, hold.1));
+        while t < duration_s {
+            let v = value(rng);
+            timed(s, t, &[(prop, v)], tc);
+            t += draw(rng, hold);
+        }
+    };
+    let (pa, ra, rda) = (p.pitch_stick_amp, p.roll_stick_amp, p.rudder_amp);
+    // Half of the stick segments are neutral so the targets also get flown cleanly.
+    channel(
+        &mut s,
+        &mut rng,
+        "maneuver/pitch-stick",
+        p.stick_hold_s,
+        0.15,
+        &mut |r| {
+            if r.random_bool(0.5) {
+                0.0
+            } else {
+                r.random_range(-pa..=pa)
+            }
+        },
+    );
+    channel(
+        &mut s,
+        &mut rng,
+        "maneuver/roll-stick",
+        p.stick_hold_s,
+        0.1,
+        &mut |r| {
+            if r.random_bool(0.5) {
+                0.0
+            } else {
+                r.random_range(-ra..=ra)
+            }
+        },
+    );
+    channel(
+        &mut s,
+        &mut rng,
+        "maneuver/rudder",
+        p.rudder_hold_s,
+        0.2,
+        &mut |r| r.random_range(-rda..=rda),
+    );
+    let thr = p.throttle;
+    channel(
+        &mut s,
+        &mut rng,
+        "maneuver/throttle",
+        p.throttle_hold_s,
+        2.0,
+        &mut |r| draw(r, thr),
+    );
+    let sb = p.speedbrake_share.clamp(0.0, 1.0);
+    channel(
+        &mut s,
+        &mut rng,
+        "maneuver/speedbrake",
+        (15.0, 60.0),
+        0.0,
+        &mut |r| {
+            if r.random_bool(sb) {
+                1.0
+            } else {
+                0.0
+            }
+        },
+    );
+
+    // 1-cosine gusts in random directions.
+    let mut t = start + draw(&mut rng, p.gust_interval_s);
+    while t < duration_s {
+        let mag = draw(&mut rng, p.gust_fps);
+        let az = draw(&mut rng, (0.0, std::f64::consts::TAU));
+        let el = draw(&mut rng, (-0.5, 0.5));
+        let ramp = draw(&mut rng, (0.5, 3.0));
+        let steady = draw(&mut rng, (0.0, 5.0));
+        timed(
+            &mut s,
+            t,
+            &[
+                ("atmosphere/cosine-gust/startup-duration-sec", ramp),
+                ("atmosphere/cosine-gust/steady-duration-sec", steady),
+                ("atmosphere/cosine-gust/end-duration-sec", ramp),
+                ("atmosphere/cosine-gust/magnitude-ft_sec", mag),
+                ("atmosphere/cosine-gust/frame", 3.0),
+                (
+                    "atmosphere/cosine-gust/X-velocity-ft_sec",
+                    el.cos() * az.cos(),
+                ),
+                (
+                    "atmosphere/cosine-gust/Y-velocity-ft_sec",
+                    el.cos() * az.sin(),
+                ),
+                ("atmosphere/cosine-gust/Z-velocity-ft_sec", el.sin()),
+                ("atmosphere/cosine-gust/start", 1.0),
+            ],
+            0.0,
+        );
+        t += draw(&mut rng, p.gust_interval_s);
+    }
+    s.push_str("  </run>\n</runscript>\n");
+    Ok(Maneuver {
+        name: name.to_string(),
+        script_xml: s,
+        init_xml,
+        duration_s,
+    })
+}
+
+impl Maneuver {
+    /// Writes `DIR/NAME.xml` and `DIR/NAME_init.xml`; returns the script path.
+    pub fn write(&self, dir: &Path) -> Result<PathBuf, ManeuverError> {
+        let script = dir.join(format!("{}.xml", self.name));
+        let init = dir.join(format!("{}_init.xml", self.name));
+        for (path, text) in [(&script, &self.script_xml), (&init, &self.init_xml)] {
+            std::fs::write(path, text).map_err(|source| ManeuverError::Write {
+                path: path.clone(),
+                source,
+            })?;
+        }
+        Ok(script)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn same_seed_same_script_other_seed_other_script() {
+        let p = Profile::preset(ProfileKind::Aggressive);
+        let a = generate(&p, 3, "a", 120.0).unwrap();
+        let b = generate(&p, 3, "a", 120.0).unwrap();
+        let c = generate(&p, 4, "a", 120.0).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a.script_xml, c.script_xml);
+        assert!(a
+            .script_xml
+            .contains("<use aircraft=\"f16\" initialize=\"a_init\"/>"));
+    }
+
+    #[test]
+    fn names_that_are_not_file_names_are_refused() {
+        let p = Profile::preset(ProfileKind::Gentle);
+        assert!(matches!(
+            generate(&p, 1, "../x", 60.0),
+            Err(ManeuverError::BadName(_))
+        ));
+        assert!(matches!(
+            generate(&p, 1, "x", 0.0),
+            Err(ManeuverError::BadDuration(_))
+        ));
+    }
+}
+
+/// Dataset presets of `hil-sim generate`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// 16 training flights (4 per profile) of 15–20 min, plus 4 test flights (one per profile) of 6–7 min.
+    Paper,
+    /// 4 training flights (one per profile) of 3 min plus 1 test flight of 3 min.
+    Ci,
+}
+
+/// One planned flight of a preset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlannedFlight {
+    pub name: String,
+    pub split: crate::dataset::Split,
+    pub profile: ProfileKind,
+    pub seed: u64,
+    pub duration_s: f64,
+}
+
+impl Preset {
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::Ci => "ci",
+        }
+    }
+
+    /// The flights of this preset for a base seed. Test flights take seeds from a separate range so
+    /// no test flight repeats a training one.
+    pub fn plan(self, base_seed: u64) -> Vec<PlannedFlight> {
+        use crate::dataset::Split;
+        let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6d61_6e65_7576_6572);
+        let mut out = Vec::new();
+        let (per_profile, train_len, test_profiles, test_len): (
+            usize,
+            Range,
+            &[ProfileKind],
+            Range,
+        ) = match self {
+            Preset::Paper => (4, (900.0, 1200.0), &ProfileKind::ALL, (360.0, 420.0)),
+            Preset::Ci => (
+                1,
+                (180.0, 180.0),
+                &[ProfileKind::Aggressive],
+                (180.0, 180.0),
+            ),
+        };
+        for (pi, kind) in ProfileKind::ALL.iter().enumerate() {
+            for k in 0..per_profile {
+                out.push(PlannedFlight {
+                    name: format!("train_{}_{k:02}", kind.name()),
+                    split: Split::Train,
+                    profile: *kind,
+                    seed: base_seed
+                        .wrapping_mul(1000)
+                        .wrapping_add((pi * 100 + k) as u64),
+                    duration_s: draw(&mut rng, train_len).round(),
+                });
+            }
+        }
+        for (k, kind) in test_profiles.iter().enumerate() {
+            out.push(PlannedFlight {
+                name: format!("test_{}_{k:02}", kind.name()),
+                split: Split::Test,
+                profile: *kind,
+                seed: base_seed.wrapping_mul(1000).wrapping_add(500 + k as u64),
+                duration_s: draw(&mut rng, test_len).round(),
+            });
+        }
+        out
+    }
+}
