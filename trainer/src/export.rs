@@ -55,10 +55,12 @@ pub fn provenance(
         ds.dir.display(),
         ds.manifest_sha256
     );
-    if preset == "ci" {
+    let rows = ds.rows(Role::Train) + ds.rows(Role::Val);
+    if preset == "ci" || rows < 288_000 {
         let _ = writeln!(
             s,
-            "WARNING: trained on the small CI preset dataset: a pipeline check, not a flight-quality model"
+            "WARNING: trained on {rows} rows (preset {preset}), less than the paper's 4 h (288000 \
+             rows): a pipeline check, not a flight-quality model"
         );
     }
     let _ = writeln!(

@@ -1,6 +1,6 @@
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use trainer::data::Dataset;
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::FeatureSet;
@@ -59,6 +59,14 @@ enum Cmd {
         #[arg(long)]
         no_export: bool,
     },
+    /// Table 2 baselines (linear regression, gradient boosting, plain MLP) on the test flights.
+    Baselines {
+        #[command(flatten)]
+        args: TrainArgs,
+        /// Training rows (evenly subsampled) for gradient boosting.
+        #[arg(long, default_value_t = 40_000)]
+        gb_rows: usize,
+    },
     /// Evaluate the compiled-in model (Estimator::shipped) on the test flights.
     Eval {
         #[arg(long)]
@@ -86,8 +94,8 @@ fn print_metrics(label: &str, m: &FlightMetrics) {
 fn cmd_train(
     args: &TrainArgs,
     out: &PathBuf,
-    weights_out: &PathBuf,
-    vectors_out: &PathBuf,
+    weights_out: &Path,
+    vectors_out: &Path,
     no_export: bool,
 ) -> Result<()> {
     let size = Size::parse(&args.config).context("--config must be small or paper")?;
@@ -154,7 +162,7 @@ fn cmd_train(
     Ok(())
 }
 
-fn cmd_eval(data: &PathBuf, json: bool) -> Result<()> {
+fn cmd_eval(data: &Path, json: bool) -> Result<()> {
     let ds =
         Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
     let Some(prov) = trainer::pipeline::shipped_provenance() else {
@@ -186,6 +194,41 @@ fn cmd_eval(data: &PathBuf, json: bool) -> Result<()> {
     Ok(())
 }
 
+fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
+    use trainer::baselines::{Baseline, run_baseline};
+    let size = Size::parse(&args.config).context("--config must be small or paper")?;
+    let fs = FeatureSet::parse(&args.features)?;
+    let ds = Dataset::load(&args.data, args.val_fraction)
+        .with_context(|| format!("loading dataset {}", args.data.display()))?;
+    let epochs = args.epochs.unwrap_or(40);
+    for angle in [Angle::Alpha, Angle::Beta] {
+        let feats = match angle {
+            Angle::Alpha => &fs.alpha,
+            Angle::Beta => &fs.beta,
+        };
+        for kind in [Baseline::Linear, Baseline::GradientBoosting, Baseline::Mlp] {
+            let cfg = TrainConfig {
+                epochs,
+                batch: args.batch,
+                lr: args.lr,
+                seed: args.seed,
+                label: format!("{} mlp", angle.name()),
+                progress: false,
+            };
+            let t0 = std::time::Instant::now();
+            let m = run_baseline(kind, &ds, angle, feats, size.hidden(angle), &cfg, gb_rows)?;
+            println!(
+                "{} {}: ({:.1} s)",
+                angle.symbol(),
+                kind.name(),
+                t0.elapsed().as_secs_f64()
+            );
+            print_metrics("float", &m);
+        }
+    }
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
@@ -197,5 +240,6 @@ fn main() -> Result<()> {
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
         Cmd::Eval { data, json } => cmd_eval(data, *json),
+        Cmd::Baselines { args, gb_rows } => cmd_baselines(args, *gb_rows),
     }
 }

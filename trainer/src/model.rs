@@ -144,6 +144,8 @@ pub trait Net: Module + Sized {
     fn losses(&self, x: Tensor<2>, ym: Tensor<2>, yo: Tensor<2>) -> (Tensor<1>, Tensor<1>);
     /// Predicted normalised (intermediate, angle) per row.
     fn predict(&self, x: Tensor<2>) -> (Vec<f32>, Vec<f32>);
+    /// Float layers; reading them also forces burn's lazy parameter initialisation.
+    fn layers(&self) -> Vec<FloatLayer>;
 }
 
 fn mse(a: Tensor<2>, b: Tensor<2>) -> Tensor<1> {
@@ -164,6 +166,11 @@ impl Net for Cascade {
         let (m, o) = self.forward(x);
         (to_vec(m), to_vec(o))
     }
+    fn layers(&self) -> Vec<FloatLayer> {
+        let mut l = self.part1.export();
+        l.extend(self.part2.export());
+        l
+    }
 }
 
 impl Net for Mlp {
@@ -174,6 +181,9 @@ impl Net for Mlp {
     fn predict(&self, x: Tensor<2>) -> (Vec<f32>, Vec<f32>) {
         let o = to_vec(self.forward(x));
         (vec![0.0; o.len()], o)
+    }
+    fn layers(&self) -> Vec<FloatLayer> {
+        self.export()
     }
 }
 
@@ -263,7 +273,10 @@ pub fn train<M: Net>(
         let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
         device.seed(cfg.seed);
         Device::flex().seed(cfg.seed);
-        init(&device)
+        let m = init(&device);
+        // Parameters initialise lazily: materialise them while the seeded RNG is ours.
+        let _ = m.layers();
+        m
     };
     let mut optim = AdamConfig::new().init();
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);

@@ -39,6 +39,9 @@ impl Size {
     }
 }
 
+/// (flight, truth, float prediction, int8 prediction), degrees.
+pub type TestSeries = (String, Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// A trained and quantized cascade with its test metrics.
 pub struct Trained {
     pub angle: Angle,
@@ -50,7 +53,7 @@ pub struct Trained {
     pub float_test: FlightMetrics,
     pub int_test: FlightMetrics,
     /// Float and int8 predictions (degrees) per test flight, for plots.
-    pub series: Vec<(String, Vec<f64>, Vec<f64>, Vec<f64>)>,
+    pub series: Vec<TestSeries>,
 }
 
 pub fn flights(ds: &Dataset, role: Role) -> Vec<&Flight> {

@@ -107,7 +107,7 @@ pub struct Prep {
 }
 
 impl Prep {
-    pub fn fit<'a>(angle: Angle, features: &[Feature], train: &[&'a Flight]) -> Prep {
+    pub fn fit(angle: Angle, features: &[Feature], train: &[&Flight]) -> Prep {
         let rows = || train.iter().flat_map(|f| f.features.iter());
         let mut norm = Vec::new();
         let mut envelope = Vec::new();
@@ -202,7 +202,7 @@ mod tests {
         for r in [1e-9, 3.3e-5, 0.0137, 1.0, 4096.0 / 3.0, 4096.0] {
             let (m, s) = fixed_point(r, 1 << 30);
             assert!((1..=62).contains(&s));
-            assert!(m >= 1 && m <= 1 << 30);
+            assert!((1..=1 << 30).contains(&m));
             assert!((fp_value(m, s) - r).abs() / r < 1e-6, "{r}");
         }
     }
