@@ -15,7 +15,7 @@ struct Cli {
 enum Cmd {
     /// Stream a flight through the simulated serial link to the firmware (in-process, QEMU or a
     /// board) and score its estimates.
-    Run(hil_sim::runner::cli::RunArgs),
+    Run(Box<hil_sim::runner::cli::RunArgs>),
     /// Fly one JSBSim runscript (aircraft f16) and write a one-flight dataset (CSV + manifest).
     Fly(hil_sim_cli::FlyArgs),
     /// Generate a random-maneuver dataset (maneuver XML, CSV per flight, manifest, plots, report).
@@ -146,6 +146,7 @@ mod hil_sim_cli {
         );
         let m = dataset::generate(a.preset, a.seed, &a.out, &sensors, a.workers, Some(&pb))?;
         pb.finish_and_clear();
+        let report = dataset::report::write_report(&a.out)?;
         let samples: usize = m.flights.iter().map(|f| f.samples).sum();
         let cut = m.flights.iter().filter(|f| f.cut.is_some()).count();
         println!(
@@ -159,7 +160,21 @@ mod hil_sim_cli {
         for f in m.flights.iter().filter(|f| f.cut.is_some()) {
             println!("  {} cut: {}", f.name, f.cut.as_deref().unwrap_or(""));
         }
-        println!("wrote {}", a.out.display());
+        let over15: f64 = report.train.alpha_band_share[4..].iter().sum();
+        println!(
+            "training: α {:.1}..{:.1}° ({:.1}% above 15°), β {:.1}..{:.1}°, Mach {:.2}..{:.2}",
+            report.train.alpha_deg.0,
+            report.train.alpha_deg.1,
+            over15 * 100.0,
+            report.train.beta_deg.0,
+            report.train.beta_deg.1,
+            report.train.mach.0,
+            report.train.mach.1
+        );
+        println!(
+            "wrote {} (report: dataset.md, plots: *.png)",
+            a.out.display()
+        );
         Ok(())
     }
 }

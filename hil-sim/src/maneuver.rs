@@ -230,11 +230,7 @@ fn draw(rng: &mut ChaCha12Rng, r: Range) -> f64 {
 
 fn signed(rng: &mut ChaCha12Rng, r: Range) -> f64 {
     let v = draw(rng, r);
-    if rng.random_bool(0.5) {
-        v
-    } else {
-        -v
-    }
+    if rng.random_bool(0.5) { v } else { -v }
 }
 
 /// Timed event: at `t`, ramp `prop` to `value` over `tc` seconds.
@@ -255,6 +251,25 @@ fn timed(out: &mut String, t: f64, sets: &[(&str, f64)], tc: f64) {
         }
     }
     let _ = writeln!(out, "    </event>");
+}
+
+/// Continuous event holding `prop` at `initial`, then at each `(t, value, hold)` ramping linearly to
+/// `value` over `ramp` seconds (at most half the hold), as a table of sim time.
+fn schedule(prop: &str, initial: f64, seq: &[(f64, f64, f64)], ramp: f64) -> String {
+    let mut rows = format!("            0.0 {initial:.4}\n");
+    let mut prev = initial;
+    for (t, v, hold) in seq {
+        let r = ramp.min(0.5 * hold).max(0.01);
+        let _ = writeln!(
+            rows,
+            "            {t:.3} {prev:.4}\n            {:.3} {v:.4}",
+            t + r
+        );
+        prev = *v;
+    }
+    format!(
+        "    <event name=\"{prop} schedule\" continuous=\"true\">\n      <condition> simulation/sim-time-sec ge 0.0 </condition>\n      <set name=\"{prop}\">\n        <function>\n          <table>\n            <independentVar lookup=\"row\">simulation/sim-time-sec</independentVar>\n            <tableData>\n{rows}            </tableData>\n          </table>\n        </function>\n      </set>\n    </event>\n"
+    )
 }
 
 /// Continuous event computing `prop` from a function body.
@@ -338,14 +353,15 @@ pub fn generate(
     let turb_seed = rng.random_range(1..1_000_000u32);
     let _ = write!(
         s,
-        "    <event name=\"wind\">\n      <condition> simulation/sim-time-sec ge 0.5 </condition>\n      <set name=\"atmosphere/randomseed\" value=\"{turb_seed}\"/>\n      <set name=\"atmosphere/turb-type\" value=\"{}\"/>\n      <set name=\"atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps\" value=\"{:.1}\"/>\n      <set name=\"atmosphere/turbulence/milspec/severity\" value=\"{sev}\"/>\n      <set name=\"atmosphere/wind-north-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n      <set name=\"atmosphere/wind-east-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n      <set name=\"maneuver/throttle\" value=\"{throttle0:.3}\"/>\n    </event>\n",
+        "    <event name=\"wind\">\n      <condition> simulation/sim-time-sec ge 0.5 </condition>\n      <set name=\"atmosphere/randomseed\" value=\"{turb_seed}\"/>\n      <set name=\"atmosphere/turb-type\" value=\"{}\"/>\n      <set name=\"atmosphere/turbulence/milspec/windspeed_at_20ft_AGL-fps\" value=\"{:.1}\"/>\n      <set name=\"atmosphere/turbulence/milspec/severity\" value=\"{sev}\"/>\n      <set name=\"atmosphere/wind-north-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n      <set name=\"atmosphere/wind-east-fps\" value=\"{:.2}\" action=\"FG_RAMP\" tc=\"5\"/>\n    </event>\n",
         if sev > 0 { 3 } else { 0 },
         15.0 + 5.0 * f64::from(sev),
         wind * wdir.cos(),
         wind * wdir.sin(),
     );
 
-    // Zone logic, evaluated every step in this order.
+    // Zone logic, evaluated every step in this order (the command tables go just before it).
+    let laws_at = s.len();
     let trigger = format!(
         "<or><lt><property>position/h-agl-ft</property><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
         p.min_agl_ft,
@@ -484,52 +500,62 @@ pub fn generate(
         ),
     );
 
-    // Random commands, each channel its own sequence of held values.
+    // Random commands, each channel its own sequence of held values. Each sequence is one table of
+    // sim time (one continuous event), not one event per change: JSBSim evaluates every pending
+    // event's condition every step, and thousands of timed events made long flights ~10x slower.
     let start = 8.0;
+    let mut mode = Vec::new();
+    let (mut theta_t, mut alpha_t, mut bank_t) = (Vec::new(), Vec::new(), Vec::new());
     let mut t = start;
     while t < duration_s {
+        let hold = draw(&mut rng, p.target_hold_s);
         let alpha_mode = rng.random_bool(p.alpha_mode_share.clamp(0.0, 1.0));
-        let theta = draw(&mut rng, p.theta_target_deg);
-        let alpha = draw(&mut rng, p.alpha_target_deg);
-        let bank = signed(&mut rng, p.bank_target_deg);
-        timed(
-            &mut s,
-            t,
-            &[("maneuver/alpha-mode", if alpha_mode { 1.0 } else { 0.0 })],
-            0.0,
-        );
-        // Targets move smoothly: a step would be a full-stick jerk the profile does not ask for.
-        timed(
-            &mut s,
-            t,
-            &[
-                ("maneuver/theta-target-deg", theta),
-                ("maneuver/alpha-target-deg", alpha),
-                ("maneuver/bank-target-deg", bank),
-            ],
-            p.target_ramp_s,
-        );
-        t += draw(&mut rng, p.target_hold_s);
+        mode.push((t, if alpha_mode { 1.0 } else { 0.0 }, hold));
+        theta_t.push((t, draw(&mut rng, p.theta_target_deg), hold));
+        alpha_t.push((t, draw(&mut rng, p.alpha_target_deg), hold));
+        bank_t.push((t, signed(&mut rng, p.bank_target_deg), hold));
+        t += hold;
     }
-    let channel = |s: &mut String,
-                   rng: &mut ChaCha12Rng,
-                   prop: &str,
-                   hold: Range,
-                   tc: f64,
-                   value: &mut dyn FnMut(&mut ChaCha12Rng) -> f64| {
-        let mut t = start + draw(rng, (0.0, hold.1));
+    let mut tables = String::new();
+    tables.push_str(&schedule("maneuver/alpha-mode", 0.0, &mode, 0.0));
+    // Targets move smoothly: a step would be a full-stick jerk the profile does not ask for.
+    tables.push_str(&schedule(
+        "maneuver/theta-target-deg",
+        0.0,
+        &theta_t,
+        p.target_ramp_s,
+    ));
+    tables.push_str(&schedule(
+        "maneuver/alpha-target-deg",
+        5.0,
+        &alpha_t,
+        p.target_ramp_s,
+    ));
+    tables.push_str(&schedule(
+        "maneuver/bank-target-deg",
+        0.0,
+        &bank_t,
+        p.target_ramp_s,
+    ));
+    let mut channel = |prop: &str,
+                       initial: f64,
+                       hold: Range,
+                       tc: f64,
+                       value: &mut dyn FnMut(&mut ChaCha12Rng) -> f64| {
+        let mut t = start + draw(&mut rng, (0.0, hold.1));
+        let mut seq = Vec::new();
         while t < duration_s {
-            let v = value(rng);
-            timed(s, t, &[(prop, v)], tc);
-            t += draw(rng, hold);
+            let h = draw(&mut rng, hold);
+            seq.push((t, value(&mut rng), h));
+            t += h;
         }
+        tables.push_str(&schedule(prop, initial, &seq, tc));
     };
     let (pa, ra, rda) = (p.pitch_stick_amp, p.roll_stick_amp, p.rudder_amp);
     // Half of the stick segments are neutral so the targets also get flown cleanly.
     channel(
-        &mut s,
-        &mut rng,
         "maneuver/pitch-stick",
+        0.0,
         p.stick_hold_s,
         0.15,
         &mut |r| {
@@ -540,52 +566,29 @@ pub fn generate(
             }
         },
     );
-    channel(
-        &mut s,
-        &mut rng,
-        "maneuver/roll-stick",
-        p.stick_hold_s,
-        0.1,
-        &mut |r| {
-            if r.random_bool(0.5) {
-                0.0
-            } else {
-                r.random_range(-ra..=ra)
-            }
-        },
-    );
-    channel(
-        &mut s,
-        &mut rng,
-        "maneuver/rudder",
-        p.rudder_hold_s,
-        0.2,
-        &mut |r| r.random_range(-rda..=rda),
-    );
+    channel("maneuver/roll-stick", 0.0, p.stick_hold_s, 0.1, &mut |r| {
+        if r.random_bool(0.5) {
+            0.0
+        } else {
+            r.random_range(-ra..=ra)
+        }
+    });
+    channel("maneuver/rudder", 0.0, p.rudder_hold_s, 0.2, &mut |r| {
+        r.random_range(-rda..=rda)
+    });
     let thr = p.throttle;
     channel(
-        &mut s,
-        &mut rng,
         "maneuver/throttle",
+        throttle0,
         p.throttle_hold_s,
         2.0,
         &mut |r| draw(r, thr),
     );
     let sb = p.speedbrake_share.clamp(0.0, 1.0);
-    channel(
-        &mut s,
-        &mut rng,
-        "maneuver/speedbrake",
-        (15.0, 60.0),
-        0.0,
-        &mut |r| {
-            if r.random_bool(sb) {
-                1.0
-            } else {
-                0.0
-            }
-        },
-    );
+    channel("maneuver/speedbrake", 0.0, (15.0, 60.0), 0.0, &mut |r| {
+        if r.random_bool(sb) { 1.0 } else { 0.0 }
+    });
+    s.insert_str(laws_at, &tables);
 
     // 1-cosine gusts in random directions.
     let mut t = start + draw(&mut rng, p.gust_interval_s);
@@ -655,9 +658,10 @@ mod tests {
         let c = generate(&p, 4, "a", 120.0).unwrap();
         assert_eq!(a, b);
         assert_ne!(a.script_xml, c.script_xml);
-        assert!(a
-            .script_xml
-            .contains("<use aircraft=\"f16\" initialize=\"a_init\"/>"));
+        assert!(
+            a.script_xml
+                .contains("<use aircraft=\"f16\" initialize=\"a_init\"/>")
+        );
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimator_core::{Channel, CHANNELS};
+use estimator_core::{CHANNELS, Channel};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -330,6 +330,8 @@ impl Manifest {
     }
 }
 
+pub mod report;
+
 /// SHA-256 of a file, lowercase hex.
 pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {
     let mut f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
@@ -489,40 +491,42 @@ pub fn generate(
     let version = std::sync::Mutex::new(String::new());
     std::thread::scope(|scope| {
         for _ in 0..workers.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                let (Some(f), Some(script)) = (plan.get(i), scripts.get(i)) else {
-                    break;
-                };
-                let cfg = FlyConfig {
-                    seed: sensor_seed(f.seed),
-                    sensors: sensors.clone(),
-                    max_time_s: None,
-                    name: Some(f.name.clone()),
-                };
-                let r = (|| -> Result<FlightEntry, GenerateError> {
-                    let mut plant = crate::plant::Plant::spawn()?;
-                    if let Ok(mut v) = version.lock() {
-                        *v = plant.jsbsim_version().to_string();
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let (Some(f), Some(script)) = (plan.get(i), scripts.get(i)) else {
+                        break;
+                    };
+                    let cfg = FlyConfig {
+                        seed: sensor_seed(f.seed),
+                        sensors: sensors.clone(),
+                        max_time_s: None,
+                        name: Some(f.name.clone()),
+                    };
+                    let r = (|| -> Result<FlightEntry, GenerateError> {
+                        let mut plant = crate::plant::Plant::spawn()?;
+                        if let Ok(mut v) = version.lock() {
+                            *v = plant.jsbsim_version().to_string();
+                        }
+                        let flight = crate::plant::fly_script_with(&mut plant, script, &cfg)?;
+                        Ok(write_flight(
+                            out,
+                            &flight,
+                            f.split,
+                            f.profile.name(),
+                            f.seed,
+                        )?)
+                    })()
+                    .map_err(|e| GenerateError::Flight {
+                        name: f.name.clone(),
+                        source: Box::new(e),
+                    });
+                    if let Some(pb) = progress {
+                        pb.inc(1);
                     }
-                    let flight = crate::plant::fly_script_with(&mut plant, script, &cfg)?;
-                    Ok(write_flight(
-                        out,
-                        &flight,
-                        f.split,
-                        f.profile.name(),
-                        f.seed,
-                    )?)
-                })()
-                .map_err(|e| GenerateError::Flight {
-                    name: f.name.clone(),
-                    source: Box::new(e),
-                });
-                if let Some(pb) = progress {
-                    pb.inc(1);
-                }
-                if let Some(slot) = results.lock().ok().as_mut().and_then(|r| r.get_mut(i)) {
-                    *slot = Some(r);
+                    if let Some(slot) = results.lock().ok().as_mut().and_then(|r| r.get_mut(i)) {
+                        *slot = Some(r);
+                    }
                 }
             });
         }

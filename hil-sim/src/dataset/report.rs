@@ -1,0 +1,426 @@
+//! Dataset pictures and `dataset.md`: flight envelope, α/β histograms, one sample flight, and the
+//! coverage numbers the trainer depends on (share of samples per α band, ranges of α, β, Mach).
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use super::{DatasetError, Flight, Manifest, Split};
+
+// DejaVu Sans (Bitstream Vera license, assets/DejaVuSans-LICENSE.txt), embedded so plots do not
+// depend on system fonts.
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+fn register_font() {
+    REGISTER.call_once(|| {
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// α bands of the report, deg: (label, low, high).
+pub const ALPHA_BANDS: [(&str, f64, f64); 7] = [
+    ("< 0", f64::NEG_INFINITY, 0.0),
+    ("0–5", 0.0, 5.0),
+    ("5–10", 5.0, 10.0),
+    ("10–15", 10.0, 15.0),
+    ("15–20", 15.0, 20.0),
+    ("20–25", 20.0, 25.0),
+    ("> 25", 25.0, f64::INFINITY),
+];
+
+/// Coverage of one split.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Coverage {
+    pub flights: usize,
+    pub samples: usize,
+    pub duration_min: f64,
+    /// Share of samples per [`ALPHA_BANDS`] entry, 0–1.
+    pub alpha_band_share: [f64; 7],
+    pub alpha_deg: (f64, f64),
+    pub beta_deg: (f64, f64),
+    pub mach: (f64, f64),
+    pub alt_m: (f64, f64),
+    /// Share of samples with |β| > 5°.
+    pub beta_over_5_share: f64,
+}
+
+fn coverage(flights: &[&Flight]) -> Coverage {
+    let mut c = Coverage {
+        flights: flights.len(),
+        alpha_deg: (f64::INFINITY, f64::NEG_INFINITY),
+        beta_deg: (f64::INFINITY, f64::NEG_INFINITY),
+        mach: (f64::INFINITY, f64::NEG_INFINITY),
+        alt_m: (f64::INFINITY, f64::NEG_INFINITY),
+        ..Coverage::default()
+    };
+    let mut counts = [0usize; 7];
+    let mut beta5 = 0usize;
+    let mm = |r: &mut (f64, f64), v: f64| {
+        r.0 = r.0.min(v);
+        r.1 = r.1.max(v);
+    };
+    for f in flights {
+        c.duration_min += f.samples.len() as f64 / 20.0 / 60.0;
+        for s in &f.samples {
+            let t = &s.truth;
+            c.samples += 1;
+            if let Some(b) = ALPHA_BANDS
+                .iter()
+                .position(|(_, lo, hi)| t.alpha_deg >= *lo && t.alpha_deg < *hi)
+            {
+                counts[b] += 1;
+            }
+            beta5 += usize::from(t.beta_deg.abs() > 5.0);
+            mm(&mut c.alpha_deg, t.alpha_deg);
+            mm(&mut c.beta_deg, t.beta_deg);
+            mm(&mut c.mach, t.mach);
+            mm(&mut c.alt_m, t.alt_msl_m);
+        }
+    }
+    let n = c.samples.max(1) as f64;
+    for (share, k) in c.alpha_band_share.iter_mut().zip(counts) {
+        *share = k as f64 / n;
+    }
+    c.beta_over_5_share = beta5 as f64 / n;
+    c
+}
+
+fn draw_err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> DatasetError + '_ {
+    move |e| DatasetError::Csv {
+        path: path.to_path_buf(),
+        message: format!("plot: {e}"),
+    }
+}
+
+const TRAIN: RGBColor = RGBColor(31, 119, 180);
+const TEST: RGBColor = RGBColor(214, 39, 40);
+
+fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetError> {
+    let e = draw_err(path);
+    let root = BitMapBackend::new(path, (1000, 700)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let max_alt_kft = flights
+        .iter()
+        .flat_map(|(f, _)| {
+            f.samples
+                .iter()
+                .map(|s| s.truth.alt_msl_m / 0.3048 / 1000.0)
+        })
+        .fold(10.0f64, f64::max);
+    let max_mach = flights
+        .iter()
+        .flat_map(|(f, _)| f.samples.iter().map(|s| s.truth.mach))
+        .fold(1.0f64, f64::max);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Flight envelope (blue: training, red: test)",
+            ("sans-serif", 26),
+        )
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..max_mach * 1.05, 0.0..max_alt_kft * 1.05)
+        .map_err(&e)?;
+    chart
+        .configure_mesh()
+        .x_desc("Mach")
+        .y_desc("altitude MSL, 1000 ft")
+        .label_style(("sans-serif", 18))
+        .draw()
+        .map_err(&e)?;
+    for (f, split) in flights {
+        let color = if *split == Split::Train { TRAIN } else { TEST };
+        chart
+            .draw_series(f.samples.iter().step_by(10).map(|s| {
+                Circle::new(
+                    (s.truth.mach, s.truth.alt_msl_m / 0.3048 / 1000.0),
+                    1,
+                    color.mix(0.4).filled(),
+                )
+            }))
+            .map_err(&e)?;
+    }
+    root.present().map_err(&e)?;
+    Ok(())
+}
+
+fn histogram(
+    path: &Path,
+    title: &str,
+    xlabel: &str,
+    values: &[f64],
+    bin: f64,
+    range: (f64, f64),
+) -> Result<(), DatasetError> {
+    let e = draw_err(path);
+    let lo = (range.0 / bin).floor() * bin;
+    let hi = (range.1 / bin).ceil() * bin;
+    let nbins = (((hi - lo) / bin).round() as usize).max(1);
+    let mut counts = vec![0usize; nbins];
+    for v in values {
+        let k = ((v - lo) / bin).floor();
+        if k >= 0.0 && (k as usize) < nbins {
+            counts[k as usize] += 1;
+        }
+    }
+    let n = values.len().max(1) as f64;
+    let max_pct = counts
+        .iter()
+        .map(|c| *c as f64 / n * 100.0)
+        .fold(1.0, f64::max);
+    let root = BitMapBackend::new(path, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 26))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(lo..hi, 0.0..max_pct * 1.1)
+        .map_err(&e)?;
+    chart
+        .configure_mesh()
+        .x_desc(xlabel)
+        .y_desc("% of training samples")
+        .label_style(("sans-serif", 18))
+        .draw()
+        .map_err(&e)?;
+    chart
+        .draw_series(counts.iter().enumerate().map(|(k, c)| {
+            let x0 = lo + k as f64 * bin;
+            Rectangle::new(
+                [(x0, 0.0), (x0 + bin, *c as f64 / n * 100.0)],
+                TRAIN.filled(),
+            )
+        }))
+        .map_err(&e)?;
+    root.present().map_err(&e)?;
+    Ok(())
+}
+
+fn sample_flight(path: &Path, f: &Flight) -> Result<(), DatasetError> {
+    let e = draw_err(path);
+    let root = BitMapBackend::new(path, (1200, 1000)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let (title, body) = root.split_vertically(40);
+    title
+        .draw(&Text::new(
+            format!("Sample flight {} ({:.0} s)", f.name, f.duration_s()),
+            (15, 8),
+            ("sans-serif", 24),
+        ))
+        .map_err(&e)?;
+    let panels = body.split_evenly((4, 1));
+    let t_end = f.duration_s().max(1.0);
+    type Get = fn(&super::Sample) -> f64;
+    let series: [(&str, Get); 4] = [
+        ("altitude, 1000 ft", |s| s.truth.alt_msl_m / 0.3048 / 1000.0),
+        ("Mach", |s| s.truth.mach),
+        ("α, deg", |s| s.truth.alpha_deg),
+        ("β, deg", |s| s.truth.beta_deg),
+    ];
+    for (area, (label, get)) in panels.iter().zip(series) {
+        let (lo, hi) = f
+            .samples
+            .iter()
+            .map(get)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
+        let pad = ((hi - lo) * 0.05).max(0.1);
+        let mut chart = ChartBuilder::on(area)
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..t_end, (lo - pad)..(hi + pad))
+            .map_err(&e)?;
+        chart
+            .configure_mesh()
+            .y_desc(label)
+            .x_desc("time, s")
+            .label_style(("sans-serif", 15))
+            .draw()
+            .map_err(&e)?;
+        chart
+            .draw_series(LineSeries::new(
+                f.samples.iter().map(|s| (s.time_s, get(s))),
+                TRAIN,
+            ))
+            .map_err(&e)?;
+    }
+    root.present().map_err(&e)?;
+    Ok(())
+}
+
+/// Coverage of the training and test splits.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Report {
+    pub train: Coverage,
+    pub test: Coverage,
+}
+
+/// Reads the dataset in `dir`, writes `envelope.png`, `alpha_hist.png`, `beta_hist.png`,
+/// `sample_flight.png` and `dataset.md` there, and returns the numbers.
+pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
+    register_font();
+    let manifest = Manifest::read(dir)?;
+    let mut flights = Vec::new();
+    for entry in &manifest.flights {
+        let mut f = Flight::read_csv(&dir.join(&entry.file))?;
+        f.cut = entry.cut.clone();
+        flights.push((f, entry.split, entry.profile.clone()));
+    }
+    let of = |split| -> Vec<&Flight> {
+        flights
+            .iter()
+            .filter(|(_, s, _)| *s == split)
+            .map(|(f, _, _)| f)
+            .collect()
+    };
+    let report = Report {
+        train: coverage(&of(Split::Train)),
+        test: coverage(&of(Split::Test)),
+    };
+    let all: Vec<(&Flight, Split)> = flights.iter().map(|(f, s, _)| (f, *s)).collect();
+    envelope(&dir.join("envelope.png"), &all)?;
+    let train = of(Split::Train);
+    let train = if train.is_empty() {
+        of(Split::Test)
+    } else {
+        train
+    };
+    let alphas: Vec<f64> = train
+        .iter()
+        .flat_map(|f| f.samples.iter().map(|s| s.truth.alpha_deg))
+        .collect();
+    let betas: Vec<f64> = train
+        .iter()
+        .flat_map(|f| f.samples.iter().map(|s| s.truth.beta_deg))
+        .collect();
+    let r = if report.train.samples > 0 {
+        &report.train
+    } else {
+        &report.test
+    };
+    histogram(
+        &dir.join("alpha_hist.png"),
+        "Angle of attack α (truth)",
+        "α, deg",
+        &alphas,
+        1.0,
+        r.alpha_deg,
+    )?;
+    histogram(
+        &dir.join("beta_hist.png"),
+        "Sideslip β (truth)",
+        "β, deg",
+        &betas,
+        0.5,
+        r.beta_deg,
+    )?;
+    // The sample flight: the most varied one in α (the most informative picture).
+    if let Some(f) = train.iter().max_by(|a, b| {
+        let spread = |f: &Flight| {
+            f.samples
+                .iter()
+                .map(|s| s.truth.alpha_deg)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(x, y), v| {
+                    (x.min(v), y.max(v))
+                })
+        };
+        let (a0, a1) = spread(a);
+        let (b0, b1) = spread(b);
+        (a1 - a0).total_cmp(&(b1 - b0))
+    }) {
+        sample_flight(&dir.join("sample_flight.png"), f)?;
+    }
+    let md = markdown(&manifest, &report, &flights);
+    let path = dir.join("dataset.md");
+    std::fs::write(&path, md).map_err(|source| DatasetError::Io {
+        action: "write",
+        path,
+        source,
+    })?;
+    Ok(report)
+}
+
+fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Dataset `{}` (seed {})\n", m.preset, m.config["seed"]);
+    let _ = writeln!(
+        s,
+        "JSBSim {} · git {} · 20 Hz · generated by `hil-sim generate`. Numbers below are measured \
+         from the CSVs by `hil_sim::dataset::report`.\n",
+        m.jsbsim_version, m.git_rev
+    );
+    let _ = writeln!(
+        s,
+        "| split | flights | samples | minutes | α min/max, ° | β min/max, ° | Mach min/max | alt min/max, m | share |β| > 5° |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    for (name, c) in [("train", &r.train), ("test", &r.test)] {
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {:.1} | {:.1} / {:.1} | {:.1} / {:.1} | {:.2} / {:.2} | {:.0} / {:.0} | {:.1}% |",
+            c.flights,
+            c.samples,
+            c.duration_min,
+            c.alpha_deg.0,
+            c.alpha_deg.1,
+            c.beta_deg.0,
+            c.beta_deg.1,
+            c.mach.0,
+            c.mach.1,
+            c.alt_m.0,
+            c.alt_m.1,
+            c.beta_over_5_share * 100.0
+        );
+    }
+    let _ = writeln!(s, "\n## Share of samples per α band\n");
+    let _ = writeln!(s, "| α band, ° | train | test |");
+    let _ = writeln!(s, "|---|---|---|");
+    for (k, (label, _, _)) in ALPHA_BANDS.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "| {label} | {:.1}% | {:.1}% |",
+            r.train.alpha_band_share[k] * 100.0,
+            r.test.alpha_band_share[k] * 100.0
+        );
+    }
+    let over15: f64 = r.train.alpha_band_share[4..].iter().sum();
+    let _ = writeln!(
+        s,
+        "\nTraining samples above 15° α: {:.1}%.\n",
+        over15 * 100.0
+    );
+    let _ = writeln!(s, "## Flights\n");
+    let _ = writeln!(
+        s,
+        "| flight | split | profile | duration, s | α max, ° | cut |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for (f, split, profile) in flights {
+        let amax = f
+            .samples
+            .iter()
+            .map(|x| x.truth.alpha_deg)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let _ = writeln!(
+            s,
+            "| {} | {:?} | {profile} | {:.0} | {amax:.1} | {} |",
+            f.name,
+            split,
+            f.duration_s(),
+            f.cut.as_deref().unwrap_or("—")
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nPictures: `envelope.png` (altitude vs Mach), `alpha_hist.png`, `beta_hist.png`, \
+         `sample_flight.png`."
+    );
+    s
+}
