@@ -189,11 +189,23 @@ impl Qemu {
         let read_half = stream
             .try_clone()
             .map_err(|e| RunError::Io("clone the QEMU socket".into(), e))?;
-        Ok(Qemu {
+        let mut q = Qemu {
             child,
             stream,
             reader: Reader::spawn(read_half),
-        })
+        };
+        // The firmware sends one delimiter once USART1 is enabled; bytes sent before that are lost.
+        let mut ready = Vec::new();
+        let until = Instant::now() + Duration::from_secs(15);
+        while ready.is_empty() && Instant::now() < until {
+            q.recv(Duration::from_millis(100), &mut ready)?;
+        }
+        if ready.is_empty() {
+            return Err(RunError::Closed(
+                "QEMU started but the firmware never signalled ready (is the ELF a `cargo fw` image?)".into(),
+            ));
+        }
+        Ok(q)
     }
 }
 

@@ -63,6 +63,8 @@ pub struct Summary {
     pub step_ticks_median: Option<u32>,
     pub step_instructions_max: Option<u32>,
     pub step_instructions_median: Option<u32>,
+    /// Multiply-accumulates per step of the compiled-in model (0 without one).
+    pub macs_per_step: usize,
     pub flight_s: f64,
     pub wall_s: f64,
     pub uplink: LinkStats,
@@ -125,6 +127,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         step_ticks_median: tmed,
         step_instructions_max: tmax.filter(|_| instr),
         step_instructions_median: tmed.filter(|_| instr),
+        macs_per_step: estimator_core::Estimator::shipped().macs(),
         flight_s: o.records.len() as f64 * crate::runner::PERIOD_S,
         wall_s: o.wall_s,
         uplink: o.uplink,

@@ -25,6 +25,8 @@ const ESTIMATE: RGBColor = RGBColor(255, 127, 14);
 const ERROR: RGBColor = RGBColor(214, 39, 40);
 
 type Points = Vec<(f64, f64)>;
+/// A panel: y label and its lines (name, points, colour).
+type Panel<'a> = (&'a str, Vec<(&'a str, &'a Points, RGBColor)>);
 
 fn series(
     records: &[FrameRecord],
@@ -97,7 +99,7 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
             r.reply.map_or(f64::NAN, |f| f.estimate.beta_deg()),
         )
     });
-    let plots: [(&str, Vec<(&str, &Points, RGBColor)>); 3] = [
+    let plots: [Panel; 3] = [
         (
             "α (deg)",
             vec![("truth", &alpha.0, TRUTH), ("estimate", &alpha.1, ESTIMATE)],
