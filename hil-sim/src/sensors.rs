@@ -506,6 +506,15 @@ impl SensorModel {
         &self.gyro
     }
 
+    /// The raw 120 Hz output of gyro `axis` for a truth rate (errors + quantization, no lag or
+    /// anti-alias filter, no g term): for measuring the error model back in tests.
+    pub fn gyro_raw_for_test(&mut self, axis: usize, truth_rps: f64) -> f64 {
+        match self.gyro.get_mut(axis) {
+            Some(a) => a.raw(truth_rps, 0.0, &mut self.rng),
+            None => f64::NAN,
+        }
+    }
+
     /// One 120 Hz step: the 16 sensed channels at this instant.
     pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
         let mut out = [0.0; CHANNELS];

@@ -358,7 +358,7 @@ fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> St
     );
     let _ = writeln!(
         s,
-        "| split | flights | samples | minutes | α min/max, ° | β min/max, ° | Mach min/max | alt min/max, m | share |β| > 5° |"
+        "| split | flights | samples | minutes | α min/max, ° | β min/max, ° | Mach min/max | alt min/max, m | share of abs(β) > 5° |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for (name, c) in [("train", &r.train), ("test", &r.test)] {
