@@ -2,6 +2,7 @@
 //! contract, feature sets and leakage guard, burn models, quantization and code generation of
 //! `estimator-core/src/model/weights.rs`, an independent integer reference and test vectors,
 //! baselines, feature analysis and reports.
+pub mod analysis;
 pub mod baselines;
 pub mod data;
 pub mod error;
@@ -13,5 +14,6 @@ pub mod pipeline;
 pub mod plots;
 pub mod prep;
 pub mod quant;
+pub mod report;
 
 pub use error::{Error, Result};

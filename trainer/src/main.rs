@@ -67,6 +67,63 @@ enum Cmd {
         #[arg(long, default_value_t = 40_000)]
         gb_rows: usize,
     },
+    /// Table 2: every model family for α and β on the same test flights (float and int8), seed
+    /// spread, feature ablation; writes training.md + learning-curve and time-series PNGs.
+    Report {
+        #[command(flatten)]
+        args: TrainArgs,
+        /// Comma-separated seeds of the neural models.
+        #[arg(long, default_value = "1,2")]
+        seeds: String,
+        /// Feature set of the ablation against --features ("none": skip).
+        #[arg(long, default_value = "physics")]
+        ablation: String,
+        /// Training rows (evenly subsampled) for gradient boosting.
+        #[arg(long, default_value_t = 40_000)]
+        gb_rows: usize,
+        /// Output directory of training.md and the PNGs.
+        #[arg(long, default_value = "docs/results")]
+        out: PathBuf,
+        /// Print exactly one JSON object (the Table-2 numbers) on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Spearman rank correlations of every candidate feature with the air-data targets and among
+    /// themselves (CSV + markdown + heatmap), and sampled Shapley values of the compiled-in α and β
+    /// models' integer path (mean |SHAP| bar charts); writes features.md.
+    Features {
+        #[arg(long)]
+        data: PathBuf,
+        #[arg(long, default_value = "docs/results")]
+        out: PathBuf,
+        /// Training rows (evenly subsampled) used for the correlations.
+        #[arg(long, default_value_t = 60_000)]
+        rows: usize,
+        /// SHAP sampling seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// SHAP: test rows explained (evenly spread over the test flights).
+        #[arg(long, default_value_t = 200)]
+        explain: usize,
+        /// SHAP: background rows (evenly spread over the training flights).
+        #[arg(long, default_value_t = 32)]
+        background: usize,
+        /// SHAP: feature permutations per explained row.
+        #[arg(long, default_value_t = 8)]
+        permutations: usize,
+    },
+    /// Times training epochs of the paper-size α cascade (512-256-128-64-32 per part).
+    BenchEpoch {
+        #[arg(long)]
+        data: PathBuf,
+        #[arg(long, default_value_t = 3)]
+        epochs: usize,
+        #[arg(long, default_value_t = 256)]
+        batch: usize,
+        /// Where the measured figures go (JSON; `trainer report --out DIR` includes DIR/bench_epoch.json).
+        #[arg(long, default_value = "docs/results/bench_epoch.json")]
+        out: PathBuf,
+    },
     /// Evaluate the compiled-in model (Estimator::shipped) on the test flights.
     Eval {
         #[arg(long)]
@@ -229,6 +286,375 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     Ok(())
 }
 
+/// "AMD EPYC …, N cores (x86_64)" from /proc/cpuinfo and the available parallelism.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!(
+        "{cpu}, {cores} cores available, {} {} container, release build",
+        std::env::consts::ARCH,
+        std::env::consts::OS
+    )
+}
+
+fn cmd_report(
+    args: &TrainArgs,
+    seeds: &str,
+    ablation: &str,
+    gb_rows: usize,
+    out: &Path,
+    json: bool,
+) -> Result<()> {
+    use trainer::report::{ReportConfig, run};
+    let size = Size::parse(&args.config).context("--config must be small or paper")?;
+    let seeds: Vec<u64> = seeds
+        .split(',')
+        .map(|s| s.trim().parse::<u64>())
+        .collect::<std::result::Result<_, _>>()
+        .context("--seeds must be comma-separated integers, e.g. 1,2")?;
+    if seeds.is_empty() {
+        bail!("--seeds needs at least one seed");
+    }
+    let features = FeatureSet::parse(&args.features)?;
+    let ablation = match ablation {
+        "none" => None,
+        a => Some(FeatureSet::parse(a)?),
+    };
+    let ds = Dataset::load(&args.data, args.val_fraction)
+        .with_context(|| format!("loading dataset {}", args.data.display()))?;
+    if ds.rows(trainer::data::Role::Val) == 0 {
+        bail!("no validation flight: the dataset needs at least two training flights");
+    }
+    let epochs = args.epochs.unwrap_or(match size {
+        Size::Small => 40,
+        Size::Paper => 30,
+    });
+    let cfg = ReportConfig {
+        seeds,
+        size,
+        epochs,
+        batch: args.batch,
+        lr: args.lr,
+        gb_rows,
+        features,
+        ablation: ablation.clone(),
+    };
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let report = run(
+        &ds,
+        &cfg,
+        |a, b| {
+            plot_curves(&out.join("training_learning_curves.png"), &[a, b])?;
+            plot_series(&out.join("training_test_timeseries.png"), &ds, &[a, b], 3)
+        },
+        |line| eprintln!("{line}"),
+    )?;
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let mut md = report.markdown(
+        &command,
+        &machine(),
+        ablation.as_ref().map(|a| a.name.as_str()),
+    );
+    md.push_str(
+        "
+## Plots (first seed, main feature set)
+
+",
+    );
+    md.push_str(
+        "Learning curves (train/val MSE of both heads per epoch, paper Fig. 9):
+
+![learning curves](training_learning_curves.png)
+
+",
+    );
+    md.push_str(
+        "Predicted vs truth on the test flights (paper Fig. 11–12):
+
+![test time series](training_test_timeseries.png)
+",
+    );
+    let bench = out.join("bench_epoch.json");
+    if let Ok(text) = std::fs::read_to_string(&bench) {
+        let v: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{} is not JSON: rerun `trainer bench-epoch`",
+                bench.display()
+            )
+        })?;
+        md.push_str(&format!(
+            "
+## Benchmark: paper-size α cascade epoch time
+
+`{}` on {}: **{:.2} s per epoch**              (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation pass,              α cascade 2 × {}-512-256-128-64-32-1, batch {}; ≈ {:.1} s per epoch scaled linearly to the              paper's 288 000 rows.
+",
+            v["command"].as_str().unwrap_or("?"),
+            v["machine"].as_str().unwrap_or("?"),
+            v["mean_epoch_s"].as_f64().unwrap_or(f64::NAN),
+            v["epochs"].as_u64().unwrap_or(0),
+            v["first_epoch_s"].as_f64().unwrap_or(f64::NAN),
+            v["train_rows"].as_u64().unwrap_or(0),
+            v["val_rows"].as_u64().unwrap_or(0),
+            v["n_in"].as_u64().unwrap_or(0),
+            v["batch"].as_u64().unwrap_or(0),
+            v["per_epoch_288k_s"].as_f64().unwrap_or(f64::NAN),
+        ));
+    }
+    std::fs::write(out.join("training.md"), md)
+        .with_context(|| format!("writing {}", out.join("training.md").display()))?;
+    eprintln!("wrote {}/training.md and PNGs", out.display());
+    Ok(())
+}
+
+struct ShapArgs {
+    seed: u64,
+    explain: usize,
+    background: usize,
+    permutations: usize,
+}
+
+fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result<()> {
+    use std::fmt::Write;
+    use trainer::analysis::{columns, spearman_matrix};
+    let ds =
+        Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (names, cols) = columns(&ds, rows);
+    let n_rows = cols.first().map(|c| c.len()).unwrap_or(0);
+    eprintln!(
+        "Spearman over {} columns × {n_rows} training rows",
+        names.len()
+    );
+    let m = spearman_matrix(&cols);
+    let mut csv = format!(",{}\n", names.join(","));
+    for (n, row) in names.iter().zip(&m) {
+        let vals: Vec<String> = row.iter().map(|v| format!("{v:.4}")).collect();
+        let _ = writeln!(csv, "{n},{}", vals.join(","));
+    }
+    let csv_path = out.join("features_spearman.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    trainer::plots::heatmap(
+        &out.join("features_spearman.png"),
+        "Spearman rank correlation (training flights)",
+        &names,
+        &m,
+    )?;
+    let nf = estimator_core::Feature::ALL.len();
+    let mut md = String::from("# Feature analysis (generated by `trainer features`)\n\n");
+    let _ = writeln!(
+        md,
+        "Dataset `{}` (preset {}, manifest sha256 `{}`); command `{}`; machine: {}.\n",
+        data.display(),
+        ds.preset.as_deref().unwrap_or("?"),
+        ds.manifest_sha256,
+        std::env::args().collect::<Vec<_>>().join(" "),
+        machine()
+    );
+    let _ = writeln!(
+        md,
+        "## Spearman rank correlation with the air data\n\n{n_rows} rows evenly sampled from the \
+         training and validation flights (never the test flights). Every candidate of \
+         `estimator_core::Feature::ALL` (16 sensed channels + derived features, SI values as the models \
+         see them); the air-data columns are targets only: the feature parser refuses them as inputs \
+         (`trainer::features::parse_feature`, test `air_data_can_never_become_an_input`). \
+         Full matrix (features and targets among themselves): `features_spearman.csv`, heatmap below.\n"
+    );
+    md.push_str(
+        "| feature | alpha_deg | beta_deg | w_aero_mps | v_aero_mps |\n|---|---|---|---|---|\n",
+    );
+    let mut order: Vec<usize> = (0..nf).collect();
+    order.sort_by(|&a, &b| {
+        let k = |i: usize| m[i][nf].abs().max(m[i][nf + 1].abs());
+        k(b).total_cmp(&k(a))
+    });
+    for i in order {
+        let _ = writeln!(
+            md,
+            "| {} | {:+.3} | {:+.3} | {:+.3} | {:+.3} |",
+            names[i],
+            m[i][nf],
+            m[i][nf + 1],
+            m[i][nf + 2],
+            m[i][nf + 3]
+        );
+    }
+    md.push_str("\n(sorted by max(|ρ α|, |ρ β|); NaN: constant column in this dataset)\n\n![Spearman heatmap](features_spearman.png)\n\n");
+    md.push_str("### Among the features\n\n| | ");
+    md.push_str(&names[..nf].join(" | "));
+    md.push_str(" |\n|---|");
+    md.push_str(&"---|".repeat(nf));
+    md.push('\n');
+    for i in 0..nf {
+        let vals: Vec<String> = m[i][..nf].iter().map(|v| format!("{v:+.2}")).collect();
+        let _ = writeln!(md, "| {} | {} |", names[i], vals.join(" | "));
+    }
+    md.push('\n');
+    md.push_str(&shap_section(&ds, out, shap)?);
+    let md_path = out.join("features.md");
+    std::fs::write(&md_path, md).with_context(|| format!("writing {}", md_path.display()))?;
+    eprintln!("wrote {}, features_spearman.csv/.png", md_path.display());
+    Ok(())
+}
+
+/// SHAP of the compiled-in α and β cascades (integer path, `AngleNet::run`, exactly as deployed).
+#[cfg(trainer_has_model)]
+fn shap_section(ds: &Dataset, out: &Path, a: &ShapArgs) -> Result<String> {
+    use estimator_core::AngleNet;
+    use std::fmt::Write;
+    use trainer::analysis::{rng, sample_rows, shapley};
+    use trainer::data::Role;
+    let bg = sample_rows(ds, &[Role::Train, Role::Val], a.background);
+    let xs = sample_rows(ds, &[Role::Test], a.explain);
+    let mut md = String::from("## SHAP: mean |Shapley value| per input (paper Fig. 8)\n\n");
+    let prov = estimator_core::model::PROVENANCE
+        .lines()
+        .next()
+        .unwrap_or("");
+    let _ = writeln!(
+        md,
+        "Model: the compiled-in int8 cascades (`estimator_core::model::{{ALPHA, BETA}}`, \
+         `AngleNet::run`, bit-exact with the firmware), provenance: {prov}. Sampled Shapley values: \
+         {} test rows explained, {} background rows from the training flights, {} random feature \
+         orders per row (seed {}); an input's value is switched from the background row to the \
+         explained row and the change of the predicted angle (degrees) is credited to it. Values sum \
+         exactly to prediction − mean background prediction.\n",
+        xs.len(),
+        bg.len(),
+        a.permutations,
+        a.seed
+    );
+    let nets: [(&str, &dyn AngleNet); 2] = [
+        ("alpha", &estimator_core::model::ALPHA),
+        ("beta", &estimator_core::model::BETA),
+    ];
+    for (name, net) in nets {
+        let feats = net.features().to_vec();
+        let f = |v: &estimator_core::FeatureValues| net.run(v).1 as f64 / 1000.0;
+        let mut r = rng(a.seed);
+        let pb = indicatif::ProgressBar::new(xs.len() as u64);
+        pb.set_prefix(format!("SHAP {name}"));
+        let mut sum = vec![0.0; feats.len()];
+        for x in &xs {
+            let phi = shapley(&f, &feats, x, &bg, a.permutations, &mut r);
+            for (s, p) in sum.iter_mut().zip(&phi) {
+                *s += p.abs();
+            }
+            pb.inc(1);
+        }
+        pb.finish_and_clear();
+        let items: Vec<(String, f64)> = feats
+            .iter()
+            .zip(&sum)
+            .map(|(f, s)| (f.name().to_string(), s / xs.len().max(1) as f64))
+            .collect();
+        let png = format!("features_shap_{name}.png");
+        trainer::plots::bars(
+            &out.join(&png),
+            &format!("{name}: mean |SHAP| (deg), compiled-in int8 model"),
+            "mean |SHAP| (deg)",
+            &items,
+        )?;
+        let mut sorted = items.clone();
+        sorted.sort_by(|x, y| y.1.total_cmp(&x.1));
+        let _ = writeln!(
+            md,
+            "### {name}\n\n| input | mean abs SHAP (deg) |\n|---|---|"
+        );
+        for (n, v) in &sorted {
+            let _ = writeln!(md, "| {n} | {v:.4} |");
+        }
+        let _ = writeln!(md, "\n![{name} SHAP]({png})\n");
+    }
+    Ok(md)
+}
+
+#[cfg(not(trainer_has_model))]
+fn shap_section(_: &Dataset, _: &Path, _: &ShapArgs) -> Result<String> {
+    Ok("## SHAP\n\nNot computed: this build has no compiled-in model (run `trainer train` first).\n".into())
+}
+
+fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()> {
+    use trainer::data::Role;
+    use trainer::model::{Cascade, Matrix, train};
+    use trainer::prep::Prep;
+    if epochs < 2 {
+        bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
+    }
+    let ds =
+        Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
+    let fs = FeatureSet::parse("table1")?;
+    let tr: Vec<_> = ds.flights(Role::Train).collect();
+    let va: Vec<_> = ds.flights(Role::Val).collect();
+    let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
+    let (x, ym, yo) = prep.matrix(&tr);
+    let (vx, vym, vyo) = prep.matrix(&va);
+    let n_in = prep.n_inputs();
+    let cfg = TrainConfig {
+        epochs,
+        batch,
+        lr: 1e-3,
+        seed: 1,
+        label: "alpha paper cascade".into(),
+        progress: true,
+    };
+    let (_, curves) = train(
+        |d| Cascade::new(n_in, Size::Paper.hidden(Angle::Alpha), d),
+        &cfg,
+        &Matrix {
+            x: &x,
+            ym: &ym,
+            yo: &yo,
+            n_in,
+        },
+        &Matrix {
+            x: &vx,
+            ym: &vym,
+            yo: &vyo,
+            n_in,
+        },
+    );
+    let rest = &curves.epoch_s[1..];
+    let mean = rest.iter().sum::<f64>() / rest.len() as f64;
+    let rows = yo.len();
+    let v = serde_json::json!({
+        "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "machine": machine(),
+        "dataset": data.display().to_string(),
+        "epochs": epochs, "batch": batch, "n_in": n_in,
+        "train_rows": rows, "val_rows": vyo.len(),
+        "epoch_s": curves.epoch_s,
+        "first_epoch_s": curves.epoch_s[0],
+        "mean_epoch_s": mean,
+        "per_epoch_288k_s": mean * 288_000.0 / rows.max(1) as f64,
+    });
+    println!(
+        "paper α cascade ({n_in}-512-256-128-64-32-1 ×2), {rows} train rows, batch {batch}: \
+         {mean:.2} s/epoch (epochs 2..{epochs}; first {:.2} s) → ≈{:.1} s/epoch at 288 000 rows",
+        curves.epoch_s[0],
+        mean * 288_000.0 / rows.max(1) as f64
+    );
+    if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    std::fs::write(out, serde_json::to_string_pretty(&v)?)
+        .with_context(|| format!("writing {}", out.display()))?;
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
@@ -240,6 +666,39 @@ fn main() -> Result<()> {
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
         Cmd::Eval { data, json } => cmd_eval(data, *json),
+        Cmd::Report {
+            args,
+            seeds,
+            ablation,
+            gb_rows,
+            out,
+            json,
+        } => cmd_report(args, seeds, ablation, *gb_rows, out, *json),
+        Cmd::Features {
+            data,
+            out,
+            rows,
+            seed,
+            explain,
+            background,
+            permutations,
+        } => cmd_features(
+            data,
+            out,
+            *rows,
+            &ShapArgs {
+                seed: *seed,
+                explain: *explain,
+                background: *background,
+                permutations: *permutations,
+            },
+        ),
+        Cmd::BenchEpoch {
+            data,
+            epochs,
+            batch,
+            out,
+        } => cmd_bench(data, *epochs, *batch, out),
         Cmd::Baselines { args, gb_rows } => cmd_baselines(args, *gb_rows),
     }
 }

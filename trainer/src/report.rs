@@ -1,0 +1,583 @@
+//! `trainer report`: every model family of the paper's Table 2 (linear regression, gradient boosting,
+//! plain MLP, cascaded MLP float and int8 as deployed) for α and β on the same test flights, seed
+//! spread of the neural models, the feature ablation, rendered as markdown.
+use crate::baselines::{Baseline, run_baseline};
+use crate::data::{Dataset, Role};
+use crate::error::Result;
+use crate::features::FeatureSet;
+use crate::metrics::{FlightMetrics, Metrics};
+use crate::model::TrainConfig;
+use crate::pipeline::{Size, Trained, train_angle};
+use crate::prep::Angle;
+use serde::Serialize;
+use std::fmt::Write;
+
+/// What `trainer report` runs.
+#[derive(Debug, Clone)]
+pub struct ReportConfig {
+    pub seeds: Vec<u64>,
+    pub size: Size,
+    pub epochs: usize,
+    pub batch: usize,
+    pub lr: f64,
+    pub gb_rows: usize,
+    pub features: FeatureSet,
+    /// Feature set of the ablation (None: no ablation).
+    pub ablation: Option<FeatureSet>,
+}
+
+/// Test metrics of one model for one angle (`int8` only for the deployed cascade).
+#[derive(Debug, Clone, Serialize)]
+pub struct Entry {
+    pub model: String,
+    pub angle: Angle,
+    pub features: String,
+    /// None for deterministic models (linear regression, gradient boosting).
+    pub seed: Option<u64>,
+    pub float: FlightMetrics,
+    pub int8: Option<FlightMetrics>,
+    pub seconds: f64,
+}
+
+/// Which flights played which part.
+#[derive(Debug, Clone, Serialize)]
+pub struct Split {
+    pub train: Vec<(String, usize)>,
+    pub val: Vec<(String, usize)>,
+    pub test: Vec<(String, usize)>,
+}
+
+impl Split {
+    pub fn of(ds: &Dataset) -> Split {
+        let f = |r| ds.flights(r).map(|f| (f.name.clone(), f.len())).collect();
+        Split {
+            train: f(Role::Train),
+            val: f(Role::Val),
+            test: f(Role::Test),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub dataset: String,
+    pub manifest_sha256: String,
+    pub preset: Option<String>,
+    pub config: String,
+    pub epochs: usize,
+    pub seeds: Vec<u64>,
+    pub features: String,
+    pub split: Split,
+    pub entries: Vec<Entry>,
+}
+
+pub const LINEAR: &str = "Linear regression";
+pub const GB: &str = "Gradient boosting";
+pub const MLP: &str = "Plain MLP";
+pub const CASCADE: &str = "Cascaded MLP";
+
+/// Runs every model. `on_trained` receives the cascades of the first seed (for plots).
+pub fn run(
+    ds: &Dataset,
+    cfg: &ReportConfig,
+    mut on_trained: impl FnMut(&Trained, &Trained) -> Result<()>,
+    mut log: impl FnMut(&str),
+) -> Result<Report> {
+    let mut entries = Vec::new();
+    let tc = |seed: u64, label: String| TrainConfig {
+        epochs: cfg.epochs,
+        batch: cfg.batch,
+        lr: cfg.lr,
+        seed,
+        label,
+        progress: true,
+    };
+    let fs = &cfg.features;
+    for angle in [Angle::Alpha, Angle::Beta] {
+        let feats = pick(fs, angle);
+        for (kind, name) in [(Baseline::Linear, LINEAR), (Baseline::GradientBoosting, GB)] {
+            let t0 = std::time::Instant::now();
+            let m = run_baseline(
+                kind,
+                ds,
+                angle,
+                feats,
+                &[],
+                &tc(0, String::new()),
+                cfg.gb_rows,
+            )?;
+            let seconds = t0.elapsed().as_secs_f64();
+            log(&format!(
+                "{} {name}: MAE {:.3} ({seconds:.1} s)",
+                angle.symbol(),
+                m.overall.mae
+            ));
+            entries.push(Entry {
+                model: name.into(),
+                angle,
+                features: fs.name.clone(),
+                seed: None,
+                float: m,
+                int8: None,
+                seconds,
+            });
+        }
+        for &seed in &cfg.seeds {
+            let t0 = std::time::Instant::now();
+            let m = run_baseline(
+                Baseline::Mlp,
+                ds,
+                angle,
+                feats,
+                cfg.size.hidden(angle),
+                &tc(seed, format!("{} mlp s{seed}", angle.name())),
+                cfg.gb_rows,
+            )?;
+            entries.push(Entry {
+                model: MLP.into(),
+                angle,
+                features: fs.name.clone(),
+                seed: Some(seed),
+                float: m,
+                int8: None,
+                seconds: t0.elapsed().as_secs_f64(),
+            });
+        }
+    }
+    let mut sets = vec![fs];
+    if let Some(a) = &cfg.ablation {
+        sets.push(a);
+    }
+    for set in sets {
+        for (k, &seed) in cfg.seeds.iter().enumerate() {
+            let mut pair = Vec::new();
+            for angle in [Angle::Alpha, Angle::Beta] {
+                let t0 = std::time::Instant::now();
+                let t = train_angle(
+                    ds,
+                    angle,
+                    pick(set, angle),
+                    cfg.size,
+                    &tc(
+                        seed,
+                        format!("{} cascade {} s{seed}", angle.name(), set.name),
+                    ),
+                );
+                let seconds = t0.elapsed().as_secs_f64();
+                log(&format!(
+                    "{} cascade [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
+                    angle.symbol(),
+                    set.name,
+                    t.float_test.overall.mae,
+                    t.int_test.overall.mae
+                ));
+                entries.push(Entry {
+                    model: CASCADE.into(),
+                    angle,
+                    features: set.name.clone(),
+                    seed: Some(seed),
+                    float: t.float_test.clone(),
+                    int8: Some(t.int_test.clone()),
+                    seconds,
+                });
+                pair.push(t);
+            }
+            if k == 0 && std::ptr::eq(set, fs) {
+                on_trained(&pair[0], &pair[1])?;
+            }
+        }
+    }
+    Ok(Report {
+        dataset: ds.dir.display().to_string(),
+        manifest_sha256: ds.manifest_sha256.clone(),
+        preset: ds.preset.clone(),
+        config: cfg.size.name().into(),
+        epochs: cfg.epochs,
+        seeds: cfg.seeds.clone(),
+        features: fs.name.clone(),
+        split: Split::of(ds),
+        entries,
+    })
+}
+
+fn pick(fs: &FeatureSet, a: Angle) -> &[estimator_core::Feature] {
+    match a {
+        Angle::Alpha => &fs.alpha,
+        Angle::Beta => &fs.beta,
+    }
+}
+
+/// Mean and spread (half the max − min range) of values.
+pub fn mean_spread(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (mean, (hi - lo) / 2.0)
+}
+
+/// Element-wise mean of metrics over seeds (n kept).
+pub fn mean_metrics(ms: &[Metrics]) -> Metrics {
+    let k = ms.len().max(1) as f64;
+    let s = |f: fn(&Metrics) -> f64| ms.iter().map(f).sum::<f64>() / k;
+    Metrics {
+        n: ms.first().map(|m| m.n).unwrap_or(0),
+        mae: s(|m| m.mae),
+        rmse: s(|m| m.rmse),
+        p95: s(|m| m.p95),
+        max: s(|m| m.max),
+    }
+}
+
+/// A Table-2 row: model label and, per angle, the metrics (averaged over seeds) of one test flight
+/// (`flight = None`: overall).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub label: String,
+    pub alpha: Metrics,
+    pub beta: Metrics,
+}
+
+impl Report {
+    fn select(&self, model: &str, angle: Angle, features: &str) -> Vec<&Entry> {
+        self.entries
+            .iter()
+            .filter(|e| e.model == model && e.angle == angle && e.features == features)
+            .collect()
+    }
+
+    /// Table-2 rows (float, and int8 for the cascade) for `flight` (None: overall), main feature set.
+    pub fn rows(&self, flight: Option<&str>) -> Vec<Row> {
+        let pick = |m: &FlightMetrics| -> Metrics {
+            match flight {
+                None => m.overall,
+                Some(f) => m
+                    .per_flight
+                    .iter()
+                    .find(|(n, _)| n == f)
+                    .map(|x| x.1)
+                    .unwrap_or_default(),
+            }
+        };
+        let mut rows = Vec::new();
+        for (model, int8) in [
+            (LINEAR, false),
+            (GB, false),
+            (MLP, false),
+            (CASCADE, false),
+            (CASCADE, true),
+        ] {
+            let agg = |a: Angle| {
+                let ms: Vec<Metrics> = self
+                    .select(model, a, &self.features)
+                    .iter()
+                    .filter_map(|e| {
+                        if int8 {
+                            e.int8.as_ref().map(pick)
+                        } else {
+                            Some(pick(&e.float))
+                        }
+                    })
+                    .collect();
+                (mean_metrics(&ms), ms.len())
+            };
+            let (a, na) = agg(Angle::Alpha);
+            let (b, _) = agg(Angle::Beta);
+            if na == 0 {
+                continue;
+            }
+            let seeds = if model == LINEAR || model == GB {
+                String::new()
+            } else {
+                format!(", mean of {na} seeds")
+            };
+            let kind = match (model, int8) {
+                (CASCADE, true) => " (int8, deployed)",
+                (CASCADE, false) => " (float)",
+                _ => "",
+            };
+            rows.push(Row {
+                label: format!("{model}{kind}{seeds}"),
+                alpha: a,
+                beta: b,
+            });
+        }
+        rows
+    }
+
+    /// Model labels by overall MAE, best first, per angle.
+    pub fn ranking(&self, angle: Angle) -> Vec<(String, f64)> {
+        let mut r: Vec<(String, f64)> = self
+            .rows(None)
+            .into_iter()
+            .map(|row| {
+                let m = match angle {
+                    Angle::Alpha => row.alpha.mae,
+                    Angle::Beta => row.beta.mae,
+                };
+                (row.label, m)
+            })
+            .collect();
+        r.sort_by(|a, b| a.1.total_cmp(&b.1));
+        r
+    }
+
+    /// Overall MAE per seed of a model/angle/feature set (`int8`: the deployed cascade).
+    pub fn seed_maes(&self, model: &str, angle: Angle, features: &str, int8: bool) -> Vec<f64> {
+        self.select(model, angle, features)
+            .iter()
+            .filter_map(|e| {
+                if int8 {
+                    e.int8.as_ref().map(|m| m.overall.mae)
+                } else {
+                    Some(e.float.overall.mae)
+                }
+            })
+            .collect()
+    }
+
+    /// The markdown report. `command`, `machine`, `extra` (appended sections) are free text.
+    pub fn markdown(&self, command: &str, machine: &str, ablation: Option<&str>) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "# Training results: Table 2 (generated by `trainer report`)\n"
+        );
+        let _ = writeln!(
+            s,
+            "Dataset `{}` (preset {}, manifest sha256 `{}`), configuration **{}**, {} epochs, \
+             seeds {:?}, features `{}`. Every model is trained on the same training flights and \
+             scored on the same test flights; errors in degrees.\n",
+            self.dataset,
+            self.preset.as_deref().unwrap_or("?"),
+            self.manifest_sha256,
+            self.config,
+            self.epochs,
+            self.seeds,
+            self.features
+        );
+        let _ = writeln!(s, "Command: `{command}`  \nMachine: {machine}\n");
+        let _ = writeln!(s, "## Split (by flight)\n");
+        for (name, fl) in [
+            ("train", &self.split.train),
+            (
+                "validation (held-out training flights, model selection)",
+                &self.split.val,
+            ),
+            ("test (unseen until evaluation)", &self.split.test),
+        ] {
+            let rows: usize = fl.iter().map(|f| f.1).sum();
+            let names: Vec<&str> = fl.iter().map(|f| f.0.as_str()).collect();
+            let _ = writeln!(
+                s,
+                "- **{name}**: {} flights, {rows} rows: {}",
+                fl.len(),
+                names.join(", ")
+            );
+        }
+        s.push('\n');
+        let header = "| model | α MAE | α RMSE | α p95 | α max | β MAE | β RMSE | β p95 | β max |\n|---|---|---|---|---|---|---|---|---|\n";
+        let table = |s: &mut String, rows: &[Row]| {
+            s.push_str(header);
+            for r in rows {
+                let _ = writeln!(
+                    s,
+                    "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} |",
+                    r.label,
+                    r.alpha.mae,
+                    r.alpha.rmse,
+                    r.alpha.p95,
+                    r.alpha.max,
+                    r.beta.mae,
+                    r.beta.rmse,
+                    r.beta.p95,
+                    r.beta.max
+                );
+            }
+            s.push('\n');
+        };
+        let n_test: usize = self.split.test.iter().map(|f| f.1).sum();
+        let _ = writeln!(
+            s,
+            "## Table 2: all test flights ({} flights, {n_test} frames)\n",
+            self.split.test.len()
+        );
+        table(&mut s, &self.rows(None));
+        for (name, n) in &self.split.test {
+            let _ = writeln!(s, "### Test flight `{name}` ({n} frames)\n");
+            table(&mut s, &self.rows(Some(name)));
+        }
+        let _ = writeln!(s, "## Ranking (overall MAE, best first)\n");
+        for a in [Angle::Alpha, Angle::Beta] {
+            let r: Vec<String> = self
+                .ranking(a)
+                .iter()
+                .map(|(l, m)| format!("{l} {m:.3}"))
+                .collect();
+            let _ = writeln!(s, "- **{}**: {}", a.symbol(), r.join(" < "));
+        }
+        let _ = writeln!(
+            s,
+            "\n## Seed spread (overall MAE, mean ± half range over seeds {:?})\n",
+            self.seeds
+        );
+        s.push_str("| model | α MAE | β MAE | per seed α | per seed β |\n|---|---|---|---|---|\n");
+        let mut sets = vec![self.features.clone()];
+        if let Some(a) = ablation {
+            sets.push(a.to_string());
+        }
+        for set in &sets {
+            for (model, int8) in [(MLP, false), (CASCADE, false), (CASCADE, true)] {
+                let a = self.seed_maes(model, Angle::Alpha, set, int8);
+                let b = self.seed_maes(model, Angle::Beta, set, int8);
+                if a.is_empty() {
+                    continue;
+                }
+                let (am, asp) = mean_spread(&a);
+                let (bm, bsp) = mean_spread(&b);
+                let fmt = |v: &[f64]| {
+                    v.iter()
+                        .map(|x| format!("{x:.3}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                };
+                let _ = writeln!(
+                    s,
+                    "| {model}{} [{set}] | {am:.3} ± {asp:.3} | {bm:.3} ± {bsp:.3} | {} | {} |",
+                    if int8 {
+                        " int8"
+                    } else if model == CASCADE {
+                        " float"
+                    } else {
+                        ""
+                    },
+                    fmt(&a),
+                    fmt(&b)
+                );
+            }
+        }
+        if let Some(abl) = ablation {
+            let _ = writeln!(
+                s,
+                "\n## Ablation: `{}` vs `{abl}` features (cascade, overall MAE, mean ± half range over seeds)\n",
+                self.features
+            );
+            s.push_str(
+                "| features | α float | α int8 | β float | β int8 |\n|---|---|---|---|---|\n",
+            );
+            for set in [self.features.as_str(), abl] {
+                let c = |a, i| {
+                    let (m, sp) = mean_spread(&self.seed_maes(CASCADE, a, set, i));
+                    format!("{m:.3} ± {sp:.3}")
+                };
+                let _ = writeln!(
+                    s,
+                    "| {set} | {} | {} | {} | {} |",
+                    c(Angle::Alpha, false),
+                    c(Angle::Alpha, true),
+                    c(Angle::Beta, false),
+                    c(Angle::Beta, true)
+                );
+            }
+            for a in [Angle::Alpha, Angle::Beta] {
+                let (base, _) = mean_spread(&self.seed_maes(CASCADE, a, &self.features, true));
+                let (with, _) = mean_spread(&self.seed_maes(CASCADE, a, abl, true));
+                let _ = writeln!(
+                    s,
+                    "\n{} int8 MAE change with `{abl}`: {:+.1} %",
+                    a.symbol(),
+                    (with - base) / base * 100.0
+                );
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fm(name: &str, mae: f64) -> FlightMetrics {
+        let m = Metrics {
+            n: 10,
+            mae,
+            rmse: mae * 2.0,
+            p95: mae * 3.0,
+            max: mae * 4.0,
+        };
+        FlightMetrics {
+            per_flight: vec![(name.into(), m)],
+            overall: m,
+        }
+    }
+
+    fn entry(model: &str, angle: Angle, seed: Option<u64>, mae: f64, int8: Option<f64>) -> Entry {
+        Entry {
+            model: model.into(),
+            angle,
+            features: "table1".into(),
+            seed,
+            float: fm("t1", mae),
+            int8: int8.map(|x| fm("t1", x)),
+            seconds: 0.0,
+        }
+    }
+
+    fn report() -> Report {
+        let mut entries = Vec::new();
+        for (a, k) in [(Angle::Alpha, 1.0), (Angle::Beta, 2.0)] {
+            entries.push(entry(LINEAR, a, None, 0.5 * k, None));
+            entries.push(entry(GB, a, None, 0.2 * k, None));
+            entries.push(entry(MLP, a, Some(1), 0.3 * k, None));
+            entries.push(entry(MLP, a, Some(2), 0.1 * k, None));
+            entries.push(entry(CASCADE, a, Some(1), 0.15 * k, Some(0.16 * k)));
+            entries.push(entry(CASCADE, a, Some(2), 0.25 * k, Some(0.26 * k)));
+        }
+        Report {
+            dataset: "d".into(),
+            manifest_sha256: "h".into(),
+            preset: None,
+            config: "small".into(),
+            epochs: 1,
+            seeds: vec![1, 2],
+            features: "table1".into(),
+            split: Split {
+                train: vec![("a".into(), 5)],
+                val: vec![("b".into(), 5)],
+                test: vec![("t1".into(), 10)],
+            },
+            entries,
+        }
+    }
+
+    #[test]
+    fn rows_average_seeds_and_keep_int8_separate() {
+        let r = report();
+        let rows = r.rows(None);
+        assert_eq!(rows.len(), 5);
+        assert_eq!(rows[0].label, LINEAR);
+        assert!((rows[2].alpha.mae - 0.2).abs() < 1e-12); // MLP mean of 0.3, 0.1
+        assert!((rows[3].alpha.mae - 0.2).abs() < 1e-12); // cascade float mean of 0.15, 0.25
+        assert!((rows[4].beta.mae - 0.42).abs() < 1e-12); // cascade int8 β mean of 0.32, 0.52
+        assert!((rows[4].beta.max - 1.68).abs() < 1e-12);
+        assert_eq!(r.rows(Some("t1")), rows);
+        assert_eq!(r.rows(Some("nope"))[0].alpha.n, 0);
+    }
+
+    #[test]
+    fn ranking_and_spread() {
+        let r = report();
+        let rank = r.ranking(Angle::Alpha);
+        assert!(rank.windows(2).all(|w| w[0].1 <= w[1].1));
+        assert_eq!(rank[0].0, GB);
+        assert_eq!(rank.last().unwrap().0, LINEAR);
+        let (m, sp) = mean_spread(&r.seed_maes(MLP, Angle::Beta, "table1", false));
+        assert!((m - 0.4).abs() < 1e-12 && (sp - 0.2).abs() < 1e-12);
+        let md = r.markdown("cmd", "machine", None);
+        assert!(md.contains("| Gradient boosting | 0.200 | 0.400 | 0.600 | 0.800 | 0.400 |"));
+        assert!(md.contains("0.200 ± 0.100"));
+    }
+}
