@@ -344,6 +344,23 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
         path,
         source,
     })?;
+    // Record the pictures and the report in the manifest too, so every file of the dataset is hashed.
+    let mut manifest = manifest;
+    for name in [
+        "envelope.png",
+        "alpha_hist.png",
+        "beta_hist.png",
+        "sample_flight.png",
+        "dataset.md",
+    ] {
+        let p = dir.join(name);
+        if p.is_file() {
+            manifest
+                .files
+                .insert(name.to_string(), super::sha256_file(&p)?);
+        }
+    }
+    manifest.write(dir)?;
     Ok(report)
 }
 

@@ -1,0 +1,48 @@
+//! The `ci` preset end to end: maneuver files, flights, manifest, hashes, report (a few seconds).
+
+use hil_sim::dataset::{self, Flight, Manifest, Split};
+use hil_sim::maneuver::Preset;
+use hil_sim::sensors::SensorConfig;
+
+#[test]
+fn ci_preset_writes_a_consistent_dataset() {
+    let dir = std::env::temp_dir().join(format!("hil-data-gen-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let m = dataset::generate(Preset::Ci, 9, &dir, &SensorConfig::default(), 2, None).unwrap();
+    let report = dataset::report::write_report(&dir).unwrap();
+    let back = Manifest::read(&dir).unwrap();
+    assert_eq!(back.flights, m.flights);
+    assert_eq!(back.format, 1);
+    assert_eq!(back.preset, "ci");
+    assert!(!back.jsbsim_version.is_empty());
+    assert_eq!(m.flights.len(), 5);
+    assert_eq!(
+        m.flights.iter().filter(|f| f.split == Split::Test).count(),
+        1
+    );
+    for f in &m.flights {
+        let path = dir.join(&f.file);
+        assert_eq!(dataset::sha256_file(&path).unwrap(), f.sha256, "{}", f.file);
+        let flight = Flight::read_csv(&path).unwrap();
+        assert_eq!(flight.samples.len(), f.samples);
+        if f.cut.is_none() {
+            assert_eq!(f.samples, 3600, "{} runs its 180 s", f.name);
+        }
+        assert!(dir.join(format!("{}.xml", f.name)).is_file());
+        assert!(dir.join(format!("{}_init.xml", f.name)).is_file());
+    }
+    for (name, sha) in &back.files {
+        assert_eq!(
+            &dataset::sha256_file(&dir.join(name)).unwrap(),
+            sha,
+            "{name}"
+        );
+    }
+    assert!(back.files.contains_key("envelope.png") && back.files.contains_key("dataset.md"));
+    // The high-α profile is what puts training data above 15°.
+    let over15: f64 = report.train.alpha_band_share[4..].iter().sum();
+    assert!(over15 > 0.03, "share above 15° α: {over15}");
+    let shares: f64 = report.train.alpha_band_share.iter().sum();
+    assert!((shares - 1.0).abs() < 1e-9);
+    std::fs::remove_dir_all(&dir).ok();
+}
