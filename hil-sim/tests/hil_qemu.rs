@@ -1,5 +1,6 @@
 //! The flight image in QEMU answers exactly like the in-process firmware. Needs `cargo fw` and
-//! qemu-system-arm, so it is ignored by default: `cargo test -p hil-sim --release --test hil_qemu -- --ignored`.
+//! qemu-system-arm (both installed by `scripts/bootstrap` + `cargo fw`; `scripts/test` builds the image
+//! before the tests). Without them it fails with the command to run, never skips.
 
 use estimator_core::{CHANNELS, Channel, SensorFrame};
 use hil_sim::runner::target::default_elf;
@@ -33,7 +34,6 @@ fn samples(n: u16) -> Vec<Sample> {
 }
 
 #[test]
-#[ignore = "needs `cargo fw` and qemu-system-arm"]
 fn qemu_estimates_equal_host_bit_for_bit() {
     let s = samples(200);
     let cfg = RunConfig::default();

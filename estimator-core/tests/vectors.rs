@@ -1,0 +1,77 @@
+//! Host parity: the compiled-in model reproduces the trainer's test vectors, whose expected outputs
+//! come from the trainer's independent i64 reference (trainer/src/quant.rs), not from this crate.
+//! `ESTIMATOR_VECTORS=/path` at build time checks another export (set with `ESTIMATOR_WEIGHTS`).
+
+use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, SensorFrame};
+
+const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
+
+#[test]
+fn compiled_in_model_matches_the_trainer_vectors() {
+    if !estimator_core::model::HAS_MODEL {
+        panic!("this build has no weights: run `trainer train` (see README) before the tests");
+    }
+    let path = VECTORS.map(String::from).unwrap_or_else(|| {
+        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/vectors/shipped.txt").to_string()
+    });
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("read {path}: {e}"));
+    let mut checked = 0;
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
+        let v: Vec<i64> = line
+            .split_whitespace()
+            .map(|t| t.parse().expect("integer"))
+            .collect();
+        assert_eq!(v.len(), 3 + CHANNELS + 6, "malformed vector line: {line}");
+        let raw: [i32; CHANNELS] = core::array::from_fn(|i| v[3 + i] as i32);
+        let frame = SensorFrame {
+            seq: v[0] as u16,
+            time_ms: v[1] as u32,
+            raw,
+            valid: v[2] as u16,
+        };
+        let values = FeatureValues::compute(&frame);
+        let o = &v[3 + CHANNELS..];
+        let want_alpha = (o[0] as i32, o[1] as i32, o[2] != 0);
+        let want_beta = (o[3] as i32, o[4] as i32, o[5] != 0);
+        use estimator_core::AngleNet;
+        #[cfg(estimator_weights)]
+        {
+            assert_eq!(
+                estimator_core::model::ALPHA.run(&values),
+                want_alpha,
+                "alpha, line: {line}"
+            );
+            assert_eq!(
+                estimator_core::model::BETA.run(&values),
+                want_beta,
+                "beta, line: {line}"
+            );
+        }
+        // The full step on a fresh estimator gives the same numbers when every channel is valid.
+        if frame.valid & estimator_core::channels::ALL_VALID == estimator_core::channels::ALL_VALID
+        {
+            let e = Estimator::shipped().step(&frame);
+            assert_eq!(
+                (e.w_aero_mms, e.alpha_mdeg),
+                (want_alpha.0, want_alpha.1),
+                "step alpha: {line}"
+            );
+            assert_eq!(
+                (e.v_aero_mms, e.beta_mdeg),
+                (want_beta.0, want_beta.1),
+                "step beta: {line}"
+            );
+            assert_eq!(
+                e.flags.has(Flags::OUT_OF_ENVELOPE),
+                want_alpha.2 || want_beta.2,
+                "flags: {line}"
+            );
+        }
+        let _ = &values;
+        checked += 1;
+    }
+    assert!(checked >= 100, "only {checked} vectors in {path}");
+}
