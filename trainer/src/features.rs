@@ -158,6 +158,25 @@ mod tests {
     }
 
     #[test]
+    fn only_feature_names_are_accepted() {
+        // Dataset columns that are neither air data nor a Feature (time, sequence, typos) are refused
+        // with a typed error; every Feature::ALL name round-trips.
+        for col in ["time_s", "seq", "", "ALPHA_DEG", "vt", "qbar", "w_aero"] {
+            assert!(
+                matches!(parse_feature(col), Err(Error::UnknownFeature(..))),
+                "{col:?}"
+            );
+        }
+        for f in Feature::ALL {
+            assert_eq!(parse_feature(f.name()).unwrap(), f);
+        }
+        assert!(matches!(
+            FeatureSet::parse("beta=rudder_deg,qbar_pa"),
+            Err(Error::Leakage(c)) if c == "qbar_pa"
+        ));
+    }
+
+    #[test]
     fn table1_and_custom_sets_parse() {
         let t = FeatureSet::parse("table1").unwrap();
         assert_eq!((t.alpha.len(), t.beta.len()), (10, 5));

@@ -141,7 +141,11 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
         .x_desc(xlabel)
         .y_labels(n)
         .y_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) => names.get(n - 1 - *i).cloned().unwrap_or_default(),
+            SegmentValue::CenterOf(i) => (n - 1)
+                .checked_sub(*i)
+                .and_then(|k| names.get(k))
+                .cloned()
+                .unwrap_or_default(),
             _ => String::new(),
         })
         .draw()
@@ -179,12 +183,12 @@ pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Re
         .y_label_area_size(170)
         .build_cartesian_2d((0..n).into_segmented(), (0..n).into_segmented())
         .map_err(perr)?;
-    let label = |v: &SegmentValue<usize>| match v {
-        SegmentValue::CenterOf(i) => names.get(*i).cloned().unwrap_or_default(),
-        _ => String::new(),
-    };
     let ylabel = |v: &SegmentValue<usize>| match v {
-        SegmentValue::CenterOf(i) => names.get(n - 1 - *i).cloned().unwrap_or_default(),
+        SegmentValue::CenterOf(i) => (n - 1)
+            .checked_sub(*i)
+            .and_then(|k| names.get(k))
+            .cloned()
+            .unwrap_or_default(),
         _ => String::new(),
     };
     chart
@@ -192,16 +196,21 @@ pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Re
         .disable_mesh()
         .x_labels(n)
         .y_labels(n)
-        .x_label_formatter(&label)
+        .x_label_formatter(&|_| String::new())
         .y_label_formatter(&ylabel)
-        .x_label_style(
-            ("sans-serif", 12)
-                .into_font()
-                .transform(FontTransform::Rotate90),
-        )
         .y_label_style(("sans-serif", 12))
         .draw()
         .map_err(perr)?;
+    // Column names drawn downwards from the bottom edge (rotated mesh labels get clipped).
+    let rotated = ("sans-serif", 12)
+        .into_font()
+        .transform(FontTransform::Rotate90)
+        .color(&BLACK);
+    for (j, name) in names.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(SegmentValue::CenterOf(j), SegmentValue::Exact(0)));
+        root.draw(&Text::new(name.clone(), (px + 6, py + 6), rotated.clone()))
+            .map_err(perr)?;
+    }
     for (i, row) in m.iter().enumerate() {
         for (j, v) in row.iter().enumerate() {
             let v = if v.is_finite() {
