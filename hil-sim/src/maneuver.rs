@@ -360,10 +360,11 @@ pub fn generate(
         wind * wdir.sin(),
     );
 
-    // Zone logic, evaluated every step in this order (the command tables go just before it).
+    // Zone logic, evaluated every step in this order (the command tables go just before it). The
+    // low-altitude limit looks 8 s ahead along the sink rate: fast dives overshot a plain height limit.
     let laws_at = s.len();
     let trigger = format!(
-        "<or><lt><property>position/h-agl-ft</property><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
+        "<or><lt><sum><property>position/h-agl-ft</property><product><value>8</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
         p.min_agl_ft,
         p.ceiling_ft,
         p.max_bank_deg,
