@@ -368,24 +368,27 @@ fn cmd_report(
         &machine(),
         ablation.as_ref().map(|a| a.name.as_str()),
     );
+    if ds.preset.as_deref() != Some("paper") {
+        let rows = ds.rows(trainer::data::Role::Train) + ds.rows(trainer::data::Role::Val);
+        let warn = format!(
+            "> **Not the paper experiment.** Dataset preset `{}`: {rows} training rows ({:.1} min of \
+             flight at 20 Hz) vs the paper's 288 000 (4 h). These figures check the pipeline and \
+             compare the model families on one small split; rerun \
+             `trainer report --data out/data/paper --config paper` for the paper-scale Table 2.\n\n",
+            ds.preset.as_deref().unwrap_or("?"),
+            rows as f64 / 20.0 / 60.0
+        );
+        let at = md.find("\n\n").map(|i| i + 2).unwrap_or(0);
+        md.insert_str(at, &warn);
+    }
+    md.push_str("\n## Plots (first seed, main feature set)\n\n");
     md.push_str(
-        "
-## Plots (first seed, main feature set)
-
-",
+        "Learning curves (train/val MSE of both heads per epoch, paper Fig. 9):\n\n\
+         ![learning curves](training_learning_curves.png)\n\n",
     );
     md.push_str(
-        "Learning curves (train/val MSE of both heads per epoch, paper Fig. 9):
-
-![learning curves](training_learning_curves.png)
-
-",
-    );
-    md.push_str(
-        "Predicted vs truth on the test flights (paper Fig. 11–12):
-
-![test time series](training_test_timeseries.png)
-",
+        "Predicted vs truth on the test flights (paper Fig. 11–12):\n\n\
+         ![test time series](training_test_timeseries.png)\n",
     );
     let bench = out.join("bench_epoch.json");
     if let Ok(text) = std::fs::read_to_string(&bench) {
@@ -396,11 +399,10 @@ fn cmd_report(
             )
         })?;
         md.push_str(&format!(
-            "
-## Benchmark: paper-size α cascade epoch time
-
-`{}` on {}: **{:.2} s per epoch**              (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation pass,              α cascade 2 × {}-512-256-128-64-32-1, batch {}; ≈ {:.1} s per epoch scaled linearly to the              paper's 288 000 rows.
-",
+            "\n## Benchmark: paper-size α cascade epoch time\n\n`{}` on {}: **{:.2} s per epoch** \
+             (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation \
+             pass, α cascade 2 × {}-512-256-128-64-32-1, batch {}; ≈ {:.1} s per epoch scaled \
+             linearly to the paper's 288 000 rows.\n",
             v["command"].as_str().unwrap_or("?"),
             v["machine"].as_str().unwrap_or("?"),
             v["mean_epoch_s"].as_f64().unwrap_or(f64::NAN),

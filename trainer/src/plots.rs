@@ -28,6 +28,24 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// Tick label with at most 4 significant digits and no float noise ("0.7", "1e-3", "120").
+pub fn fmt_tick(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.1e}");
+    }
+    let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// One line of a line chart.
 pub struct Series<'a> {
     pub name: String,
@@ -78,16 +96,20 @@ pub fn line_panels(
                     .configure_mesh()
                     .x_desc(*xl)
                     .y_desc(*yl)
+                    .x_label_formatter(&|v| fmt_tick(*v))
+                    .y_label_formatter(&|v| fmt_tick(*v))
                     .draw()
                     .map_err(perr)?;
                 for (k, s) in series.iter().enumerate() {
                     let c = COLORS[k % COLORS.len()];
+                    // Dense series (time histories) get thin lines so overlapping ones stay legible.
+                    let width = if s.points.len() > 1000 { 1 } else { 2 };
                     chart
                         .draw_series(LineSeries::new(
                             s.points.iter().copied().filter(|(x, y)| {
                                 x.is_finite() && y.is_finite() && (!*logy || *y > 0.0)
                             }),
-                            c.stroke_width(2),
+                            c.stroke_width(width),
                         ))
                         .map_err(perr)?
                         .label(s.name.clone())
@@ -245,4 +267,18 @@ pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Re
     }
     root.present().map_err(perr)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn ticks_have_no_float_noise() {
+        use super::fmt_tick;
+        assert_eq!(fmt_tick(0.7000000000000001), "0.7");
+        assert_eq!(fmt_tick(0.30000000000000004), "0.3");
+        assert_eq!(fmt_tick(120.0), "120");
+        assert_eq!(fmt_tick(-2.5), "-2.5");
+        assert_eq!(fmt_tick(0.0123456), "0.01235");
+        assert_eq!(fmt_tick(2.0e-5), "2.0e-5");
+    }
 }
