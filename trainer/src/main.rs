@@ -355,7 +355,13 @@ fn cmd_report(
         &cfg,
         |a, b| {
             plot_curves(&out.join("training_learning_curves.png"), &[a, b])?;
-            plot_series(&out.join("training_test_timeseries.png"), &ds, &[a, b], 3)
+            plot_series(
+                &out.join("training_test_timeseries_alpha.png"),
+                &ds,
+                &[a],
+                2,
+            )?;
+            plot_series(&out.join("training_test_timeseries_beta.png"), &ds, &[b], 2)
         },
         |line| eprintln!("{line}"),
     )?;
@@ -368,6 +374,14 @@ fn cmd_report(
         &machine(),
         ablation.as_ref().map(|a| a.name.as_str()),
     );
+    if size != Size::Paper {
+        let at = md.find("\n\n").map(|i| i + 2).unwrap_or(0);
+        md.insert_str(
+            at,
+            "> **Small networks** (α 32-16, β 16-8 per part), not the paper's sizes: \
+             `--config paper` trains α 512-256-128-64-32 and β 32-16-8-4-2 per part.\n\n",
+        );
+    }
     if ds.preset.as_deref() != Some("paper") {
         let rows = ds.rows(trainer::data::Role::Train) + ds.rows(trainer::data::Role::Val);
         let warn = format!(
@@ -387,8 +401,9 @@ fn cmd_report(
          ![learning curves](training_learning_curves.png)\n\n",
     );
     md.push_str(
-        "Predicted vs truth on the test flights (paper Fig. 11–12):\n\n\
-         ![test time series](training_test_timeseries.png)\n",
+        "Predicted vs truth on the first two test flights (paper Fig. 11–12):\n\n\
+         ![α test time series](training_test_timeseries_alpha.png)\n\n\
+         ![β test time series](training_test_timeseries_beta.png)\n",
     );
     let bench = out.join("bench_epoch.json");
     if let Ok(text) = std::fs::read_to_string(&bench) {
