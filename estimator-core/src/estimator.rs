@@ -3,7 +3,7 @@
 //! # What bad input gives
 //! | input | result |
 //! |---|---|
-//! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`, the last good estimate is held (`HELD`), or zeros with `NO_ESTIMATE` if there is none |
+//! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
 //! | a noisy channel (IMU, GPS) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR`, held as above |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | GPS speed below [`MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
@@ -36,7 +36,8 @@ impl Flags {
     pub const ALPHA_HELD: u16 = 1 << 3;
     /// β is the last good value, not computed from this frame.
     pub const BETA_HELD: u16 = 1 << 4;
-    /// No good estimate has been computed yet: the angles are zero and meaningless.
+    /// An angle that had to be held (`ALPHA_HELD`/`BETA_HELD`) had no good value yet: that angle and
+    /// its intermediate are zero and meaningless. The other angle may still be live.
     pub const NO_ESTIMATE: u16 = 1 << 5;
     /// The estimator has no compiled-in model (a build without weights).
     pub const NO_MODEL: u16 = 1 << 6;
