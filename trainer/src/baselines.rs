@@ -3,7 +3,7 @@
 use crate::data::{Dataset, Flight, Role, feature_si};
 use crate::error::{Error, Result};
 use crate::metrics::FlightMetrics;
-use crate::model::{Matrix, Mlp, TrainConfig, predict_all, train};
+use crate::model::{Mlp, TrainConfig, predict_all, train};
 use crate::prep::{Angle, Prep};
 use estimator_core::Feature;
 
@@ -219,8 +219,6 @@ pub fn run_baseline(
         Baseline::Mlp => {
             let va: Vec<&Flight> = ds.flights(Role::Val).collect();
             let prep = Prep::fit(angle, features, &tr);
-            let (x, ym, yo) = prep.matrix(&tr);
-            let (vx, vym, vyo) = prep.matrix(&va);
             let n_in = prep.n_inputs();
             let mut dims = vec![n_in];
             dims.extend_from_slice(hidden);
@@ -228,22 +226,11 @@ pub fn run_baseline(
             let (model, _) = train(
                 |dev| Mlp::new(&dims, dev),
                 cfg,
-                &Matrix {
-                    x: &x,
-                    ym: &ym,
-                    yo: &yo,
-                    n_in,
-                },
-                &Matrix {
-                    x: &vx,
-                    ym: &vym,
-                    yo: &vyo,
-                    n_in,
-                },
+                &prep.matrix(&tr),
+                &prep.matrix(&va),
             );
             Ok(test_metrics(ds, angle, |f| {
-                let (x, _, _) = prep.matrix(&[f]);
-                let (_, po) = predict_all(&model, &x, n_in);
+                let (_, po) = predict_all(&model, &prep.inputs(&[f]), n_in);
                 po.iter().map(|z| prep.out_deg(*z as f64)).collect()
             }))
         }

@@ -1,31 +1,11 @@
-//! Dataset loading (format: docs/architecture.md) and the exact estimator input contract: every row
-//! becomes `SensorFrame::from_si` of the 16 sensed SI columns, then `FeatureValues::compute`.
-use crate::error::{Error, Result, io};
-use estimator_core::{CHANNELS, Channel, FEATURE_COUNT, FeatureValues, SensorFrame};
-use serde::Deserialize;
-use sha2::{Digest, Sha256};
+//! Datasets for training, read through `hil_sim::dataset` (the one reader of the format in
+//! docs/architecture.md), and the exact estimator input contract: every row becomes the frame the link
+//! delivers (`hil_sim::frames::sample_to_frame`, i.e. `SensorFrame::from_si` of the 16 sensed SI
+//! columns), then `FeatureValues::compute`.
+use crate::error::{Error, Result};
+use estimator_core::{FEATURE_COUNT, FeatureValues, SensorFrame};
+use hil_sim::dataset::{Manifest, Split, sha256_file};
 use std::path::{Path, PathBuf};
-
-#[derive(Debug, Clone, Deserialize)]
-pub struct ManifestFlight {
-    pub file: String,
-    pub name: String,
-    pub split: String,
-    #[serde(default)]
-    pub profile: Option<String>,
-    #[serde(default)]
-    pub seed: Option<u64>,
-    #[serde(default)]
-    pub cut: Option<String>,
-}
-
-#[derive(Debug, Clone, Deserialize)]
-pub struct Manifest {
-    pub format: u32,
-    #[serde(default)]
-    pub preset: Option<String>,
-    pub flights: Vec<ManifestFlight>,
-}
 
 /// Which part of the experiment a flight belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -114,18 +94,12 @@ impl Dataset {
     /// Loads every flight of `dir/manifest.json`. `val_fraction` of the training flights (by flight,
     /// evenly spread) become validation flights.
     pub fn load(dir: &Path, val_fraction: f64) -> Result<Dataset> {
-        let mpath = dir.join("manifest.json");
-        let bytes = std::fs::read(&mpath).map_err(io(&mpath))?;
-        let manifest: Manifest =
-            serde_json::from_slice(&bytes).map_err(|source| Error::Manifest {
-                path: mpath.clone(),
-                source,
-            })?;
-        let manifest_sha256 = hex(&Sha256::digest(&bytes));
+        let manifest = Manifest::read(dir)?;
+        let manifest_sha256 = sha256_file(&dir.join("manifest.json"))?;
         let train_names: Vec<&str> = manifest
             .flights
             .iter()
-            .filter(|f| f.split == "train")
+            .filter(|f| f.split == Split::Train)
             .map(|f| f.name.as_str())
             .collect();
         let val: Vec<&str> = validation_indices(train_names.len(), val_fraction)
@@ -134,19 +108,10 @@ impl Dataset {
             .collect();
         let mut flights = Vec::new();
         for mf in &manifest.flights {
-            let role = match mf.split.as_str() {
-                "train" if val.contains(&mf.name.as_str()) => Role::Val,
-                "train" => Role::Train,
-                "test" => Role::Test,
-                other => {
-                    return Err(Error::Split(
-                        dir.to_path_buf(),
-                        format!(
-                            "flight {} has split {other:?}: expected train or test",
-                            mf.name
-                        ),
-                    ));
-                }
+            let role = match mf.split {
+                Split::Train if val.contains(&mf.name.as_str()) => Role::Val,
+                Split::Train => Role::Train,
+                Split::Test => Role::Test,
             };
             flights.push(load_flight(&dir.join(&mf.file), &mf.name, role)?);
         }
@@ -161,7 +126,7 @@ impl Dataset {
         Ok(Dataset {
             dir: dir.to_path_buf(),
             manifest_sha256,
-            preset: manifest.preset,
+            preset: Some(manifest.preset),
             flights,
         })
     }
@@ -179,71 +144,31 @@ pub fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// Reads one flight CSV.
+/// Reads one flight CSV and derives the estimator's inputs from it.
 pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
-    let csv_err = |source| Error::Csv {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut rd = csv::Reader::from_path(path).map_err(csv_err)?;
-    let headers = rd.headers().map_err(csv_err)?.clone();
-    let col = |name: &str| -> Result<usize> {
-        headers
-            .iter()
-            .position(|h| h.trim() == name)
-            .ok_or_else(|| Error::MissingColumn {
-                path: path.to_path_buf(),
-                column: name.to_string(),
-            })
-    };
-    let ch_cols: Vec<usize> = Channel::ALL
-        .iter()
-        .map(|c| col(c.name()))
-        .collect::<Result<_>>()?;
-    let t_col = col("time_s")?;
-    let truth_cols: Vec<usize> = Target::ALL
-        .iter()
-        .map(|t| col(t.column()))
-        .collect::<Result<_>>()?;
+    let csv = hil_sim::dataset::Flight::read_csv(path)?;
     let mut fl = Flight {
         name: name.to_string(),
         role,
-        time_s: Vec::new(),
-        frames: Vec::new(),
-        features: Vec::new(),
+        time_s: Vec::with_capacity(csv.samples.len()),
+        frames: Vec::with_capacity(csv.samples.len()),
+        features: Vec::with_capacity(csv.samples.len()),
         truth: Default::default(),
     };
-    for (i, rec) in rd.records().enumerate() {
-        let rec = rec.map_err(csv_err)?;
-        let num = |c: usize| -> Result<f64> {
-            let s = rec.get(c).unwrap_or("").trim();
-            s.parse::<f64>().map_err(|_| Error::BadNumber {
-                path: path.to_path_buf(),
-                line: i + 2,
-                column: headers.get(c).unwrap_or("?").to_string(),
-                value: s.to_string(),
-            })
-        };
-        let t = num(t_col)?;
-        let mut si = [0f64; CHANNELS];
-        for (v, c) in si.iter_mut().zip(&ch_cols) {
-            *v = num(*c)?;
-        }
-        let frame = frame_from_row(i, t, &si);
+    for (i, sample) in csv.samples.iter().enumerate() {
+        let frame = hil_sim::frames::sample_to_frame(i as u16, sample);
         fl.features.push(FeatureValues::compute(&frame));
         fl.frames.push(frame);
-        fl.time_s.push(t);
-        for (k, c) in truth_cols.iter().enumerate() {
-            fl.truth[k].push(num(*c)?);
+        fl.time_s.push(sample.time_s);
+        let t = &sample.truth;
+        for (k, v) in [t.alpha_deg, t.beta_deg, t.w_aero_mps, t.v_aero_mps]
+            .into_iter()
+            .enumerate()
+        {
+            fl.truth[k].push(v);
         }
     }
     Ok(fl)
-}
-
-/// The frame the link would deliver for dataset row `index` (sequence number wraps like the wire's).
-pub fn frame_from_row(index: usize, time_s: f64, si: &[f64; CHANNELS]) -> SensorFrame {
-    let time_ms = (time_s * 1000.0).round().max(0.0) as u32;
-    SensorFrame::from_si(index as u16, time_ms, si)
 }
 
 /// The float value of a feature the model is trained on: the quantized raw value times its LSB.
@@ -259,6 +184,7 @@ pub fn all_feature_indices() -> std::ops::Range<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use estimator_core::{CHANNELS, Channel};
 
     #[test]
     fn validation_is_held_out_by_flight_and_never_everything() {
@@ -275,7 +201,12 @@ mod tests {
         let mut si = [0.0; CHANNELS];
         si[Channel::GpsSpeed.index()] = 201.2345;
         si[Channel::AccelZ.index()] = -9.80665;
-        let f = frame_from_row(70_000, 12.3456, &si);
+        let sample = hil_sim::dataset::Sample {
+            time_s: 12.3456,
+            truth: Default::default(),
+            sensed: si,
+        };
+        let f = hil_sim::frames::sample_to_frame(70_000usize as u16, &sample);
         assert_eq!(f, SensorFrame::from_si(70_000u32 as u16, 12_346, &si));
         assert_eq!(f.get(Channel::GpsSpeed), 201_235); // 201.2345 m/s → mm/s, rounded
     }

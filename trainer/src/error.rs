@@ -8,24 +8,11 @@ pub enum Error {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// A dataset that does not read (manifest, CSV, columns, numbers).
     #[error(
-        "{path} is not a valid dataset manifest: {source} (generate one with `hil-sim generate --out DIR`)"
+        "{0} (generate a dataset with `hil-sim generate --out DIR`; format in docs/architecture.md)"
     )]
-    Manifest {
-        path: PathBuf,
-        source: serde_json::Error,
-    },
-    #[error("{path}: {source}")]
-    Csv { path: PathBuf, source: csv::Error },
-    #[error("{path}: missing column `{column}` (dataset format in docs/architecture.md)")]
-    MissingColumn { path: PathBuf, column: String },
-    #[error("{path} line {line}: column `{column}` is not a number: {value:?}")]
-    BadNumber {
-        path: PathBuf,
-        line: usize,
-        column: String,
-        value: String,
-    },
+    Dataset(#[from] hil_sim::dataset::DatasetError),
     #[error("dataset {0}: {1}")]
     Split(PathBuf, String),
     #[error("unknown feature `{0}` (known: {1})")]

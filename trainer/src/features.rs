@@ -3,26 +3,9 @@ use crate::error::{Error, Result};
 use estimator_core::{Channel, Feature};
 
 /// Dataset truth columns straight from the simulator: air data (what the model estimates, or derived
-/// from it) and the other truth values. None of them can ever be a model input.
-pub const AIR_DATA_COLUMNS: [&str; 17] = [
-    "alpha_deg",
-    "beta_deg",
-    "u_aero_mps",
-    "v_aero_mps",
-    "w_aero_mps",
-    "vt_mps",
-    "mach",
-    "qbar_pa",
-    "alt_msl_m",
-    "p_true_rps",
-    "q_true_rps",
-    "r_true_rps",
-    "phi_deg",
-    "theta_deg",
-    "psi_deg",
-    "nz_g",
-    "mass_kg",
-];
+/// from it) and the other truth values. None of them can ever be a model input. The list is the
+/// dataset format's own (`hil_sim::dataset::TRUTH_COLUMNS`), so a new truth column is guarded too.
+pub use hil_sim::dataset::TRUTH_COLUMNS as AIR_DATA_COLUMNS;
 
 /// Parses a feature name. Air-data names are refused with [`Error::Leakage`] before any lookup, and
 /// only names of [`Feature::ALL`] (sensed channels and features derived from them) are accepted.

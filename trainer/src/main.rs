@@ -605,7 +605,7 @@ fn shap_section(_: &Dataset, _: &Path, _: &ShapArgs) -> Result<String> {
 
 fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()> {
     use trainer::data::Role;
-    use trainer::model::{Cascade, Matrix, train};
+    use trainer::model::{Cascade, train};
     use trainer::prep::Prep;
     if epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
@@ -616,8 +616,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     let tr: Vec<_> = ds.flights(Role::Train).collect();
     let va: Vec<_> = ds.flights(Role::Val).collect();
     let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
-    let (x, ym, yo) = prep.matrix(&tr);
-    let (vx, vym, vyo) = prep.matrix(&va);
+    let (train_m, val_m) = (prep.matrix(&tr), prep.matrix(&va));
     let n_in = prep.n_inputs();
     let cfg = TrainConfig {
         epochs,
@@ -630,28 +629,18 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     let (_, curves) = train(
         |d| Cascade::new(n_in, Size::Paper.hidden(Angle::Alpha), d),
         &cfg,
-        &Matrix {
-            x: &x,
-            ym: &ym,
-            yo: &yo,
-            n_in,
-        },
-        &Matrix {
-            x: &vx,
-            ym: &vym,
-            yo: &vyo,
-            n_in,
-        },
+        &train_m,
+        &val_m,
     );
     let rest = &curves.epoch_s[1..];
     let mean = rest.iter().sum::<f64>() / rest.len() as f64;
-    let rows = yo.len();
+    let rows = train_m.rows();
     let v = serde_json::json!({
         "command": std::env::args().collect::<Vec<_>>().join(" "),
         "machine": machine(),
         "dataset": data.display().to_string(),
         "epochs": epochs, "batch": batch, "n_in": n_in,
-        "train_rows": rows, "val_rows": vyo.len(),
+        "train_rows": rows, "val_rows": val_m.rows(),
         "epoch_s": curves.epoch_s,
         "first_epoch_s": curves.epoch_s[0],
         "mean_epoch_s": mean,

@@ -188,14 +188,14 @@ impl Net for Mlp {
 }
 
 /// Rows of a design matrix with both targets.
-pub struct Matrix<'a> {
-    pub x: &'a [f32],
-    pub ym: &'a [f32],
-    pub yo: &'a [f32],
+pub struct Matrix {
+    pub x: Vec<f32>,
+    pub ym: Vec<f32>,
+    pub yo: Vec<f32>,
     pub n_in: usize,
 }
 
-impl Matrix<'_> {
+impl Matrix {
     pub fn rows(&self) -> usize {
         self.yo.len()
     }
@@ -239,17 +239,17 @@ pub fn predict_all<M: Net>(model: &M, x: &[f32], n_in: usize) -> (Vec<f32>, Vec<
 }
 
 fn val_losses<M: Net>(model: &M, val: &Matrix) -> [f64; 2] {
-    let (pm, po) = predict_all(model, val.x, val.n_in);
+    let (pm, po) = predict_all(model, &val.x, val.n_in);
     let n = val.rows().max(1) as f64;
     let m = pm
         .iter()
-        .zip(val.ym)
+        .zip(&val.ym)
         .map(|(p, y)| ((p - y) as f64).powi(2))
         .sum::<f64>()
         / n;
     let o = po
         .iter()
-        .zip(val.yo)
+        .zip(&val.yo)
         .map(|(p, y)| ((p - y) as f64).powi(2))
         .sum::<f64>()
         / n;

@@ -1,7 +1,7 @@
 //! Train → quantize → evaluate one angle's cascade; evaluate the compiled-in model.
 use crate::data::{Dataset, Flight, Role};
 use crate::metrics::FlightMetrics;
-use crate::model::{Cascade, Curves, FloatLayer, Matrix, TrainConfig, predict_all, train};
+use crate::model::{Cascade, Curves, FloatLayer, TrainConfig, predict_all, train};
 use crate::prep::{Angle, Prep};
 use crate::quant::{QCascade, quantize_cascade};
 use estimator_core::{Estimator, Feature};
@@ -89,25 +89,13 @@ pub fn train_angle(
     let tr = flights(ds, Role::Train);
     let va = flights(ds, Role::Val);
     let prep = Prep::fit(angle, features, &tr);
-    let (x, ym, yo) = prep.matrix(&tr);
-    let (vx, vym, vyo) = prep.matrix(&va);
     let n_in = prep.n_inputs();
     let hidden = size.hidden(angle);
     let (model, curves) = train(
         |d| Cascade::new(n_in, hidden, d),
         cfg,
-        &Matrix {
-            x: &x,
-            ym: &ym,
-            yo: &yo,
-            n_in,
-        },
-        &Matrix {
-            x: &vx,
-            ym: &vym,
-            yo: &vyo,
-            n_in,
-        },
+        &prep.matrix(&tr),
+        &prep.matrix(&va),
     );
     let part1 = model.part1.export();
     let part2 = model.part2.export();
@@ -143,8 +131,7 @@ pub fn evaluate(
     let mut fl_i = Vec::new();
     let mut series = Vec::new();
     for fl in ds.flights(Role::Test) {
-        let (x, _, _) = prep.matrix(&[fl]);
-        let (_, po) = predict_all(model, &x, prep.n_inputs());
+        let (_, po) = predict_all(model, &prep.inputs(&[fl]), prep.n_inputs());
         let pf: Vec<f64> = po.iter().map(|z| prep.out_deg(*z as f64)).collect();
         let pi: Vec<f64> = fl
             .features

@@ -1,6 +1,7 @@
 //! Normalisation shared by training, quantization and the integer reference: the float model is
 //! trained on exactly the scaling the integer `Norm`s apply (integer centers, `mult / 2^shift` slopes).
 use crate::data::{Flight, Target};
+use crate::model::Matrix;
 use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
 use estimator_core::{Feature, FeatureValues};
 
@@ -178,18 +179,32 @@ impl Prep {
     }
 
     /// Inputs and both normalised targets of every row of `flights`.
-    pub fn matrix(&self, flights: &[&Flight]) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
-        let mut x = Vec::new();
+    pub fn matrix(&self, flights: &[&Flight]) -> Matrix {
         let mut ym = Vec::new();
         let mut yo = Vec::new();
         for fl in flights {
-            for (i, v) in fl.features.iter().enumerate() {
+            let mid = fl.truth(self.angle.intermediate());
+            let out = fl.truth(self.angle.target());
+            ym.extend(mid.iter().take(fl.features.len()).map(|v| self.mid_z(*v)));
+            yo.extend(out.iter().take(fl.features.len()).map(|v| self.out_z(*v)));
+        }
+        Matrix {
+            x: self.inputs(flights),
+            ym,
+            yo,
+            n_in: self.n_inputs(),
+        }
+    }
+
+    /// Network inputs of every row of `flights` (row-major, `n_inputs()` per row).
+    pub fn inputs(&self, flights: &[&Flight]) -> Vec<f32> {
+        let mut x = Vec::new();
+        for fl in flights {
+            for v in &fl.features {
                 self.input(v, &mut x);
-                ym.push(self.mid_z(fl.truth(self.angle.intermediate())[i]));
-                yo.push(self.out_z(fl.truth(self.angle.target())[i]));
             }
         }
-        (x, ym, yo)
+        x
     }
 }
 

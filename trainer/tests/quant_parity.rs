@@ -82,12 +82,7 @@ fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
     }
     let ym: Vec<f32> = ts.iter().map(|t| prep.mid_z(t.0)).collect();
     let yo: Vec<f32> = ts.iter().map(|t| prep.out_z(t.1)).collect();
-    let m = Matrix {
-        x: &x,
-        ym: &ym,
-        yo: &yo,
-        n_in: 3,
-    };
+    let m = Matrix { x, ym, yo, n_in: 3 };
     let cfg = TrainConfig {
         epochs,
         batch: 64,
