@@ -162,14 +162,7 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
         .configure_mesh()
         .x_desc(xlabel)
         .y_labels(n)
-        .y_label_formatter(&|v| match v {
-            SegmentValue::CenterOf(i) => (n - 1)
-                .checked_sub(*i)
-                .and_then(|k| names.get(k))
-                .cloned()
-                .unwrap_or_default(),
-            _ => String::new(),
-        })
+        .y_label_formatter(&|v| reversed_label(&names, v))
         .draw()
         .map_err(perr)?;
     chart
@@ -190,6 +183,18 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
     Ok(())
 }
 
+/// Label of a segmented axis drawn top-down: segment `i` from the bottom shows `names[n - 1 - i]`.
+fn reversed_label(names: &[String], v: &SegmentValue<usize>) -> String {
+    match v {
+        SegmentValue::CenterOf(i) => (names.len().saturating_sub(1))
+            .checked_sub(*i)
+            .and_then(|k| names.get(k))
+            .cloned()
+            .unwrap_or_default(),
+        _ => String::new(),
+    }
+}
+
 /// Correlation heatmap, values in -1..=1 (blue negative, red positive).
 pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Result<()> {
     font();
@@ -205,14 +210,7 @@ pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Re
         .y_label_area_size(170)
         .build_cartesian_2d((0..n).into_segmented(), (0..n).into_segmented())
         .map_err(perr)?;
-    let ylabel = |v: &SegmentValue<usize>| match v {
-        SegmentValue::CenterOf(i) => (n - 1)
-            .checked_sub(*i)
-            .and_then(|k| names.get(k))
-            .cloned()
-            .unwrap_or_default(),
-        _ => String::new(),
-    };
+    let ylabel = |v: &SegmentValue<usize>| reversed_label(names, v);
     chart
         .configure_mesh()
         .disable_mesh()
