@@ -248,7 +248,48 @@ impl Drop for Plant {
     }
 }
 
-/// Properties read after every step, in this order (indices below).
+/// Positions of the [`WATCH`] properties in a step row.
+mod at {
+    pub const TIME: usize = 0;
+    pub const ALPHA: usize = 1;
+    pub const BETA: usize = 2;
+    pub const U_AERO: usize = 3;
+    pub const V_AERO: usize = 4;
+    pub const W_AERO: usize = 5;
+    pub const VT: usize = 6;
+    pub const MACH: usize = 7;
+    pub const QBAR: usize = 8;
+    pub const H_SL: usize = 9;
+    pub const H_AGL: usize = 10;
+    pub const P: usize = 11;
+    pub const Q: usize = 12;
+    pub const R: usize = 13;
+    pub const PHI: usize = 14;
+    pub const THETA: usize = 15;
+    pub const PSI: usize = 16;
+    pub const PDOT: usize = 17;
+    pub const QDOT: usize = 18;
+    pub const RDOT: usize = 19;
+    pub const FBX: usize = 20;
+    pub const FBY: usize = 21;
+    pub const FBZ: usize = 22;
+    pub const MASS: usize = 23;
+    pub const GPS_SPEED: usize = 24;
+    pub const ELEVATOR: usize = 25;
+    pub const AILERON: usize = 26;
+    pub const RUDDER: usize = 27;
+    pub const LEF: usize = 28;
+    pub const TEF: usize = 29;
+    pub const FLAPERON: usize = 30;
+    pub const SPEEDBRAKE: usize = 31;
+    pub const THROTTLE: usize = 32;
+}
+const _: () = assert!(
+    at::THROTTLE + 1 == WATCH.len(),
+    "every watched property has a name in `at`"
+);
+
+/// Properties read after every step, in this order (named positions in [`at`]).
 const WATCH: [&str; 33] = [
     "simulation/sim-time-sec",
     "aero/alpha-deg",
@@ -353,49 +394,49 @@ pub fn script_use(path: &Path) -> Result<ScriptUse, PlantError> {
 /// Truth at one step, in dataset units.
 fn truth_of(r: &[f64]) -> Truth {
     Truth {
-        alpha_deg: r[1],
-        beta_deg: r[2],
-        u_aero_mps: r[3] * FT_TO_M,
-        v_aero_mps: r[4] * FT_TO_M,
-        w_aero_mps: r[5] * FT_TO_M,
-        vt_mps: r[6] * FT_TO_M,
-        mach: r[7],
-        qbar_pa: r[8] * PSF_TO_PA,
-        alt_msl_m: r[9] * FT_TO_M,
-        p_true_rps: r[11],
-        q_true_rps: r[12],
-        r_true_rps: r[13],
-        phi_deg: r[14].to_degrees(),
-        theta_deg: r[15].to_degrees(),
-        psi_deg: r[16].to_degrees(),
+        alpha_deg: r[at::ALPHA],
+        beta_deg: r[at::BETA],
+        u_aero_mps: r[at::U_AERO] * FT_TO_M,
+        v_aero_mps: r[at::V_AERO] * FT_TO_M,
+        w_aero_mps: r[at::W_AERO] * FT_TO_M,
+        vt_mps: r[at::VT] * FT_TO_M,
+        mach: r[at::MACH],
+        qbar_pa: r[at::QBAR] * PSF_TO_PA,
+        alt_msl_m: r[at::H_SL] * FT_TO_M,
+        p_true_rps: r[at::P],
+        q_true_rps: r[at::Q],
+        r_true_rps: r[at::R],
+        phi_deg: r[at::PHI].to_degrees(),
+        theta_deg: r[at::THETA].to_degrees(),
+        psi_deg: r[at::PSI].to_degrees(),
         // Load factor along -z body from the total (non-gravity) force: 1 in level flight.
-        nz_g: -r[22] / (r[23] * G0_FPS2),
-        mass_kg: r[23] * SLUG_TO_KG,
+        nz_g: -r[at::FBZ] / (r[at::MASS] * G0_FPS2),
+        mass_kg: r[at::MASS] * SLUG_TO_KG,
     }
 }
 
 /// What the sensors see at one step, in SI (surfaces in degrees).
 fn sensor_input(r: &[f64]) -> SensorInput {
-    let m = r[23];
+    let m = r[at::MASS];
     SensorInput {
-        omega_rps: [r[11], r[12], r[13]],
-        omega_dot_rps2: [r[17], r[18], r[19]],
+        omega_rps: [r[at::P], r[at::Q], r[at::R]],
+        omega_dot_rps2: [r[at::PDOT], r[at::QDOT], r[at::RDOT]],
         // Specific force at the CG: total non-gravity force over mass (not accelerations/N*, which lag a step).
         f_cg_mps2: [
-            r[20] / m * FT_TO_M,
-            r[21] / m * FT_TO_M,
-            r[22] / m * FT_TO_M,
+            r[at::FBX] / m * FT_TO_M,
+            r[at::FBY] / m * FT_TO_M,
+            r[at::FBZ] / m * FT_TO_M,
         ],
-        gps_speed_mps: r[24] * FT_TO_M,
-        alt_msl_m: r[9] * FT_TO_M,
-        elevator_deg: r[25],
-        aileron_deg: r[26].to_degrees(),
-        rudder_deg: r[27],
-        lef_deg: r[28],
-        tef_deg: r[29] * TEF_DEG_PER_UNIT,
-        flaperon_deg: r[30] * FLAPERON_DEG_PER_NORM,
-        speedbrake_deg: r[31],
-        throttle_norm: r[32],
+        gps_speed_mps: r[at::GPS_SPEED] * FT_TO_M,
+        alt_msl_m: r[at::H_SL] * FT_TO_M,
+        elevator_deg: r[at::ELEVATOR],
+        aileron_deg: r[at::AILERON].to_degrees(),
+        rudder_deg: r[at::RUDDER],
+        lef_deg: r[at::LEF],
+        tef_deg: r[at::TEF] * TEF_DEG_PER_UNIT,
+        flaperon_deg: r[at::FLAPERON] * FLAPERON_DEG_PER_NORM,
+        speedbrake_deg: r[at::SPEEDBRAKE],
+        throttle_norm: r[at::THROTTLE],
     }
 }
 
@@ -462,7 +503,7 @@ pub fn fly_script_with(
         let ended = rows.len() < (SIM_HZ * 5) as usize;
         for r in &rows {
             step_count += 1;
-            let t = r[0];
+            let t = r[at::TIME];
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
                 break 'outer;
             }
@@ -470,11 +511,11 @@ pub fn fly_script_with(
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;
             }
-            airborne |= r[10] > AIRBORNE_AGL_FT;
-            if airborne && r[10] < GROUND_CUT_AGL_FT {
+            airborne |= r[at::H_AGL] > AIRBORNE_AGL_FT;
+            if airborne && r[at::H_AGL] < GROUND_CUT_AGL_FT {
                 flight.cut = Some(format!(
                     "ground contact at t={t:.3} s (h-agl {:.1} ft)",
-                    r[10]
+                    r[at::H_AGL]
                 ));
                 break 'outer;
             }
