@@ -63,7 +63,9 @@ pub struct Summary {
     pub step_ticks_median: Option<u32>,
     pub step_instructions_max: Option<u32>,
     pub step_instructions_median: Option<u32>,
-    /// Multiply-accumulates per step of the compiled-in model (0 without one).
+    /// Multiply-accumulates per step of hil-sim's own compiled-in model (0 without one). The estimate
+    /// frames do not carry it: for an `--elf` built with other weights (`ESTIMATOR_WEIGHTS`), compute
+    /// the count from that export instead.
     pub macs_per_step: usize,
     pub flight_s: f64,
     pub wall_s: f64,
