@@ -1,8 +1,10 @@
 //! Host time per estimator step and per kernel call: `cargo bench -p estimator-core`.
-//! (Instructions per step and per MAC on the Cortex-M4 come from `hil-sim bench-wcet` on QEMU.)
+//! (Instructions per step and per MAC on the Cortex-M4 come from QEMU: docs/results/wcet.md.)
 //! Prints one JSON object per line so results can be collected by scripts.
 
-use estimator_core::nn::kernel::{accumulate_dsp, accumulate_portable};
+use estimator_core::nn::kernel::{
+    Int16Weights, accumulate_dsp, accumulate_portable, accumulate_wide,
+};
 use estimator_core::{CHANNELS, Channel, Estimator, SensorFrame};
 use std::hint::black_box;
 use std::time::Instant;
@@ -55,17 +57,22 @@ fn main() {
         }
         w
     };
+    static W16: Int16Weights<512, 256> = Int16Weights::new(&W);
     let bias = [7i32; 256];
     let x: [i16; 512] = core::array::from_fn(|i| (i as i16).wrapping_mul(97));
     let mut acc = [0i32; 256];
-    for (name, f) in [
-        (
-            "portable",
-            accumulate_portable::<512, 256> as fn(&_, &_, &_, &mut _),
-        ),
-        ("dsp_emulated", accumulate_dsp::<512, 256>),
-    ] {
-        let ns = time(2_000, || f(black_box(&W), &bias, black_box(&x), &mut acc));
+    type Kernel<'a> = &'a dyn Fn(&[i16; 512], &mut [i32; 256]);
+    let kernels: [(&str, Kernel); 3] = [
+        ("portable", &|x, acc| accumulate_portable(&W, &bias, x, acc)),
+        ("int8_sxtb16_emulated", &|x, acc| {
+            accumulate_dsp(&W, &bias, x, acc)
+        }),
+        ("int16_emulated", &|x, acc| {
+            accumulate_wide(&W16, &bias, x, acc)
+        }),
+    ];
+    for (name, f) in kernels {
+        let ns = time(2_000, || f(black_box(&x), &mut acc));
         println!(
             "{{\"bench\":\"dense_512x256_{name}\",\"ns_per_call\":{ns:.0},\"ns_per_mac\":{:.3}}}",
             ns / (512.0 * 256.0)

@@ -25,15 +25,48 @@ impl Requant {
         let prod = acc as i64 * self.mult as i64 + (1i64 << (shift - 1));
         (prod >> shift) + self.offset as i64
     }
+
+    /// [`Requant::apply`] saturated to int32, computed in 32 bits for the usual shifts (33..=62):
+    /// the rounding term 2^(shift-1) then only touches the high word of the product, and flooring by
+    /// 2^32 then by 2^(shift-32) is flooring by 2^shift, so no 64-bit add or shift is needed. The
+    /// product is at most 2^62 in magnitude, so its high word and the rounding sum fit in 31 bits.
+    #[inline(always)]
+    pub fn apply_sat(self, acc: i32) -> i32 {
+        let prod = acc as i64 * self.mult as i64;
+        let k = (self.shift as u32).wrapping_sub(32);
+        if (1..=30).contains(&k) {
+            let hi = (prod >> 32) as i32;
+            return (hi.wrapping_add(1 << (k - 1)) >> k).saturating_add(self.offset);
+        }
+        apply_sat_64(acc, self.mult, self.shift, self.offset)
+    }
+}
+
+/// [`Requant::apply_sat`] for shifts outside 33..=62, in 64 bits: out of line, as it is rare (and
+/// with scalar arguments, so that calling it does not spill the `Requant` to the stack).
+#[cold]
+#[inline(never)]
+fn apply_sat_64(acc: i32, mult: i32, shift: u8, offset: i32) -> i32 {
+    let rq = Requant {
+        mult,
+        shift,
+        offset,
+    };
+    rq.apply(acc).clamp(i32::MIN as i64, i32::MAX as i64) as i32
 }
 
 /// Weights, bias and requantization of one fully connected layer.
 pub struct Dense<const IN: usize, const OUT: usize> {
-    /// Row `o` holds the int8 weights of output `o`, in input order. Values are in -127..=127.
-    pub weights: [[i8; IN]; OUT],
+    /// The int8 weights (-127..=127) in this build's storage format ([`kernel::Weights`]); read them
+    /// back with [`Dense::weight`].
+    weights: kernel::Weights<IN, OUT>,
     /// Bias in accumulator units.
     pub bias: [i32; OUT],
-    pub requant: [Requant; OUT],
+    // The requantization, field by field: 9 bytes per output instead of the 12 of a padded
+    // `Requant` (6 KB of flash on the paper-size network).
+    mult: [i32; OUT],
+    offset: [i32; OUT],
+    shift: [u8; OUT],
 }
 
 impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
@@ -51,6 +84,7 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
             "layer input wider than MAX_IN: the int32 accumulator could overflow"
         );
         let headroom = i32::MAX as i64 - max_products(IN);
+        let (mut mult, mut offset, mut shift) = ([0i32; OUT], [0i32; OUT], [0u8; OUT]);
         let mut o = 0;
         while o < OUT {
             let b = bias[o] as i64;
@@ -63,6 +97,9 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
                 requant[o].shift >= 1 && requant[o].shift <= 62,
                 "requant shift out of 1..=62"
             );
+            mult[o] = requant[o].mult;
+            offset[o] = requant[o].offset;
+            shift[o] = requant[o].shift;
             let mut i = 0;
             while i < IN {
                 assert!(
@@ -74,16 +111,46 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
             o += 1;
         }
         Dense {
-            weights,
+            weights: kernel::Weights::new(&weights),
             bias,
-            requant,
+            mult,
+            offset,
+            shift,
         }
+    }
+
+    /// The weight of input `i` in output `o`, as given to [`Dense::new`]; `None` out of range.
+    pub fn weight(&self, o: usize, i: usize) -> Option<i8> {
+        self.weights.get(o, i)
+    }
+
+    /// The requantization of output `o`, as given to [`Dense::new`]; `None` out of range.
+    pub fn requant(&self, o: usize) -> Option<Requant> {
+        Some(Requant {
+            mult: *self.mult.get(o)?,
+            shift: *self.shift.get(o)?,
+            offset: *self.offset.get(o)?,
+        })
+    }
+
+    /// The requantizations in output order.
+    #[inline(always)]
+    fn requants(&self) -> impl Iterator<Item = Requant> + '_ {
+        self.mult
+            .iter()
+            .zip(self.shift.iter())
+            .zip(self.offset.iter())
+            .map(|((mult, shift), offset)| Requant {
+                mult: *mult,
+                shift: *shift,
+                offset: *offset,
+            })
     }
 
     /// Int32 accumulators with the bias, using the fastest kernel for this target.
     #[inline]
     pub fn accumulate(&self, x: &[i16; IN], acc: &mut [i32; OUT]) {
-        kernel::accumulate(&self.weights, &self.bias, x, acc);
+        self.weights.accumulate(&self.bias, x, acc);
     }
 }
 
@@ -100,8 +167,8 @@ impl<const IN: usize, const OUT: usize> Layer<IN, OUT> for Hidden<IN, OUT> {
     fn forward(&self, x: &[i16; IN], y: &mut [i16; OUT]) {
         let mut acc = [0i32; OUT];
         self.0.accumulate(x, &mut acc);
-        for ((y, a), rq) in y.iter_mut().zip(acc.iter()).zip(self.0.requant.iter()) {
-            *y = rq.apply(*a).clamp(0, i16::MAX as i64) as i16;
+        for ((y, a), rq) in y.iter_mut().zip(acc.iter()).zip(self.0.requants()) {
+            *y = rq.apply_sat(*a).clamp(0, i16::MAX as i32) as i16;
         }
     }
 
@@ -117,12 +184,53 @@ impl<const IN: usize, const OUT: usize> Layer<IN, OUT> for Output<IN, OUT> {
     fn forward(&self, x: &[i16; IN], y: &mut [i32; OUT]) {
         let mut acc = [0i32; OUT];
         self.0.accumulate(x, &mut acc);
-        for ((y, a), rq) in y.iter_mut().zip(acc.iter()).zip(self.0.requant.iter()) {
-            *y = rq.apply(*a).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        for ((y, a), rq) in y.iter_mut().zip(acc.iter()).zip(self.0.requants()) {
+            *y = rq.apply_sat(*a);
         }
     }
 
     fn macs(&self) -> usize {
         IN * OUT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn check(acc: i32, mult: i32, shift: u8, offset: i32) {
+        let rq = Requant {
+            mult,
+            shift,
+            offset,
+        };
+        let want = rq.apply(acc).clamp(i32::MIN as i64, i32::MAX as i64) as i32;
+        assert_eq!(rq.apply_sat(acc), want, "{rq:?} acc={acc}");
+    }
+
+    #[test]
+    fn apply_sat_at_the_edges() {
+        for acc in [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX] {
+            for mult in [0, 1, 1 << 30, i32::MAX, -1, i32::MIN] {
+                for shift in [0, 1, 31, 32, 33, 34, 61, 62, 63, 255] {
+                    for offset in [i32::MIN, -1, 0, 1, i32::MAX] {
+                        check(acc, mult, shift, offset);
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn apply_sat_is_apply_saturated(acc in any::<i32>(), mult in any::<i32>(), shift in any::<u8>(), offset in any::<i32>()) {
+            check(acc, mult, shift, offset);
+        }
+
+        #[test]
+        fn apply_sat_on_trained_ranges(acc in -(1i32 << 28)..(1 << 28), mult in (1i32 << 30)..i32::MAX, shift in 30u8..46, offset in -100_000i32..100_000) {
+            check(acc, mult, shift, offset);
+        }
     }
 }

@@ -1,30 +1,39 @@
-//! The two dense kernels. Both compute `acc[o] = bias[o] + Σ_i x[i] * w[o][i]` with wrapping int32 adds.
+//! The dense kernels: `acc[o] = bias[o] + Σ_i x[i] * w[o][i]` with wrapping int32 adds, int8 weight
+//! values (-127..=127), int16 activations.
 //!
-//! * [`accumulate_portable`]: plain Rust, one MAC at a time.
-//! * [`accumulate_dsp`]: the Cortex-M4 DSP formulation. The input is packed once per layer into int16
-//!   pairs in the order `(x0,x2) (x1,x3)` per group of four, so that one 32-bit load of four int8
-//!   weights `w0 w1 w2 w3` feeds two `SXTB16` (which widen `(w0,w2)` and, rotated by 8, `(w1,w3)`) and two
-//!   `SMLAD` (two MACs each), with no weight re-ordering in flash. Two output rows share each input load.
-//!   On `target_arch = "arm"` the three primitives are the real instructions; elsewhere they are exact
-//!   emulations, so the same kernel is property-tested on the host against the portable one.
+//! Two storage formats, chosen at build time; the generated weights files are the same for both (an
+//! int8 table handed to the const fn `Dense::new`, which builds the stored form at compile time):
 //!
-//! [`accumulate`] picks the DSP kernel on Arm and the portable kernel elsewhere.
+//! * [`Int16Weights`] (default): each weight widened to an int16 half and re-ordered for the kernel,
+//!   so that the Cortex-M4 inner loop is loads and `SMLAD`s only, four output rows sharing each input
+//!   load (11 instructions per 16 MACs; measured 0.74 instructions per MAC on the paper-size network's
+//!   large layers, ≈1.0 on the shipped model's small ones). Twice the flash of int8.
+//! * [`Int8Weights`] (feature `int8-weights`): the int8 table as exported. Every pair of weights then
+//!   needs an `SXTB16` besides its `SMLAD`, so this kernel cannot go below one instruction per MAC
+//!   (measured ≈2.0). Half the flash, for models that would not fit otherwise.
+//!
+//! The figures and how they were measured: `docs/results/wcet.md`.
+//!
+//! [`accumulate_portable`] is the reference both are tested against (bit for bit, on random shapes and
+//! values). On `target_arch = "arm"` the DSP primitives are the real instructions (inline assembly);
+//! elsewhere they are exact emulations, so the Arm formulations run, and are tested, on the host too.
+//! The int16 kernel's Arm loops are inline assembly of their own, checked against the same emulation on
+//! QEMU (bit-for-bit HIL parity of the whole estimator, `hil-sim/tests/hil_qemu.rs`).
+
+mod int16;
+mod int8;
+
+pub use int8::{Int8Weights, accumulate_dsp};
+pub use int16::{Int16Weights, accumulate_wide};
 
 use super::MAX_IN;
 
-/// The kernel this build uses.
-#[inline]
-pub fn accumulate<const IN: usize, const OUT: usize>(
-    w: &[[i8; IN]; OUT],
-    bias: &[i32; OUT],
-    x: &[i16; IN],
-    acc: &mut [i32; OUT],
-) {
-    #[cfg(target_arch = "arm")]
-    accumulate_dsp(w, bias, x, acc);
-    #[cfg(not(target_arch = "arm"))]
-    accumulate_portable(w, bias, x, acc);
-}
+/// The weight storage of this build (see the module docs).
+#[cfg(not(feature = "int8-weights"))]
+pub type Weights<const IN: usize, const OUT: usize> = Int16Weights<IN, OUT>;
+/// The weight storage of this build (see the module docs).
+#[cfg(feature = "int8-weights")]
+pub type Weights<const IN: usize, const OUT: usize> = Int8Weights<IN, OUT>;
 
 /// Reference kernel: one multiply-accumulate per weight.
 pub fn accumulate_portable<const IN: usize, const OUT: usize>(
@@ -40,89 +49,6 @@ pub fn accumulate_portable<const IN: usize, const OUT: usize>(
         }
         *a = s;
     }
-}
-
-/// DSP kernel (see the module docs). `IN` is at most [`MAX_IN`] (checked when the layer is built).
-#[inline(never)]
-pub fn accumulate_dsp<const IN: usize, const OUT: usize>(
-    w: &[[i8; IN]; OUT],
-    bias: &[i32; OUT],
-    x: &[i16; IN],
-    acc: &mut [i32; OUT],
-) {
-    // Packed pairs: for group g, packed[2g] = (x[4g], x[4g+2]) and packed[2g+1] = (x[4g+1], x[4g+3]).
-    let mut packed = [0u32; MAX_IN / 2];
-    for (p, q) in packed.chunks_exact_mut(2).zip(x.chunks_exact(4)) {
-        if let ([p0, p1], [x0, x1, x2, x3]) = (p, q) {
-            *p0 = pack(*x0, *x2);
-            *p1 = pack(*x1, *x3);
-        }
-    }
-    let groups = IN / 4;
-    let packed = packed.get(..groups * 2).unwrap_or(&[]);
-    let tail_x = x.get(groups * 4..).unwrap_or(&[]);
-
-    let mut rows = w.chunks_exact(2);
-    let mut biases = bias.chunks_exact(2);
-    let mut accs = acc.chunks_exact_mut(2);
-    for ((pair, b), a) in (&mut rows).zip(&mut biases).zip(&mut accs) {
-        if let ([r0, r1], [b0, b1], [a0, a1]) = (pair, b, a) {
-            let (mut s0, mut s1) = (*b0, *b1);
-            for ((w0, w1), xp) in r0
-                .chunks_exact(4)
-                .zip(r1.chunks_exact(4))
-                .zip(packed.chunks_exact(2))
-            {
-                if let ([x02, x13], Ok(w0), Ok(w1)) =
-                    (xp, <[i8; 4]>::try_from(w0), <[i8; 4]>::try_from(w1))
-                {
-                    let (w0, w1) = (word(w0), word(w1));
-                    s0 = smlad(sxtb16(w0), *x02, s0);
-                    s1 = smlad(sxtb16(w1), *x02, s1);
-                    s0 = smlad(sxtb16_ror8(w0), *x13, s0);
-                    s1 = smlad(sxtb16_ror8(w1), *x13, s1);
-                }
-            }
-            *a0 = tail(r0, tail_x, groups, s0);
-            *a1 = tail(r1, tail_x, groups, s1);
-        }
-    }
-    // An odd last row.
-    for ((r, b), a) in rows
-        .remainder()
-        .iter()
-        .zip(biases.remainder())
-        .zip(accs.into_remainder())
-    {
-        let mut s = *b;
-        for (wq, xp) in r.chunks_exact(4).zip(packed.chunks_exact(2)) {
-            if let ([x02, x13], Ok(wq)) = (xp, <[i8; 4]>::try_from(wq)) {
-                let wq = word(wq);
-                s = smlad(sxtb16(wq), *x02, s);
-                s = smlad(sxtb16_ror8(wq), *x13, s);
-            }
-        }
-        *a = tail(r, tail_x, groups, s);
-    }
-}
-
-/// The last `IN % 4` products, one at a time.
-#[inline(always)]
-fn tail(row: &[i8], tail_x: &[i16], groups: usize, mut s: i32) -> i32 {
-    for (xi, wi) in tail_x.iter().zip(row.get(groups * 4..).unwrap_or(&[])) {
-        s = s.wrapping_add(*xi as i32 * *wi as i32);
-    }
-    s
-}
-
-#[inline(always)]
-fn pack(lo: i16, hi: i16) -> u32 {
-    (lo as u16 as u32) | ((hi as u16 as u32) << 16)
-}
-
-#[inline(always)]
-fn word(b: [i8; 4]) -> u32 {
-    u32::from_le_bytes([b[0] as u8, b[1] as u8, b[2] as u8, b[3] as u8])
 }
 
 /// `SMLAD acc, a, b`: `acc + a.lo*b.lo + a.hi*b.hi` (signed 16-bit halves, wrapping).
@@ -195,6 +121,10 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    fn pack(lo: i16, hi: i16) -> u32 {
+        (lo as u16 as u32) | ((hi as u16 as u32) << 16)
+    }
+
     #[test]
     fn primitives_match_their_definition() {
         assert_eq!(sxtb16(0x807F_FF01), 0x007F_0001);
@@ -218,31 +148,73 @@ mod tests {
         let mut w = [[0i8; IN]; OUT];
         for row in w.iter_mut() {
             for v in row.iter_mut() {
-                *v = (next() % 255) as i16 as i8; // full int8 range incl. -128: kernels must agree anyway
+                *v = (next() % 256) as u8 as i8; // full int8 range incl. -128: kernels must agree anyway
             }
         }
         let bias: [i32; OUT] = core::array::from_fn(|_| next() as i32);
         let x: [i16; IN] = core::array::from_fn(|_| next() as i16);
-        let (mut a, mut b) = ([0i32; OUT], [0i32; OUT]);
-        accumulate_portable(&w, &bias, &x, &mut a);
-        accumulate_dsp(&w, &bias, &x, &mut b);
-        assert_eq!(a, b, "IN={IN} OUT={OUT} seed={seed}");
+        let mut want = [0i32; OUT];
+        accumulate_portable(&w, &bias, &x, &mut want);
+
+        let mut got = [0i32; OUT];
+        accumulate_dsp(&w, &bias, &x, &mut got);
+        assert_eq!(want, got, "int8 (SXTB16) IN={IN} OUT={OUT} seed={seed}");
+
+        let wide = Int16Weights::new(&w);
+        let mut got = [0i32; OUT];
+        accumulate_wide(&wide, &bias, &x, &mut got);
+        assert_eq!(want, got, "int16 IN={IN} OUT={OUT} seed={seed}");
+        for (o, row) in w.iter().enumerate() {
+            for (i, v) in row.iter().enumerate() {
+                assert_eq!(
+                    wide.get(o, i),
+                    Some(*v),
+                    "int16 layout ({o}, {i}) of {IN}x{OUT}"
+                );
+            }
+        }
+        assert_eq!(wide.get(OUT, 0), None);
+        assert_eq!(wide.get(0, IN), None);
+
+        let mut got = [0i32; OUT];
+        Weights::new(&w).accumulate(&bias, &x, &mut got);
+        assert_eq!(
+            want, got,
+            "this build's kernel IN={IN} OUT={OUT} seed={seed}"
+        );
     }
 
     proptest! {
         #[test]
-        fn dsp_equals_portable_on_random_values(seed in any::<u64>()) {
+        fn kernels_equal_portable_on_random_values(seed in any::<u64>()) {
             check::<1, 1>(seed);
+            check::<1, 6>(seed);
+            check::<2, 2>(seed);
             check::<3, 2>(seed);
             check::<4, 1>(seed);
             check::<5, 3>(seed);
             check::<7, 7>(seed);
+            check::<8, 5>(seed);
             check::<10, 32>(seed);
             check::<11, 9>(seed);
+            check::<13, 4>(seed);
+            check::<16, 1>(seed);
+            check::<17, 11>(seed);
             check::<33, 16>(seed);
             check::<64, 33>(seed);
             check::<129, 5>(seed);
             check::<512, 3>(seed);
         }
+    }
+
+    #[test]
+    fn extreme_values_wrap_alike() {
+        let w = [[-128i8; 9]; 6];
+        let x = [i16::MIN; 9];
+        let bias = [i32::MAX; 6];
+        let (mut want, mut got) = ([0i32; 6], [0i32; 6]);
+        accumulate_portable(&w, &bias, &x, &mut want);
+        accumulate_wide(&Int16Weights::new(&w), &bias, &x, &mut got);
+        assert_eq!(want, got);
     }
 }

@@ -1,4 +1,5 @@
-//! Fixed-size quantized MLP layers: int8 weights, int16 activations, int32 accumulation.
+//! Fixed-size quantized MLP layers: int8 weights, int16 activations, int32 accumulation. How the
+//! weights are stored (int16 halves in kernel order by default) is the business of [`kernel`].
 //!
 //! Shapes are const generics, so a weight table of the wrong shape does not compile, and a network is
 //! a nested [`Chain`] of layers whose widths must line up at compile time.
@@ -37,6 +38,11 @@ pub trait Layer<const IN: usize, const OUT: usize> {
     fn macs(&self) -> usize;
 }
 
+/// The activations between two layers, on a word boundary so that the int16 kernel loads them in
+/// pairs without copying them first.
+#[repr(C, align(4))]
+struct Activations<const N: usize>([i16; N]);
+
 /// Two layers in sequence, with the intermediate width `MID` checked by the type system.
 pub struct Chain<A, B, const MID: usize>(pub A, pub B);
 
@@ -49,9 +55,9 @@ where
 
     #[inline]
     fn forward(&self, x: &[i16; IN], y: &mut [Self::Out; OUT]) {
-        let mut mid = [0i16; MID];
-        self.0.forward(x, &mut mid);
-        self.1.forward(&mid, y);
+        let mut mid = Activations([0i16; MID]);
+        self.0.forward(x, &mut mid.0);
+        self.1.forward(&mid.0, y);
     }
 
     fn macs(&self) -> usize {
