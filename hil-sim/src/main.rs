@@ -113,7 +113,8 @@ mod hil_sim_cli {
 
     #[derive(clap::Args)]
     pub struct GenerateArgs {
-        /// `paper`: 16 training flights of 15–20 min + 4 test flights; `ci`: 5 flights of 3 min.
+        /// `paper`: 16 training flights of 15–20 min + 4 test flights; `large`: paper + 48 more training
+        /// flights (≈ 18 h); `ci`: 5 flights of 3 min.
         #[arg(long, value_enum)]
         preset: hil_sim::maneuver::Preset,
         /// Dataset directory to write (created).

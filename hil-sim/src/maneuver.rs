@@ -687,6 +687,10 @@ pub enum Preset {
     Paper,
     /// 4 training flights (one per profile) of 3 min plus 1 test flight of 3 min.
     Ci,
+    /// The `paper` preset's flights (same seeds, same bytes, same test flights) plus 12 more training
+    /// flights per profile: 64 training flights, about 18 h. More flights, each with its own mass,
+    /// wind and maneuvers, is what lets a model generalise to unseen flights.
+    Large,
 }
 
 /// One planned flight of a preset.
@@ -704,6 +708,7 @@ impl Preset {
         match self {
             Preset::Paper => "paper",
             Preset::Ci => "ci",
+            Preset::Large => "large",
         }
     }
 
@@ -711,6 +716,25 @@ impl Preset {
     /// no test flight repeats a training one.
     pub fn plan(self, base_seed: u64) -> Vec<PlannedFlight> {
         use crate::dataset::Split;
+        if self == Preset::Large {
+            // Paper's plan untouched, then the extra flights from their own random stream.
+            let mut out = Preset::Paper.plan(base_seed);
+            let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6c61_7267_6570_6c61);
+            for (pi, kind) in ProfileKind::ALL.iter().enumerate() {
+                for k in 4..16 {
+                    out.push(PlannedFlight {
+                        name: format!("train_{}_{k:02}", kind.name()),
+                        split: Split::Train,
+                        profile: *kind,
+                        seed: base_seed
+                            .wrapping_mul(1000)
+                            .wrapping_add((pi * 100 + k) as u64),
+                        duration_s: draw(&mut rng, (900.0, 1200.0)).round(),
+                    });
+                }
+            }
+            return out;
+        }
         let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6d61_6e65_7576_6572);
         let mut out = Vec::new();
         let (per_profile, train_len, test_profiles, test_len): (
@@ -719,7 +743,9 @@ impl Preset {
             &[ProfileKind],
             Range,
         ) = match self {
-            Preset::Paper => (4, (900.0, 1200.0), &ProfileKind::ALL, (360.0, 420.0)),
+            Preset::Paper | Preset::Large => {
+                (4, (900.0, 1200.0), &ProfileKind::ALL, (360.0, 420.0))
+            }
             Preset::Ci => (
                 1,
                 (180.0, 180.0),

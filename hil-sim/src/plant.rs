@@ -50,6 +50,13 @@ pub enum PlantError {
     BridgeDied { why: String, stderr_tail: String },
 }
 
+impl PlantError {
+    /// JSBSim could not trim the aircraft at the script's initial condition (its `TrimFailureError`).
+    pub fn is_trim_failure(&self) -> bool {
+        matches!(self, PlantError::Bridge { message, .. } if message.contains("TrimFailure"))
+    }
+}
+
 /// Which Python runs the bridge: `HIL_PYTHON`, else the workspace's `.venv` made by `scripts/bootstrap`.
 pub fn python_path() -> PathBuf {
     match std::env::var_os("HIL_PYTHON") {

@@ -451,10 +451,20 @@ pub fn sensor_seed(flight_seed: u64) -> u64 {
     flight_seed ^ 0x5e45_5e45_5e45_5e45
 }
 
+/// Re-draws of a flight whose random initial condition JSBSim cannot trim, before giving up.
+pub const TRIM_RETRIES: u64 = 3;
+
+/// Maneuver seed of re-draw `attempt` (0 = the planned seed).
+pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
+    planned ^ attempt.wrapping_mul(0x7472_696d_0000_0000)
+}
+
 /// Generates a dataset: writes each planned maneuver (`NAME.xml` + `NAME_init.xml`) into `out`,
 /// flies it through [`crate::plant::fly_script`] (the same path as `hil-sim fly --script`) on
 /// `workers` threads, and writes the CSVs and `manifest.json`. Flights are written in plan order
-/// whatever order the workers finish in, so the manifest is deterministic.
+/// whatever order the workers finish in, so the manifest is deterministic. A flight JSBSim cannot
+/// trim is re-drawn with [`redraw_seed`] (up to [`TRIM_RETRIES`] times; the seed flown is the one
+/// in the manifest), so one unlucky initial condition does not lose a whole dataset.
 pub fn generate(
     preset: crate::maneuver::Preset,
     base_seed: u64,
@@ -471,19 +481,14 @@ pub fn generate(
         source,
     })?;
     let plan = preset.plan(base_seed);
-    let mut files = std::collections::BTreeMap::new();
+    let write_maneuver =
+        |f: &maneuver::PlannedFlight, seed: u64| -> Result<PathBuf, GenerateError> {
+            let m = maneuver::generate(&Profile::preset(f.profile), seed, &f.name, f.duration_s)?;
+            Ok(m.write(out)?)
+        };
     let mut scripts = Vec::new();
     for f in &plan {
-        let m = maneuver::generate(&Profile::preset(f.profile), f.seed, &f.name, f.duration_s)?;
-        let path = m.write(out)?;
-        for p in [path.clone(), out.join(format!("{}_init.xml", f.name))] {
-            let name = p
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            files.insert(name, sha256_file(&p)?);
-        }
-        scripts.push(path);
+        scripts.push(write_maneuver(f, f.seed)?);
     }
     let next = std::sync::atomic::AtomicUsize::new(0);
     let results: std::sync::Mutex<Vec<Option<Result<FlightEntry, GenerateError>>>> =
@@ -508,14 +513,24 @@ pub fn generate(
                         if let Ok(mut v) = version.lock() {
                             *v = plant.jsbsim_version().to_string();
                         }
-                        let flight = crate::plant::fly_script_with(&mut plant, script, &cfg)?;
-                        Ok(write_flight(
-                            out,
-                            &flight,
-                            f.split,
-                            f.profile.name(),
-                            f.seed,
-                        )?)
+                        let mut attempt = 0;
+                        let (flight, seed) = loop {
+                            let seed = redraw_seed(f.seed, attempt);
+                            let cfg = FlyConfig {
+                                seed: sensor_seed(seed),
+                                ..cfg.clone()
+                            };
+                            match crate::plant::fly_script_with(&mut plant, script, &cfg) {
+                                Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => {
+                                    attempt += 1;
+                                    write_maneuver(f, redraw_seed(f.seed, attempt))?;
+                                    // A failed trim can leave the bridge in any state: start afresh.
+                                    plant = crate::plant::Plant::spawn()?;
+                                }
+                                r => break (r?, seed),
+                            }
+                        };
+                        Ok(write_flight(out, &flight, f.split, f.profile.name(), seed)?)
                     })()
                     .map_err(|e| GenerateError::Flight {
                         name: f.name.clone(),
@@ -531,6 +546,16 @@ pub fn generate(
             });
         }
     });
+    let mut files = std::collections::BTreeMap::new();
+    for (f, path) in plan.iter().zip(&scripts) {
+        for p in [path.clone(), out.join(format!("{}_init.xml", f.name))] {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            files.insert(name, sha256_file(&p)?);
+        }
+    }
     let mut flights = Vec::new();
     for r in results
         .into_inner()
