@@ -6,14 +6,15 @@
 //! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
 //! | a noisy channel (IMU, GPS) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR`, held as above |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
-//! | GPS speed below [`MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
+//! | GPS speed below [`crate::features::MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
+//! | a delta feature a model uses lacks its exact lagged frame (first second, lost frames, time jump) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
 //! the step panic or return anything but the integers described here.
 
 use crate::channels::{CHANNELS, Channel, SensorFrame};
-use crate::features::{Feature, FeatureValues};
+use crate::features::{Feature, FeatureValues, History};
 use crate::nn::Layer;
 use crate::normalize::{Envelope, Norm};
 
@@ -41,6 +42,9 @@ impl Flags {
     pub const NO_ESTIMATE: u16 = 1 << 5;
     /// The estimator has no compiled-in model (a build without weights).
     pub const NO_MODEL: u16 = 1 << 6;
+    /// A delta feature used by a computed angle was not taken over its exact lag (the first second
+    /// after a start or reset, or lost frames): the estimate is computed but may be less accurate.
+    pub const HISTORY_SHORT: u16 = 1 << 7;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -91,6 +95,10 @@ pub trait AngleNet: Sync {
     /// Channels the features are computed from.
     fn sources(&self) -> u16 {
         self.features().iter().fold(0, |m, f| m | f.sources())
+    }
+    /// Lags of the delta features it reads (bit per [`crate::features::Lag`]).
+    fn lags(&self) -> u8 {
+        self.features().iter().fold(0, |m, f| m | f.lags())
     }
 }
 
@@ -176,6 +184,7 @@ pub struct Estimator<'m> {
     repeats: [u16; CHANNELS],
     last_alpha: Option<(i32, i32)>,
     last_beta: Option<(i32, i32)>,
+    history: History,
 }
 
 impl<'m> Estimator<'m> {
@@ -191,6 +200,7 @@ impl<'m> Estimator<'m> {
             repeats: [0; CHANNELS],
             last_alpha: None,
             last_beta: None,
+            history: History::new(),
         }
     }
 
@@ -211,7 +221,7 @@ impl<'m> Estimator<'m> {
         self.alpha.map_or(0, |n| n.macs()) + self.beta.map_or(0, |n| n.macs())
     }
 
-    /// Forgets health history and held values (e.g. after a long link outage).
+    /// Forgets health history, past frames and held values (e.g. after a long link outage).
     pub fn reset(&mut self) {
         *self = Self::with(self.alpha, self.beta);
     }
@@ -252,7 +262,8 @@ impl<'m> Estimator<'m> {
             e.flags.0 = Flags::NO_MODEL | Flags::NO_ESTIMATE;
             return e;
         };
-        let values = FeatureValues::compute(frame);
+        let values = FeatureValues::compute(frame, &self.history);
+        self.history.push(frame);
         let mut flags = 0u16;
         let mut angle =
             |net: &dyn AngleNet, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
@@ -278,6 +289,9 @@ impl<'m> Estimator<'m> {
                 let (mid, out, clamped) = net.run(&values);
                 if clamped {
                     flags |= Flags::OUT_OF_ENVELOPE;
+                }
+                if net.lags() & values.short_lags != 0 {
+                    flags |= Flags::HISTORY_SHORT;
                 }
                 *last = Some((mid, out));
                 (mid, out)

@@ -6,11 +6,107 @@
 //! pressure), specific force divided by it (≈ aerodynamic coefficient × S/m), and GPS speed over the
 //! ISA speed of sound at altitude (a Mach proxy). Air-data quantities (air-relative velocities,
 //! airspeeds, dynamic pressure, Mach, α, β) are not channels, so no model can take them as input.
+//!
+//! The delta features carry the short-term dynamics a single frame cannot show (a pull-up building,
+//! a climb rate, a speed trend): [`Feature::Delta`]`(c, lag)` is channel `c` now minus channel `c`
+//! `lag` frames (50 ms each) ago, in the channel's unit, read from a [`History`] of past frames.
+//!
+//! # When the lagged frame is missing
+//! After a start, a reset or lost frames, the frame exactly `lag × 50 ms` back may not be there, or may
+//! have the channel marked invalid. The delta is then taken to the stored frame (with that channel
+//! valid) whose age is closest to the lag, no older than twice the lag, and scaled to the nominal lag
+//! (`Δ × lag_ms / age_ms`, a rate-preserving estimate); with no such frame it is 0 (no change). Either
+//! way the lag's bit is set in [`FeatureValues::short_lags`], which the estimator reports as
+//! `HISTORY_SHORT` when a model uses that lag.
 
 use crate::channels::{CHANNELS, Channel, SensorFrame};
 
-/// Number of candidate features.
-pub const FEATURE_COUNT: usize = CHANNELS + 5;
+/// Number of derived single-frame features after the sensed channels.
+const DERIVED: usize = 5;
+
+/// Number of candidate features: sensed channels, derived features, and a delta per channel and lag.
+pub const FEATURE_COUNT: usize = CHANNELS + DERIVED + CHANNELS * Lag::COUNT;
+
+/// Frames a [`History`] keeps: 1 s at 20 Hz plus room for lost frames.
+pub const HISTORY_FRAMES: usize = 24;
+
+/// Nominal sensor frame period, ms (20 Hz).
+pub const FRAME_PERIOD_MS: u32 = 50;
+
+/// How far back a delta feature looks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Lag {
+    /// 1 frame, 50 ms.
+    F1,
+    /// 4 frames, 200 ms.
+    F4,
+    /// 10 frames, 500 ms.
+    F10,
+    /// 20 frames, 1 s.
+    F20,
+}
+
+impl Lag {
+    pub const COUNT: usize = 4;
+    pub const ALL: [Lag; Lag::COUNT] = [Lag::F1, Lag::F4, Lag::F10, Lag::F20];
+
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Bit of this lag in [`FeatureValues::short_lags`].
+    pub const fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+
+    pub const fn frames(self) -> u32 {
+        match self {
+            Lag::F1 => 1,
+            Lag::F4 => 4,
+            Lag::F10 => 10,
+            Lag::F20 => 20,
+        }
+    }
+
+    pub const fn ms(self) -> u32 {
+        self.frames() * FRAME_PERIOD_MS
+    }
+}
+
+/// `"<channel name>_d<frames>"` for every channel and lag (a test checks them against the names).
+macro_rules! delta_names {
+    ($($v:ident => $c:literal),* $(,)?) => {
+        const fn delta_name(c: Channel, l: Lag) -> &'static str {
+            match c {
+                $(Channel::$v => match l {
+                    Lag::F1 => concat!($c, "_d1"),
+                    Lag::F4 => concat!($c, "_d4"),
+                    Lag::F10 => concat!($c, "_d10"),
+                    Lag::F20 => concat!($c, "_d20"),
+                },)*
+            }
+        }
+    };
+}
+delta_names!(
+    GyroP => "gyro_p_rps",
+    GyroQ => "gyro_q_rps",
+    GyroR => "gyro_r_rps",
+    AccelX => "accel_x_mps2",
+    AccelY => "accel_y_mps2",
+    AccelZ => "accel_z_mps2",
+    GpsSpeed => "gps_speed_mps",
+    GpsAlt => "gps_alt_m",
+    Elevator => "elevator_deg",
+    Aileron => "aileron_deg",
+    Rudder => "rudder_deg",
+    Lef => "lef_deg",
+    Tef => "tef_deg",
+    Flaperon => "flaperon_deg",
+    Speedbrake => "speedbrake_deg",
+    Throttle => "throttle_norm",
+);
 
 /// GPS speeds below this (mm/s) make the `ρV²`-based features meaningless: they saturate and are
 /// flagged out of envelope.
@@ -34,6 +130,8 @@ pub enum Feature {
     MachProxy,
     /// ISA density at GPS altitude × GPS speed², Pa.
     RhoV2,
+    /// The channel now minus the channel `Lag` ago, in the channel's unit.
+    Delta(Channel, Lag),
 }
 
 impl Feature {
@@ -51,6 +149,16 @@ impl Feature {
         all[CHANNELS + 2] = Feature::FzOverRhoV2;
         all[CHANNELS + 3] = Feature::MachProxy;
         all[CHANNELS + 4] = Feature::RhoV2;
+        let mut c = 0;
+        while c < CHANNELS {
+            let mut l = 0;
+            while l < Lag::COUNT {
+                all[CHANNELS + DERIVED + c * Lag::COUNT + l] =
+                    Feature::Delta(Channel::ALL[c], Lag::ALL[l]);
+                l += 1;
+            }
+            c += 1;
+        }
         all
     };
 
@@ -62,6 +170,7 @@ impl Feature {
             Feature::FzOverRhoV2 => CHANNELS + 2,
             Feature::MachProxy => CHANNELS + 3,
             Feature::RhoV2 => CHANNELS + 4,
+            Feature::Delta(c, l) => CHANNELS + DERIVED + c.index() * Lag::COUNT + l.index(),
         }
     }
 
@@ -73,13 +182,14 @@ impl Feature {
             Feature::FzOverRhoV2 => "fz_over_rho_v2",
             Feature::MachProxy => "mach_proxy",
             Feature::RhoV2 => "rho_v2_pa",
+            Feature::Delta(c, l) => delta_name(c, l),
         }
     }
 
     /// Size of one integer step in the feature's unit.
     pub const fn lsb(self) -> f64 {
         match self {
-            Feature::Sensor(c) => c.lsb(),
+            Feature::Sensor(c) | Feature::Delta(c, _) => c.lsb(),
             Feature::FxOverRhoV2 | Feature::FyOverRhoV2 | Feature::FzOverRhoV2 => 1e-7,
             Feature::MachProxy => 1e-4,
             Feature::RhoV2 => 1.0,
@@ -90,11 +200,19 @@ impl Feature {
     pub const fn sources(self) -> u16 {
         let speed_alt = Channel::GpsSpeed.bit() | Channel::GpsAlt.bit();
         match self {
-            Feature::Sensor(c) => c.bit(),
+            Feature::Sensor(c) | Feature::Delta(c, _) => c.bit(),
             Feature::FxOverRhoV2 => speed_alt | Channel::AccelX.bit(),
             Feature::FyOverRhoV2 => speed_alt | Channel::AccelY.bit(),
             Feature::FzOverRhoV2 => speed_alt | Channel::AccelZ.bit(),
             Feature::MachProxy | Feature::RhoV2 => speed_alt,
+        }
+    }
+
+    /// Lags this feature reads from the history (bit per [`Lag`]).
+    pub const fn lags(self) -> u8 {
+        match self {
+            Feature::Delta(_, l) => l.bit(),
+            _ => 0,
         }
     }
 
@@ -109,6 +227,109 @@ pub struct FeatureValues {
     pub raw: [i32; FEATURE_COUNT],
     /// GPS speed below [`MIN_SPEED_MMS`]: the derived features are saturated.
     pub low_speed: bool,
+    /// Bit per [`Lag`]: for some channel the frame exactly that lag back was missing (see the module
+    /// docs), so the delta was rate-scaled from another frame or set to 0.
+    pub short_lags: u8,
+}
+
+/// One past frame as the history keeps it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Past {
+    time_ms: u32,
+    raw: [i32; CHANNELS],
+    valid: u16,
+}
+
+/// The last [`HISTORY_FRAMES`] sensor frames, newest last, for the delta features. Fixed size, no heap.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct History {
+    past: [Past; HISTORY_FRAMES],
+    /// Slot the next frame goes to.
+    head: usize,
+    len: usize,
+}
+
+impl Default for History {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl History {
+    pub const fn new() -> History {
+        History {
+            past: [Past {
+                time_ms: 0,
+                raw: [0; CHANNELS],
+                valid: 0,
+            }; HISTORY_FRAMES],
+            head: 0,
+            len: 0,
+        }
+    }
+
+    /// Forgets every stored frame.
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.head = 0;
+    }
+
+    /// Stores a frame (the oldest is dropped when full).
+    pub fn push(&mut self, frame: &SensorFrame) {
+        if let Some(p) = self.past.get_mut(self.head) {
+            *p = Past {
+                time_ms: frame.time_ms,
+                raw: frame.raw,
+                valid: frame.valid,
+            };
+        }
+        self.head = (self.head + 1) % HISTORY_FRAMES;
+        self.len = (self.len + 1).min(HISTORY_FRAMES);
+    }
+
+    /// Stored frames, newest first.
+    fn newest_first(&self) -> impl Iterator<Item = &Past> {
+        (1..=self.len).filter_map(move |k| {
+            self.past
+                .get((self.head + HISTORY_FRAMES - k) % HISTORY_FRAMES)
+        })
+    }
+
+    /// Writes `Delta(c, lag)` for every channel into `raw`; returns whether any was not exact.
+    fn deltas(&self, frame: &SensorFrame, lag: Lag, raw: &mut [i32; FEATURE_COUNT]) -> bool {
+        let want = lag.ms();
+        let age = |p: &Past| frame.time_ms.wrapping_sub(p.time_ms);
+        let exact = self.newest_first().find(|p| age(p) == want);
+        let mut short = false;
+        for c in Channel::ALL {
+            let now = frame.get(c) as i64;
+            let bit = c.bit();
+            let d = match exact {
+                Some(p) if p.valid & bit != 0 => {
+                    now - p.raw.get(c.index()).copied().unwrap_or(0) as i64
+                }
+                _ => {
+                    short = true;
+                    // Closest stored age to the lag, in (0, 2 × lag], channel valid.
+                    let best = self
+                        .newest_first()
+                        .filter(|p| p.valid & bit != 0 && age(p) > 0 && age(p) <= 2 * want)
+                        .min_by_key(|p| age(p).abs_diff(want));
+                    match best {
+                        Some(p) => {
+                            let old = p.raw.get(c.index()).copied().unwrap_or(0) as i64;
+                            (now - old) * want as i64 / age(p) as i64
+                        }
+                        None => 0,
+                    }
+                }
+            };
+            if let Some(r) = raw.get_mut(Feature::Delta(c, lag).index()) {
+                *r = sat_i32(d);
+            }
+        }
+        short
+    }
 }
 
 impl FeatureValues {
@@ -116,9 +337,10 @@ impl FeatureValues {
         self.raw.get(f.index()).copied().unwrap_or(0)
     }
 
-    /// Computes all features. Invalid channels are read as they are; the estimator decides what an
-    /// invalid source means before it uses a value.
-    pub fn compute(frame: &SensorFrame) -> FeatureValues {
+    /// Computes all features of `frame`, the deltas against `history` (the frames before it). Invalid
+    /// channels are read as they are; the estimator decides what an invalid source means before it
+    /// uses a value.
+    pub fn compute(frame: &SensorFrame, history: &History) -> FeatureValues {
         let mut raw = [0i32; FEATURE_COUNT];
         for (r, v) in raw.iter_mut().zip(frame.raw.iter()) {
             *r = *v;
@@ -161,7 +383,17 @@ impl FeatureValues {
             sat_i32(speed * 10_000 / (sound as i64).max(1)),
         );
         set(&mut raw, Feature::RhoV2, sat_i32(rho_v2_upa / 1_000_000));
-        FeatureValues { raw, low_speed }
+        let mut short_lags = 0;
+        for lag in Lag::ALL {
+            if history.deltas(frame, lag, &mut raw) {
+                short_lags |= lag.bit();
+            }
+        }
+        FeatureValues {
+            raw,
+            low_speed,
+            short_lags,
+        }
     }
 }
 
@@ -241,7 +473,7 @@ mod tests {
         f.raw[Channel::GpsSpeed.index()] = 200_000;
         f.raw[Channel::GpsAlt.index()] = 300_000;
         f.raw[Channel::AccelZ.index()] = -981_000;
-        let v = FeatureValues::compute(&f);
+        let v = FeatureValues::compute(&f, &History::new());
         // ρV² = 0.909122 × 40000 = 36364.88 Pa
         assert_eq!(v.get(Feature::RhoV2), 36_364);
         // fz / ρV² = -9.81 / 36364.88 = -2.6977e-4 → -2697.7 in 1e-7
@@ -256,9 +488,106 @@ mod tests {
         let mut f = SensorFrame::default();
         f.raw[Channel::AccelX.index()] = i32::MAX;
         f.raw[Channel::GpsSpeed.index()] = -5;
-        let v = FeatureValues::compute(&f);
+        let v = FeatureValues::compute(&f, &History::new());
         assert!(v.low_speed);
         assert_eq!(v.get(Feature::FxOverRhoV2), i32::MAX);
         assert_eq!(v.get(Feature::RhoV2), 0);
+    }
+
+    fn ramp(t_ms: u32) -> SensorFrame {
+        // Every channel rises by 7 units per ms.
+        SensorFrame {
+            seq: (t_ms / FRAME_PERIOD_MS) as u16,
+            time_ms: t_ms,
+            raw: [t_ms as i32 * 7; CHANNELS],
+            valid: crate::channels::ALL_VALID,
+        }
+    }
+
+    #[test]
+    fn delta_names_follow_the_channel_names() {
+        for c in Channel::ALL {
+            for l in Lag::ALL {
+                let f = Feature::Delta(c, l);
+                assert_eq!(f.name(), format!("{}_d{}", c.name(), l.frames()));
+                assert_eq!(f.sources(), c.bit());
+                assert_eq!(f.lags(), l.bit());
+            }
+        }
+    }
+
+    #[test]
+    fn full_history_gives_exact_deltas() {
+        let mut h = History::new();
+        for k in 0..30u32 {
+            h.push(&ramp(k * 50));
+        }
+        let v = FeatureValues::compute(&ramp(1500), &h);
+        assert_eq!(v.short_lags, 0);
+        for l in Lag::ALL {
+            assert_eq!(v.get(Feature::Delta(Channel::AccelZ, l)), 7 * l.ms() as i32);
+        }
+    }
+
+    #[test]
+    fn empty_history_gives_zero_deltas_and_flags_every_lag() {
+        let v = FeatureValues::compute(&ramp(1000), &History::new());
+        assert_eq!(v.short_lags, 0b1111);
+        for l in Lag::ALL {
+            assert_eq!(v.get(Feature::Delta(Channel::GyroQ, l)), 0);
+        }
+    }
+
+    #[test]
+    fn a_lost_frame_is_bridged_by_rate_scaling() {
+        let mut h = History::new();
+        for t in [0, 100, 150, 200] {
+            h.push(&ramp(t)); // the frame at 50 ms was lost
+        }
+        let v = FeatureValues::compute(&ramp(250), &h);
+        // Lag 1 (200 ms back) is there; lag 4 (50 ms) is not: the 100 ms frame (age 150) is the closest.
+        assert_eq!(
+            v.short_lags,
+            Lag::F4.bit() | Lag::F10.bit() | Lag::F20.bit()
+        );
+        assert_eq!(v.get(Feature::Delta(Channel::GpsAlt, Lag::F1)), 7 * 50);
+        assert_eq!(
+            v.get(Feature::Delta(Channel::GpsAlt, Lag::F4)),
+            7 * 150 * 200 / 150
+        );
+        // Lag 10 (500 ms): the oldest frame is 250 ms old, within 2 × 500: scaled.
+        assert_eq!(v.get(Feature::Delta(Channel::GpsAlt, Lag::F10)), 7 * 500);
+    }
+
+    #[test]
+    fn an_invalid_past_channel_is_not_used() {
+        let mut h = History::new();
+        for k in 0..=20u32 {
+            let mut f = ramp(k * 50);
+            if k == 20 {
+                f.valid &= !Channel::Rudder.bit();
+                f.raw[Channel::Rudder.index()] = i32::MIN;
+            }
+            h.push(&f);
+        }
+        // At 1050 ms lag 1 wants the 1000 ms frame, valid except the rudder: the rudder's delta comes
+        // from the 950 ms frame, scaled to 50 ms.
+        let v = FeatureValues::compute(&ramp(1050), &h);
+        assert_eq!(v.short_lags, Lag::F1.bit());
+        assert_eq!(v.get(Feature::Delta(Channel::Rudder, Lag::F1)), 7 * 50);
+        assert_eq!(v.get(Feature::Delta(Channel::Aileron, Lag::F1)), 7 * 50);
+    }
+
+    #[test]
+    fn time_going_backwards_or_far_jumps_give_no_delta() {
+        let mut h = History::new();
+        for k in 0..25u32 {
+            h.push(&ramp(10_000 + k * 50));
+        }
+        for t in [0, 5_000, 100_000] {
+            let v = FeatureValues::compute(&ramp(t), &h);
+            assert_eq!(v.short_lags, 0b1111, "t={t}");
+            assert_eq!(v.get(Feature::Delta(Channel::GyroP, Lag::F20)), 0);
+        }
     }
 }

@@ -38,4 +38,4 @@ pub mod wire;
 
 pub use channels::{CHANNELS, Channel, SensorFrame};
 pub use estimator::{AngleNet, CascadeNet, Estimate, Estimator, Flags};
-pub use features::{FEATURE_COUNT, Feature, FeatureValues};
+pub use features::{FEATURE_COUNT, Feature, FeatureValues, History, Lag};

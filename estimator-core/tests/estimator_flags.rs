@@ -5,7 +5,7 @@ use estimator_core::channels::{ALL_VALID, CHANNELS};
 use estimator_core::estimator::STUCK_FRAMES;
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
 use estimator_core::normalize::{Envelope, Norm};
-use estimator_core::{AngleNet, CascadeNet, Channel, Estimator, Feature, Flags, SensorFrame};
+use estimator_core::{AngleNet, CascadeNet, Channel, Estimator, Feature, Flags, Lag, SensorFrame};
 
 type Part1 = Chain<Hidden<2, 3>, Output<3, 1>, 3>;
 type Part2 = Chain<Hidden<3, 2>, Output<2, 1>, 2>;
@@ -17,8 +17,12 @@ const RQ: Requant = Requant {
 };
 
 fn net(a: Channel, b: Channel, env_hi: i32) -> CascadeNet<Part1, Part2, 2, 3> {
+    net_of(Feature::Sensor(a), Feature::Sensor(b), env_hi)
+}
+
+fn net_of(a: Feature, b: Feature, env_hi: i32) -> CascadeNet<Part1, Part2, 2, 3> {
     CascadeNet {
-        features: [Feature::Sensor(a), Feature::Sensor(b)],
+        features: [a, b],
         norm: [Norm {
             center: 0,
             mult: 1,
@@ -206,4 +210,38 @@ fn sources_cover_derived_features() {
         Feature::FzOverRhoV2.sources(),
         Channel::GpsSpeed.bit() | Channel::GpsAlt.bit() | Channel::AccelZ.bit()
     );
+}
+
+#[test]
+fn short_history_is_flagged_only_for_the_angle_that_uses_deltas() {
+    // α reads the 200 ms change of the elevator; β reads no delta.
+    let a = net_of(
+        Feature::Sensor(Channel::GpsSpeed),
+        Feature::Delta(Channel::Elevator, Lag::F4),
+        400_000,
+    );
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    let mut e = Estimator::new(&a, &b);
+    let short = |e: &mut Estimator, s: u16| e.step(&frame(s)).flags.has(Flags::HISTORY_SHORT);
+    // Frames 0-3 have no frame 200 ms back; from frame 4 on they do.
+    for s in 0..4 {
+        assert!(short(&mut e, s), "frame {s}");
+    }
+    for s in 4..10 {
+        assert!(!short(&mut e, s), "frame {s}");
+    }
+    // Frame 10 is lost: frame 14 misses its lagged frame and is flagged, but still computed.
+    for s in 11..14 {
+        assert!(!short(&mut e, s), "frame {s}");
+    }
+    let out = e.step(&frame(14));
+    assert!(out.flags.has(Flags::HISTORY_SHORT));
+    assert!(out.flags.is_usable());
+    assert!(!short(&mut e, 15));
+    // A reset forgets the history.
+    e.reset();
+    assert!(short(&mut e, 16));
+    // A β-only delta user never flags α's history, and vice versa.
+    let mut e2 = Estimator::new(&b, &b);
+    assert!(!short(&mut e2, 0));
 }

@@ -2,7 +2,7 @@
 //! come from the trainer's independent i64 reference (trainer/src/quant.rs), not from this crate.
 //! `ESTIMATOR_VECTORS=/path` at build time checks another export (set with `ESTIMATOR_WEIGHTS`).
 
-use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, SensorFrame};
+use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, History, SensorFrame};
 
 const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
 
@@ -16,6 +16,10 @@ fn compiled_in_model_matches_the_trainer_vectors() {
     });
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("read {path}: {e}"));
     let mut checked = 0;
+    // Lines are runs of consecutive frames; `reset` starts one on an empty history (and a fresh
+    // estimator, so its own history matches).
+    let mut history = History::new();
+    let mut est = Estimator::shipped();
     for line in text
         .lines()
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
@@ -24,7 +28,12 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             .split_whitespace()
             .map(|t| t.parse().expect("integer"))
             .collect();
-        assert_eq!(v.len(), 3 + CHANNELS + 6, "malformed vector line: {line}");
+        assert_eq!(v.len(), 4 + CHANNELS + 6, "malformed vector line: {line}");
+        if v[0] == 1 {
+            history.clear();
+            est = Estimator::shipped();
+        }
+        let v = &v[1..];
         let raw: [i32; CHANNELS] = core::array::from_fn(|i| v[3 + i] as i32);
         let frame = SensorFrame {
             seq: v[0] as u16,
@@ -32,7 +41,9 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             raw,
             valid: v[2] as u16,
         };
-        let values = FeatureValues::compute(&frame);
+        let values = FeatureValues::compute(&frame, &history);
+        history.push(&frame);
+        let e = est.step(&frame);
         let o = &v[3 + CHANNELS..];
         let want_alpha = (o[0] as i32, o[1] as i32, o[2] != 0);
         let want_beta = (o[3] as i32, o[4] as i32, o[5] != 0);
@@ -50,10 +61,9 @@ fn compiled_in_model_matches_the_trainer_vectors() {
                 "beta, line: {line}"
             );
         }
-        // The full step on a fresh estimator gives the same numbers when every channel is valid.
+        // The full step gives the same numbers when every channel is valid.
         if frame.valid & estimator_core::channels::ALL_VALID == estimator_core::channels::ALL_VALID
         {
-            let e = Estimator::shipped().step(&frame);
             assert_eq!(
                 (e.w_aero_mms, e.alpha_mdeg),
                 (want_alpha.0, want_alpha.1),

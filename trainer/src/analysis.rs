@@ -188,6 +188,7 @@ mod tests {
             FeatureValues {
                 raw,
                 low_speed: false,
+                short_lags: 0,
             }
         };
         let bg = vec![mk(1, 2, 3), mk(3, 0, -1)];

@@ -3,7 +3,7 @@
 //! delivers (`hil_sim::frames::sample_to_frame`, i.e. `SensorFrame::from_si` of the 16 sensed SI
 //! columns), then `FeatureValues::compute`.
 use crate::error::{Error, Result};
-use estimator_core::{FEATURE_COUNT, FeatureValues, SensorFrame};
+use estimator_core::{FEATURE_COUNT, FeatureValues, History, SensorFrame};
 use hil_sim::dataset::{Manifest, Split, sha256_file};
 use std::path::{Path, PathBuf};
 
@@ -155,9 +155,12 @@ pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
         features: Vec::with_capacity(csv.samples.len()),
         truth: Default::default(),
     };
+    // The estimator's own history: features at frame i see frames 0..i, as in flight.
+    let mut history = History::new();
     for (i, sample) in csv.samples.iter().enumerate() {
         let frame = hil_sim::frames::sample_to_frame(i as u16, sample);
-        fl.features.push(FeatureValues::compute(&frame));
+        fl.features.push(FeatureValues::compute(&frame, &history));
+        history.push(&frame);
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);
         let t = &sample.truth;

@@ -1,6 +1,6 @@
 //! Input feature sets and the leakage guard: air data can never become a model input.
 use crate::error::{Error, Result};
-use estimator_core::{Channel, Feature};
+use estimator_core::{Channel, Feature, Lag};
 
 /// Dataset truth columns straight from the simulator: air data (what the model estimates, or derived
 /// from it) and the other truth values. None of them can ever be a model input. The list is the
@@ -57,7 +57,43 @@ pub const PHYSICS_ALPHA: [Feature; 3] = [
 ];
 pub const PHYSICS_BETA: [Feature; 3] = [Feature::FyOverRhoV2, Feature::MachProxy, Feature::RhoV2];
 
-/// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), or explicit
+/// Channels whose short-term changes the `dynamics` set adds for α, at every [`Lag`]: the load factor
+/// and pitch rate building, the speed and altitude trends (energy), the elevator and throttle moving.
+pub const DYNAMICS_ALPHA_DELTAS: [Channel; 8] = [
+    Channel::AccelZ,
+    Channel::GyroQ,
+    Channel::AccelX,
+    Channel::GpsSpeed,
+    Channel::GpsAlt,
+    Channel::Elevator,
+    Channel::Lef,
+    Channel::Throttle,
+];
+
+/// The same for β: lateral acceleration, yaw and roll rates, rudder and aileron.
+pub const DYNAMICS_BETA_DELTAS: [Channel; 5] = [
+    Channel::AccelY,
+    Channel::GyroR,
+    Channel::GyroP,
+    Channel::Rudder,
+    Channel::Aileron,
+];
+
+/// Longitudinal state for β (the side force per degree of sideslip depends on α).
+pub const DYNAMICS_BETA_EXTRA: [Feature; 3] = [
+    Feature::Sensor(Channel::GyroQ),
+    Feature::Sensor(Channel::AccelZ),
+    Feature::FzOverRhoV2,
+];
+
+fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
+    channels
+        .iter()
+        .flat_map(|c| Lag::ALL.iter().map(move |l| Feature::Delta(*c, *l)))
+}
+
+/// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
+/// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FeatureSet {
@@ -79,6 +115,23 @@ impl FeatureSet {
                 alpha: TABLE1_ALPHA.iter().chain(&PHYSICS_ALPHA).copied().collect(),
                 beta: TABLE1_BETA.iter().chain(&PHYSICS_BETA).copied().collect(),
             }),
+            "dynamics" => Ok(FeatureSet {
+                name: "dynamics".into(),
+                alpha: TABLE1_ALPHA
+                    .iter()
+                    .chain(&PHYSICS_ALPHA)
+                    .copied()
+                    .chain([Feature::Sensor(Channel::GyroQ)])
+                    .chain(deltas(&DYNAMICS_ALPHA_DELTAS))
+                    .collect(),
+                beta: TABLE1_BETA
+                    .iter()
+                    .chain(&PHYSICS_BETA)
+                    .chain(&DYNAMICS_BETA_EXTRA)
+                    .copied()
+                    .chain(deltas(&DYNAMICS_BETA_DELTAS))
+                    .collect(),
+            }),
             custom => {
                 let mut alpha = None;
                 let mut beta = None;
@@ -86,7 +139,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, or alpha=a,b;beta=c,d".into(),
+                            "feature sets: table1, physics, dynamics, or alpha=a,b;beta=c,d".into(),
                         )
                     })?;
                     let list = v
@@ -132,7 +185,7 @@ mod tests {
             assert_ne!(f.sources(), 0);
             assert_eq!(f.sources() & !estimator_core::channels::ALL_VALID, 0);
         }
-        for set in ["table1", "physics"] {
+        for set in ["table1", "physics", "dynamics"] {
             let s = FeatureSet::parse(set).unwrap();
             for f in s.alpha.iter().chain(&s.beta) {
                 assert!(!AIR_DATA_COLUMNS.contains(&f.name()));

@@ -23,17 +23,18 @@ struct TrainArgs {
     data: PathBuf,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Network sizes: small (CI) or paper.
+    /// Network sizes: small (CI), medium, or paper.
     #[arg(long, default_value = "small")]
     config: String,
-    /// Epochs (default: 40 small, 30 paper).
+    /// Epochs (default: 40 small, 30 medium and paper).
     #[arg(long)]
     epochs: Option<usize>,
     #[arg(long, default_value_t = 256)]
     batch: usize,
     #[arg(long, default_value_t = 1e-3)]
     lr: f64,
-    /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), or
+    /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
+    /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs), or
     /// "alpha=a,b,...;beta=c,d,..." with names of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,
@@ -155,7 +156,7 @@ fn cmd_train(
     vectors_out: &Path,
     no_export: bool,
 ) -> Result<()> {
-    let size = Size::parse(&args.config).context("--config must be small or paper")?;
+    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
     let fs = FeatureSet::parse(&args.features)?;
     let ds = Dataset::load(&args.data, args.val_fraction)
         .with_context(|| format!("loading dataset {}", args.data.display()))?;
@@ -169,10 +170,7 @@ fn cmd_train(
     if ds.rows(trainer::data::Role::Val) == 0 {
         bail!("no validation flight: the dataset needs at least two training flights");
     }
-    let epochs = args.epochs.unwrap_or(match size {
-        Size::Small => 40,
-        Size::Paper => 30,
-    });
+    let epochs = args.epochs.unwrap_or(size.default_epochs());
     let cfg = |a: Angle| TrainConfig {
         epochs,
         batch: args.batch,
@@ -253,7 +251,7 @@ fn cmd_eval(data: &Path, json: bool) -> Result<()> {
 
 fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     use trainer::baselines::{Baseline, run_baseline};
-    let size = Size::parse(&args.config).context("--config must be small or paper")?;
+    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
     let fs = FeatureSet::parse(&args.features)?;
     let ds = Dataset::load(&args.data, args.val_fraction)
         .with_context(|| format!("loading dataset {}", args.data.display()))?;
@@ -316,7 +314,7 @@ fn cmd_report(
     json: bool,
 ) -> Result<()> {
     use trainer::report::{ReportConfig, run};
-    let size = Size::parse(&args.config).context("--config must be small or paper")?;
+    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
     let seeds: Vec<u64> = seeds
         .split(',')
         .map(|s| s.trim().parse::<u64>())
@@ -335,10 +333,7 @@ fn cmd_report(
     if ds.rows(trainer::data::Role::Val) == 0 {
         bail!("no validation flight: the dataset needs at least two training flights");
     }
-    let epochs = args.epochs.unwrap_or(match size {
-        Size::Small => 40,
-        Size::Paper => 30,
-    });
+    let epochs = args.epochs.unwrap_or(size.default_epochs());
     let cfg = ReportConfig {
         seeds,
         size,

@@ -11,6 +11,8 @@ use estimator_core::{Estimator, Feature};
 pub enum Size {
     /// CI: α 32-16, β 16-8 per part.
     Small,
+    /// α 64-32-16, β 32-16 per part: for the larger datasets.
+    Medium,
     /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
     Paper,
 }
@@ -19,6 +21,7 @@ impl Size {
     pub fn parse(s: &str) -> Option<Size> {
         match s {
             "small" => Some(Size::Small),
+            "medium" => Some(Size::Medium),
             "paper" => Some(Size::Paper),
             _ => None,
         }
@@ -26,13 +29,22 @@ impl Size {
     pub fn name(self) -> &'static str {
         match self {
             Size::Small => "small",
+            Size::Medium => "medium",
             Size::Paper => "paper",
+        }
+    }
+    pub fn default_epochs(self) -> usize {
+        match self {
+            Size::Small => 40,
+            Size::Medium | Size::Paper => 30,
         }
     }
     pub fn hidden(self, a: Angle) -> &'static [usize] {
         match (self, a) {
             (Size::Small, Angle::Alpha) => &[32, 16],
             (Size::Small, Angle::Beta) => &[16, 8],
+            (Size::Medium, Angle::Alpha) => &[64, 32, 16],
+            (Size::Medium, Angle::Beta) => &[32, 16],
             (Size::Paper, Angle::Alpha) => &[512, 256, 128, 64, 32],
             (Size::Paper, Angle::Beta) => &[32, 16, 8, 4, 2],
         }

@@ -3,7 +3,7 @@
 use crate::model::{FloatLayer, float_forward};
 use crate::prep::{Angle, Prep, fixed_point, fp_value};
 use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
-use estimator_core::{Channel, Feature, FeatureValues, SensorFrame};
+use estimator_core::{Channel, Feature, FeatureValues, History, SensorFrame};
 use std::fmt::Write;
 
 /// One quantized layer: `weights[o][i]` int8, bias in accumulator units, requant per output.
@@ -252,6 +252,9 @@ impl QCascade {
 fn feature_path(f: Feature) -> String {
     match f {
         Feature::Sensor(c) => format!("crate::Feature::Sensor(crate::Channel::{c:?})"),
+        Feature::Delta(c, l) => {
+            format!("crate::Feature::Delta(crate::Channel::{c:?}, crate::Lag::{l:?})")
+        }
         other => format!("crate::Feature::{other:?}"),
     }
 }
@@ -384,23 +387,33 @@ pub fn generate(alpha: &QCascade, beta: &QCascade, provenance: &str) -> String {
 // ---------------------------------------------------------------------------------------------
 // Test vectors.
 
-/// One vector: a sensor frame and the integer outputs the deployed model must produce for it.
+/// One vector: a sensor frame and the integer outputs the deployed model must produce for it, given
+/// the frames since the last `reset` (the delta features' history).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Vector {
+    /// Start of a sequence: the history is empty before this frame.
+    pub reset: bool,
     pub frame: SensorFrame,
     pub alpha: RefOut,
     pub beta: RefOut,
 }
 
-pub const VECTOR_COLUMNS: &str = "seq time_ms valid raw0..raw15 w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped";
+pub const VECTOR_COLUMNS: &str = "reset seq time_ms valid raw0..raw15 w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped";
 
-/// Vectors for `frames`, computed by the integer reference.
-pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[SensorFrame]) -> Vec<Vector> {
+/// Vectors for `frames` (`(reset, frame)`: a reset starts a new sequence with an empty history),
+/// computed by the integer reference on the features `estimator-core` derives.
+pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[(bool, SensorFrame)]) -> Vec<Vector> {
+    let mut history = History::new();
     frames
         .iter()
-        .map(|f| {
-            let v = FeatureValues::compute(f);
+        .map(|(reset, f)| {
+            if *reset {
+                history.clear();
+            }
+            let v = FeatureValues::compute(f, &history);
+            history.push(f);
             Vector {
+                reset: *reset,
                 frame: *f,
                 alpha: alpha.reference(&v),
                 beta: beta.reference(&v),
@@ -410,7 +423,7 @@ pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[SensorFrame]) -> Vec
 }
 
 /// Text format: `#` comment lines, then one line per vector of whitespace-separated integers
-/// ([`VECTOR_COLUMNS`]): 3 + 16 + 6 = 25 numbers.
+/// ([`VECTOR_COLUMNS`]): 4 + 16 + 6 = 26 numbers.
 pub fn format_vectors(vs: &[Vector], header: &str) -> String {
     let mut out = String::new();
     for line in header.lines() {
@@ -419,7 +432,7 @@ pub fn format_vectors(vs: &[Vector], header: &str) -> String {
     let _ = writeln!(out, "# columns: {VECTOR_COLUMNS}");
     for v in vs {
         let f = &v.frame;
-        let _ = write!(out, "{} {} {}", f.seq, f.time_ms, f.valid);
+        let _ = write!(out, "{} {} {} {}", v.reset as u8, f.seq, f.time_ms, f.valid);
         for r in &f.raw {
             let _ = write!(out, " {r}");
         }
@@ -448,9 +461,10 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             .split_whitespace()
             .map(|t| t.parse().ok())
             .collect::<Option<_>>()?;
-        if n.len() != 25 {
+        if n.len() != 26 {
             return None;
         }
+        let n = &n[1..];
         let mut frame = SensorFrame {
             seq: n[0] as u16,
             time_ms: n[1] as u32,
@@ -466,6 +480,7 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             clamped: n[k + 2] != 0,
         };
         out.push(Vector {
+            reset: line.split_whitespace().next() == Some("1"),
             frame,
             alpha: ro(19),
             beta: ro(22),

@@ -3,7 +3,7 @@
 //! trained in-process on a deterministic function (no dataset needed).
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
 use estimator_core::normalize::Envelope;
-use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, SensorFrame};
+use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
 use trainer::model::{Cascade, Matrix, TrainConfig, float_forward, train};
 use trainer::prep::{Angle, Prep, norm_for};
 use trainer::quant::{QCascade, QLayer, format_vectors, parse_vectors, quantize_cascade, vectors};
@@ -40,7 +40,15 @@ fn targets(f: &SensorFrame) -> (f64, f64) {
 
 fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
     let fr = frames(3000);
-    let vals: Vec<FeatureValues> = fr.iter().map(FeatureValues::compute).collect();
+    let mut h = History::new();
+    let vals: Vec<FeatureValues> = fr
+        .iter()
+        .map(|f| {
+            let v = FeatureValues::compute(f, &h);
+            h.push(f);
+            v
+        })
+        .collect();
     // Prep fitted directly (no Flight needed): same construction as Prep::fit.
     let mut norm = Vec::new();
     let mut envelope = Vec::new();
@@ -161,8 +169,10 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
         }
     }
     let mut max_err_mdeg = 0f64;
+    let mut h = History::new();
     for (i, f) in fr.iter().enumerate() {
-        let v = FeatureValues::compute(f);
+        let v = FeatureValues::compute(f, &h);
+        h.push(f);
         let r = q.reference(&v);
         assert_eq!(net.run(&v), (r.mid, r.angle, r.clamped), "frame {i}");
         if i < xs.len() {
@@ -181,7 +191,12 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
         prep.out_sigma
     );
     // Vectors round-trip through the text format.
-    let vs = vectors(&q, &q, &fr[..50]);
+    let seq: Vec<(bool, SensorFrame)> = fr[..50]
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (i % 20 == 0, *f))
+        .collect();
+    let vs = vectors(&q, &q, &seq);
     let text = format_vectors(&vs, "test\nheader");
     assert_eq!(parse_vectors(&text).unwrap(), vs);
 }

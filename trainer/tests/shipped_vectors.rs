@@ -1,6 +1,6 @@
 //! The compiled-in model (estimator-core/src/model/weights.rs) reproduces the test vectors the trainer
-//! wrote next to it with its independent integer reference, through both `AngleNet::run` and a fresh
-//! `Estimator::shipped()`.
+//! wrote next to it with its independent integer reference, through `Estimator::shipped()` stepped over
+//! each run of consecutive frames (fresh at every `reset`).
 use estimator_core::Estimator;
 use trainer::quant::parse_vectors;
 
@@ -18,8 +18,11 @@ fn shipped_model_matches_its_vectors() {
         .expect("vectors written by `trainer train` next to weights.rs");
     let vs = parse_vectors(&text).expect("well-formed vectors");
     assert!(vs.len() > 50);
+    let mut est = Estimator::shipped();
     for (i, v) in vs.iter().enumerate() {
-        let mut est = Estimator::shipped();
+        if v.reset {
+            est = Estimator::shipped();
+        }
         let e = est.step(&v.frame);
         let all_valid = v.frame.valid == estimator_core::channels::ALL_VALID;
         if all_valid {
