@@ -666,6 +666,20 @@ mod tests {
     }
 
     #[test]
+    fn large_plan_extends_paper_without_changing_it() {
+        let paper = Preset::Paper.plan(1);
+        let large = Preset::Large.plan(1);
+        assert_eq!(paper.len(), 20);
+        assert_eq!(large.len(), 68);
+        assert_eq!(&large[..20], &paper[..]);
+        let names: std::collections::BTreeSet<_> = large.iter().map(|f| &f.name).collect();
+        let seeds: std::collections::BTreeSet<_> = large.iter().map(|f| f.seed).collect();
+        assert_eq!((names.len(), seeds.len()), (68, 68));
+        let tests = large.iter().filter(|f| f.split == crate::dataset::Split::Test);
+        assert_eq!(tests.count(), 4);
+    }
+
+    #[test]
     fn names_that_are_not_file_names_are_refused() {
         let p = Profile::preset(ProfileKind::Gentle);
         assert!(matches!(
@@ -703,6 +717,28 @@ pub struct PlannedFlight {
     pub duration_s: f64,
 }
 
+impl PlannedFlight {
+    /// Training flight `k` of profile number `pi`: seed `base × 1000 + pi × 100 + k`, duration drawn.
+    fn train(
+        base_seed: u64,
+        pi: usize,
+        kind: ProfileKind,
+        k: usize,
+        rng: &mut ChaCha12Rng,
+        len: Range,
+    ) -> PlannedFlight {
+        PlannedFlight {
+            name: format!("train_{}_{k:02}", kind.name()),
+            split: crate::dataset::Split::Train,
+            profile: kind,
+            seed: base_seed
+                .wrapping_mul(1000)
+                .wrapping_add((pi * 100 + k) as u64),
+            duration_s: draw(rng, len).round(),
+        }
+    }
+}
+
 impl Preset {
     pub fn name(self) -> &'static str {
         match self {
@@ -722,15 +758,14 @@ impl Preset {
             let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6c61_7267_6570_6c61);
             for (pi, kind) in ProfileKind::ALL.iter().enumerate() {
                 for k in 4..16 {
-                    out.push(PlannedFlight {
-                        name: format!("train_{}_{k:02}", kind.name()),
-                        split: Split::Train,
-                        profile: *kind,
-                        seed: base_seed
-                            .wrapping_mul(1000)
-                            .wrapping_add((pi * 100 + k) as u64),
-                        duration_s: draw(&mut rng, (900.0, 1200.0)).round(),
-                    });
+                    out.push(PlannedFlight::train(
+                        base_seed,
+                        pi,
+                        *kind,
+                        k,
+                        &mut rng,
+                        (900.0, 1200.0),
+                    ));
                 }
             }
             return out;
@@ -755,15 +790,9 @@ impl Preset {
         };
         for (pi, kind) in ProfileKind::ALL.iter().enumerate() {
             for k in 0..per_profile {
-                out.push(PlannedFlight {
-                    name: format!("train_{}_{k:02}", kind.name()),
-                    split: Split::Train,
-                    profile: *kind,
-                    seed: base_seed
-                        .wrapping_mul(1000)
-                        .wrapping_add((pi * 100 + k) as u64),
-                    duration_s: draw(&mut rng, train_len).round(),
-                });
+                out.push(PlannedFlight::train(
+                    base_seed, pi, *kind, k, &mut rng, train_len,
+                ));
             }
         }
         for (k, kind) in test_profiles.iter().enumerate() {
