@@ -371,14 +371,25 @@ fn cmd_report(
     );
     if size != Size::Paper {
         let at = md.find("\n\n").map(|i| i + 2).unwrap_or(0);
+        let fmt = |h: &[usize]| {
+            h.iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join("-")
+        };
         md.insert_str(
             at,
-            "> **Small networks** (α 32-16, β 16-8 per part), not the paper's sizes: \
-             `--config paper` trains α 512-256-128-64-32 and β 32-16-8-4-2 per part.\n\n",
+            &format!(
+                "> **`{}` networks** (α {}, β {} per part), not the paper's sizes: `--config paper` \
+                 trains α 512-256-128-64-32 and β 32-16-8-4-2 per part.\n\n",
+                size.name(),
+                fmt(size.hidden(Angle::Alpha)),
+                fmt(size.hidden(Angle::Beta)),
+            ),
         );
     }
-    if ds.preset.as_deref() != Some("paper") {
-        let rows = ds.rows(trainer::data::Role::Train) + ds.rows(trainer::data::Role::Val);
+    let rows = ds.rows(trainer::data::Role::Train) + ds.rows(trainer::data::Role::Val);
+    if ds.preset.as_deref() != Some("paper") && rows < 288_000 {
         let warn = format!(
             "> **Not the paper experiment.** Dataset preset `{}`: {rows} training rows ({:.1} min of \
              flight at 20 Hz) vs the paper's 288 000 (4 h). These figures check the pipeline and \
