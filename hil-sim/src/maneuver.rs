@@ -675,7 +675,9 @@ mod tests {
         let names: std::collections::BTreeSet<_> = large.iter().map(|f| &f.name).collect();
         let seeds: std::collections::BTreeSet<_> = large.iter().map(|f| f.seed).collect();
         assert_eq!((names.len(), seeds.len()), (68, 68));
-        let tests = large.iter().filter(|f| f.split == crate::dataset::Split::Test);
+        let tests = large
+            .iter()
+            .filter(|f| f.split == crate::dataset::Split::Test);
         assert_eq!(tests.count(), 4);
     }
 
