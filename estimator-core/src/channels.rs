@@ -189,11 +189,13 @@ pub fn quantize(v: f64, lsb: f64, range: (i32, i32)) -> Option<i32> {
     if !q.is_finite() {
         return None;
     }
-    let r = if q >= 0.0 { q + 0.5 } else { q - 0.5 };
-    if r < range.0 as f64 || r >= range.1 as f64 + 1.0 {
+    // Round half away from zero, then check the rounded value (so the range ends themselves fit).
+    // (`as i64` truncates toward zero and saturates, so huge values stay out of range.)
+    let r = (if q >= 0.0 { q + 0.5 } else { q - 0.5 }) as i64;
+    if r < range.0 as i64 || r > range.1 as i64 {
         return None;
     }
-    Some(r as i64 as i32)
+    Some(r as i32)
 }
 
 #[cfg(test)]
@@ -222,5 +224,18 @@ mod tests {
         assert_eq!(quantize(-0.0149, 0.01, (-10, 10)), Some(-1));
         assert_eq!(quantize(0.0151, 0.01, (-10, 10)), Some(2));
         assert_eq!(quantize(0.105, 0.01, (-10, 10)), None);
+    }
+
+    #[test]
+    fn both_ends_of_the_range_are_carried() {
+        let full = (i32::MIN, i32::MAX);
+        assert_eq!(quantize(i32::MIN as f64, 1.0, full), Some(i32::MIN));
+        assert_eq!(quantize(i32::MAX as f64, 1.0, full), Some(i32::MAX));
+        assert_eq!(quantize(-10.4, 1.0, (-10, 10)), Some(-10));
+        assert_eq!(quantize(-10.5, 1.0, (-10, 10)), None);
+        assert_eq!(quantize(10.4, 1.0, (-10, 10)), Some(10));
+        assert_eq!(quantize(10.5, 1.0, (-10, 10)), None);
+        let s16 = Channel::Rudder.raw_range();
+        assert_eq!(quantize(-327.68, 0.01, s16), Some(i16::MIN as i32));
     }
 }
