@@ -7,7 +7,6 @@ ORIGINAL stdout):
   load\tSCRIPT\tINITFILE   load a runscript at 120 Hz (INITFILE may be empty: JSBSim looks in the
                           aircraft folder), run the initial conditions
   watch\tP1\tP2...        the properties returned after every step, in this order
-  set\tPROP\tVALUE        write one property
   step\tN                 run up to N steps; payload = u32 steps done (fewer when the script ended)
                           + that many rows of little-endian f64, one per watched property
   quit
@@ -68,9 +67,6 @@ def main():
                 else:
                     nodes = found
                     reply(True)
-            elif cmd == "set":
-                fdm.set_property_value(f[1], float(f[2]))
-                reply(True)
             elif cmd == "step":
                 n = int(f[1])
                 rows = []

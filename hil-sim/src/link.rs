@@ -172,10 +172,6 @@ impl Direction {
         }
     }
 
-    pub fn config(&self) -> &LinkConfig {
-        &self.cfg
-    }
-
     pub fn stats(&self) -> LinkStats {
         self.stats
     }

@@ -114,7 +114,7 @@ mod hil_sim_cli {
     #[derive(clap::Args)]
     pub struct GenerateArgs {
         /// `paper`: 16 training flights of 15–20 min + 4 test flights; `large`: paper + 48 more training
-        /// flights (≈ 18 h); `ci`: 5 flights of 3 min.
+        /// flights (≈ 19 h); `ci`: 5 flights of 3 min.
         #[arg(long, value_enum)]
         preset: hil_sim::maneuver::Preset,
         /// Dataset directory to write (created).
@@ -154,7 +154,7 @@ mod hil_sim_cli {
             "generated {} flights ({} samples, {:.1} min of flight, {} cut) in {:.1} s wall",
             m.flights.len(),
             samples,
-            samples as f64 / 20.0 / 60.0,
+            samples as f64 / f64::from(hil_sim::plant::SAMPLE_HZ) / 60.0,
             cut,
             started.elapsed().as_secs_f64()
         );

@@ -215,12 +215,6 @@ impl Plant {
         Ok(())
     }
 
-    /// Writes one property.
-    pub fn set(&mut self, prop: &str, value: f64) -> Result<(), PlantError> {
-        let v = format!("{value:e}");
-        self.request(&["set", prop, &v]).map(|_| ())
-    }
-
     /// Runs up to `n` steps; returns one row of watched values per step done. Fewer rows than `n`
     /// means the script reached its end.
     pub fn step(&mut self, n: u32) -> Result<Vec<Vec<f64>>, PlantError> {
@@ -541,11 +535,6 @@ pub fn fly_script_with(
         }
     }
     Ok(flight)
-}
-
-/// JSBSim version the bridge reports (starts a bridge just to ask).
-pub fn jsbsim_version() -> Result<String, PlantError> {
-    Ok(Plant::spawn()?.jsbsim_version().to_string())
 }
 
 #[cfg(test)]

@@ -73,7 +73,7 @@ impl Default for ImuConfig {
                 in_run_bias_tau_s: 60.0,
                 noise_density: 35e-6 * G0,
                 // 2^-14 ft/s per Δv count
-                quantum: 2f64.powi(-14) * 0.3048,
+                quantum: 2f64.powi(-14) * crate::plant::FT_TO_M,
             },
             gyro_g_sensitivity_rps_per_mps2: 1.0 * DEG_PER_H / G0,
             lever_arm_m: [0.5, 0.0, 0.2],

@@ -56,7 +56,7 @@ pub fn spearman(a: &[f64], b: &[f64]) -> f64 {
 pub fn columns(ds: &Dataset, max_rows: usize) -> (Vec<String>, Vec<Vec<f64>>) {
     let fl: Vec<_> = ds.flights.iter().filter(|f| f.role != Role::Test).collect();
     let total: usize = fl.iter().map(|f| f.len()).sum();
-    let step = total.div_ceil(max_rows.max(1)).max(1);
+    let step = crate::data::stride(total, max_rows);
     let mut names: Vec<String> = Feature::ALL.iter().map(|f| f.name().to_string()).collect();
     names.extend(Target::ALL.iter().map(|t| t.column().to_string()));
     let mut cols = vec![Vec::new(); names.len()];
@@ -137,7 +137,7 @@ pub fn sample_rows(ds: &Dataset, roles: &[Role], n: usize) -> Vec<FeatureValues>
         .filter(|f| roles.contains(&f.role))
         .flat_map(|f| f.features.iter())
         .collect();
-    let step = all.len().div_ceil(n.max(1)).max(1);
+    let step = crate::data::stride(all.len(), n);
     all.into_iter().step_by(step).copied().collect()
 }
 

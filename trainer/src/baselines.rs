@@ -180,7 +180,7 @@ pub fn run_baseline(
             use gbdt::gradient_boost::GBDT;
             let d = Design::fit(features, &tr);
             let total: usize = tr.iter().map(|f| f.len()).sum();
-            let step = total.div_ceil(gb_rows.max(1)).max(1);
+            let step = crate::data::stride(total, gb_rows);
             let mut data = Vec::new();
             let mut k = 0usize;
             for fl in &tr {

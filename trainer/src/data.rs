@@ -1,9 +1,9 @@
 //! Datasets for training, read through `hil_sim::dataset` (the one reader of the format in
 //! docs/architecture.md), and the exact estimator input contract: every row becomes the frame the link
 //! delivers (`hil_sim::frames::sample_to_frame`, i.e. `SensorFrame::from_si` of the 16 sensed SI
-//! columns), then `FeatureValues::compute`.
+//! columns), then `FeatureValues::compute(&frame, &history)` through one `History` per flight.
 use crate::error::{Error, Result};
-use estimator_core::{FEATURE_COUNT, FeatureValues, History, SensorFrame};
+use estimator_core::{FeatureValues, History, SensorFrame};
 use hil_sim::dataset::{Manifest, Split, sha256_file};
 use std::path::{Path, PathBuf};
 
@@ -144,6 +144,12 @@ pub fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// Row stride that keeps at most `max_rows` of `total` rows, evenly spread (every row when
+/// `max_rows >= total`).
+pub fn stride(total: usize, max_rows: usize) -> usize {
+    total.div_ceil(max_rows.max(1)).max(1)
+}
+
 /// Reads one flight CSV and derives the estimator's inputs from it.
 pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
     let csv = hil_sim::dataset::Flight::read_csv(path)?;
@@ -177,11 +183,6 @@ pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
 /// The float value of a feature the model is trained on: the quantized raw value times its LSB.
 pub fn feature_si(v: &FeatureValues, f: estimator_core::Feature) -> f64 {
     v.get(f) as f64 * f.lsb()
-}
-
-/// Indices `0..FEATURE_COUNT` in `Feature::ALL` order (for analyses over every candidate).
-pub fn all_feature_indices() -> std::ops::Range<usize> {
-    0..FEATURE_COUNT
 }
 
 #[cfg(test)]

@@ -135,6 +135,34 @@ enum Cmd {
     },
 }
 
+impl TrainArgs {
+    fn size(&self) -> Result<Size> {
+        Size::parse(&self.config).context("--config must be small, medium or paper")
+    }
+
+    fn epochs(&self, size: Size) -> usize {
+        self.epochs.unwrap_or(size.default_epochs())
+    }
+
+    /// The dataset, split by flight, with at least one validation flight.
+    fn dataset(&self) -> Result<Dataset> {
+        let ds = load(&self.data, self.val_fraction)?;
+        if ds.rows(trainer::data::Role::Val) == 0 {
+            bail!("no validation flight: the dataset needs at least two training flights");
+        }
+        Ok(ds)
+    }
+}
+
+fn load(data: &Path, val_fraction: f64) -> Result<Dataset> {
+    Dataset::load(data, val_fraction).with_context(|| format!("loading dataset {}", data.display()))
+}
+
+/// This process's command line, for provenance and reports.
+fn command_line() -> String {
+    std::env::args().collect::<Vec<_>>().join(" ")
+}
+
 fn print_metrics(label: &str, m: &FlightMetrics) {
     for (name, x) in &m.per_flight {
         println!(
@@ -156,10 +184,9 @@ fn cmd_train(
     vectors_out: &Path,
     no_export: bool,
 ) -> Result<()> {
-    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
+    let size = args.size()?;
     let fs = FeatureSet::parse(&args.features)?;
-    let ds = Dataset::load(&args.data, args.val_fraction)
-        .with_context(|| format!("loading dataset {}", args.data.display()))?;
+    let ds = args.dataset()?;
     eprintln!(
         "dataset {}: train {} rows, val {} rows, test {} rows",
         args.data.display(),
@@ -167,10 +194,7 @@ fn cmd_train(
         ds.rows(trainer::data::Role::Val),
         ds.rows(trainer::data::Role::Test)
     );
-    if ds.rows(trainer::data::Role::Val) == 0 {
-        bail!("no validation flight: the dataset needs at least two training flights");
-    }
-    let epochs = args.epochs.unwrap_or(size.default_epochs());
+    let epochs = args.epochs(size);
     let cfg = |a: Angle| TrainConfig {
         epochs,
         batch: args.batch,
@@ -194,7 +218,7 @@ fn cmd_train(
             t.curves.best_epoch + 1
         );
     }
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = command_line();
     let prov = provenance(&ds, args.seed, &command, &fs.name, &alpha, &beta);
     let summary = serde_json::json!({
         "seed": args.seed, "config": size.name(), "features": fs.name, "epochs": epochs,
@@ -218,8 +242,7 @@ fn cmd_train(
 }
 
 fn cmd_eval(data: &Path, json: bool) -> Result<()> {
-    let ds =
-        Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
+    let ds = load(data, 0.15)?;
     let Some(prov) = trainer::pipeline::shipped_provenance() else {
         bail!(
             "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
@@ -251,11 +274,10 @@ fn cmd_eval(data: &Path, json: bool) -> Result<()> {
 
 fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     use trainer::baselines::{Baseline, run_baseline};
-    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
+    let size = args.size()?;
     let fs = FeatureSet::parse(&args.features)?;
-    let ds = Dataset::load(&args.data, args.val_fraction)
-        .with_context(|| format!("loading dataset {}", args.data.display()))?;
-    let epochs = args.epochs.unwrap_or(40);
+    let ds = args.dataset()?;
+    let epochs = args.epochs(size);
     for angle in [Angle::Alpha, Angle::Beta] {
         let feats = match angle {
             Angle::Alpha => &fs.alpha,
@@ -314,7 +336,7 @@ fn cmd_report(
     json: bool,
 ) -> Result<()> {
     use trainer::report::{ReportConfig, run};
-    let size = Size::parse(&args.config).context("--config must be small, medium or paper")?;
+    let size = args.size()?;
     let seeds: Vec<u64> = seeds
         .split(',')
         .map(|s| s.trim().parse::<u64>())
@@ -328,12 +350,8 @@ fn cmd_report(
         "none" => None,
         a => Some(FeatureSet::parse(a)?),
     };
-    let ds = Dataset::load(&args.data, args.val_fraction)
-        .with_context(|| format!("loading dataset {}", args.data.display()))?;
-    if ds.rows(trainer::data::Role::Val) == 0 {
-        bail!("no validation flight: the dataset needs at least two training flights");
-    }
-    let epochs = args.epochs.unwrap_or(size.default_epochs());
+    let ds = args.dataset()?;
+    let epochs = args.epochs(size);
     let cfg = ReportConfig {
         seeds,
         size,
@@ -363,7 +381,7 @@ fn cmd_report(
     if json {
         println!("{}", serde_json::to_string(&report)?);
     }
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = command_line();
     let mut md = report.markdown(
         &command,
         &machine(),
@@ -452,8 +470,7 @@ struct ShapArgs {
 fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result<()> {
     use std::fmt::Write;
     use trainer::analysis::{columns, spearman_matrix};
-    let ds =
-        Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
+    let ds = load(data, 0.15)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let (names, cols) = columns(&ds, rows);
     let n_rows = cols.first().map(|c| c.len()).unwrap_or(0);
@@ -483,7 +500,7 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
         data.display(),
         ds.preset.as_deref().unwrap_or("?"),
         ds.manifest_sha256,
-        std::env::args().collect::<Vec<_>>().join(" "),
+        command_line(),
         machine()
     );
     let _ = writeln!(
@@ -616,8 +633,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     if epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
     }
-    let ds =
-        Dataset::load(data, 0.15).with_context(|| format!("loading dataset {}", data.display()))?;
+    let ds = load(data, 0.15)?;
     let fs = FeatureSet::parse("table1")?;
     let tr: Vec<_> = ds.flights(Role::Train).collect();
     let va: Vec<_> = ds.flights(Role::Val).collect();
@@ -642,7 +658,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     let mean = rest.iter().sum::<f64>() / rest.len() as f64;
     let rows = train_m.rows();
     let v = serde_json::json!({
-        "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "command": command_line(),
         "machine": machine(),
         "dataset": data.display().to_string(),
         "epochs": epochs, "batch": batch, "n_in": n_in,

@@ -75,7 +75,7 @@ pub fn flights(ds: &Dataset, role: Role) -> Vec<&Flight> {
 /// Evenly spread training rows' inputs for activation calibration.
 pub fn calibration(prep: &Prep, train: &[&Flight], max_rows: usize) -> Vec<Vec<f32>> {
     let total: usize = train.iter().map(|f| f.len()).sum();
-    let step = total.div_ceil(max_rows.max(1)).max(1);
+    let step = crate::data::stride(total, max_rows);
     let mut out = Vec::new();
     let mut k = 0usize;
     for fl in train {
@@ -128,16 +128,11 @@ pub fn train_angle(
 }
 
 /// Float and integer-reference metrics of a cascade on the test flights.
-#[allow(clippy::type_complexity)]
 pub fn evaluate(
     model: &Cascade,
     q: &QCascade,
     ds: &Dataset,
-) -> (
-    FlightMetrics,
-    FlightMetrics,
-    Vec<(String, Vec<f64>, Vec<f64>, Vec<f64>)>,
-) {
+) -> (FlightMetrics, FlightMetrics, Vec<TestSeries>) {
     let prep = &q.prep;
     let mut fl_f = Vec::new();
     let mut fl_i = Vec::new();

@@ -1,19 +1,7 @@
 //! PNG plots (plotters, bitmap backend, embedded DejaVu Sans so no system fonts are needed).
 use crate::error::{Error, Result};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 use std::path::Path;
-use std::sync::Once;
-
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
-static REGISTER: Once = Once::new();
-
-fn font() {
-    REGISTER.call_once(|| {
-        // The embedded font is a valid TTF; if registration failed, text drawing reports the error.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
 
 fn perr<E: std::fmt::Display>(e: E) -> Error {
     Error::Plot(e.to_string())
@@ -59,7 +47,7 @@ pub fn line_panels(
     panel_w: u32,
     h: u32,
 ) -> Result<()> {
-    font();
+    hil_sim::font::register();
     let root = BitMapBackend::new(path, (panel_w * panels.len() as u32, h)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
     let areas = root.split_evenly((1, panels.len()));
@@ -142,7 +130,7 @@ pub fn line_panels(
 
 /// Horizontal bar chart (e.g. mean |SHAP| per feature), largest first.
 pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> Result<()> {
-    font();
+    hil_sim::font::register();
     let mut items = items.to_vec();
     items.sort_by(|a, b| b.1.total_cmp(&a.1));
     let h = 80 + 28 * items.len() as u32;
@@ -197,7 +185,7 @@ fn reversed_label(names: &[String], v: &SegmentValue<usize>) -> String {
 
 /// Correlation heatmap, values in -1..=1 (blue negative, red positive).
 pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Result<()> {
-    font();
+    hil_sim::font::register();
     let n = names.len();
     let cell = 34u32;
     let side = 190 + cell * n as u32;

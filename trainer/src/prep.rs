@@ -162,12 +162,6 @@ impl Prep {
     pub fn mid_z(&self, mps: f64) -> f32 {
         norm_z(self.mid_norm, mps * 1000.0) as f32
     }
-    /// m/s from a normalised intermediate.
-    pub fn mid_mps(&self, z: f64) -> f64 {
-        (z * ONE_SIGMA as f64 / fp_value(self.mid_norm.mult, self.mid_norm.shift)
-            + self.mid_norm.center as f64)
-            / 1000.0
-    }
     /// Normalised angle target from degrees.
     pub fn out_z(&self, deg: f64) -> f32 {
         ((deg * 1000.0 - self.out_center as f64) / self.out_sigma) as f32

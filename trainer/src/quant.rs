@@ -374,8 +374,8 @@ pub fn generate(alpha: &QCascade, beta: &QCascade, provenance: &str) -> String {
          // Every layer is built with the const fn `Dense::new`, so shapes, int8 range and accumulator\n\
          // head-room are checked at compile time.\n\n",
     );
-    static_item("ALPHA", alpha, &mut out);
-    static_item("BETA", beta, &mut out);
+    static_item(static_name(Angle::Alpha), alpha, &mut out);
+    static_item(static_name(Angle::Beta), beta, &mut out);
     let _ = writeln!(
         out,
         "/// Where this model came from: dataset, seed, command, git revision and its test metrics.\n\

@@ -3,23 +3,10 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
 use super::{DatasetError, Flight, Manifest, Split};
-
-// DejaVu Sans (Bitstream Vera license, assets/DejaVuSans-LICENSE.txt), embedded so plots do not
-// depend on system fonts.
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-static REGISTER: Once = Once::new();
-
-fn register_font() {
-    REGISTER.call_once(|| {
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
 
 /// α bands of the report, deg: (label, low, high).
 pub const ALPHA_BANDS: [(&str, f64, f64); 7] = [
@@ -64,7 +51,7 @@ fn coverage(flights: &[&Flight]) -> Coverage {
         r.1 = r.1.max(v);
     };
     for f in flights {
-        c.duration_min += f.samples.len() as f64 / 20.0 / 60.0;
+        c.duration_min += f.samples.len() as f64 / f64::from(crate::plant::SAMPLE_HZ) / 60.0;
         for s in &f.samples {
             let t = &s.truth;
             c.samples += 1;
@@ -108,7 +95,7 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
         .flat_map(|(f, _)| {
             f.samples
                 .iter()
-                .map(|s| s.truth.alt_msl_m / 0.3048 / 1000.0)
+                .map(|s| s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0)
         })
         .fold(10.0f64, f64::max);
     let max_mach = flights
@@ -137,7 +124,10 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
         chart
             .draw_series(f.samples.iter().step_by(10).map(|s| {
                 Circle::new(
-                    (s.truth.mach, s.truth.alt_msl_m / 0.3048 / 1000.0),
+                    (
+                        s.truth.mach,
+                        s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0,
+                    ),
                     1,
                     color.mix(0.4).filled(),
                 )
@@ -217,7 +207,9 @@ fn sample_flight(path: &Path, f: &Flight) -> Result<(), DatasetError> {
     let t_end = f.duration_s().max(1.0);
     type Get = fn(&super::Sample) -> f64;
     let series: [(&str, Get); 4] = [
-        ("altitude, 1000 ft", |s| s.truth.alt_msl_m / 0.3048 / 1000.0),
+        ("altitude, 1000 ft", |s| {
+            s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0
+        }),
         ("Mach", |s| s.truth.mach),
         ("α, deg", |s| s.truth.alpha_deg),
         ("β, deg", |s| s.truth.beta_deg),
@@ -265,7 +257,7 @@ pub struct Report {
 /// Reads the dataset in `dir`, writes `envelope.png`, `alpha_hist.png`, `beta_hist.png`,
 /// `sample_flight.png` and `dataset.md` there, and returns the numbers.
 pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
-    register_font();
+    crate::font::register();
     let manifest = Manifest::read(dir)?;
     let mut flights = Vec::new();
     for entry in &manifest.flights {

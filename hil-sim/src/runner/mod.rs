@@ -74,7 +74,7 @@ impl Default for RunConfig {
 }
 
 /// Sample period of the flight and the estimator.
-pub const PERIOD_S: f64 = 0.05;
+pub const PERIOD_S: f64 = 1.0 / crate::plant::SAMPLE_HZ as f64;
 
 /// One sensor frame sent and what came back for it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -260,9 +260,9 @@ pub fn samples_of(flight: &crate::dataset::Flight) -> Vec<Sample> {
     flight
         .samples
         .iter()
-        .enumerate()
-        .map(|(i, s)| Sample {
-            frame: crate::frames::sample_to_frame(i as u16, s),
+        .zip(crate::frames::flight_frames(flight))
+        .map(|(s, frame)| Sample {
+            frame,
             time_s: s.time_s,
             alpha_true_deg: s.truth.alpha_deg,
             beta_true_deg: s.truth.beta_deg,

@@ -62,10 +62,6 @@ impl InProcess {
             pending: Vec::new(),
         }
     }
-
-    pub fn app(&self) -> &App<'static, HostClock> {
-        &self.app
-    }
 }
 
 impl Target for InProcess {

@@ -187,35 +187,4 @@ pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error>
     Ok(())
 }
 
-/// Columns of the CSV that must match bit for bit between two firmwares running the same flight.
-pub const ESTIMATE_COLUMNS: [&str; 7] = [
-    "seq",
-    "received",
-    "alpha_mdeg",
-    "beta_mdeg",
-    "w_aero_mms",
-    "v_aero_mms",
-    "flags",
-];
-
-/// The estimate columns of a per-frame CSV, for bit-exact comparisons.
-pub fn read_estimate_columns(path: &Path) -> Result<Vec<Vec<String>>, csv::Error> {
-    let mut r = csv::Reader::from_path(path)?;
-    let headers = r.headers()?.clone();
-    let idx: Vec<usize> = ESTIMATE_COLUMNS
-        .iter()
-        .filter_map(|c| headers.iter().position(|h| h == *c))
-        .collect();
-    let mut rows = Vec::new();
-    for rec in r.records() {
-        let rec = rec?;
-        rows.push(
-            idx.iter()
-                .map(|&i| rec.get(i).unwrap_or("").to_string())
-                .collect(),
-        );
-    }
-    Ok(rows)
-}
-
 pub mod plot;

@@ -2,23 +2,11 @@
 //! Text uses the embedded DejaVu Sans (no system fonts in CI containers).
 
 use std::path::Path;
-use std::sync::Once;
 
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 
 use super::{Summary, scorable};
 use crate::runner::FrameRecord;
-
-static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-static REGISTER: Once = Once::new();
-
-fn register_font() {
-    REGISTER.call_once(|| {
-        // A bad font would surface as a drawing error below, with its message.
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
 
 const TRUTH: RGBColor = RGBColor(31, 119, 180);
 const ESTIMATE: RGBColor = RGBColor(255, 127, 14);
@@ -59,7 +47,7 @@ fn range(points: &[&Points]) -> (f64, f64) {
 
 /// Writes the plot. Errors come back as text (plotters' error types are backend-generic).
 pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<(), String> {
-    register_font();
+    crate::font::register();
     let root = BitMapBackend::new(path, (1400, 1000)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let fmt = |v: Option<f64>| v.map_or("n/a".to_string(), |v| format!("{v:.3}"));
