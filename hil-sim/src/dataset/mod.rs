@@ -502,13 +502,6 @@ pub fn generate(
                     let (Some(f), Some(script)) = (plan.get(i), scripts.get(i)) else {
                         break;
                     };
-                    // The sensor seed follows the maneuver seed of each attempt (below).
-                    let cfg = FlyConfig {
-                        seed: 0,
-                        sensors: sensors.clone(),
-                        max_time_s: None,
-                        name: Some(f.name.clone()),
-                    };
                     let r = (|| -> Result<FlightEntry, GenerateError> {
                         let mut plant = crate::plant::Plant::spawn()?;
                         if let Ok(mut v) = version.lock() {
@@ -519,7 +512,9 @@ pub fn generate(
                             let seed = redraw_seed(f.seed, attempt);
                             let cfg = FlyConfig {
                                 seed: sensor_seed(seed),
-                                ..cfg.clone()
+                                sensors: sensors.clone(),
+                                max_time_s: None,
+                                name: Some(f.name.clone()),
                             };
                             match crate::plant::fly_script_with(&mut plant, script, &cfg) {
                                 Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => {
