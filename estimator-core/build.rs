@@ -1,6 +1,6 @@
 //! Chooses the weights file that `src/model/mod.rs` compiles in.
 //!
-//! Default: `src/model/weights.rs`, written by `trainer export` and committed. `ESTIMATOR_WEIGHTS=/abs/path.rs`
+//! Default: `src/model/weights.rs`, written by `trainer train` and committed. `ESTIMATOR_WEIGHTS=/abs/path.rs`
 //! builds against another export (CI trains a small model and checks it end to end without touching the
 //! shipped weights).
 use std::path::PathBuf;
@@ -22,7 +22,7 @@ fn main() {
     } else {
         println!(
             "cargo:warning=no estimator weights at {} yet: the crate builds without a shipped model \
-             (run `trainer export` to write one)",
+             (run `trainer train` to write one)",
             path.display()
         );
     }

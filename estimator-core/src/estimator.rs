@@ -50,7 +50,7 @@ impl Flags {
         self.0 & bit != 0
     }
 
-    /// Neither angle was computed from this frame's data.
+    /// Both angles were computed from this frame's data (none held, no `NO_ESTIMATE`/`NO_MODEL`).
     pub fn is_usable(self) -> bool {
         self.0 & (Self::NO_ESTIMATE | Self::NO_MODEL | Self::ALPHA_HELD | Self::BETA_HELD) == 0
     }

@@ -14,7 +14,7 @@
 //! * the frame formats on the serial link ([`wire`]).
 //!
 //! Data flow of one step: bytes → [`wire::Accumulator`] → [`wire::sensor`] → [`SensorFrame`] →
-//! [`Estimator::step`] (features → envelope → normalise → cascade part 1 → part 2) → [`Estimate`] →
+//! [`Estimator::step`] (features, with deltas from the 24-frame History → envelope → normalise → cascade part 1 → part 2) → [`Estimate`] →
 //! [`wire::estimate`] → bytes.
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]

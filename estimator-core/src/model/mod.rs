@@ -1,4 +1,4 @@
-//! The compiled-in model: `weights.rs`, written by `trainer export`, never edited by hand.
+//! The compiled-in model: `weights.rs`, written by `trainer train`, never edited by hand.
 //! `ESTIMATOR_WEIGHTS=/path/weights.rs` at build time selects another export (see `build.rs`).
 
 #[cfg(estimator_weights)]

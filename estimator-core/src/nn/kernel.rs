@@ -7,7 +7,8 @@
 //! * [`Int16Weights`] (default): each weight widened to an int16 half and re-ordered for the kernel,
 //!   so that the Cortex-M4 inner loop is loads and `SMLAD`s only, four output rows sharing each input
 //!   load (11 instructions per 16 MACs; measured 0.74 instructions per MAC on the paper-size network's
-//!   large layers, ≈1.0 on the shipped model's small ones). Twice the flash of int8.
+//!   large layers, 0.83 over the shipped medium model, 0.795 on its 64-input layers). Twice the flash
+//!   of int8.
 //! * [`Int8Weights`] (feature `int8-weights`): the int8 table as exported. Every pair of weights then
 //!   needs an `SXTB16` besides its `SMLAD`, so this kernel cannot go below one instruction per MAC
 //!   (measured ≈2.0). Half the flash, for models that would not fit otherwise.
