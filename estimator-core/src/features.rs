@@ -1,4 +1,5 @@
-//! Candidate model inputs, computed in integer arithmetic from a [`SensorFrame`].
+//! Candidate model inputs, computed in integer arithmetic from a [`SensorFrame`] and, for the
+//! delta features, a [`History`] of past frames.
 //!
 //! The first 16 features are the sensed channels themselves. The derived ones carry the
 //! dynamic-pressure information that the sensed channels lack, from sensors alone (never air data):
@@ -299,31 +300,42 @@ impl History {
     fn deltas(&self, frame: &SensorFrame, lag: Lag, raw: &mut [i32; FEATURE_COUNT]) -> bool {
         let want = lag.ms();
         let age = |p: &Past| frame.time_ms.wrapping_sub(p.time_ms);
-        let exact = self.newest_first().find(|p| age(p) == want);
-        let mut short = false;
+        // The stored frame whose age is closest to the lag, in (0, 2 × lag], with the `need` channels
+        // valid (the first, i.e. newest, of equally close ones). Age == lag is the exact frame.
+        let closest = |need: u16| {
+            self.newest_first()
+                .filter(|p| p.valid & need == need && age(p) > 0 && age(p) <= 2 * want)
+                .min_by_key(|p| age(p).abs_diff(want))
+        };
+        // One search serves every channel valid in the frame it finds: a channel's own search could
+        // only find the same frame. Only channels invalid there search again. The exact frame, when
+        // stored, is the closest; looking for it first stops early in the usual case.
+        let shared = self
+            .newest_first()
+            .find(|p| age(p) == want)
+            .or_else(|| closest(0));
+        let mut short = shared.is_none_or(|p| age(p) != want);
         for c in Channel::ALL {
-            let now = frame.get(c) as i64;
             let bit = c.bit();
-            let d = match exact {
-                Some(p) if p.valid & bit != 0 => {
-                    now - p.raw.get(c.index()).copied().unwrap_or(0) as i64
-                }
-                _ => {
+            let from = match shared {
+                Some(p) if p.valid & bit != 0 => Some(p),
+                Some(_) => {
                     short = true;
-                    // Closest stored age to the lag, in (0, 2 × lag], channel valid.
-                    let best = self
-                        .newest_first()
-                        .filter(|p| p.valid & bit != 0 && age(p) > 0 && age(p) <= 2 * want)
-                        .min_by_key(|p| age(p).abs_diff(want));
-                    match best {
-                        Some(p) => {
-                            let old = p.raw.get(c.index()).copied().unwrap_or(0) as i64;
-                            (now - old) * want as i64 / age(p) as i64
-                        }
-                        None => 0,
-                    }
+                    closest(bit)
                 }
+                // Nothing stored within twice the lag: no channel's search could find a frame.
+                None => None,
             };
+            let d = from.map_or(0, |p| {
+                let old = p.raw.get(c.index()).copied().unwrap_or(0) as i64;
+                let d = frame.get(c) as i64 - old;
+                // Rate-scaled to the nominal lag when the frame is not the lagged one (an i64
+                // division is a library call on the Cortex-M4: skip it in the usual exact case).
+                match age(p) {
+                    a if a == want => d,
+                    a => d * want as i64 / a as i64,
+                }
+            });
             if let Some(r) = raw.get_mut(Feature::Delta(c, lag).index()) {
                 *r = sat_i32(d);
             }
@@ -545,7 +557,8 @@ mod tests {
             h.push(&ramp(t)); // the frame at 50 ms was lost
         }
         let v = FeatureValues::compute(&ramp(250), &h);
-        // Lag 1 (200 ms back) is there; lag 4 (50 ms) is not: the 100 ms frame (age 150) is the closest.
+        // Lag 1 (50 ms: the 200 ms frame) is there; lag 4 (200 ms: the lost 50 ms frame) is not: the
+        // 100 ms frame (age 150) is the closest.
         assert_eq!(
             v.short_lags,
             Lag::F4.bit() | Lag::F10.bit() | Lag::F20.bit()
