@@ -284,14 +284,16 @@ mod at {
     pub const FLAPERON: usize = 30;
     pub const SPEEDBRAKE: usize = 31;
     pub const THROTTLE: usize = 32;
+    pub const LAT: usize = 33;
+    pub const LON: usize = 34;
 }
 const _: () = assert!(
-    at::THROTTLE + 1 == WATCH.len(),
+    at::LON + 1 == WATCH.len(),
     "every watched property has a name in `at`"
 );
 
 /// Properties read after every step, in this order (named positions in [`at`]).
-const WATCH: [&str; 33] = [
+const WATCH: [&str; 35] = [
     "simulation/sim-time-sec",
     "aero/alpha-deg",
     "aero/beta-deg",
@@ -325,6 +327,8 @@ const WATCH: [&str; 33] = [
     "fcs/left-flaperon-norm",
     "fcs/speedbrake-pos-deg",
     "fcs/throttle-cmd-norm",
+    "position/lat-geod-deg",
+    "position/long-gc-deg",
 ];
 
 pub const FT_TO_M: f64 = 0.3048;
@@ -413,6 +417,8 @@ fn truth_of(r: &[f64]) -> Truth {
         // Load factor along -z body from the total (non-gravity) force: 1 in level flight.
         nz_g: -r[at::FBZ] / (r[at::MASS] * G0_FPS2),
         mass_kg: r[at::MASS] * SLUG_TO_KG,
+        lat_deg: r[at::LAT],
+        lon_deg: r[at::LON],
     }
 }
 

@@ -62,6 +62,27 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
     assert!(a > 0.5 && a < 6.0, "α {a}");
     let az = flight.samples[100].sensed[estimator_core::Channel::AccelZ.index()];
     assert!((az + 9.8).abs() < 1.5, "accel z {az}");
+
+    // Position: the init file's 47° N (geocentric, JSBSim's default: tan φd = tan φc / (1 − e²)
+    // gives 47.19° geodetic) 122° E, heading east; over the 5.95 s between the first and the last
+    // sample the track runs east at the true airspeed (no wind, level), within 1 %.
+    let (a, z) = (&flight.samples[0].truth, &flight.samples[119].truth);
+    let geodetic = (47f64.to_radians().tan() / (1.0 - 6.694_38e-3))
+        .atan()
+        .to_degrees();
+    assert!((a.lat_deg - geodetic).abs() < 2e-3, "lat {}", a.lat_deg);
+    assert!((a.lon_deg - 122.0).abs() < 1e-2, "lon {}", a.lon_deg);
+    let (north, east) = hil_sim::dataset::report::north_east_m(
+        a.lat_deg, a.lon_deg, z.lat_deg, z.lon_deg,
+    );
+    let mean_vt: f64 =
+        flight.samples.iter().map(|s| s.truth.vt_mps).sum::<f64>() / flight.samples.len() as f64;
+    let expected = mean_vt * 5.95;
+    assert!(
+        (east - expected).abs() < 0.01 * expected,
+        "east {east} m, expected {expected} m"
+    );
+    assert!(north.abs() < 0.01 * expected, "north {north} m");
 }
 
 /// A stock runway script (initialize file in the aircraft folder) flies a few seconds.

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 /// Truth columns, in CSV order (after `time_s`).
-pub const TRUTH_COLUMNS: [&str; 17] = [
+pub const TRUTH_COLUMNS: [&str; TRUTH_COUNT] = [
     "alpha_deg",
     "beta_deg",
     "u_aero_mps",
@@ -27,7 +27,12 @@ pub const TRUTH_COLUMNS: [&str; 17] = [
     "psi_deg",
     "nz_g",
     "mass_kg",
+    "lat_deg",
+    "lon_deg",
 ];
+
+/// Number of truth columns.
+pub const TRUTH_COUNT: usize = 19;
 
 /// Truth straight from JSBSim at a sample instant.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -49,11 +54,15 @@ pub struct Truth {
     pub psi_deg: f64,
     pub nz_g: f64,
     pub mass_kg: f64,
+    /// Geodetic latitude (WGS84), degrees north.
+    pub lat_deg: f64,
+    /// Longitude, degrees east.
+    pub lon_deg: f64,
 }
 
 impl Truth {
     /// Values in [`TRUTH_COLUMNS`] order.
-    pub fn to_array(&self) -> [f64; 17] {
+    pub fn to_array(&self) -> [f64; TRUTH_COUNT] {
         [
             self.alpha_deg,
             self.beta_deg,
@@ -72,11 +81,13 @@ impl Truth {
             self.psi_deg,
             self.nz_g,
             self.mass_kg,
+            self.lat_deg,
+            self.lon_deg,
         ]
     }
 
     /// Inverse of [`Truth::to_array`].
-    pub fn from_array(a: &[f64; 17]) -> Truth {
+    pub fn from_array(a: &[f64; TRUTH_COUNT]) -> Truth {
         Truth {
             alpha_deg: a[0],
             beta_deg: a[1],
@@ -95,6 +106,8 @@ impl Truth {
             psi_deg: a[14],
             nz_g: a[15],
             mass_kg: a[16],
+            lat_deg: a[17],
+            lon_deg: a[18],
         }
     }
 }
@@ -162,7 +175,7 @@ impl Flight {
     pub fn write_csv_to<W: Write>(&self, w: W) -> Result<(), csv::Error> {
         let mut wr = csv::Writer::from_writer(w);
         wr.write_record(columns())?;
-        let mut rec: Vec<String> = Vec::with_capacity(1 + 17 + CHANNELS);
+        let mut rec: Vec<String> = Vec::with_capacity(1 + TRUTH_COUNT + CHANNELS);
         for s in &self.samples {
             rec.clear();
             rec.push(format!("{}", s.time_s));
@@ -219,7 +232,7 @@ impl Flight {
         for rec in rd.records() {
             let rec = rec.map_err(csv_err)?;
             let line = rec.position().map(|p| p.line()).unwrap_or(0);
-            let mut vals = [0.0f64; 1 + 17 + CHANNELS];
+            let mut vals = [0.0f64; 1 + TRUTH_COUNT + CHANNELS];
             for (k, (&i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
                 let s = rec.get(i).unwrap_or("");
                 *v = s
@@ -232,10 +245,10 @@ impl Flight {
                         value: s.to_string(),
                     })?;
             }
-            let mut truth = [0.0; 17];
-            truth.copy_from_slice(&vals[1..18]);
+            let mut truth = [0.0; TRUTH_COUNT];
+            truth.copy_from_slice(&vals[1..1 + TRUTH_COUNT]);
             let mut sensed = [0.0; CHANNELS];
-            sensed.copy_from_slice(&vals[18..]);
+            sensed.copy_from_slice(&vals[1 + TRUTH_COUNT..]);
             samples.push(Sample {
                 time_s: vals[0],
                 truth: Truth::from_array(&truth),
@@ -292,7 +305,8 @@ pub struct Manifest {
 }
 
 impl Manifest {
-    pub const FORMAT: u32 = 1;
+    /// 2: truth `lat_deg`, `lon_deg` added (1 had no position).
+    pub const FORMAT: u32 = 2;
 
     pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
         let path = dir.join("manifest.json");
@@ -323,7 +337,12 @@ impl Manifest {
         if m.format != Self::FORMAT {
             return Err(DatasetError::Manifest {
                 path,
-                message: format!("format {} (this build reads {})", m.format, Self::FORMAT),
+                message: format!(
+                    "format {} (this build reads {}); regenerate the dataset with this build's \
+                     `hil-sim generate` (or `fly`)",
+                    m.format,
+                    Self::FORMAT
+                ),
             });
         }
         Ok(m)

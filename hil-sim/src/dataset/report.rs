@@ -247,6 +247,139 @@ fn sample_flight(path: &Path, f: &Flight) -> Result<(), DatasetError> {
     Ok(())
 }
 
+/// North and east offsets, m, of `(lat_deg, lon_deg)` from `(lat0_deg, lon0_deg)` on the WGS84
+/// ellipsoid, with the meridian and normal radii of curvature at the mean latitude. A flat-earth
+/// approximation for plots: about 0.1 % of the distance within 100 km.
+pub fn north_east_m(lat0_deg: f64, lon0_deg: f64, lat_deg: f64, lon_deg: f64) -> (f64, f64) {
+    const A_M: f64 = 6_378_137.0;
+    const E2: f64 = 6.694_379_990_14e-3;
+    let mean_lat = (0.5 * (lat_deg + lat0_deg)).to_radians();
+    let s = mean_lat.sin();
+    let w = (1.0 - E2 * s * s).sqrt();
+    let r_meridian = A_M * (1.0 - E2) / (w * w * w);
+    let r_normal = A_M / w;
+    // Across the antimeridian the short way round.
+    let dlon = (lon_deg - lon0_deg + 540.0).rem_euclid(360.0) - 180.0;
+    (
+        (lat_deg - lat0_deg).to_radians() * r_meridian,
+        dlon.to_radians() * r_normal * mean_lat.cos(),
+    )
+}
+
+/// Paper Fig. 4: the path of one flight in 3-D (east, north, altitude) beside its ground track,
+/// both in km from the first sample; green dot = start, red = end.
+fn flight_path(path: &Path, f: &Flight) -> Result<(), DatasetError> {
+    let e = draw_err(path);
+    let (Some(first), Some(last)) = (f.samples.first(), f.samples.last()) else {
+        return Ok(());
+    };
+    let ne = |s: &super::Sample| {
+        let (n, e) = north_east_m(
+            first.truth.lat_deg,
+            first.truth.lon_deg,
+            s.truth.lat_deg,
+            s.truth.lon_deg,
+        );
+        (e / 1000.0, n / 1000.0, s.truth.alt_msl_m / 1000.0)
+    };
+    let pts: Vec<(f64, f64, f64)> = f.samples.iter().map(ne).collect();
+    let range = |k: fn(&(f64, f64, f64)) -> f64| {
+        pts.iter()
+            .map(k)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let (e0, e1) = range(|p| p.0);
+    let (n0, n1) = range(|p| p.1);
+    let (a0, a1) = range(|p| p.2);
+    // Same scale on both horizontal axes, so turns look like turns.
+    let half = ((e1 - e0).max(n1 - n0) * 0.55).max(1.0);
+    let (ec, nc) = (0.5 * (e0 + e1), 0.5 * (n0 + n1));
+    let (ex, nx) = ((ec - half)..(ec + half), (nc - half)..(nc + half));
+    let ax = 0.0f64.min(a0)..(a1 * 1.05).max(1.0);
+
+    let root = BitMapBackend::new(path, (1500, 750)).into_drawing_area();
+    root.fill(&WHITE).map_err(&e)?;
+    let (title, body) = root.split_vertically(40);
+    title
+        .draw(&Text::new(
+            format!(
+                "Flight path of {} ({:.0} s, {:.0} km flown over ground)",
+                f.name,
+                f.duration_s(),
+                pts.windows(2)
+                    .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+                    .sum::<f64>()
+            ),
+            (15, 8),
+            ("sans-serif", 24),
+        ))
+        .map_err(&e)?;
+    let (left, right) = body.split_horizontally(800);
+
+    let mut c3 = ChartBuilder::on(&left)
+        .margin(20)
+        .caption("3-D path (km)", ("sans-serif", 18))
+        .build_cartesian_3d(ex.clone(), ax.clone(), nx.clone())
+        .map_err(&e)?;
+    c3.with_projection(|mut p| {
+        p.pitch = 0.45;
+        p.yaw = 0.6;
+        p.scale = 0.8;
+        p.into_matrix()
+    });
+    c3.configure_axes()
+        .label_style(("sans-serif", 13))
+        .max_light_lines(3)
+        .draw()
+        .map_err(&e)?;
+    // Shadow on the ground first, then the path.
+    c3.draw_series(LineSeries::new(
+        pts.iter().map(|p| (p.0, ax.start, p.1)),
+        RGBColor(190, 190, 190),
+    ))
+    .map_err(&e)?;
+    c3.draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.2, p.1)), TRAIN))
+        .map_err(&e)?;
+    let (s, z) = (ne(first), ne(last));
+    c3.draw_series([
+        Circle::new((s.0, s.2, s.1), 6, RGBColor(44, 160, 44).filled()),
+        Circle::new((z.0, z.2, z.1), 6, TEST.filled()),
+    ])
+    .map_err(&e)?;
+    // The 3-D axes carry no titles in plotters: say which is which.
+    left.draw(&Text::new(
+        "x: east, y: altitude, z: north (km)",
+        (20, 680),
+        ("sans-serif", 15),
+    ))
+    .map_err(&e)?;
+
+    let mut c2 = ChartBuilder::on(&right)
+        .margin(20)
+        .caption("Ground track", ("sans-serif", 18))
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(ex, nx)
+        .map_err(&e)?;
+    c2.configure_mesh()
+        .x_desc("east, km")
+        .y_desc("north, km")
+        .label_style(("sans-serif", 15))
+        .draw()
+        .map_err(&e)?;
+    c2.draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), TRAIN))
+        .map_err(&e)?;
+    c2.draw_series([
+        Circle::new((s.0, s.1), 6, RGBColor(44, 160, 44).filled()),
+        Circle::new((z.0, z.1), 6, TEST.filled()),
+    ])
+    .map_err(&e)?;
+    root.present().map_err(&e)?;
+    Ok(())
+}
+
 /// Coverage of the training and test splits.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Report {
@@ -255,7 +388,7 @@ pub struct Report {
 }
 
 /// Reads the dataset in `dir`, writes `envelope.png`, `alpha_hist.png`, `beta_hist.png`,
-/// `sample_flight.png` and `dataset.md` there, and returns the numbers.
+/// `sample_flight.png`, `flight_path.png` and `dataset.md` there, and returns the numbers.
 pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
     crate::font::register();
     let manifest = Manifest::read(dir)?;
@@ -328,6 +461,7 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
         (a1 - a0).total_cmp(&(b1 - b0))
     }) {
         sample_flight(&dir.join("sample_flight.png"), f)?;
+        flight_path(&dir.join("flight_path.png"), f)?;
     }
     let md = markdown(&manifest, &report, &flights);
     let path = dir.join("dataset.md");
@@ -343,6 +477,7 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
         "alpha_hist.png",
         "beta_hist.png",
         "sample_flight.png",
+        "flight_path.png",
         "dataset.md",
     ] {
         let p = dir.join(name);
@@ -429,7 +564,27 @@ fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> St
     let _ = writeln!(
         s,
         "\nPictures: `envelope.png` (altitude vs Mach), `alpha_hist.png`, `beta_hist.png`, \
-         `sample_flight.png`."
+         `sample_flight.png` (time histories), `flight_path.png` (3-D path and ground track of the \
+         same flight)."
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::north_east_m;
+
+    /// One degree of latitude at 45° is 111,132.95 m and one of longitude 78,846.84 m (WGS84
+    /// tables); across the antimeridian the offset is the short way.
+    #[test]
+    fn north_east_matches_wgs84_degree_lengths() {
+        let (n, e) = north_east_m(44.5, 10.0, 45.5, 10.0);
+        assert!((n - 111_132.95).abs() < 2.0, "north {n}");
+        assert!(e.abs() < 1e-9);
+        let (n, e) = north_east_m(45.0, 10.0, 45.0, 11.0);
+        assert!(n.abs() < 1e-9);
+        assert!((e - 78_846.84).abs() < 1.0, "east {e}");
+        let (_, e) = north_east_m(0.0, 179.9, 0.0, -179.9);
+        assert!((e - 22_263.9).abs() < 1.0, "east {e}");
+    }
 }
