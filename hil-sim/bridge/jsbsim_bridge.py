@@ -9,6 +9,8 @@ ORIGINAL stdout):
   watch\tP1\tP2...        the properties returned after every step, in this order
   step\tN                 run up to N steps; payload = u32 steps done (fewer when the script ended)
                           + that many rows of little-endian f64, one per watched property
+  run\tN                  run up to N steps reading nothing (raw JSBSim stepping, the benchmark's
+                          baseline); payload = u32 steps done
   quit
 """
 
@@ -79,6 +81,15 @@ def main():
                     if not alive:
                         break
                 reply(True, struct.pack("<I", done) + b"".join(rows))
+            elif cmd == "run":
+                n = int(f[1])
+                run = fdm.run
+                done = 0
+                while done < n:
+                    done += 1
+                    if not run():
+                        break
+                reply(True, struct.pack("<I", done))
             elif cmd == "quit":
                 reply(True)
                 return

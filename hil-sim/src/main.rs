@@ -20,6 +20,9 @@ enum Cmd {
     Fly(hil_sim_cli::FlyArgs),
     /// Generate a random-maneuver dataset (maneuver XML, CSV per flight, manifest, plots, report).
     Generate(hil_sim_cli::GenerateArgs),
+    /// Benchmark: wall time of `generate` against raw JSBSim stepping of the same flights, side by
+    /// side on the same workers.
+    Bench(hil_sim_cli::BenchArgs),
 }
 
 fn main() -> Result<()> {
@@ -30,6 +33,7 @@ fn main() -> Result<()> {
             .map_err(Into::into),
         Cmd::Fly(a) => hil_sim_cli::fly(a),
         Cmd::Generate(a) => hil_sim_cli::generate(a),
+        Cmd::Bench(a) => hil_sim_cli::bench(a),
     }
 }
 
@@ -60,10 +64,7 @@ mod hil_sim_cli {
     }
 
     pub fn fly(a: FlyArgs) -> Result<()> {
-        let sensors = match &a.sensors {
-            Some(p) => SensorConfig::load(p)?,
-            None => SensorConfig::default(),
-        };
+        let sensors = sensors_of(&a.sensors)?;
         let cfg = FlyConfig {
             seed: a.seed,
             sensors: sensors.clone(),
@@ -131,20 +132,28 @@ mod hil_sim_cli {
         workers: usize,
     }
 
-    pub fn generate(a: GenerateArgs) -> Result<()> {
-        let sensors = match &a.sensors {
+    fn sensors_of(path: &Option<PathBuf>) -> Result<SensorConfig> {
+        Ok(match path {
             Some(p) => SensorConfig::load(p)?,
             None => SensorConfig::default(),
-        };
-        let started = std::time::Instant::now();
-        let n = a.preset.plan(a.seed).len();
+        })
+    }
+
+    fn flights_bar(n: usize) -> indicatif::ProgressBar {
         let pb = indicatif::ProgressBar::new(n as u64);
         pb.set_style(
             indicatif::ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:30}] {pos}/{len} flights",
+                "{elapsed_precise} [{bar:30}] {pos}/{len} flights {msg}",
             )
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
+        pb
+    }
+
+    pub fn generate(a: GenerateArgs) -> Result<()> {
+        let sensors = sensors_of(&a.sensors)?;
+        let started = std::time::Instant::now();
+        let pb = flights_bar(a.preset.plan(a.seed).len());
         let m = dataset::generate(a.preset, a.seed, &a.out, &sensors, a.workers, Some(&pb))?;
         pb.finish_and_clear();
         let report = dataset::report::write_report(&a.out)?;
@@ -175,6 +184,91 @@ mod hil_sim_cli {
         println!(
             "wrote {} (report: dataset.md, plots: *.png)",
             a.out.display()
+        );
+        Ok(())
+    }
+
+    #[derive(clap::Args)]
+    pub struct BenchArgs {
+        /// Preset to generate and raw-step (the issue's figure is for `paper`).
+        #[arg(long, value_enum, default_value = "paper")]
+        preset: hil_sim::maneuver::Preset,
+        /// Scratch dataset directory (overwritten every repeat).
+        #[arg(long, default_value = "out/bench/generate")]
+        out: PathBuf,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Sensor model parameters (TOML; see docs/sensors.md).
+        #[arg(long)]
+        sensors: Option<PathBuf>,
+        /// Parallel flights on both sides.
+        #[arg(long, default_value_t = 2)]
+        workers: usize,
+        /// Runs of each side (alternating which goes first); the best of each is reported.
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Print the summary as JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    }
+
+    pub fn bench(a: BenchArgs) -> Result<()> {
+        let sensors = sensors_of(&a.sensors)?;
+        let n = a.preset.plan(a.seed).len();
+        // One tick per flight per side per repeat.
+        let pb = flights_bar(2 * a.repeats.max(1) * n);
+        let r = hil_sim::dataset::bench::run(
+            a.preset,
+            a.seed,
+            &a.out,
+            &sensors,
+            a.workers,
+            a.repeats,
+            Some(&pb),
+        )?;
+        pb.finish_and_clear();
+        if a.json {
+            println!("{}", serde_json::to_string_pretty(&r)?);
+            return Ok(());
+        }
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:.2}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        println!(
+            "preset {} seed {}: {} flights, {:.2} h of flight, {} JSBSim steps at 120 Hz, {} workers \
+             ({})",
+            r.preset, r.seed, r.flights, r.flight_hours, r.steps, r.workers, r.machine
+        );
+        println!(
+            "| side | runs, s | best, s | per 4 h of flight, s | µs per 120 Hz step |\n|---|---|---|---|---|"
+        );
+        println!(
+            "| raw JSBSim stepping | {} | {:.2} | {:.2} | {:.2} |",
+            list(&r.raw_s),
+            r.raw_best_s,
+            r.raw_per_4h_s,
+            r.raw_us_per_step
+        );
+        println!(
+            "| hil-sim generate (+ report {:.2} s) | {} | {:.2} | {:.2} | {:.2} |",
+            r.report_s,
+            list(&r.generate_s),
+            r.generate_total_best_s,
+            r.generate_per_4h_s,
+            r.generate_us_per_step
+        );
+        println!(
+            "generate costs {:.2}× raw stepping; 4 h of flight in {:.1} s (target ≤ 30 s on 2 cores){}",
+            r.overhead_ratio,
+            r.generate_per_4h_s,
+            if r.same_flights {
+                ""
+            } else {
+                "; WARNING: raw step counts differ from the recorded flights"
+            }
         );
         Ok(())
     }

@@ -239,6 +239,19 @@ impl Plant {
             })
             .collect())
     }
+
+    /// Runs up to `n` steps without reading any property (raw JSBSim stepping: the baseline of
+    /// `hil-sim bench`); returns the steps done, fewer than `n` when the script ended.
+    pub fn run_raw(&mut self, n: u32) -> Result<u32, PlantError> {
+        let payload = self.request(&["run", &n.to_string()])?;
+        let count = payload
+            .first_chunk::<4>()
+            .ok_or_else(|| PlantError::Bridge {
+                command: "run".into(),
+                message: "reply shorter than its count".into(),
+            })?;
+        Ok(u32::from_le_bytes(*count))
+    }
 }
 
 impl Drop for Plant {
@@ -456,13 +469,10 @@ pub fn fly_script(script: &Path, cfg: &FlyConfig) -> Result<Flight, PlantError> 
     fly_script_with(&mut plant, script, cfg)
 }
 
-/// [`fly_script`] on an already started bridge (one process per flight keeps flights independent;
-/// callers that want that start a fresh [`Plant`] each time).
-pub fn fly_script_with(
-    plant: &mut Plant,
-    script: &Path,
-    cfg: &FlyConfig,
-) -> Result<Flight, PlantError> {
+/// Loads a runscript for the `f16` into `plant` and runs its initial conditions: the initialize
+/// file is taken from beside the script when it is there, else JSBSim looks in the aircraft folder.
+/// Returns the script's canonical path.
+pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<PathBuf, PlantError> {
     let script = std::fs::canonicalize(script).map_err(|source| PlantError::ScriptUnreadable {
         path: script.to_path_buf(),
         source,
@@ -489,6 +499,17 @@ pub fn fly_script_with(
             },
             other => other,
         })?;
+    Ok(script)
+}
+
+/// [`fly_script`] on an already started bridge (one process per flight keeps flights independent;
+/// callers that want that start a fresh [`Plant`] each time).
+pub fn fly_script_with(
+    plant: &mut Plant,
+    script: &Path,
+    cfg: &FlyConfig,
+) -> Result<Flight, PlantError> {
+    let script = load_f16_script(plant, script)?;
     plant.watch(&WATCH)?;
 
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);

@@ -72,9 +72,8 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
         .to_degrees();
     assert!((a.lat_deg - geodetic).abs() < 2e-3, "lat {}", a.lat_deg);
     assert!((a.lon_deg - 122.0).abs() < 1e-2, "lon {}", a.lon_deg);
-    let (north, east) = hil_sim::dataset::report::north_east_m(
-        a.lat_deg, a.lon_deg, z.lat_deg, z.lon_deg,
-    );
+    let (north, east) =
+        hil_sim::dataset::report::north_east_m(a.lat_deg, a.lon_deg, z.lat_deg, z.lon_deg);
     let mean_vt: f64 =
         flight.samples.iter().map(|s| s.truth.vt_mps).sum::<f64>() / flight.samples.len() as f64;
     let expected = mean_vt * 5.95;
@@ -83,6 +82,27 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
         "east {east} m, expected {expected} m"
     );
     assert!(north.abs() < 0.01 * expected, "north {north} m");
+}
+
+/// The benchmark's raw stepping (`run`, nothing read) flies the same flight as `fly_script`: after
+/// 719 raw steps and one watched step, α is bit-identical to the recorded sample at 6 s.
+#[test]
+fn raw_stepping_flies_the_same_flight() {
+    let script = root().join("flights/f16_test_flight.xml");
+    let cfg = FlyConfig {
+        max_time_s: Some(6.0),
+        ..FlyConfig::default()
+    };
+    let flight = plant::fly_script(&script, &cfg).unwrap();
+    let mut p = Plant::spawn().unwrap();
+    plant::load_f16_script(&mut p, &script).unwrap();
+    assert_eq!(p.run_raw(719).unwrap(), 719);
+    p.watch(&["aero/alpha-deg", "simulation/sim-time-sec"])
+        .unwrap();
+    let row = &p.step(1).unwrap()[0];
+    let last = flight.samples.last().unwrap();
+    assert_eq!(row[0], last.truth.alpha_deg);
+    assert!((row[1] - 6.0).abs() < 1e-9, "t {}", row[1]);
 }
 
 /// A stock runway script (initialize file in the aircraft folder) flies a few seconds.

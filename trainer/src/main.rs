@@ -1,5 +1,6 @@
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use hil_sim::dataset::machine;
 use std::path::{Path, PathBuf};
 use trainer::data::Dataset;
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
@@ -304,27 +305,6 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// "AMD EPYC …, N cores (x86_64)" from /proc/cpuinfo and the available parallelism.
-fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1);
-    format!(
-        "{cpu}, {cores} cores available, {} {} container, release build",
-        std::env::consts::ARCH,
-        std::env::consts::OS
-    )
 }
 
 fn cmd_report(

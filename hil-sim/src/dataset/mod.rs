@@ -349,6 +349,7 @@ impl Manifest {
     }
 }
 
+pub mod bench;
 pub mod report;
 
 /// SHA-256 of a file, lowercase hex.
@@ -393,6 +394,32 @@ pub fn git_rev() -> String {
         },
         None => "unknown".into(),
     }
+}
+
+/// "AMD EPYC …, N cores available (x86_64 linux container), release build": where a figure was measured.
+pub fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    format!(
+        "{cpu}, {cores} cores available, {} {} container, {} build",
+        std::env::consts::ARCH,
+        std::env::consts::OS,
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+    )
 }
 
 /// Writes one flight's CSV into `dir` and returns its manifest entry.
@@ -465,6 +492,39 @@ pub enum GenerateError {
     },
 }
 
+/// `f` over `items` on `workers` threads (each takes the next unstarted item), results in item
+/// order whatever order they finish in; ticks `progress` once per item.
+pub fn par_map<T: Sync, R: Send>(
+    items: &[T],
+    workers: usize,
+    progress: Option<&indicatif::ProgressBar>,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let done: std::sync::Mutex<Vec<(usize, R)>> = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..workers.clamp(1, items.len().max(1)) {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(item) = items.get(i) else { break };
+                    let r = f(item);
+                    if let Some(pb) = progress {
+                        pb.inc(1);
+                    }
+                    if let Ok(mut d) = done.lock() {
+                        d.push((i, r));
+                    }
+                }
+            });
+        }
+    });
+    let mut done = done.into_inner().unwrap_or_default();
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
+
 /// Sensor seed of a flight: distinct from the maneuver seed so the two random streams are unrelated.
 pub fn sensor_seed(flight_seed: u64) -> u64 {
     flight_seed ^ 0x5e45_5e45_5e45_5e45
@@ -509,57 +569,39 @@ pub fn generate(
     for f in &plan {
         scripts.push(write_maneuver(f, f.seed)?);
     }
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let results: std::sync::Mutex<Vec<Option<Result<FlightEntry, GenerateError>>>> =
-        std::sync::Mutex::new((0..plan.len()).map(|_| None).collect());
     let version = std::sync::Mutex::new(String::new());
-    std::thread::scope(|scope| {
-        for _ in 0..workers.max(1) {
-            scope.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let (Some(f), Some(script)) = (plan.get(i), scripts.get(i)) else {
-                        break;
-                    };
-                    let r = (|| -> Result<FlightEntry, GenerateError> {
-                        let mut plant = crate::plant::Plant::spawn()?;
-                        if let Ok(mut v) = version.lock() {
-                            *v = plant.jsbsim_version().to_string();
-                        }
-                        let mut attempt = 0;
-                        let (flight, seed) = loop {
-                            let seed = redraw_seed(f.seed, attempt);
-                            let cfg = FlyConfig {
-                                seed: sensor_seed(seed),
-                                sensors: sensors.clone(),
-                                max_time_s: None,
-                                name: Some(f.name.clone()),
-                            };
-                            match crate::plant::fly_script_with(&mut plant, script, &cfg) {
-                                Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => {
-                                    attempt += 1;
-                                    write_maneuver(f, redraw_seed(f.seed, attempt))?;
-                                    // A failed trim can leave the bridge in any state: start afresh.
-                                    plant = crate::plant::Plant::spawn()?;
-                                }
-                                r => break (r?, seed),
-                            }
-                        };
-                        Ok(write_flight(out, &flight, f.split, f.profile.name(), seed)?)
-                    })()
-                    .map_err(|e| GenerateError::Flight {
-                        name: f.name.clone(),
-                        source: Box::new(e),
-                    });
-                    if let Some(pb) = progress {
-                        pb.inc(1);
+    let jobs: Vec<_> = plan.iter().zip(&scripts).collect();
+    let results = par_map(&jobs, workers, progress, |(f, script)| {
+        (|| -> Result<FlightEntry, GenerateError> {
+            let mut plant = crate::plant::Plant::spawn()?;
+            if let Ok(mut v) = version.lock() {
+                *v = plant.jsbsim_version().to_string();
+            }
+            let mut attempt = 0;
+            let (flight, seed) = loop {
+                let seed = redraw_seed(f.seed, attempt);
+                let cfg = FlyConfig {
+                    seed: sensor_seed(seed),
+                    sensors: sensors.clone(),
+                    max_time_s: None,
+                    name: Some(f.name.clone()),
+                };
+                match crate::plant::fly_script_with(&mut plant, script, &cfg) {
+                    Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => {
+                        attempt += 1;
+                        write_maneuver(f, redraw_seed(f.seed, attempt))?;
+                        // A failed trim can leave the bridge in any state: start afresh.
+                        plant = crate::plant::Plant::spawn()?;
                     }
-                    if let Some(slot) = results.lock().ok().as_mut().and_then(|r| r.get_mut(i)) {
-                        *slot = Some(r);
-                    }
+                    r => break (r?, seed),
                 }
-            });
-        }
+            };
+            Ok(write_flight(out, &flight, f.split, f.profile.name(), seed)?)
+        })()
+        .map_err(|e| GenerateError::Flight {
+            name: f.name.clone(),
+            source: Box::new(e),
+        })
     });
     let mut files = std::collections::BTreeMap::new();
     for (f, path) in plan.iter().zip(&scripts) {
@@ -571,15 +613,7 @@ pub fn generate(
             files.insert(name, sha256_file(&p)?);
         }
     }
-    let mut flights = Vec::new();
-    for r in results
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .flatten()
-    {
-        flights.push(r?);
-    }
+    let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let manifest = Manifest {
         format: Manifest::FORMAT,
         preset: preset.name().to_string(),

@@ -1,0 +1,161 @@
+//! `hil-sim bench`: wall time of [`super::generate`] against raw JSBSim stepping of the same
+//! flights, side by side on the same workers (issue 4's target: 4 h of flight in ≤ 30 s on 2 cores).
+//!
+//! Raw stepping is the floor any data generator on JSBSim pays: the same maneuver scripts, loaded
+//! the same way ([`crate::plant::load_f16_script`], one bridge process per flight), run to their end
+//! with the bridge's `run` command, which calls `FGFDMExec::run` and reads nothing. `generate` on top
+//! of that reads 35 properties per 120 Hz step, runs the sensor models in Rust, and writes the CSVs
+//! and the manifest. Repeats alternate which side goes first so neither always meets a cold cache.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::{GenerateError, Manifest, machine, par_map};
+use crate::plant::{self, Plant, PlantError, SIM_HZ, STEPS_PER_SAMPLE};
+
+/// Steps per bridge request on the raw side (one minute of flight).
+const RAW_CHUNK: u32 = SIM_HZ * 60;
+
+/// What `hil-sim bench --json` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub preset: String,
+    pub seed: u64,
+    pub workers: usize,
+    pub repeats: usize,
+    pub flights: usize,
+    /// Simulated flight time over all flights, hours.
+    pub flight_hours: f64,
+    /// 120 Hz JSBSim steps over all flights (raw side).
+    pub steps: u64,
+    /// Every raw flight ran exactly the steps behind the samples `generate` recorded for it.
+    pub same_flights: bool,
+    /// Wall time of each `generate` repeat (flights, CSVs, manifest), s.
+    pub generate_s: Vec<f64>,
+    /// Wall time of each raw-stepping repeat, s.
+    pub raw_s: Vec<f64>,
+    /// Wall time of the dataset report (plots + dataset.md) that `hil-sim generate` adds, once, s.
+    pub report_s: f64,
+    /// Best `generate` + report, s: what `hil-sim generate` costs.
+    pub generate_total_best_s: f64,
+    /// Best raw stepping, s.
+    pub raw_best_s: f64,
+    /// `generate_total_best_s` / `raw_best_s`.
+    pub overhead_ratio: f64,
+    /// `generate_total_best_s` scaled to 4 h of flight, s (target ≤ 30 on 2 cores).
+    pub generate_per_4h_s: f64,
+    /// `raw_best_s` scaled to 4 h of flight, s.
+    pub raw_per_4h_s: f64,
+    /// Wall time per 120 Hz step of flight, µs (over all workers).
+    pub generate_us_per_step: f64,
+    pub raw_us_per_step: f64,
+    pub jsbsim_version: String,
+    pub git_rev: String,
+    pub machine: String,
+}
+
+/// Runs every flight of the dataset in `dir` (written by [`super::generate`]) through raw JSBSim
+/// stepping on `workers` threads; returns the 120 Hz steps per flight, in manifest order.
+pub fn raw_steps(
+    dir: &Path,
+    m: &Manifest,
+    workers: usize,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Vec<u64>, PlantError> {
+    par_map(&m.flights, workers, progress, |f| {
+        let mut plant = Plant::spawn()?;
+        plant::load_f16_script(&mut plant, &dir.join(format!("{}.xml", f.name)))?;
+        let mut steps = 0u64;
+        loop {
+            let n = plant.run_raw(RAW_CHUNK)?;
+            steps += u64::from(n);
+            if n < RAW_CHUNK {
+                break Ok(steps);
+            }
+        }
+    })
+    .into_iter()
+    .collect()
+}
+
+/// Generates `preset` into `out` and raw-steps the same flights, `repeats` times each, alternating
+/// which goes first; then writes the dataset report once and times it.
+pub fn run(
+    preset: crate::maneuver::Preset,
+    seed: u64,
+    out: &Path,
+    sensors: &crate::sensors::SensorConfig,
+    workers: usize,
+    repeats: usize,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<BenchReport, GenerateError> {
+    let repeats = repeats.max(1);
+    let (mut generate_s, mut raw_s) = (Vec::new(), Vec::new());
+    let generate = |times: &mut Vec<f64>| -> Result<Manifest, GenerateError> {
+        let t = Instant::now();
+        let m = super::generate(preset, seed, out, sensors, workers, progress)?;
+        times.push(t.elapsed().as_secs_f64());
+        Ok(m)
+    };
+    let raw = |m: &Manifest, times: &mut Vec<f64>| -> Result<Vec<u64>, GenerateError> {
+        let t = Instant::now();
+        let steps = raw_steps(out, m, workers, progress)?;
+        times.push(t.elapsed().as_secs_f64());
+        Ok(steps)
+    };
+    // The raw side needs the maneuver files, so the first repeat generates first; later repeats
+    // alternate. Every repeat writes the same bytes (same seed).
+    let mut m = generate(&mut generate_s)?;
+    let mut steps = raw(&m, &mut raw_s)?;
+    for r in 1..repeats {
+        if r % 2 == 1 {
+            steps = raw(&m, &mut raw_s)?;
+            m = generate(&mut generate_s)?;
+        } else {
+            m = generate(&mut generate_s)?;
+            steps = raw(&m, &mut raw_s)?;
+        }
+    }
+    let t = Instant::now();
+    super::report::write_report(out)?;
+    let report_s = t.elapsed().as_secs_f64();
+
+    let total_steps: u64 = steps.iter().sum();
+    let samples: usize = m.flights.iter().map(|f| f.samples).sum();
+    let flight_hours = samples as f64 / f64::from(plant::SAMPLE_HZ) / 3600.0;
+    let same_flights = steps.len() == m.flights.len()
+        && m.flights
+            .iter()
+            .zip(&steps)
+            .all(|(f, s)| s / u64::from(STEPS_PER_SAMPLE) == f.samples as u64);
+    let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let generate_total_best_s = best(&generate_s) + report_s;
+    let raw_best_s = best(&raw_s);
+    let per_4h = |s: f64| s * 4.0 / flight_hours.max(1e-9);
+    let per_step = |s: f64| s * 1e6 / (total_steps.max(1) as f64);
+    Ok(BenchReport {
+        preset: preset.name().to_string(),
+        seed,
+        workers,
+        repeats,
+        flights: m.flights.len(),
+        flight_hours,
+        steps: total_steps,
+        same_flights,
+        generate_s,
+        raw_s,
+        report_s,
+        generate_total_best_s,
+        raw_best_s,
+        overhead_ratio: generate_total_best_s / raw_best_s,
+        generate_per_4h_s: per_4h(generate_total_best_s),
+        raw_per_4h_s: per_4h(raw_best_s),
+        generate_us_per_step: per_step(generate_total_best_s),
+        raw_us_per_step: per_step(raw_best_s),
+        jsbsim_version: m.jsbsim_version.clone(),
+        git_rev: m.git_rev.clone(),
+        machine: machine(),
+    })
+}
