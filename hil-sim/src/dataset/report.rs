@@ -321,7 +321,7 @@ fn flight_path(path: &Path, f: &Flight) -> Result<(), DatasetError> {
     let mut c3 = ChartBuilder::on(&left)
         .margin(20)
         .caption("3-D path (km)", ("sans-serif", 18))
-        .build_cartesian_3d(ex.clone(), ax.clone(), nx.clone())
+        .build_cartesian_3d(nx.clone(), ax.clone(), ex.clone())
         .map_err(&e)?;
     c3.with_projection(|mut p| {
         p.pitch = 0.45;
@@ -334,23 +334,24 @@ fn flight_path(path: &Path, f: &Flight) -> Result<(), DatasetError> {
         .max_light_lines(3)
         .draw()
         .map_err(&e)?;
-    // Shadow on the ground first, then the path.
+    // (north, up, east) is right-handed, as plotters' projection is: (east, up, north) would draw
+    // the path mirrored. Shadow on the ground first, then the path.
     c3.draw_series(LineSeries::new(
-        pts.iter().map(|p| (p.0, ax.start, p.1)),
+        pts.iter().map(|p| (p.1, ax.start, p.0)),
         RGBColor(190, 190, 190),
     ))
     .map_err(&e)?;
-    c3.draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.2, p.1)), TRAIN))
+    c3.draw_series(LineSeries::new(pts.iter().map(|p| (p.1, p.2, p.0)), TRAIN))
         .map_err(&e)?;
     let (s, z) = (ne(first), ne(last));
     c3.draw_series([
-        Circle::new((s.0, s.2, s.1), 6, RGBColor(44, 160, 44).filled()),
-        Circle::new((z.0, z.2, z.1), 6, TEST.filled()),
+        Circle::new((s.1, s.2, s.0), 6, RGBColor(44, 160, 44).filled()),
+        Circle::new((z.1, z.2, z.0), 6, TEST.filled()),
     ])
     .map_err(&e)?;
     // The 3-D axes carry no titles in plotters: say which is which.
     left.draw(&Text::new(
-        "x: east, y: altitude, z: north (km)",
+        "x: north, y: altitude, z: east (km)",
         (20, 680),
         ("sans-serif", 15),
     ))
