@@ -12,7 +12,7 @@ fn ci_preset_writes_a_consistent_dataset() {
     let report = dataset::report::write_report(&dir).unwrap();
     let back = Manifest::read(&dir).unwrap();
     assert_eq!(back.flights, m.flights);
-    assert_eq!(back.format, 1);
+    assert_eq!(back.format, Manifest::FORMAT);
     assert_eq!(back.preset, "ci");
     assert!(!back.jsbsim_version.is_empty());
     assert_eq!(m.flights.len(), 5);
@@ -38,11 +38,25 @@ fn ci_preset_writes_a_consistent_dataset() {
             "{name}"
         );
     }
-    assert!(back.files.contains_key("envelope.png") && back.files.contains_key("dataset.md"));
+    for name in ["envelope.png", "flight_path.png", "dataset.md"] {
+        assert!(
+            back.files.contains_key(name),
+            "{name} is hashed in the manifest"
+        );
+    }
     // The high-α profile is what puts training data above 15°.
     let over15: f64 = report.train.alpha_band_share[4..].iter().sum();
     assert!(over15 > 0.03, "share above 15° α: {over15}");
     let shares: f64 = report.train.alpha_band_share.iter().sum();
     assert!((shares - 1.0).abs() < 1e-9);
+
+    // A dataset of the previous format (no lat/lon columns) is refused with what to do.
+    let old = Manifest { format: 1, ..back };
+    old.write(&dir).unwrap();
+    let err = Manifest::read(&dir).unwrap_err().to_string();
+    assert!(
+        err.contains("format 1") && err.contains("regenerate"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
