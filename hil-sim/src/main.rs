@@ -121,6 +121,13 @@ mod hil_sim_cli {
         /// Dataset directory to write (created).
         #[arg(long)]
         out: PathBuf,
+        #[command(flatten)]
+        flights: FlightsArgs,
+    }
+
+    /// What `generate` and `bench` share.
+    #[derive(clap::Args)]
+    pub struct FlightsArgs {
         /// Base seed; flight and sensor seeds derive from it.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -151,10 +158,10 @@ mod hil_sim_cli {
     }
 
     pub fn generate(a: GenerateArgs) -> Result<()> {
-        let sensors = sensors_of(&a.sensors)?;
+        let sensors = sensors_of(&a.flights.sensors)?;
         let started = std::time::Instant::now();
-        let pb = flights_bar(a.preset.plan(a.seed).len());
-        let m = dataset::generate(a.preset, a.seed, &a.out, &sensors, a.workers, Some(&pb))?;
+        let pb = flights_bar(a.preset.plan(a.flights.seed).len());
+        let m = dataset::generate(a.preset, a.flights.seed, &a.out, &sensors, a.flights.workers, Some(&pb))?;
         pb.finish_and_clear();
         let report = dataset::report::write_report(&a.out)?;
         let samples: usize = m.flights.iter().map(|f| f.samples).sum();
@@ -196,14 +203,9 @@ mod hil_sim_cli {
         /// Scratch dataset directory (overwritten every repeat).
         #[arg(long, default_value = "out/bench/generate")]
         out: PathBuf,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Sensor model parameters (TOML; see docs/sensors.md).
-        #[arg(long)]
-        sensors: Option<PathBuf>,
-        /// Parallel flights on both sides.
-        #[arg(long, default_value_t = 2)]
-        workers: usize,
+        /// The same `--workers` on both sides.
+        #[command(flatten)]
+        flights: FlightsArgs,
         /// Runs of each side (alternating which goes first); the best of each is reported.
         #[arg(long, default_value_t = 3)]
         repeats: usize,
@@ -213,16 +215,16 @@ mod hil_sim_cli {
     }
 
     pub fn bench(a: BenchArgs) -> Result<()> {
-        let sensors = sensors_of(&a.sensors)?;
-        let n = a.preset.plan(a.seed).len();
+        let sensors = sensors_of(&a.flights.sensors)?;
+        let n = a.preset.plan(a.flights.seed).len();
         // One tick per flight per side per repeat.
         let pb = flights_bar(2 * a.repeats.max(1) * n);
         let r = hil_sim::dataset::bench::run(
             a.preset,
-            a.seed,
+            a.flights.seed,
             &a.out,
             &sensors,
-            a.workers,
+            a.flights.workers,
             a.repeats,
             Some(&pb),
         )?;
