@@ -93,6 +93,11 @@ mod hil_sim_cli {
             files: Default::default(),
         };
         let mpath = manifest.write(&a.out)?;
+        // The same pictures and dataset.md as `generate` writes (envelope, α/β histograms, time
+        // histories, 3-D path and ground track), when there is anything to draw.
+        if entry.samples > 0 {
+            dataset::report::write_report(&a.out)?;
+        }
         println!(
             "flew {} for {:.1} s ({} samples at 20 Hz) in {:.1} s wall{}",
             a.script.display(),
@@ -105,7 +110,7 @@ mod hil_sim_cli {
             }
         );
         println!(
-            "wrote {} and {}",
+            "wrote {} and {} (report: dataset.md, plots: *.png)",
             a.out.join(&entry.file).display(),
             mpath.display()
         );
@@ -161,7 +166,14 @@ mod hil_sim_cli {
         let sensors = sensors_of(&a.flights.sensors)?;
         let started = std::time::Instant::now();
         let pb = flights_bar(a.preset.plan(a.flights.seed).len());
-        let m = dataset::generate(a.preset, a.flights.seed, &a.out, &sensors, a.flights.workers, Some(&pb))?;
+        let m = dataset::generate(
+            a.preset,
+            a.flights.seed,
+            &a.out,
+            &sensors,
+            a.flights.workers,
+            Some(&pb),
+        )?;
         pb.finish_and_clear();
         let report = dataset::report::write_report(&a.out)?;
         let samples: usize = m.flights.iter().map(|f| f.samples).sum();
