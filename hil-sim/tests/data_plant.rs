@@ -33,15 +33,21 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-/// Truth α/β at the 20 Hz samples are JSBSim's own aero/alpha-deg, aero/beta-deg at those steps.
-#[test]
-fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
+/// The stock-format test flight (`flights/`), its first 6 s flown through the bridge.
+fn first_6_s_of_the_test_flight() -> (PathBuf, Flight) {
     let script = root().join("flights/f16_test_flight.xml");
     let cfg = FlyConfig {
         max_time_s: Some(6.0),
         ..FlyConfig::default()
     };
     let flight = plant::fly_script(&script, &cfg).unwrap();
+    (script, flight)
+}
+
+/// Truth α/β at the 20 Hz samples are JSBSim's own aero/alpha-deg, aero/beta-deg at those steps.
+#[test]
+fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
+    let (script, flight) = first_6_s_of_the_test_flight();
     assert_eq!(flight.samples.len(), 120, "6 s at 20 Hz");
     assert!(flight.cut.is_none());
 
@@ -88,12 +94,7 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
 /// 719 raw steps and one watched step, α is bit-identical to the recorded sample at 6 s.
 #[test]
 fn raw_stepping_flies_the_same_flight() {
-    let script = root().join("flights/f16_test_flight.xml");
-    let cfg = FlyConfig {
-        max_time_s: Some(6.0),
-        ..FlyConfig::default()
-    };
-    let flight = plant::fly_script(&script, &cfg).unwrap();
+    let (script, flight) = first_6_s_of_the_test_flight();
     let mut p = Plant::spawn().unwrap();
     plant::load_f16_script(&mut p, &script).unwrap();
     assert_eq!(p.run_raw(719).unwrap(), 719);
