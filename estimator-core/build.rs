@@ -14,7 +14,6 @@ fn main() {
         _ => default,
     };
     println!("cargo:rerun-if-changed={}", path.display());
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_VECTORS");
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
     if path.is_file() {
         println!("cargo:rustc-cfg=estimator_weights");

@@ -75,28 +75,6 @@ impl Channel {
         1 << (self as u16)
     }
 
-    /// Column name used in datasets and reports.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Channel::GyroP => "gyro_p_rps",
-            Channel::GyroQ => "gyro_q_rps",
-            Channel::GyroR => "gyro_r_rps",
-            Channel::AccelX => "accel_x_mps2",
-            Channel::AccelY => "accel_y_mps2",
-            Channel::AccelZ => "accel_z_mps2",
-            Channel::GpsSpeed => "gps_speed_mps",
-            Channel::GpsAlt => "gps_alt_m",
-            Channel::Elevator => "elevator_deg",
-            Channel::Aileron => "aileron_deg",
-            Channel::Rudder => "rudder_deg",
-            Channel::Lef => "lef_deg",
-            Channel::Tef => "tef_deg",
-            Channel::Flaperon => "flaperon_deg",
-            Channel::Speedbrake => "speedbrake_deg",
-            Channel::Throttle => "throttle_norm",
-        }
-    }
-
     /// Size of one integer step in the SI (or degree / normalised) unit of [`Channel::name`].
     pub const fn lsb(self) -> f64 {
         match self {
@@ -132,6 +110,51 @@ impl Channel {
 
 /// All channels valid.
 pub const ALL_VALID: u16 = u16::MAX >> (16 - CHANNELS);
+
+/// [`Channel::name`] and the delta-feature names from one list: `"<name>_d<frames>"` for every lag.
+macro_rules! channel_names {
+    ($($v:ident => $c:literal),* $(,)?) => {
+        impl Channel {
+            /// Column name used in datasets and reports.
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Channel::$v => $c,)*
+                }
+            }
+
+            /// Name of `Feature::Delta(self, lag)`.
+            pub(crate) const fn delta_name(self, lag: crate::features::Lag) -> &'static str {
+                use crate::features::Lag;
+                match self {
+                    $(Channel::$v => match lag {
+                        Lag::F1 => concat!($c, "_d1"),
+                        Lag::F4 => concat!($c, "_d4"),
+                        Lag::F10 => concat!($c, "_d10"),
+                        Lag::F20 => concat!($c, "_d20"),
+                    },)*
+                }
+            }
+        }
+    };
+}
+channel_names!(
+    GyroP => "gyro_p_rps",
+    GyroQ => "gyro_q_rps",
+    GyroR => "gyro_r_rps",
+    AccelX => "accel_x_mps2",
+    AccelY => "accel_y_mps2",
+    AccelZ => "accel_z_mps2",
+    GpsSpeed => "gps_speed_mps",
+    GpsAlt => "gps_alt_m",
+    Elevator => "elevator_deg",
+    Aileron => "aileron_deg",
+    Rudder => "rudder_deg",
+    Lef => "lef_deg",
+    Tef => "tef_deg",
+    Flaperon => "flaperon_deg",
+    Speedbrake => "speedbrake_deg",
+    Throttle => "throttle_norm",
+);
 
 /// One validated sensor sample: the payload of a sensor frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -8,14 +8,14 @@
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | GPS speed below [`crate::features::MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
-//! | a delta feature a model uses lacks its exact lagged frame (first second, lost frames, time jump) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
+//! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
 //! the step panic or return anything but the integers described here.
 
 use crate::channels::{CHANNELS, Channel, SensorFrame};
 use crate::features::{Feature, FeatureValues, History};
-use crate::nn::Layer;
+use crate::nn::{Aligned, Layer};
 use crate::normalize::{Envelope, Norm};
 
 /// Frames with an unchanged noisy channel before it counts as stuck (1 s at 20 Hz).
@@ -42,8 +42,9 @@ impl Flags {
     pub const NO_ESTIMATE: u16 = 1 << 5;
     /// The estimator has no compiled-in model (a build without weights).
     pub const NO_MODEL: u16 = 1 << 6;
-    /// A delta feature used by a computed angle was not taken over its exact lag (the first second
-    /// after a start or reset, or lost frames): the estimate is computed but may be less accurate.
+    /// A computed angle reads delta features at a lag for which some channel's delta was not taken
+    /// over the exact lag (the first second after a start or reset, lost frames, a channel invalid in
+    /// the lagged frame): the estimate is computed but may be less accurate.
     pub const HISTORY_SHORT: u16 = 1 << 7;
 
     pub fn has(self, bit: u16) -> bool {
@@ -126,14 +127,14 @@ where
         "part 2 takes the features plus one intermediate"
     );
 
-    fn inputs(&self, values: &FeatureValues) -> ([i16; N], bool) {
+    fn inputs(&self, values: &FeatureValues) -> (Aligned<N>, bool) {
         let mut clamped = false;
-        let mut x = [0i16; N];
-        for (((x, f), n), e) in x
-            .iter_mut()
-            .zip(&self.features)
-            .zip(&self.norm)
-            .zip(&self.envelope)
+        let mut x = Aligned([0i16; N]);
+        for (((x, f), n), e) in
+            x.0.iter_mut()
+                .zip(&self.features)
+                .zip(&self.norm)
+                .zip(&self.envelope)
         {
             let (v, out) = e.clamp(values.get(*f));
             clamped |= out;
@@ -156,16 +157,16 @@ where
         let () = Self::SHAPE_OK;
         let (x, mut clamped) = self.inputs(values);
         let mut mid = [0i32; 1];
-        self.part1.forward(&x, &mut mid);
-        let mut x1 = [0i16; N1];
-        for (d, s) in x1.iter_mut().zip(x.iter()) {
+        self.part1.forward(&x.0, &mut mid);
+        let mut x1 = Aligned([0i16; N1]);
+        for (d, s) in x1.0.iter_mut().zip(x.0.iter()) {
             *d = *s;
         }
-        if let Some(last) = x1.last_mut() {
+        if let Some(last) = x1.0.last_mut() {
             *last = self.mid_norm.apply(mid[0]);
         }
         let mut out = [0i32; 1];
-        self.part2.forward(&x1, &mut out);
+        self.part2.forward(&x1.0, &mut out);
         let (angle, out_clamped) = self.out_range.clamp(out[0]);
         clamped |= out_clamped || values.low_speed && self.sources() & Channel::GpsSpeed.bit() != 0;
         (mid[0], angle, clamped)
@@ -176,11 +177,29 @@ where
     }
 }
 
+/// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
+/// over its feature list).
+#[derive(Clone, Copy)]
+struct Model<'m> {
+    net: &'m dyn AngleNet,
+    sources: u16,
+    lags: u8,
+}
+
+impl<'m> Model<'m> {
+    fn new(net: &'m dyn AngleNet) -> Self {
+        Model {
+            net,
+            sources: net.sources(),
+            lags: net.lags(),
+        }
+    }
+}
+
 /// The 20 Hz estimator: both cascades plus the per-channel health state.
 pub struct Estimator<'m> {
-    alpha: Option<&'m dyn AngleNet>,
-    beta: Option<&'m dyn AngleNet>,
-    last_raw: [i32; CHANNELS],
+    alpha: Option<Model<'m>>,
+    beta: Option<Model<'m>>,
     repeats: [u16; CHANNELS],
     last_alpha: Option<(i32, i32)>,
     last_beta: Option<(i32, i32)>,
@@ -194,9 +213,8 @@ impl<'m> Estimator<'m> {
 
     fn with(alpha: Option<&'m dyn AngleNet>, beta: Option<&'m dyn AngleNet>) -> Self {
         Estimator {
-            alpha,
-            beta,
-            last_raw: [0; CHANNELS],
+            alpha: alpha.map(Model::new),
+            beta: beta.map(Model::new),
             repeats: [0; CHANNELS],
             last_alpha: None,
             last_beta: None,
@@ -218,32 +236,29 @@ impl<'m> Estimator<'m> {
 
     /// Multiply-accumulates per step.
     pub fn macs(&self) -> usize {
-        self.alpha.map_or(0, |n| n.macs()) + self.beta.map_or(0, |n| n.macs())
+        self.alpha.map_or(0, |m| m.net.macs()) + self.beta.map_or(0, |m| m.net.macs())
     }
 
     /// Forgets health history, past frames and held values (e.g. after a long link outage).
     pub fn reset(&mut self) {
-        *self = Self::with(self.alpha, self.beta);
+        *self = Self::with(self.alpha.map(|m| m.net), self.beta.map(|m| m.net));
     }
 
-    /// Bit per channel: noisy channels unchanged for [`STUCK_FRAMES`] frames.
+    /// Bit per channel: noisy channels unchanged for [`STUCK_FRAMES`] frames. The previous frame is
+    /// the history's newest (0s before the first).
     fn update_stuck(&mut self, frame: &SensorFrame) -> u16 {
         let mut stuck = 0u16;
+        let previous = self.history.newest().map_or(&[0; CHANNELS], |p| &p.raw);
         for (((c, raw), last), n) in Channel::ALL
             .iter()
             .zip(&frame.raw)
-            .zip(self.last_raw.iter_mut())
+            .zip(previous)
             .zip(self.repeats.iter_mut())
         {
             if !c.is_noisy() {
                 continue;
             }
-            *n = if *raw == *last {
-                n.saturating_add(1)
-            } else {
-                0
-            };
-            *last = *raw;
+            *n = if raw == last { n.saturating_add(1) } else { 0 };
             if *n + 1 >= STUCK_FRAMES {
                 stuck |= c.bit();
             }
@@ -265,37 +280,35 @@ impl<'m> Estimator<'m> {
         let values = FeatureValues::compute(frame, &self.history);
         self.history.push(frame);
         let mut flags = 0u16;
-        let mut angle =
-            |net: &dyn AngleNet, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
-                let src = net.sources();
-                let invalid = src & !frame.valid != 0;
-                let is_stuck = src & stuck != 0;
-                if invalid {
-                    flags |= Flags::INVALID_INPUT;
-                }
-                if is_stuck {
-                    flags |= Flags::STUCK_SENSOR;
-                }
-                if invalid || is_stuck {
-                    flags |= held_flag;
-                    return match *last {
-                        Some(v) => v,
-                        None => {
-                            flags |= Flags::NO_ESTIMATE;
-                            (0, 0)
-                        }
-                    };
-                }
-                let (mid, out, clamped) = net.run(&values);
-                if clamped {
-                    flags |= Flags::OUT_OF_ENVELOPE;
-                }
-                if net.lags() & values.short_lags != 0 {
-                    flags |= Flags::HISTORY_SHORT;
-                }
-                *last = Some((mid, out));
-                (mid, out)
-            };
+        let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
+            let invalid = m.sources & !frame.valid != 0;
+            let is_stuck = m.sources & stuck != 0;
+            if invalid {
+                flags |= Flags::INVALID_INPUT;
+            }
+            if is_stuck {
+                flags |= Flags::STUCK_SENSOR;
+            }
+            if invalid || is_stuck {
+                flags |= held_flag;
+                return match *last {
+                    Some(v) => v,
+                    None => {
+                        flags |= Flags::NO_ESTIMATE;
+                        (0, 0)
+                    }
+                };
+            }
+            let (mid, out, clamped) = m.net.run(&values);
+            if clamped {
+                flags |= Flags::OUT_OF_ENVELOPE;
+            }
+            if m.lags & values.short_lags != 0 {
+                flags |= Flags::HISTORY_SHORT;
+            }
+            *last = Some((mid, out));
+            (mid, out)
+        };
         (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD);
         (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD);
         e.flags = Flags(flags);

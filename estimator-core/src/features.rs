@@ -75,40 +75,6 @@ impl Lag {
     }
 }
 
-/// `"<channel name>_d<frames>"` for every channel and lag (a test checks them against the names).
-macro_rules! delta_names {
-    ($($v:ident => $c:literal),* $(,)?) => {
-        const fn delta_name(c: Channel, l: Lag) -> &'static str {
-            match c {
-                $(Channel::$v => match l {
-                    Lag::F1 => concat!($c, "_d1"),
-                    Lag::F4 => concat!($c, "_d4"),
-                    Lag::F10 => concat!($c, "_d10"),
-                    Lag::F20 => concat!($c, "_d20"),
-                },)*
-            }
-        }
-    };
-}
-delta_names!(
-    GyroP => "gyro_p_rps",
-    GyroQ => "gyro_q_rps",
-    GyroR => "gyro_r_rps",
-    AccelX => "accel_x_mps2",
-    AccelY => "accel_y_mps2",
-    AccelZ => "accel_z_mps2",
-    GpsSpeed => "gps_speed_mps",
-    GpsAlt => "gps_alt_m",
-    Elevator => "elevator_deg",
-    Aileron => "aileron_deg",
-    Rudder => "rudder_deg",
-    Lef => "lef_deg",
-    Tef => "tef_deg",
-    Flaperon => "flaperon_deg",
-    Speedbrake => "speedbrake_deg",
-    Throttle => "throttle_norm",
-);
-
 /// GPS speeds below this (mm/s) make the `ρV²`-based features meaningless: they saturate and are
 /// flagged out of envelope.
 pub const MIN_SPEED_MMS: i32 = 20_000;
@@ -183,7 +149,7 @@ impl Feature {
             Feature::FzOverRhoV2 => "fz_over_rho_v2",
             Feature::MachProxy => "mach_proxy",
             Feature::RhoV2 => "rho_v2_pa",
-            Feature::Delta(c, l) => delta_name(c, l),
+            Feature::Delta(c, l) => c.delta_name(l),
         }
     }
 
@@ -233,18 +199,10 @@ pub struct FeatureValues {
     pub short_lags: u8,
 }
 
-/// One past frame as the history keeps it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Past {
-    time_ms: u32,
-    raw: [i32; CHANNELS],
-    valid: u16,
-}
-
 /// The last [`HISTORY_FRAMES`] sensor frames, newest last, for the delta features. Fixed size, no heap.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct History {
-    past: [Past; HISTORY_FRAMES],
+    past: [SensorFrame; HISTORY_FRAMES],
     /// Slot the next frame goes to.
     head: usize,
     len: usize,
@@ -259,7 +217,8 @@ impl Default for History {
 impl History {
     pub const fn new() -> History {
         History {
-            past: [Past {
+            past: [SensorFrame {
+                seq: 0,
                 time_ms: 0,
                 raw: [0; CHANNELS],
                 valid: 0,
@@ -278,18 +237,19 @@ impl History {
     /// Stores a frame (the oldest is dropped when full).
     pub fn push(&mut self, frame: &SensorFrame) {
         if let Some(p) = self.past.get_mut(self.head) {
-            *p = Past {
-                time_ms: frame.time_ms,
-                raw: frame.raw,
-                valid: frame.valid,
-            };
+            *p = *frame;
         }
         self.head = (self.head + 1) % HISTORY_FRAMES;
         self.len = (self.len + 1).min(HISTORY_FRAMES);
     }
 
+    /// The frame stored last.
+    pub fn newest(&self) -> Option<&SensorFrame> {
+        self.newest_first().next()
+    }
+
     /// Stored frames, newest first.
-    fn newest_first(&self) -> impl Iterator<Item = &Past> {
+    fn newest_first(&self) -> impl Iterator<Item = &SensorFrame> {
         (1..=self.len).filter_map(move |k| {
             self.past
                 .get((self.head + HISTORY_FRAMES - k) % HISTORY_FRAMES)
@@ -299,7 +259,7 @@ impl History {
     /// Writes `Delta(c, lag)` for every channel into `raw`; returns whether any was not exact.
     fn deltas(&self, frame: &SensorFrame, lag: Lag, raw: &mut [i32; FEATURE_COUNT]) -> bool {
         let want = lag.ms();
-        let age = |p: &Past| frame.time_ms.wrapping_sub(p.time_ms);
+        let age = |p: &SensorFrame| frame.time_ms.wrapping_sub(p.time_ms);
         // The stored frame whose age is closest to the lag, in (0, 2 × lag], with the `need` channels
         // valid (the first, i.e. newest, of equally close ones). Age == lag is the exact frame.
         let closest = |need: u16| {
@@ -318,7 +278,7 @@ impl History {
         for c in Channel::ALL {
             let bit = c.bit();
             let from = match shared {
-                Some(p) if p.valid & bit != 0 => Some(p),
+                Some(p) if p.is_valid(c) => Some(p),
                 Some(_) => {
                     short = true;
                     closest(bit)
@@ -327,8 +287,7 @@ impl History {
                 None => None,
             };
             let d = from.map_or(0, |p| {
-                let old = p.raw.get(c.index()).copied().unwrap_or(0) as i64;
-                let d = frame.get(c) as i64 - old;
+                let d = frame.get(c) as i64 - p.get(c) as i64;
                 // Rate-scaled to the nominal lag when the frame is not the lagged one (an i64
                 // division is a library call on the Cortex-M4: skip it in the usual exact case).
                 match age(p) {

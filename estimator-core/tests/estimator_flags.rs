@@ -241,7 +241,7 @@ fn short_history_is_flagged_only_for_the_angle_that_uses_deltas() {
     // A reset forgets the history.
     e.reset();
     assert!(short(&mut e, 16));
-    // A β-only delta user never flags α's history, and vice versa.
+    // Models that read no delta feature are never flagged, even on the first frame.
     let mut e2 = Estimator::new(&b, &b);
     assert!(!short(&mut e2, 0));
 }

@@ -2,6 +2,8 @@
 //! come from the trainer's independent i64 reference (trainer/src/quant.rs), not from this crate.
 //! `ESTIMATOR_VECTORS=/path` at build time checks another export (set with `ESTIMATOR_WEIGHTS`).
 
+#[cfg(estimator_weights)]
+use estimator_core::AngleNet;
 use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, History, SensorFrame};
 
 const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
@@ -31,7 +33,7 @@ fn compiled_in_model_matches_the_trainer_vectors() {
         assert_eq!(v.len(), 4 + CHANNELS + 6, "malformed vector line: {line}");
         if v[0] == 1 {
             history.clear();
-            est = Estimator::shipped();
+            est.reset();
         }
         let v = &v[1..];
         let raw: [i32; CHANNELS] = core::array::from_fn(|i| v[3 + i] as i32);
@@ -47,7 +49,6 @@ fn compiled_in_model_matches_the_trainer_vectors() {
         let o = &v[3 + CHANNELS..];
         let want_alpha = (o[0] as i32, o[1] as i32, o[2] != 0);
         let want_beta = (o[3] as i32, o[4] as i32, o[5] != 0);
-        use estimator_core::AngleNet;
         #[cfg(estimator_weights)]
         {
             assert_eq!(
@@ -80,7 +81,6 @@ fn compiled_in_model_matches_the_trainer_vectors() {
                 "flags: {line}"
             );
         }
-        let _ = &values;
         checked += 1;
     }
     assert!(checked >= 100, "only {checked} vectors in {path}");

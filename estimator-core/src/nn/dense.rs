@@ -57,8 +57,7 @@ fn apply_sat_64(acc: i32, mult: i32, shift: u8, offset: i32) -> i32 {
 
 /// Weights, bias and requantization of one fully connected layer.
 pub struct Dense<const IN: usize, const OUT: usize> {
-    /// The int8 weights (-127..=127) in this build's storage format ([`kernel::Weights`]); read them
-    /// back with [`Dense::weight`].
+    /// The int8 weights (-127..=127) in this build's storage format ([`kernel::Weights`]).
     weights: kernel::Weights<IN, OUT>,
     /// Bias in accumulator units.
     pub bias: [i32; OUT],
@@ -119,20 +118,6 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
         }
     }
 
-    /// The weight of input `i` in output `o`, as given to [`Dense::new`]; `None` out of range.
-    pub fn weight(&self, o: usize, i: usize) -> Option<i8> {
-        self.weights.get(o, i)
-    }
-
-    /// The requantization of output `o`, as given to [`Dense::new`]; `None` out of range.
-    pub fn requant(&self, o: usize) -> Option<Requant> {
-        Some(Requant {
-            mult: *self.mult.get(o)?,
-            shift: *self.shift.get(o)?,
-            offset: *self.offset.get(o)?,
-        })
-    }
-
     /// The requantizations in output order.
     #[inline(always)]
     fn requants(&self) -> impl Iterator<Item = Requant> + '_ {
@@ -147,7 +132,7 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
             })
     }
 
-    /// Int32 accumulators with the bias, using the fastest kernel for this target.
+    /// Int32 accumulators with the bias, using the kernel of this build's weight storage.
     #[inline]
     pub fn accumulate(&self, x: &[i16; IN], acc: &mut [i32; OUT]) {
         self.weights.accumulate(&self.bias, x, acc);

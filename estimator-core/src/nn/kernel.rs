@@ -52,6 +52,12 @@ pub fn accumulate_portable<const IN: usize, const OUT: usize>(
     }
 }
 
+/// Two int16 as the (low, high) halves of a word, as a little-endian load of them reads.
+#[inline(always)]
+pub fn pack(lo: i16, hi: i16) -> u32 {
+    (lo as u16 as u32) | ((hi as u16 as u32) << 16)
+}
+
 /// `SMLAD acc, a, b`: `acc + a.lo*b.lo + a.hi*b.hi` (signed 16-bit halves, wrapping).
 #[cfg(not(target_arch = "arm"))]
 #[inline(always)]
@@ -121,10 +127,6 @@ pub use arm::{smlad, sxtb16, sxtb16_ror8};
 mod tests {
     use super::*;
     use proptest::prelude::*;
-
-    fn pack(lo: i16, hi: i16) -> u32 {
-        (lo as u16 as u32) | ((hi as u16 as u32) << 16)
-    }
 
     #[test]
     fn primitives_match_their_definition() {

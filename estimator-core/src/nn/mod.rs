@@ -12,7 +12,7 @@
 //!
 //! Overflow cannot happen: `|x_q| ≤ 32767`, `|w_q| ≤ 127` and `IN ≤` [`MAX_IN`], and every bias is
 //! checked against the remaining head-room when the layer is built (at compile time for the
-//! generated statics). Both kernels still use wrapping adds, so they agree bit for bit in all cases.
+//! generated statics). All three kernels still use wrapping adds, so they agree bit for bit in all cases.
 
 mod dense;
 #[cfg(any(test, feature = "float-ref"))]
@@ -38,10 +38,10 @@ pub trait Layer<const IN: usize, const OUT: usize> {
     fn macs(&self) -> usize;
 }
 
-/// The activations between two layers, on a word boundary so that the int16 kernel loads them in
-/// pairs without copying them first.
+/// int16 activations on a word boundary, so that the int16 kernel loads them in pairs without
+/// copying them first: the input of a network and the activations between two layers.
 #[repr(C, align(4))]
-struct Activations<const N: usize>([i16; N]);
+pub(crate) struct Aligned<const N: usize>(pub [i16; N]);
 
 /// Two layers in sequence, with the intermediate width `MID` checked by the type system.
 pub struct Chain<A, B, const MID: usize>(pub A, pub B);
@@ -55,7 +55,7 @@ where
 
     #[inline]
     fn forward(&self, x: &[i16; IN], y: &mut [Self::Out; OUT]) {
-        let mut mid = Activations([0i16; MID]);
+        let mut mid = Aligned([0i16; MID]);
         self.0.forward(x, &mut mid.0);
         self.1.forward(&mid.0, y);
     }

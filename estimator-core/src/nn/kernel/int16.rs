@@ -33,7 +33,8 @@
 //! be misaligned) the same layout is read by plain Rust with an exact `SMLAD` emulation, which the
 //! tests compare with [`super::accumulate_portable`].
 
-use super::smlad;
+use super::{pack, smlad};
+use crate::nn::Aligned;
 
 /// Output rows per block of the main loop.
 const BLOCK: usize = 4;
@@ -91,7 +92,8 @@ impl<const IN: usize, const OUT: usize> Int16Weights<IN, OUT> {
         Int16Weights { halves }
     }
 
-    /// Index in storage order of weight `(o, i)`, both in range.
+    /// Index in storage order of weight `(o, i)`, both in range (the layout test reads it back).
+    #[cfg(test)]
     const fn position(o: usize, i: usize) -> usize {
         let full = OUT / BLOCK * BLOCK;
         let r0 = if o < full {
@@ -111,6 +113,7 @@ impl<const IN: usize, const OUT: usize> Int16Weights<IN, OUT> {
     }
 
     /// Weight `(o, i)` as exported, `None` out of range.
+    #[cfg(test)]
     pub fn get(&self, o: usize, i: usize) -> Option<i8> {
         if o >= OUT || i >= IN {
             return None;
@@ -126,10 +129,6 @@ impl<const IN: usize, const OUT: usize> Int16Weights<IN, OUT> {
     }
 }
 
-/// A word-aligned copy of an input that is not on a word boundary already.
-#[repr(C, align(4))]
-struct Aligned<const N: usize>([i16; N]);
-
 /// The int16 kernel (see the module docs).
 #[inline(never)]
 pub fn accumulate_wide<const IN: usize, const OUT: usize>(
@@ -138,7 +137,8 @@ pub fn accumulate_wide<const IN: usize, const OUT: usize>(
     x: &[i16; IN],
     acc: &mut [i32; OUT],
 ) {
-    // The Arm loops load input pairs as words.
+    // The Arm loops load input pairs as words. The estimator's inputs and activations are
+    // `nn::Aligned`; another caller's unaligned input is copied.
     let copy;
     let x = if (x.as_ptr() as usize).is_multiple_of(4) {
         x
@@ -234,11 +234,11 @@ fn dot_emulated(w: &[i16], x: &[i16], s: &mut [i32]) {
     }
 }
 
-/// Two int16 as the (low, high) halves of a word, as a little-endian load of them reads.
+/// The two int16 of `h` packed into a word (0 unless `h` holds exactly two).
 #[inline(always)]
 fn pair(h: &[i16]) -> u32 {
     match h {
-        [lo, hi] => (*lo as u16 as u32) | ((*hi as u16 as u32) << 16),
+        [lo, hi] => pack(*lo, *hi),
         _ => 0,
     }
 }

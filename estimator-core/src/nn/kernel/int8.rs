@@ -7,7 +7,7 @@
 //! Two output rows share each input load. The widening costs one instruction per two MACs, on top of
 //! the `SMLAD`, which is why this kernel cannot reach one instruction per MAC.
 
-use super::{MAX_IN, smlad, sxtb16, sxtb16_ror8};
+use super::{MAX_IN, pack, smlad, sxtb16, sxtb16_ror8};
 
 /// The int8 weights exactly as exported: row `o` holds the weights of output `o`, in input order.
 pub struct Int8Weights<const IN: usize, const OUT: usize>(pub [[i8; IN]; OUT]);
@@ -15,11 +15,6 @@ pub struct Int8Weights<const IN: usize, const OUT: usize>(pub [[i8; IN]; OUT]);
 impl<const IN: usize, const OUT: usize> Int8Weights<IN, OUT> {
     pub const fn new(w: &[[i8; IN]; OUT]) -> Self {
         Int8Weights(*w)
-    }
-
-    /// Weight `(o, i)`, `None` out of range.
-    pub fn get(&self, o: usize, i: usize) -> Option<i8> {
-        self.0.get(o).and_then(|r| r.get(i)).copied()
     }
 
     /// `acc[o] = bias[o] + Σ_i x[i] w[o][i]`: the `SXTB16` kernel on Arm, the portable one elsewhere.
@@ -103,11 +98,6 @@ fn tail(row: &[i8], tail_x: &[i16], groups: usize, mut s: i32) -> i32 {
         s = s.wrapping_add(*xi as i32 * *wi as i32);
     }
     s
-}
-
-#[inline(always)]
-fn pack(lo: i16, hi: i16) -> u32 {
-    (lo as u16 as u32) | ((hi as u16 as u32) << 16)
 }
 
 #[inline(always)]
