@@ -1,6 +1,6 @@
 //! Feature analysis: Spearman rank correlations (candidate features vs air-data targets and among
 //! themselves) and sampled Shapley values (permutation sampling against a training background).
-use crate::data::{Dataset, Role, Target, feature_si};
+use crate::data::{Dataset, Role, Target, feature_si, spread_rows};
 use estimator_core::{Feature, FeatureValues};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
@@ -55,23 +55,15 @@ pub fn spearman(a: &[f64], b: &[f64]) -> f64 {
 /// see) followed by the four targets. Only training and validation flights are read.
 pub fn columns(ds: &Dataset, max_rows: usize) -> (Vec<String>, Vec<Vec<f64>>) {
     let fl: Vec<_> = ds.flights.iter().filter(|f| f.role != Role::Test).collect();
-    let total: usize = fl.iter().map(|f| f.len()).sum();
-    let step = crate::data::stride(total, max_rows);
     let mut names: Vec<String> = Feature::ALL.iter().map(|f| f.name().to_string()).collect();
     names.extend(Target::ALL.iter().map(|t| t.column().to_string()));
     let mut cols = vec![Vec::new(); names.len()];
-    let mut k = 0usize;
-    for f in fl {
-        for (i, v) in f.features.iter().enumerate() {
-            if k.is_multiple_of(step) {
-                for (c, feat) in Feature::ALL.iter().enumerate() {
-                    cols[c].push(feature_si(v, *feat));
-                }
-                for (t, tgt) in Target::ALL.iter().enumerate() {
-                    cols[Feature::ALL.len() + t].push(f.truth(*tgt)[i]);
-                }
-            }
-            k += 1;
+    for (f, i) in spread_rows(&fl, max_rows) {
+        for (c, feat) in Feature::ALL.iter().enumerate() {
+            cols[c].push(feature_si(&f.features[i], *feat));
+        }
+        for (t, tgt) in Target::ALL.iter().enumerate() {
+            cols[Feature::ALL.len() + t].push(f.truth(*tgt)[i]);
         }
     }
     (names, cols)
@@ -92,7 +84,7 @@ pub fn spearman_matrix(cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
     m
 }
 
-/// Sampled Shapley values of `f` at `x` over the positions `d` of the model's inputs: for each of
+/// Sampled Shapley values of `f` at `x` over the model's inputs `features`: for each of
 /// `perms` random orders and each background row `z`, inputs switch from `z` to `x` one by one in
 /// that order and each switch's change of `f` is credited to the switched input. The values sum to
 /// `f(x) - mean_z f(z)` exactly (efficiency), whatever the sample.
@@ -131,14 +123,15 @@ pub fn shapley<F: Fn(&FeatureValues) -> f64>(
 
 /// Evenly spaced rows of the given flights (at most `n`).
 pub fn sample_rows(ds: &Dataset, roles: &[Role], n: usize) -> Vec<FeatureValues> {
-    let all: Vec<&FeatureValues> = ds
+    let fl: Vec<_> = ds
         .flights
         .iter()
         .filter(|f| roles.contains(&f.role))
-        .flat_map(|f| f.features.iter())
         .collect();
-    let step = crate::data::stride(all.len(), n);
-    all.into_iter().step_by(step).copied().collect()
+    spread_rows(&fl, n)
+        .into_iter()
+        .map(|(f, i)| f.features[i])
+        .collect()
 }
 
 /// Seeded generator for SHAP sampling.

@@ -1,6 +1,6 @@
 //! Table 2 baselines on the same features, split and test flights: closed-form linear regression,
 //! gradient boosting (gbdt), and a plain MLP (burn).
-use crate::data::{Dataset, Flight, Role, feature_si};
+use crate::data::{Dataset, Flight, Role, feature_si, spread_rows};
 use crate::error::{Error, Result};
 use crate::metrics::FlightMetrics;
 use crate::model::{Mlp, TrainConfig, predict_all, train};
@@ -123,7 +123,7 @@ pub enum Baseline {
 }
 
 impl Baseline {
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Baseline::Linear => "Linear regression",
             Baseline::GradientBoosting => "Gradient boosting",
@@ -179,19 +179,17 @@ pub fn run_baseline(
             use gbdt::decision_tree::Data;
             use gbdt::gradient_boost::GBDT;
             let d = Design::fit(features, &tr);
-            let total: usize = tr.iter().map(|f| f.len()).sum();
-            let step = crate::data::stride(total, gb_rows);
-            let mut data = Vec::new();
-            let mut k = 0usize;
-            for fl in &tr {
-                for (v, t) in fl.features.iter().zip(fl.truth(angle.target())) {
-                    if k.is_multiple_of(step) {
-                        let x: Vec<f32> = d.row(features, v).iter().map(|x| *x as f32).collect();
-                        data.push(Data::new_training_data(x, 1.0, *t as f32, None));
-                    }
-                    k += 1;
-                }
-            }
+            let mut data: Vec<Data> = spread_rows(&tr, gb_rows)
+                .into_iter()
+                .map(|(fl, i)| {
+                    let x: Vec<f32> = d
+                        .row(features, &fl.features[i])
+                        .iter()
+                        .map(|x| *x as f32)
+                        .collect();
+                    Data::new_training_data(x, 1.0, fl.truth(angle.target())[i] as f32, None)
+                })
+                .collect();
             let mut conf = Config::new();
             conf.set_feature_size(features.len());
             conf.set_max_depth(6);

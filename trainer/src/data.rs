@@ -4,8 +4,12 @@
 //! columns), then `FeatureValues::compute(&frame, &history)` through one `History` per flight.
 use crate::error::{Error, Result};
 use estimator_core::{FeatureValues, History, SensorFrame};
-use hil_sim::dataset::{Manifest, Split, sha256_file};
+use hil_sim::dataset::{Manifest, Split, Truth, sha256_file};
 use std::path::{Path, PathBuf};
+
+/// Training rows (train + validation flights) of the paper's experiment: 4 h of flight at the
+/// dataset's sample rate (288 000 at 20 Hz).
+pub const PAPER_TRAIN_ROWS: usize = 4 * 3600 * hil_sim::plant::SAMPLE_HZ as usize;
 
 /// Which part of the experiment a flight belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -42,6 +46,15 @@ impl Target {
             Target::VAero => "v_aero_mps",
         }
     }
+    /// This target's value in a truth record.
+    pub fn of(self, t: &Truth) -> f64 {
+        match self {
+            Target::AlphaDeg => t.alpha_deg,
+            Target::BetaDeg => t.beta_deg,
+            Target::WAero => t.w_aero_mps,
+            Target::VAero => t.v_aero_mps,
+        }
+    }
 }
 
 /// One flight: frames exactly as the estimator would receive them, their features, and the truth.
@@ -73,7 +86,7 @@ pub struct Dataset {
     pub dir: PathBuf,
     /// SHA-256 of manifest.json (which carries each flight's own SHA-256).
     pub manifest_sha256: String,
-    pub preset: Option<String>,
+    pub preset: String,
     pub flights: Vec<Flight>,
 }
 
@@ -126,7 +139,7 @@ impl Dataset {
         Ok(Dataset {
             dir: dir.to_path_buf(),
             manifest_sha256,
-            preset: Some(manifest.preset),
+            preset: manifest.preset,
             flights,
         })
     }
@@ -138,16 +151,28 @@ impl Dataset {
     pub fn rows(&self, role: Role) -> usize {
         self.flights(role).map(|f| f.len()).sum()
     }
-}
 
-pub fn hex(bytes: &[u8]) -> String {
-    bytes.iter().map(|b| format!("{b:02x}")).collect()
+    /// Rows the models learn from: training plus validation flights (never the test flights).
+    pub fn training_rows(&self) -> usize {
+        self.rows(Role::Train) + self.rows(Role::Val)
+    }
 }
 
 /// Row stride that keeps at most `max_rows` of `total` rows, evenly spread (every row when
 /// `max_rows >= total`).
 pub fn stride(total: usize, max_rows: usize) -> usize {
     total.div_ceil(max_rows.max(1)).max(1)
+}
+
+/// At most `max_rows` rows of `flights`, evenly spread, in order, as (flight, row index): row `k` of
+/// the flights' concatenation is kept when `k` is a multiple of [`stride`]`(total, max_rows)`.
+pub fn spread_rows<'a>(flights: &[&'a Flight], max_rows: usize) -> Vec<(&'a Flight, usize)> {
+    let total: usize = flights.iter().map(|f| f.len()).sum();
+    flights
+        .iter()
+        .flat_map(|&f| (0..f.len()).map(move |i| (f, i)))
+        .step_by(stride(total, max_rows))
+        .collect()
 }
 
 /// Reads one flight CSV and derives the estimator's inputs from it.
@@ -163,18 +188,13 @@ pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
     };
     // The estimator's own history: features at frame i see frames 0..i, as in flight.
     let mut history = History::new();
-    for (i, sample) in csv.samples.iter().enumerate() {
-        let frame = hil_sim::frames::sample_to_frame(i as u16, sample);
+    for (frame, sample) in hil_sim::frames::flight_frames(&csv).zip(&csv.samples) {
         fl.features.push(FeatureValues::compute(&frame, &history));
         history.push(&frame);
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);
-        let t = &sample.truth;
-        for (k, v) in [t.alpha_deg, t.beta_deg, t.w_aero_mps, t.v_aero_mps]
-            .into_iter()
-            .enumerate()
-        {
-            fl.truth[k].push(v);
+        for t in Target::ALL {
+            fl.truth[t as usize].push(t.of(&sample.truth));
         }
     }
     Ok(fl)

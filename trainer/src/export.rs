@@ -1,5 +1,5 @@
 //! Writes the generated model, its test vectors, learning curves and a JSON summary.
-use crate::data::{Dataset, Role};
+use crate::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use crate::error::{Result, io};
 use crate::metrics::FlightMetrics;
 use crate::pipeline::Trained;
@@ -10,7 +10,7 @@ use sha2::{Digest, Sha256};
 use std::fmt::Write;
 use std::path::Path;
 
-pub use hil_sim::dataset::git_rev;
+use hil_sim::dataset::git_rev;
 
 fn metrics_line(m: &FlightMetrics) -> String {
     let o = m.overall;
@@ -30,19 +30,19 @@ pub fn provenance(
     beta: &Trained,
 ) -> String {
     let mut s = String::new();
-    let preset = ds.preset.clone().unwrap_or_else(|| "?".into());
+    let preset = &ds.preset;
     let _ = writeln!(
         s,
         "dataset: {} (preset {preset}), manifest sha256 {}",
         ds.dir.display(),
         ds.manifest_sha256
     );
-    let rows = ds.rows(Role::Train) + ds.rows(Role::Val);
-    if preset == "ci" || rows < 288_000 {
+    let rows = ds.training_rows();
+    if preset == "ci" || rows < PAPER_TRAIN_ROWS {
         let _ = writeln!(
             s,
-            "WARNING: trained on {rows} rows (preset {preset}), less than the paper's 4 h (288000 \
-             rows): a pipeline check, not a flight-quality model"
+            "WARNING: trained on {rows} rows (preset {preset}), less than the paper's 4 h \
+             ({PAPER_TRAIN_ROWS} rows): a pipeline check, not a flight-quality model"
         );
     }
     let _ = writeln!(
@@ -114,7 +114,10 @@ fn write(path: &Path, text: &str) -> Result<()> {
 }
 
 pub fn sha256_hex(text: &str) -> String {
-    crate::data::hex(&Sha256::digest(text.as_bytes()))
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// Writes weights.rs and the test vectors; returns the weights file's SHA-256.

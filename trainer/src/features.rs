@@ -1,5 +1,6 @@
 //! Input feature sets and the leakage guard: air data can never become a model input.
 use crate::error::{Error, Result};
+use crate::prep::Angle;
 use estimator_core::{Channel, Feature, Lag};
 
 /// Dataset truth columns straight from the simulator: air data (what the model estimates, or derived
@@ -103,6 +104,14 @@ pub struct FeatureSet {
 }
 
 impl FeatureSet {
+    /// The inputs of `angle`'s cascade.
+    pub fn for_angle(&self, angle: Angle) -> &[Feature] {
+        match angle {
+            Angle::Alpha => &self.alpha,
+            Angle::Beta => &self.beta,
+        }
+    }
+
     pub fn parse(spec: &str) -> Result<FeatureSet> {
         match spec {
             "table1" => Ok(FeatureSet {

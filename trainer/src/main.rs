@@ -2,7 +2,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use hil_sim::dataset::machine;
 use std::path::{Path, PathBuf};
-use trainer::data::Dataset;
+use trainer::data::{Dataset, PAPER_TRAIN_ROWS};
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::FeatureSet;
 use trainer::metrics::FlightMetrics;
@@ -145,6 +145,17 @@ impl TrainArgs {
         self.epochs.unwrap_or(size.default_epochs())
     }
 
+    fn train_config(&self, size: Size, label: String, progress: bool) -> TrainConfig {
+        TrainConfig {
+            epochs: self.epochs(size),
+            batch: self.batch,
+            lr: self.lr,
+            seed: self.seed,
+            label,
+            progress,
+        }
+    }
+
     /// The dataset, split by flight, with at least one validation flight.
     fn dataset(&self) -> Result<Dataset> {
         let ds = load(&self.data, self.val_fraction)?;
@@ -196,14 +207,7 @@ fn cmd_train(
         ds.rows(trainer::data::Role::Test)
     );
     let epochs = args.epochs(size);
-    let cfg = |a: Angle| TrainConfig {
-        epochs,
-        batch: args.batch,
-        lr: args.lr,
-        seed: args.seed,
-        label: a.name().into(),
-        progress: true,
-    };
+    let cfg = |a: Angle| args.train_config(size, a.name().into(), true);
     let alpha = train_angle(&ds, Angle::Alpha, &fs.alpha, size, &cfg(Angle::Alpha));
     let beta = train_angle(&ds, Angle::Beta, &fs.beta, size, &cfg(Angle::Beta));
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -278,21 +282,10 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     let size = args.size()?;
     let fs = FeatureSet::parse(&args.features)?;
     let ds = args.dataset()?;
-    let epochs = args.epochs(size);
     for angle in [Angle::Alpha, Angle::Beta] {
-        let feats = match angle {
-            Angle::Alpha => &fs.alpha,
-            Angle::Beta => &fs.beta,
-        };
+        let feats = fs.for_angle(angle);
         for kind in [Baseline::Linear, Baseline::GradientBoosting, Baseline::Mlp] {
-            let cfg = TrainConfig {
-                epochs,
-                batch: args.batch,
-                lr: args.lr,
-                seed: args.seed,
-                label: format!("{} mlp", angle.name()),
-                progress: false,
-            };
+            let cfg = args.train_config(size, format!("{} mlp", angle.name()), false);
             let t0 = std::time::Instant::now();
             let m = run_baseline(kind, &ds, angle, feats, size.hidden(angle), &cfg, gb_rows)?;
             println!(
@@ -315,7 +308,7 @@ fn cmd_report(
     out: &Path,
     json: bool,
 ) -> Result<()> {
-    use trainer::report::{ReportConfig, run};
+    use trainer::report::{BenchEpoch, ReportConfig, run};
     let size = args.size()?;
     let seeds: Vec<u64> = seeds
         .split(',')
@@ -361,79 +354,22 @@ fn cmd_report(
     if json {
         println!("{}", serde_json::to_string(&report)?);
     }
-    let command = command_line();
-    let mut md = report.markdown(
-        &command,
-        &machine(),
-        ablation.as_ref().map(|a| a.name.as_str()),
-    );
-    if size != Size::Paper {
-        let at = md.find("\n\n").map(|i| i + 2).unwrap_or(0);
-        let fmt = |h: &[usize]| {
-            h.iter()
-                .map(|n| n.to_string())
-                .collect::<Vec<_>>()
-                .join("-")
-        };
-        md.insert_str(
-            at,
-            &format!(
-                "> **`{}` networks** (α {}, β {} per part), not the paper's sizes: `--config paper` \
-                 trains α 512-256-128-64-32 and β 32-16-8-4-2 per part.\n\n",
-                size.name(),
-                fmt(size.hidden(Angle::Alpha)),
-                fmt(size.hidden(Angle::Beta)),
-            ),
-        );
-    }
-    let rows = ds.rows(trainer::data::Role::Train) + ds.rows(trainer::data::Role::Val);
-    if ds.preset.as_deref() != Some("paper") && rows < 288_000 {
-        let warn = format!(
-            "> **Not the paper experiment.** Dataset preset `{}`: {rows} training rows ({:.1} min of \
-             flight at 20 Hz) vs the paper's 288 000 (4 h). These figures check the pipeline and \
-             compare the model families on one small split; rerun \
-             `trainer report --data out/data/paper --config paper` for the paper-scale Table 2.\n\n",
-            ds.preset.as_deref().unwrap_or("?"),
-            rows as f64 / 20.0 / 60.0
-        );
-        let at = md.find("\n\n").map(|i| i + 2).unwrap_or(0);
-        md.insert_str(at, &warn);
-    }
-    md.push_str("\n## Plots (first seed, main feature set)\n\n");
-    md.push_str(
-        "Learning curves (train/val MSE of both heads per epoch, paper Fig. 9):\n\n\
-         ![learning curves](training_learning_curves.png)\n\n",
-    );
-    md.push_str(
-        "Predicted vs truth on the first two test flights (paper Fig. 11–12):\n\n\
-         ![α test time series](training_test_timeseries_alpha.png)\n\n\
-         ![β test time series](training_test_timeseries_beta.png)\n",
-    );
-    let bench = out.join("bench_epoch.json");
-    if let Ok(text) = std::fs::read_to_string(&bench) {
-        let v: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+    let bench_path = out.join("bench_epoch.json");
+    let bench: Option<BenchEpoch> = match std::fs::read_to_string(&bench_path) {
+        Ok(text) => Some(serde_json::from_str(&text).with_context(|| {
             format!(
                 "{} is not JSON: rerun `trainer bench-epoch`",
-                bench.display()
+                bench_path.display()
             )
-        })?;
-        md.push_str(&format!(
-            "\n## Benchmark: paper-size α cascade epoch time\n\n`{}` on {}: **{:.2} s per epoch** \
-             (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation \
-             pass, α cascade 2 × {}-512-256-128-64-32-1, batch {}; ≈ {:.1} s per epoch scaled \
-             linearly to the paper's 288 000 rows.\n",
-            v["command"].as_str().unwrap_or("?"),
-            v["machine"].as_str().unwrap_or("?"),
-            v["mean_epoch_s"].as_f64().unwrap_or(f64::NAN),
-            v["epochs"].as_u64().unwrap_or(0),
-            v["first_epoch_s"].as_f64().unwrap_or(f64::NAN),
-            v["train_rows"].as_u64().unwrap_or(0),
-            v["val_rows"].as_u64().unwrap_or(0),
-            v["n_in"].as_u64().unwrap_or(0),
-            v["batch"].as_u64().unwrap_or(0),
-            v["per_epoch_288k_s"].as_f64().unwrap_or(f64::NAN),
-        ));
-    }
+        })?),
+        Err(_) => None,
+    };
+    let md = report.markdown(
+        &command_line(),
+        &machine(),
+        ablation.as_ref().map(|a| a.name.as_str()),
+        bench.as_ref(),
+    );
     std::fs::write(out.join("training.md"), md)
         .with_context(|| format!("writing {}", out.join("training.md").display()))?;
     eprintln!("wrote {}/training.md and PNGs", out.display());
@@ -478,7 +414,7 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
         md,
         "Dataset `{}` (preset {}, manifest sha256 `{}`); command `{}`; machine: {}.\n",
         data.display(),
-        ds.preset.as_deref().unwrap_or("?"),
+        ds.preset,
         ds.manifest_sha256,
         command_line(),
         machine()
@@ -610,6 +546,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     use trainer::data::Role;
     use trainer::model::{Cascade, train};
     use trainer::prep::Prep;
+    use trainer::report::BenchEpoch;
     if epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
     }
@@ -637,22 +574,24 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     let rest = &curves.epoch_s[1..];
     let mean = rest.iter().sum::<f64>() / rest.len() as f64;
     let rows = train_m.rows();
-    let v = serde_json::json!({
-        "command": command_line(),
-        "machine": machine(),
-        "dataset": data.display().to_string(),
-        "epochs": epochs, "batch": batch, "n_in": n_in,
-        "train_rows": rows, "val_rows": val_m.rows(),
-        "epoch_s": curves.epoch_s,
-        "first_epoch_s": curves.epoch_s[0],
-        "mean_epoch_s": mean,
-        "per_epoch_288k_s": mean * 288_000.0 / rows.max(1) as f64,
-    });
+    let v = BenchEpoch {
+        batch,
+        command: command_line(),
+        dataset: data.display().to_string(),
+        first_epoch_s: curves.epoch_s[0],
+        epoch_s: curves.epoch_s,
+        epochs,
+        machine: machine(),
+        mean_epoch_s: mean,
+        n_in,
+        per_epoch_288k_s: mean * PAPER_TRAIN_ROWS as f64 / rows.max(1) as f64,
+        train_rows: rows,
+        val_rows: val_m.rows(),
+    };
     println!(
         "paper α cascade ({n_in}-512-256-128-64-32-1 ×2), {rows} train rows, batch {batch}: \
          {mean:.2} s/epoch (epochs 2..{epochs}; first {:.2} s) → ≈{:.1} s/epoch at 288 000 rows",
-        curves.epoch_s[0],
-        mean * 288_000.0 / rows.max(1) as f64
+        v.first_epoch_s, v.per_epoch_288k_s
     );
     if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -74,21 +74,14 @@ pub fn flights(ds: &Dataset, role: Role) -> Vec<&Flight> {
 
 /// Evenly spread training rows' inputs for activation calibration.
 pub fn calibration(prep: &Prep, train: &[&Flight], max_rows: usize) -> Vec<Vec<f32>> {
-    let total: usize = train.iter().map(|f| f.len()).sum();
-    let step = crate::data::stride(total, max_rows);
-    let mut out = Vec::new();
-    let mut k = 0usize;
-    for fl in train {
-        for v in &fl.features {
-            if k.is_multiple_of(step) {
-                let mut x = Vec::new();
-                prep.input(v, &mut x);
-                out.push(x);
-            }
-            k += 1;
-        }
-    }
-    out
+    crate::data::spread_rows(train, max_rows)
+        .into_iter()
+        .map(|(fl, i)| {
+            let mut x = Vec::new();
+            prep.input(&fl.features[i], &mut x);
+            x
+        })
+        .collect()
 }
 
 pub fn train_angle(

@@ -464,6 +464,7 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
         if n.len() != 26 {
             return None;
         }
+        let reset = n[0] == 1;
         let n = &n[1..];
         let mut frame = SensorFrame {
             seq: n[0] as u16,
@@ -480,7 +481,7 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             clamped: n[k + 2] != 0,
         };
         out.push(Vector {
-            reset: line.split_whitespace().next() == Some("1"),
+            reset,
             frame,
             alpha: ro(19),
             beta: ro(22),

@@ -2,14 +2,15 @@
 //! plain MLP, cascaded MLP float and int8 as deployed) for α and β on the same test flights, seed
 //! spread of the neural models, the feature ablation, rendered as markdown.
 use crate::baselines::{Baseline, run_baseline};
-use crate::data::{Dataset, Role};
+use crate::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use crate::error::Result;
 use crate::features::FeatureSet;
 use crate::metrics::{FlightMetrics, Metrics};
 use crate::model::TrainConfig;
 use crate::pipeline::{Size, Trained, train_angle};
 use crate::prep::Angle;
-use serde::Serialize;
+use hil_sim::plant::SAMPLE_HZ;
+use serde::{Deserialize, Deserializer, Serialize};
 use std::fmt::Write;
 
 /// What `trainer report` runs.
@@ -39,6 +40,17 @@ pub struct Entry {
     pub seconds: f64,
 }
 
+impl Entry {
+    /// The int8 metrics (`int8`; None when this model has no integer path) or the float ones.
+    pub fn metrics(&self, int8: bool) -> Option<&FlightMetrics> {
+        if int8 {
+            self.int8.as_ref()
+        } else {
+            Some(&self.float)
+        }
+    }
+}
+
 /// Which flights played which part.
 #[derive(Debug, Clone, Serialize)]
 pub struct Split {
@@ -56,13 +68,18 @@ impl Split {
             test: f(Role::Test),
         }
     }
+
+    /// Rows the models learn from: training plus validation flights.
+    pub fn training_rows(&self) -> usize {
+        self.train.iter().chain(&self.val).map(|f| f.1).sum()
+    }
 }
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
     pub dataset: String,
     pub manifest_sha256: String,
-    pub preset: Option<String>,
+    pub preset: String,
     pub config: String,
     pub epochs: usize,
     pub seeds: Vec<u64>,
@@ -71,9 +88,9 @@ pub struct Report {
     pub entries: Vec<Entry>,
 }
 
-pub const LINEAR: &str = "Linear regression";
-pub const GB: &str = "Gradient boosting";
-pub const MLP: &str = "Plain MLP";
+pub const LINEAR: &str = Baseline::Linear.name();
+pub const GB: &str = Baseline::GradientBoosting.name();
+pub const MLP: &str = Baseline::Mlp.name();
 pub const CASCADE: &str = "Cascaded MLP";
 
 /// Runs every model. `on_trained` receives the cascades of the first seed (for plots).
@@ -94,8 +111,9 @@ pub fn run(
     };
     let fs = &cfg.features;
     for angle in [Angle::Alpha, Angle::Beta] {
-        let feats = pick(fs, angle);
-        for (kind, name) in [(Baseline::Linear, LINEAR), (Baseline::GradientBoosting, GB)] {
+        let feats = fs.for_angle(angle);
+        for kind in [Baseline::Linear, Baseline::GradientBoosting] {
+            let name = kind.name();
             let t0 = std::time::Instant::now();
             let m = run_baseline(
                 kind,
@@ -156,7 +174,7 @@ pub fn run(
                 let t = train_angle(
                     ds,
                     angle,
-                    pick(set, angle),
+                    set.for_angle(angle),
                     cfg.size,
                     &tc(
                         seed,
@@ -200,13 +218,6 @@ pub fn run(
     })
 }
 
-fn pick(fs: &FeatureSet, a: Angle) -> &[estimator_core::Feature] {
-    match a {
-        Angle::Alpha => &fs.alpha,
-        Angle::Beta => &fs.beta,
-    }
-}
-
 /// Mean and spread (half the max − min range) of values.
 pub fn mean_spread(v: &[f64]) -> (f64, f64) {
     if v.is_empty() {
@@ -231,8 +242,8 @@ pub fn mean_metrics(ms: &[Metrics]) -> Metrics {
     }
 }
 
-/// A Table-2 row: model label and, per angle, the metrics (averaged over seeds) of one test flight
-/// (`flight = None`: overall).
+/// A Table-2 row: model label and, per angle, the metrics (averaged over seeds) of one test flight or
+/// of all of them (see [`Report::rows`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
     pub label: String,
@@ -250,7 +261,7 @@ impl Report {
 
     /// Table-2 rows (float, and int8 for the cascade) for `flight` (None: overall), main feature set.
     pub fn rows(&self, flight: Option<&str>) -> Vec<Row> {
-        let pick = |m: &FlightMetrics| -> Metrics {
+        let of_flight = |m: &FlightMetrics| -> Metrics {
             match flight {
                 None => m.overall,
                 Some(f) => m
@@ -273,13 +284,7 @@ impl Report {
                 let ms: Vec<Metrics> = self
                     .select(model, a, &self.features)
                     .iter()
-                    .filter_map(|e| {
-                        if int8 {
-                            e.int8.as_ref().map(pick)
-                        } else {
-                            Some(pick(&e.float))
-                        }
-                    })
+                    .filter_map(|e| e.metrics(int8).map(of_flight))
                     .collect();
                 (mean_metrics(&ms), ms.len())
             };
@@ -328,30 +333,56 @@ impl Report {
     pub fn seed_maes(&self, model: &str, angle: Angle, features: &str, int8: bool) -> Vec<f64> {
         self.select(model, angle, features)
             .iter()
-            .filter_map(|e| {
-                if int8 {
-                    e.int8.as_ref().map(|m| m.overall.mae)
-                } else {
-                    Some(e.float.overall.mae)
-                }
-            })
+            .filter_map(|e| e.metrics(int8).map(|m| m.overall.mae))
             .collect()
     }
 
-    /// The markdown report. `command`, `machine`, `extra` (appended sections) are free text.
-    pub fn markdown(&self, command: &str, machine: &str, ablation: Option<&str>) -> String {
+    /// The markdown report (training.md). `command` and `machine` are free text; `ablation` names the
+    /// ablation feature set (None: no ablation section); `bench` adds the epoch-time benchmark of
+    /// `trainer bench-epoch`. Warns when the dataset or the network sizes are not the paper's.
+    pub fn markdown(
+        &self,
+        command: &str,
+        machine: &str,
+        ablation: Option<&str>,
+        bench: Option<&BenchEpoch>,
+    ) -> String {
         let mut s = String::new();
         let _ = writeln!(
             s,
             "# Training results: Table 2 (generated by `trainer report`)\n"
         );
+        let rows = self.split.training_rows();
+        if self.preset != "paper" && rows < PAPER_TRAIN_ROWS {
+            let _ = writeln!(
+                s,
+                "> **Not the paper experiment.** Dataset preset `{}`: {rows} training rows ({:.1} min of \
+                 flight at {SAMPLE_HZ} Hz) vs the paper's 288 000 (4 h). These figures check the pipeline and \
+                 compare the model families on one small split; rerun \
+                 `trainer report --data out/data/paper --config paper` for the paper-scale Table 2.\n",
+                self.preset,
+                rows as f64 / f64::from(SAMPLE_HZ) / 60.0
+            );
+        }
+        if let Some(size) = Size::parse(&self.config).filter(|&z| z != Size::Paper) {
+            let _ = writeln!(
+                s,
+                "> **`{}` networks** (α {}, β {} per part), not the paper's sizes: `--config paper` \
+                 trains α {} and β {} per part.\n",
+                size.name(),
+                widths(size.hidden(Angle::Alpha)),
+                widths(size.hidden(Angle::Beta)),
+                widths(Size::Paper.hidden(Angle::Alpha)),
+                widths(Size::Paper.hidden(Angle::Beta)),
+            );
+        }
         let _ = writeln!(
             s,
             "Dataset `{}` (preset {}, manifest sha256 `{}`), configuration **{}**, {} epochs, \
              seeds {:?}, features `{}`. Every model is trained on the same training flights and \
              scored on the same test flights; errors in degrees.\n",
             self.dataset,
-            self.preset.as_deref().unwrap_or("?"),
+            self.preset,
             self.manifest_sha256,
             self.config,
             self.epochs,
@@ -492,8 +523,94 @@ impl Report {
                 );
             }
         }
+        s.push_str("\n## Plots (first seed, main feature set)\n\n");
+        s.push_str(
+            "Learning curves (train/val MSE of both heads per epoch, paper Fig. 9):\n\n\
+             ![learning curves](training_learning_curves.png)\n\n",
+        );
+        s.push_str(
+            "Predicted vs truth on the first two test flights (paper Fig. 11–12):\n\n\
+             ![α test time series](training_test_timeseries_alpha.png)\n\n\
+             ![β test time series](training_test_timeseries_beta.png)\n",
+        );
+        if let Some(b) = bench {
+            let _ = write!(
+                s,
+                "\n## Benchmark: paper-size α cascade epoch time\n\n`{}` on {}: **{:.2} s per epoch** \
+                 (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation \
+                 pass, α cascade 2 × {}-{}-1, batch {}; ≈ {:.1} s per epoch scaled \
+                 linearly to the paper's 288 000 rows.\n",
+                b.command,
+                b.machine,
+                b.mean_epoch_s,
+                b.epochs,
+                b.first_epoch_s,
+                b.train_rows,
+                b.val_rows,
+                b.n_in,
+                widths(Size::Paper.hidden(Angle::Alpha)),
+                b.batch,
+                b.per_epoch_288k_s,
+            );
+        }
         s
     }
+}
+
+/// Hidden widths as `512-256-128`.
+fn widths(h: &[usize]) -> String {
+    h.iter()
+        .map(|n| n.to_string())
+        .collect::<Vec<_>>()
+        .join("-")
+}
+
+/// What `trainer bench-epoch` measured (its JSON file; fields in alphabetical order, as the file has
+/// always had them). Fields missing from the file read as "?", NaN or 0; a null number as NaN (how
+/// serde_json writes NaN).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BenchEpoch {
+    pub batch: usize,
+    pub command: String,
+    pub dataset: String,
+    pub epoch_s: Vec<f64>,
+    pub epochs: usize,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub first_epoch_s: f64,
+    pub machine: String,
+    /// Mean of epochs 2.. (the first is warm-up).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_epoch_s: f64,
+    pub n_in: usize,
+    /// `mean_epoch_s` scaled linearly to [`PAPER_TRAIN_ROWS`] training rows.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub per_epoch_288k_s: f64,
+    pub train_rows: usize,
+    pub val_rows: usize,
+}
+
+impl Default for BenchEpoch {
+    fn default() -> BenchEpoch {
+        BenchEpoch {
+            batch: 0,
+            command: "?".into(),
+            dataset: "?".into(),
+            epoch_s: Vec::new(),
+            epochs: 0,
+            first_epoch_s: f64::NAN,
+            machine: "?".into(),
+            mean_epoch_s: f64::NAN,
+            n_in: 0,
+            per_epoch_288k_s: f64::NAN,
+            train_rows: 0,
+            val_rows: 0,
+        }
+    }
+}
+
+fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]
@@ -539,7 +656,7 @@ mod tests {
         Report {
             dataset: "d".into(),
             manifest_sha256: "h".into(),
-            preset: None,
+            preset: "ci".into(),
             config: "small".into(),
             epochs: 1,
             seeds: vec![1, 2],
@@ -576,7 +693,7 @@ mod tests {
         assert_eq!(rank.last().unwrap().0, LINEAR);
         let (m, sp) = mean_spread(&r.seed_maes(MLP, Angle::Beta, "table1", false));
         assert!((m - 0.4).abs() < 1e-12 && (sp - 0.2).abs() < 1e-12);
-        let md = r.markdown("cmd", "machine", None);
+        let md = r.markdown("cmd", "machine", None, None);
         assert!(md.contains("| Gradient boosting | 0.200 | 0.400 | 0.600 | 0.800 | 0.400 |"));
         assert!(md.contains("0.200 ± 0.100"));
     }
