@@ -94,10 +94,8 @@ mod hil_sim_cli {
         };
         let mpath = manifest.write(&a.out)?;
         // The same pictures and dataset.md as `generate` writes (envelope, α/β histograms, time
-        // histories, 3-D path and ground track), when there is anything to draw.
-        if entry.samples > 0 {
-            dataset::report::write_report(&a.out)?;
-        }
+        // histories, 3-D path and ground track).
+        dataset::report::write_report(&a.out)?;
         println!(
             "flew {} for {:.1} s ({} samples at 20 Hz) in {:.1} s wall{}",
             a.script.display(),
@@ -189,7 +187,7 @@ mod hil_sim_cli {
         for f in m.flights.iter().filter(|f| f.cut.is_some()) {
             println!("  {} cut: {}", f.name, f.cut.as_deref().unwrap_or(""));
         }
-        let over15: f64 = report.train.alpha_band_share[4..].iter().sum();
+        let over15 = report.train.above_15_share();
         println!(
             "training: α {:.1}..{:.1}° ({:.1}% above 15°), β {:.1}..{:.1}°, Mach {:.2}..{:.2}",
             report.train.alpha_deg.0,

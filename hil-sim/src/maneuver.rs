@@ -233,22 +233,15 @@ fn signed(rng: &mut ChaCha12Rng, r: Range) -> f64 {
     if rng.random_bool(0.5) { v } else { -v }
 }
 
-/// Timed event: at `t`, ramp `prop` to `value` over `tc` seconds.
-fn timed(out: &mut String, t: f64, sets: &[(&str, f64)], tc: f64) {
+/// Timed event: at `t`, set each `(prop, value)`.
+fn timed(out: &mut String, t: f64, sets: &[(&str, f64)]) {
     let _ = writeln!(out, "    <event>");
     let _ = writeln!(
         out,
         "      <condition> simulation/sim-time-sec ge {t:.3} </condition>"
     );
     for (prop, value) in sets {
-        if tc > 0.0 {
-            let _ = writeln!(
-                out,
-                "      <set name=\"{prop}\" value=\"{value:.4}\" action=\"FG_RAMP\" tc=\"{tc:.2}\"/>"
-            );
-        } else {
-            let _ = writeln!(out, "      <set name=\"{prop}\" value=\"{value:.4}\"/>");
-        }
+        let _ = writeln!(out, "      <set name=\"{prop}\" value=\"{value:.4}\"/>");
     }
     let _ = writeln!(out, "    </event>");
 }
@@ -619,7 +612,6 @@ pub fn generate(
                 ("atmosphere/cosine-gust/Z-velocity-ft_sec", el.sin()),
                 ("atmosphere/cosine-gust/start", 1.0),
             ],
-            0.0,
         );
         t += draw(&mut rng, p.gust_interval_s);
     }
@@ -632,11 +624,19 @@ pub fn generate(
     })
 }
 
+/// The files of maneuver `name` in `dir`: the runscript `NAME.xml` and its initialize file
+/// `NAME_init.xml`.
+pub fn files(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    (
+        dir.join(format!("{name}.xml")),
+        dir.join(format!("{name}_init.xml")),
+    )
+}
+
 impl Maneuver {
-    /// Writes `DIR/NAME.xml` and `DIR/NAME_init.xml`; returns the script path.
+    /// Writes its [`files`] into `dir`; returns the script path.
     pub fn write(&self, dir: &Path) -> Result<PathBuf, ManeuverError> {
-        let script = dir.join(format!("{}.xml", self.name));
-        let init = dir.join(format!("{}_init.xml", self.name));
+        let (script, init) = files(dir, &self.name);
         for (path, text) in [(&script, &self.script_xml), (&init, &self.init_xml)] {
             std::fs::write(path, text).map_err(|source| ManeuverError::Write {
                 path: path.clone(),
@@ -754,19 +754,22 @@ impl Preset {
     /// no test flight repeats a training one.
     pub fn plan(self, base_seed: u64) -> Vec<PlannedFlight> {
         use crate::dataset::Split;
+        // Paper: 4 training flights of 15–20 min per profile.
+        const PAPER_PER_PROFILE: usize = 4;
+        const PAPER_TRAIN_LEN: Range = (900.0, 1200.0);
         if self == Preset::Large {
-            // Paper's plan untouched, then the extra flights from their own random stream.
+            // Paper's plan untouched, then 12 more per profile from their own random stream.
             let mut out = Preset::Paper.plan(base_seed);
             let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6c61_7267_6570_6c61);
             for (pi, kind) in ProfileKind::ALL.iter().enumerate() {
-                for k in 4..16 {
+                for k in PAPER_PER_PROFILE..16 {
                     out.push(PlannedFlight::train(
                         base_seed,
                         pi,
                         *kind,
                         k,
                         &mut rng,
-                        (900.0, 1200.0),
+                        PAPER_TRAIN_LEN,
                     ));
                 }
             }
@@ -780,9 +783,13 @@ impl Preset {
             &[ProfileKind],
             Range,
         ) = match self {
-            Preset::Paper | Preset::Large => {
-                (4, (900.0, 1200.0), &ProfileKind::ALL, (360.0, 420.0))
-            }
+            // (Large returned above.)
+            Preset::Paper | Preset::Large => (
+                PAPER_PER_PROFILE,
+                PAPER_TRAIN_LEN,
+                &ProfileKind::ALL,
+                (360.0, 420.0),
+            ),
             Preset::Ci => (
                 1,
                 (180.0, 180.0),

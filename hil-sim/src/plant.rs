@@ -1,7 +1,7 @@
 //! The plant: JSBSim's F-16, stepped by a pinned Python bridge (`bridge/jsbsim_bridge.py`).
 //!
-//! The bridge only loads scripts, writes properties and steps; everything else (which properties,
-//! sampling, sensors, cutting a bad flight) is here. [`fly_script`] runs a JSBSim runscript to its
+//! The bridge only loads scripts, steps and reads the watched properties; everything else (which
+//! properties, sampling, sensors, cutting a bad flight) is here. [`fly_script`] runs a JSBSim runscript to its
 //! end at 120 Hz, feeding the sensor models every step and keeping truth + sensed values at 20 Hz.
 
 use std::io::{BufRead, BufReader, BufWriter, Read, Write};
@@ -299,50 +299,56 @@ mod at {
     pub const THROTTLE: usize = 32;
     pub const LAT: usize = 33;
     pub const LON: usize = 34;
+    /// Properties watched.
+    pub const COUNT: usize = LON + 1;
 }
-const _: () = assert!(
-    at::LON + 1 == WATCH.len(),
-    "every watched property has a name in `at`"
-);
 
-/// Properties read after every step, in this order (named positions in [`at`]).
-const WATCH: [&str; 35] = [
-    "simulation/sim-time-sec",
-    "aero/alpha-deg",
-    "aero/beta-deg",
-    "velocities/u-aero-fps",
-    "velocities/v-aero-fps",
-    "velocities/w-aero-fps",
-    "velocities/vt-fps",
-    "velocities/mach",
-    "aero/qbar-psf",
-    "position/h-sl-ft",
-    "position/h-agl-ft",
-    "velocities/p-rad_sec",
-    "velocities/q-rad_sec",
-    "velocities/r-rad_sec",
-    "attitude/phi-rad",
-    "attitude/theta-rad",
-    "attitude/psi-rad",
-    "accelerations/pdot-rad_sec2",
-    "accelerations/qdot-rad_sec2",
-    "accelerations/rdot-rad_sec2",
-    "forces/fbx-total-lbs",
-    "forces/fby-total-lbs",
-    "forces/fbz-total-lbs",
-    "inertia/mass-slugs",
-    "velocities/ned-velocity-mag-fps",
-    "fcs/elevator-pos-deg",
-    "fcs/aileron-pos-rad",
-    "fcs/rudder-pos-deg",
-    "fcs/lef-pos-deg",
-    "fcs/tef-control",
-    "fcs/left-flaperon-norm",
-    "fcs/speedbrake-pos-deg",
-    "fcs/throttle-cmd-norm",
-    "position/lat-geod-deg",
-    "position/long-gc-deg",
-];
+/// Properties read after every step, each written next to its position in [`at`]; a position
+/// left without a name fails the build.
+const WATCH: [&str; at::COUNT] = {
+    let mut w = [""; at::COUNT];
+    w[at::TIME] = "simulation/sim-time-sec";
+    w[at::ALPHA] = "aero/alpha-deg";
+    w[at::BETA] = "aero/beta-deg";
+    w[at::U_AERO] = "velocities/u-aero-fps";
+    w[at::V_AERO] = "velocities/v-aero-fps";
+    w[at::W_AERO] = "velocities/w-aero-fps";
+    w[at::VT] = "velocities/vt-fps";
+    w[at::MACH] = "velocities/mach";
+    w[at::QBAR] = "aero/qbar-psf";
+    w[at::H_SL] = "position/h-sl-ft";
+    w[at::H_AGL] = "position/h-agl-ft";
+    w[at::P] = "velocities/p-rad_sec";
+    w[at::Q] = "velocities/q-rad_sec";
+    w[at::R] = "velocities/r-rad_sec";
+    w[at::PHI] = "attitude/phi-rad";
+    w[at::THETA] = "attitude/theta-rad";
+    w[at::PSI] = "attitude/psi-rad";
+    w[at::PDOT] = "accelerations/pdot-rad_sec2";
+    w[at::QDOT] = "accelerations/qdot-rad_sec2";
+    w[at::RDOT] = "accelerations/rdot-rad_sec2";
+    w[at::FBX] = "forces/fbx-total-lbs";
+    w[at::FBY] = "forces/fby-total-lbs";
+    w[at::FBZ] = "forces/fbz-total-lbs";
+    w[at::MASS] = "inertia/mass-slugs";
+    w[at::GPS_SPEED] = "velocities/ned-velocity-mag-fps";
+    w[at::ELEVATOR] = "fcs/elevator-pos-deg";
+    w[at::AILERON] = "fcs/aileron-pos-rad";
+    w[at::RUDDER] = "fcs/rudder-pos-deg";
+    w[at::LEF] = "fcs/lef-pos-deg";
+    w[at::TEF] = "fcs/tef-control";
+    w[at::FLAPERON] = "fcs/left-flaperon-norm";
+    w[at::SPEEDBRAKE] = "fcs/speedbrake-pos-deg";
+    w[at::THROTTLE] = "fcs/throttle-cmd-norm";
+    w[at::LAT] = "position/lat-geod-deg";
+    w[at::LON] = "position/long-gc-deg";
+    let mut i = 0;
+    while i < at::COUNT {
+        assert!(!w[i].is_empty(), "every position in `at` has a property");
+        i += 1;
+    }
+    w
+};
 
 pub const FT_TO_M: f64 = 0.3048;
 const SLUG_TO_KG: f64 = 14.593_902_937;

@@ -66,7 +66,7 @@ pub fn raw_steps(
 ) -> Result<Vec<u64>, PlantError> {
     par_map(&m.flights, workers, progress, |f| {
         let mut plant = Plant::spawn()?;
-        plant::load_f16_script(&mut plant, &dir.join(format!("{}.xml", f.name)))?;
+        plant::load_f16_script(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
         let mut steps = 0u64;
         loop {
             let n = plant.run_raw(RAW_CHUNK)?;

@@ -396,7 +396,7 @@ pub fn git_rev() -> String {
     }
 }
 
-/// "AMD EPYC …, N cores available (x86_64 linux container), release build": where a figure was measured.
+/// "AMD EPYC, 2 cores available, x86_64 linux, release build": where a figure was measured.
 pub fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -411,7 +411,7 @@ pub fn machine() -> String {
         .map(|n| n.get())
         .unwrap_or(1);
     format!(
-        "{cpu}, {cores} cores available, {} {} container, {} build",
+        "{cpu}, {cores} cores available, {} {}, {} build",
         std::env::consts::ARCH,
         std::env::consts::OS,
         if cfg!(debug_assertions) {
@@ -538,8 +538,8 @@ pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
     planned ^ attempt.wrapping_mul(0x7472_696d_0000_0000)
 }
 
-/// Generates a dataset: writes each planned maneuver (`NAME.xml` + `NAME_init.xml`) into `out`,
-/// flies it through [`crate::plant::fly_script`] (the same path as `hil-sim fly --script`) on
+/// Generates a dataset: writes each planned maneuver ([`crate::maneuver::files`]) into `out`,
+/// flies it through [`crate::plant::fly_script_with`] (the same path as `hil-sim fly --script`) on
 /// `workers` threads, and writes the CSVs and `manifest.json`. Flights are written in plan order
 /// whatever order the workers finish in, so the manifest is deterministic. A flight JSBSim cannot
 /// trim is re-drawn with [`redraw_seed`] (up to [`TRIM_RETRIES`] times; the seed flown is the one
@@ -560,52 +560,40 @@ pub fn generate(
         source,
     })?;
     let plan = preset.plan(base_seed);
-    let write_maneuver =
-        |f: &maneuver::PlannedFlight, seed: u64| -> Result<PathBuf, GenerateError> {
-            let m = maneuver::generate(&Profile::preset(f.profile), seed, &f.name, f.duration_s)?;
-            Ok(m.write(out)?)
-        };
-    let mut scripts = Vec::new();
-    for f in &plan {
-        scripts.push(write_maneuver(f, f.seed)?);
-    }
-    let version = std::sync::Mutex::new(String::new());
-    let jobs: Vec<_> = plan.iter().zip(&scripts).collect();
-    let results = par_map(&jobs, workers, progress, |(f, script)| {
+    let version = std::sync::OnceLock::new();
+    let results = par_map(&plan, workers, progress, |f| {
         (|| -> Result<FlightEntry, GenerateError> {
-            let mut plant = crate::plant::Plant::spawn()?;
-            if let Ok(mut v) = version.lock() {
-                *v = plant.jsbsim_version().to_string();
-            }
             let mut attempt = 0;
-            let (flight, seed) = loop {
+            loop {
                 let seed = redraw_seed(f.seed, attempt);
+                let m =
+                    maneuver::generate(&Profile::preset(f.profile), seed, &f.name, f.duration_s)?;
+                let script = m.write(out)?;
+                // A fresh bridge per attempt: a failed trim can leave one in any state.
+                let mut plant = crate::plant::Plant::spawn()?;
+                version.get_or_init(|| plant.jsbsim_version().to_string());
                 let cfg = FlyConfig {
                     seed: sensor_seed(seed),
                     sensors: sensors.clone(),
                     max_time_s: None,
                     name: Some(f.name.clone()),
                 };
-                match crate::plant::fly_script_with(&mut plant, script, &cfg) {
-                    Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => {
-                        attempt += 1;
-                        write_maneuver(f, redraw_seed(f.seed, attempt))?;
-                        // A failed trim can leave the bridge in any state: start afresh.
-                        plant = crate::plant::Plant::spawn()?;
-                    }
-                    r => break (r?, seed),
+                match crate::plant::fly_script_with(&mut plant, &script, &cfg) {
+                    Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
+                    r => break Ok(write_flight(out, &r?, f.split, f.profile.name(), seed)?),
                 }
-            };
-            Ok(write_flight(out, &flight, f.split, f.profile.name(), seed)?)
+            }
         })()
         .map_err(|e| GenerateError::Flight {
             name: f.name.clone(),
             source: Box::new(e),
         })
     });
+    let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let mut files = std::collections::BTreeMap::new();
-    for (f, path) in plan.iter().zip(&scripts) {
-        for p in [path.clone(), out.join(format!("{}_init.xml", f.name))] {
+    for f in &plan {
+        let (script, init) = maneuver::files(out, &f.name);
+        for p in [script, init] {
             let name = p
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
@@ -613,7 +601,6 @@ pub fn generate(
             files.insert(name, sha256_file(&p)?);
         }
     }
-    let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let manifest = Manifest {
         format: Manifest::FORMAT,
         preset: preset.name().to_string(),

@@ -26,13 +26,31 @@ pub struct Coverage {
     pub samples: usize,
     pub duration_min: f64,
     /// Share of samples per [`ALPHA_BANDS`] entry, 0–1.
-    pub alpha_band_share: [f64; 7],
+    pub alpha_band_share: [f64; ALPHA_BANDS.len()],
     pub alpha_deg: (f64, f64),
     pub beta_deg: (f64, f64),
     pub mach: (f64, f64),
     pub alt_m: (f64, f64),
     /// Share of samples with |β| > 5°.
     pub beta_over_5_share: f64,
+}
+
+impl Coverage {
+    /// Share of samples above 15° α (the bands from 15° up), 0–1.
+    pub fn above_15_share(&self) -> f64 {
+        self.alpha_band_share
+            .get(4..)
+            .map_or(0.0, |s| s.iter().sum())
+    }
+}
+
+/// (min, max) of `values`; (+∞, −∞) when there are none.
+fn min_max(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
 }
 
 fn coverage(flights: &[&Flight]) -> Coverage {
@@ -44,7 +62,7 @@ fn coverage(flights: &[&Flight]) -> Coverage {
         alt_m: (f64::INFINITY, f64::NEG_INFINITY),
         ..Coverage::default()
     };
-    let mut counts = [0usize; 7];
+    let mut counts = [0usize; ALPHA_BANDS.len()];
     let mut beta5 = 0usize;
     let mm = |r: &mut (f64, f64), v: f64| {
         r.0 = r.0.min(v);
@@ -142,6 +160,7 @@ fn histogram(
     path: &Path,
     title: &str,
     xlabel: &str,
+    split: &str,
     values: &[f64],
     bin: f64,
     range: (f64, f64),
@@ -174,7 +193,7 @@ fn histogram(
     chart
         .configure_mesh()
         .x_desc(xlabel)
-        .y_desc("% of training samples")
+        .y_desc(format!("% of {split} samples"))
         .label_style(("sans-serif", 18))
         .draw()
         .map_err(&e)?;
@@ -215,13 +234,7 @@ fn sample_flight(path: &Path, f: &Flight) -> Result<(), DatasetError> {
         ("β, deg", |s| s.truth.beta_deg),
     ];
     for (area, (label, get)) in panels.iter().zip(series) {
-        let (lo, hi) = f
-            .samples
-            .iter()
-            .map(get)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v), b.max(v))
-            });
+        let (lo, hi) = min_max(f.samples.iter().map(get));
         let pad = ((hi - lo) * 0.05).max(0.1);
         let mut chart = ChartBuilder::on(area)
             .margin(8)
@@ -283,13 +296,7 @@ fn flight_path(path: &Path, f: &Flight) -> Result<(), DatasetError> {
         (e / 1000.0, n / 1000.0, s.truth.alt_msl_m / 1000.0)
     };
     let pts: Vec<(f64, f64, f64)> = f.samples.iter().map(ne).collect();
-    let range = |k: fn(&(f64, f64, f64)) -> f64| {
-        pts.iter()
-            .map(k)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v), b.max(v))
-            })
-    };
+    let range = |k: fn(&(f64, f64, f64)) -> f64| min_max(pts.iter().map(k));
     let (e0, e1) = range(|p| p.0);
     let (n0, n1) = range(|p| p.1);
     let (a0, a1) = range(|p| p.2);
@@ -412,55 +419,49 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
     };
     let all: Vec<(&Flight, Split)> = flights.iter().map(|(f, s, _)| (f, *s)).collect();
     envelope(&dir.join("envelope.png"), &all)?;
-    let train = of(Split::Train);
-    let train = if train.is_empty() {
-        of(Split::Test)
+    // The pictures show the training split, or the test split of a dataset without training
+    // samples (a `hil-sim fly` flight); nothing when there are no samples at all.
+    let (shown, r, split) = if report.train.samples > 0 {
+        (of(Split::Train), &report.train, "training")
     } else {
-        train
+        (of(Split::Test), &report.test, "test")
     };
-    let alphas: Vec<f64> = train
-        .iter()
-        .flat_map(|f| f.samples.iter().map(|s| s.truth.alpha_deg))
-        .collect();
-    let betas: Vec<f64> = train
-        .iter()
-        .flat_map(|f| f.samples.iter().map(|s| s.truth.beta_deg))
-        .collect();
-    let r = if report.train.samples > 0 {
-        &report.train
-    } else {
-        &report.test
-    };
-    histogram(
-        &dir.join("alpha_hist.png"),
-        "Angle of attack α (truth)",
-        "α, deg",
-        &alphas,
-        1.0,
-        r.alpha_deg,
-    )?;
-    histogram(
-        &dir.join("beta_hist.png"),
-        "Sideslip β (truth)",
-        "β, deg",
-        &betas,
-        0.5,
-        r.beta_deg,
-    )?;
-    // The sample flight: the most varied one in α (the most informative picture).
-    if let Some(f) = train.iter().max_by(|a, b| {
-        let spread = |f: &Flight| {
-            f.samples
+    if r.samples > 0 {
+        let values = |get: fn(&super::Truth) -> f64| -> Vec<f64> {
+            shown
                 .iter()
-                .map(|s| s.truth.alpha_deg)
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(x, y), v| {
-                    (x.min(v), y.max(v))
-                })
+                .flat_map(|f| f.samples.iter().map(move |s| get(&s.truth)))
+                .collect()
         };
-        let (a0, a1) = spread(a);
-        let (b0, b1) = spread(b);
-        (a1 - a0).total_cmp(&(b1 - b0))
-    }) {
+        histogram(
+            &dir.join("alpha_hist.png"),
+            "Angle of attack α (truth)",
+            "α, deg",
+            split,
+            &values(|t| t.alpha_deg),
+            1.0,
+            r.alpha_deg,
+        )?;
+        histogram(
+            &dir.join("beta_hist.png"),
+            "Sideslip β (truth)",
+            "β, deg",
+            split,
+            &values(|t| t.beta_deg),
+            0.5,
+            r.beta_deg,
+        )?;
+    }
+    // The sample flight: the most varied one in α (the most informative picture).
+    let spread = |f: &Flight| {
+        let (lo, hi) = min_max(f.samples.iter().map(|s| s.truth.alpha_deg));
+        hi - lo
+    };
+    if let Some(f) = shown
+        .iter()
+        .filter(|f| !f.samples.is_empty())
+        .max_by(|a, b| spread(a).total_cmp(&spread(b)))
+    {
         sample_flight(&dir.join("sample_flight.png"), f)?;
         flight_path(&dir.join("flight_path.png"), f)?;
     }
@@ -516,7 +517,7 @@ fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> St
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for (name, c) in [("train", &r.train), ("test", &r.test)] {
-        if c.flights == 0 {
+        if c.samples == 0 {
             continue;
         }
         let _ = writeln!(
@@ -547,7 +548,7 @@ fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> St
             r.test.alpha_band_share[k] * 100.0
         );
     }
-    let over15: f64 = r.train.alpha_band_share[4..].iter().sum();
+    let over15 = r.train.above_15_share();
     if r.train.flights > 0 {
         let _ = writeln!(s, "\nTraining samples above 15° α: {:.1}%.", over15 * 100.0);
     }
