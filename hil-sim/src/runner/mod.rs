@@ -121,25 +121,21 @@ struct Downlink {
 }
 
 impl Downlink {
-    /// Feeds raw firmware bytes; returns the seqs the firmware answered (before link faults).
-    fn feed(&mut self, link: &mut Link, t_s: f64, bytes: &[u8]) -> Vec<u16> {
-        let mut answered = Vec::new();
+    /// Feeds raw firmware bytes; returns whether among them the firmware answered `want` (seen
+    /// before link faults).
+    fn feed(&mut self, link: &mut Link, t_s: f64, bytes: &[u8], want: Option<u16>) -> bool {
+        let mut answered = false;
         for &b in bytes {
-            if let Some(Ok(body)) = self.raw.push(b)
-                && let Ok(f) = EstimateFrame::parse(body)
-            {
-                answered.push(f.estimate.seq);
+            if let Some(Ok(f)) = self.raw.push(b).map(|r| r.and_then(EstimateFrame::parse)) {
+                answered |= want == Some(f.estimate.seq);
             }
             self.pending.push(b);
             if b == estimator_core::wire::DELIMITER {
                 let d = link.down.transmit(t_s, &self.pending);
                 self.pending.clear();
                 for &r in &d.bytes {
-                    match self.host.push(r) {
-                        Some(Ok(body)) => match EstimateFrame::parse(body) {
-                            Ok(f) => self.replies.push(f),
-                            Err(_) => self.rejected += 1,
-                        },
+                    match self.host.push(r).map(|r| r.and_then(EstimateFrame::parse)) {
+                        Some(Ok(f)) => self.replies.push(f),
                         Some(Err(_)) => self.rejected += 1,
                         None => {}
                     }
@@ -147,6 +143,28 @@ impl Downlink {
             }
         }
         answered
+    }
+
+    /// Receives from `target` until `deadline`, until the firmware answered `want`, or after one
+    /// pass for a synchronous target.
+    fn pump(
+        &mut self,
+        target: &mut dyn Target,
+        link: &mut Link,
+        t_s: f64,
+        deadline: Instant,
+        want: Option<u16>,
+        buf: &mut Vec<u8>,
+    ) -> Result<(), RunError> {
+        let sync = target.synchronous();
+        loop {
+            buf.clear();
+            target.recv(deadline.saturating_duration_since(Instant::now()), buf)?;
+            let answered = self.feed(link, t_s, buf, want);
+            if answered || sync || Instant::now() >= deadline {
+                return Ok(());
+            }
+        }
     }
 }
 
@@ -165,8 +183,22 @@ pub fn run(
         replies: Vec::new(),
         rejected: 0,
     };
-    let mut records: Vec<FrameRecord> = Vec::with_capacity(samples.len());
-    let mut index_of: HashMap<u16, usize> = HashMap::new();
+    let mut records: Vec<FrameRecord> = samples
+        .iter()
+        .map(|s| FrameRecord {
+            seq: s.frame.seq,
+            time_s: s.time_s,
+            alpha_true_deg: s.alpha_true_deg,
+            beta_true_deg: s.beta_true_deg,
+            reply: None,
+        })
+        .collect();
+    // A seq sent twice (after u16 wraps) matches its later frame.
+    let index_of: HashMap<u16, usize> = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (r.seq, i))
+        .collect();
     let mut unmatched = 0u32;
     let start = Instant::now();
     let sync = target.synchronous();
@@ -178,14 +210,6 @@ pub fn run(
         let t = i as f64 * PERIOD_S;
         let n = s.frame.encode(&mut wire).unwrap_or(0);
         let d = link.up.transmit(t, wire.get(..n).unwrap_or(&[]));
-        records.push(FrameRecord {
-            seq: s.frame.seq,
-            time_s: s.time_s,
-            alpha_true_deg: s.alpha_true_deg,
-            beta_true_deg: s.beta_true_deg,
-            reply: None,
-        });
-        index_of.insert(s.frame.seq, i);
         if cfg.fast {
             target.send(&d.bytes)?;
         } else {
@@ -212,28 +236,14 @@ pub fn run(
         } else {
             Instant::now() + cfg.altered_grace
         };
-        loop {
-            buf.clear();
-            let wait = deadline.saturating_duration_since(Instant::now());
-            target.recv(wait, &mut buf)?;
-            let answered = down.feed(&mut link, t, &buf);
-            let done = cfg.fast && answered.contains(&s.frame.seq);
-            if done || sync || Instant::now() >= deadline {
-                break;
-            }
-        }
+        let want = cfg.fast.then_some(s.frame.seq);
+        down.pump(target, &mut link, t, deadline, want, &mut buf)?;
     }
     // Late replies.
     if !sync {
+        let t = samples.len() as f64 * PERIOD_S;
         let until = Instant::now() + cfg.altered_grace;
-        loop {
-            buf.clear();
-            target.recv(until.saturating_duration_since(Instant::now()), &mut buf)?;
-            down.feed(&mut link, samples.len() as f64 * PERIOD_S, &buf);
-            if Instant::now() >= until {
-                break;
-            }
-        }
+        down.pump(target, &mut link, t, until, None, &mut buf)?;
     }
     for f in &down.replies {
         match index_of

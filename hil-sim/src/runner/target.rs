@@ -110,17 +110,17 @@ impl Reader {
         Reader { rx }
     }
 
-    /// Ok(false): the stream ended.
-    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> bool {
+    /// Appends what arrived within `timeout`; `RunError::Closed(what)` once the stream has ended.
+    fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>, what: &str) -> Result<(), RunError> {
         match self.rx.recv_timeout(timeout) {
             Ok(chunk) => out.extend_from_slice(&chunk),
-            Err(RecvTimeoutError::Timeout) => return true,
-            Err(RecvTimeoutError::Disconnected) => return false,
+            Err(RecvTimeoutError::Timeout) => return Ok(()),
+            Err(RecvTimeoutError::Disconnected) => return Err(RunError::Closed(what.into())),
         }
         while let Ok(chunk) = self.rx.try_recv() {
             out.extend_from_slice(&chunk);
         }
-        true
+        Ok(())
     }
 }
 
@@ -223,11 +223,7 @@ impl Target for Qemu {
             .map_err(|e| RunError::Io("write to QEMU's serial".into(), e))
     }
     fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
-        if self.reader.recv(timeout, out) {
-            Ok(())
-        } else {
-            Err(RunError::Closed("QEMU's serial".into()))
-        }
+        self.reader.recv(timeout, out, "QEMU's serial")
     }
 }
 
@@ -282,10 +278,6 @@ impl Target for Serial {
             .map_err(|e| RunError::Io("write to the serial port".into(), e))
     }
     fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
-        if self.reader.recv(timeout, out) {
-            Ok(())
-        } else {
-            Err(RunError::Closed("the serial port".into()))
-        }
+        self.reader.recv(timeout, out, "the serial port")
     }
 }

@@ -73,6 +73,22 @@ pub struct Summary {
     pub downlink: LinkStats,
 }
 
+/// α of a record: (truth, estimate), the estimate NaN when no reply came back.
+pub fn alpha_deg(r: &FrameRecord) -> (f64, f64) {
+    (
+        r.alpha_true_deg,
+        r.reply.map_or(f64::NAN, |f| f.estimate.alpha_deg()),
+    )
+}
+
+/// β of a record: (truth, estimate), the estimate NaN when no reply came back.
+pub fn beta_deg(r: &FrameRecord) -> (f64, f64) {
+    (
+        r.beta_true_deg,
+        r.reply.map_or(f64::NAN, |f| f.estimate.beta_deg()),
+    )
+}
+
 /// Whether the estimate in a record is one the estimator computed.
 pub fn scorable(r: &FrameRecord) -> bool {
     r.reply
@@ -86,15 +102,21 @@ fn median(v: &mut [u32]) -> Option<u32> {
 
 pub fn summarize(o: &RunOutcome) -> Summary {
     let scored: Vec<&FrameRecord> = o.records.iter().filter(|r| scorable(r)).collect();
-    let err = |f: fn(&FrameRecord) -> f64| -> Vec<f64> { scored.iter().map(|r| f(r)).collect() };
-    let a = ErrorStats::of(&err(|r| {
-        r.reply.map_or(0.0, |f| f.estimate.alpha_deg()) - r.alpha_true_deg
-    }));
-    let b = ErrorStats::of(&err(|r| {
-        r.reply.map_or(0.0, |f| f.estimate.beta_deg()) - r.beta_true_deg
-    }));
+    // Estimate − truth over the scored records (all of which have a reply).
+    let err = |angle: fn(&FrameRecord) -> (f64, f64)| -> Vec<f64> {
+        scored
+            .iter()
+            .map(|r| {
+                let (truth, estimate) = angle(r);
+                estimate - truth
+            })
+            .collect()
+    };
+    let a = ErrorStats::of(&err(alpha_deg));
+    let b = ErrorStats::of(&err(beta_deg));
     let replies: Vec<_> = o.records.iter().filter_map(|r| r.reply).collect();
-    let last = |f: fn(&estimator_core::wire::estimate::Health) -> u32| {
+    // The firmware's health counters only grow: the largest is the latest.
+    let counter = |f: fn(&estimator_core::wire::estimate::Health) -> u32| {
         replies.iter().map(|r| f(&r.health)).max().unwrap_or(0) as u64
     };
     let source = replies
@@ -104,7 +126,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
     let tmax = ticks.iter().copied().max();
     let tmed = median(&mut ticks);
     let instr = source == TickSource::Instructions;
-    let fw_corrupt = last(|h| h.rx_corrupt);
+    let fw_corrupt = counter(|h| h.rx_corrupt);
     Summary {
         firmware: o.target.to_string(),
         has_model: estimator_core::model::HAS_MODEL,
@@ -120,10 +142,10 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         frames_lost: o.records.len() - replies.len(),
         frames_corrupt_rejected: fw_corrupt + u64::from(o.downlink_rejected),
         firmware_rx_corrupt: fw_corrupt,
-        firmware_rx_lost: last(|h| h.rx_lost),
+        firmware_rx_lost: counter(|h| h.rx_lost),
         host_rx_corrupt: u64::from(o.downlink_rejected),
         unmatched_replies: u64::from(o.unmatched_replies),
-        deadline_misses: last(|h| h.deadline_misses),
+        deadline_misses: counter(|h| h.deadline_misses),
         tick_source: format!("{source:?}"),
         step_ticks_max: tmax,
         step_ticks_median: tmed,
@@ -175,12 +197,9 @@ pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error>
                     format!("{:?}", f.health.tick_source),
                 ]);
             }
-            None => row.extend(
-                ["0".to_string()]
-                    .into_iter()
-                    .chain((0..7).map(|_| String::new())),
-            ),
+            None => row.push("0".to_string()),
         }
+        row.resize(12, String::new());
         w.write_record(&row)?;
     }
     w.flush()?;

@@ -52,7 +52,7 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let fmt = |v: Option<f64>| v.map_or("n/a".to_string(), |v| format!("{v:.3}"));
     let caption = format!(
-        "firmware {} | sent {} scored {} lost {} | rejected {} | deadline misses {} | up: {} B lost, {} bits flipped, {} bursts | α MAE {}° β MAE {}°",
+        "firmware {} | sent {} scored {} lost {} | rejected {} | deadline misses {} | link: {} B lost, {} bits flipped, {} bursts | α MAE {}° β MAE {}°",
         s.firmware,
         s.frames_sent,
         s.frames_scored,
@@ -75,18 +75,8 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
         .map_err(|e| e.to_string())?;
     let panels = body.split_evenly((3, 1));
     let t_end = records.last().map_or(1.0, |r| r.time_s.max(1e-3));
-    let alpha = series(records, |r| {
-        (
-            r.alpha_true_deg,
-            r.reply.map_or(f64::NAN, |f| f.estimate.alpha_deg()),
-        )
-    });
-    let beta = series(records, |r| {
-        (
-            r.beta_true_deg,
-            r.reply.map_or(f64::NAN, |f| f.estimate.beta_deg()),
-        )
-    });
+    let alpha = series(records, super::alpha_deg);
+    let beta = series(records, super::beta_deg);
     let plots: [Panel; 3] = [
         (
             "α (deg)",
