@@ -4,9 +4,11 @@ Protocol (one request per stdin line, fields separated by TAB; one framed reply 
 ORIGINAL stdout):
   reply frame = status byte (b'O' ok / b'E' error) + u32 little-endian payload length + payload.
   On start the bridge sends one frame: b'O' + JSBSim version string, or b'E' + why it cannot run.
-  load\tSCRIPT\tINITFILE   load a runscript at 120 Hz (INITFILE may be empty: JSBSim looks in the
-                          aircraft folder), run the initial conditions
-  watch\tP1\tP2...        the properties returned after every step, in this order
+  load\tSCRIPT\tINITFILE   load a runscript at the dt it declares, exactly as stock JSBSim runs it
+                          (INITFILE may be empty: JSBSim looks in the aircraft folder), run the
+                          initial conditions; payload = f64 little-endian dt in seconds
+  watch\tP1\tP2...        the properties returned after every step, in this order; a name
+                          prefixed with '?' is optional: absent from the model, it reads NaN
   step\tN                 run up to N steps; payload = u32 steps done (fewer when the script ended)
                           + that many rows of little-endian f64, one per watched property
   run\tN                  run up to N steps reading nothing (raw JSBSim stepping, the benchmark's
@@ -30,6 +32,10 @@ def reply(ok, payload=b""):
     _frames.write((b"O" if ok else b"E") + struct.pack("<I", len(payload)) + payload)
 
 
+def nan():
+    return float("nan")
+
+
 def main():
     try:
         import jsbsim
@@ -39,7 +45,7 @@ def main():
     fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
     fdm.set_debug_level(0)
     pm = fdm.get_property_manager()
-    nodes = []
+    getters = []
     reply(True, jsbsim.__version__.encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")
@@ -52,31 +58,38 @@ def main():
                 except ET.ParseError as e:
                     reply(False, f"invalid XML: {e}".encode())
                     continue
-                if not fdm.load_script(script, 1.0 / 120.0, init):
+                # dt 0.0: the script's own dt. Passing a rate here overrides the script's, and
+                # JSBSim adds dt to its clock before checking events, so a different dt moves
+                # every time-triggered event and the flight no longer matches stock JSBSim.
+                if not fdm.load_script(script, 0.0, init):
                     reply(False, b"JSBSim refused the script (see its messages above)")
                     continue
                 if not fdm.run_ic():
                     reply(False, b"JSBSim could not apply the initial conditions")
                     continue
-                reply(True)
+                reply(True, struct.pack("<d", fdm.get_delta_t()))
             elif cmd == "watch":
                 found, missing = [], []
                 for p in f[1:]:
-                    n = pm.get_node(p, False)
-                    (found if n is not None else missing).append(n if n is not None else p)
+                    optional = p.startswith("?")
+                    n = pm.get_node(p[1:] if optional else p, False)
+                    if n is not None or optional:
+                        found.append(n)
+                    else:
+                        missing.append(p)
                 if missing:
                     reply(False, ("unknown properties: " + ", ".join(missing)).encode())
                 else:
-                    nodes = found
+                    getters = [nan if n is None else n.get_double_value for n in found]
                     reply(True)
             elif cmd == "step":
                 n = int(f[1])
                 rows = []
                 done = 0
-                pack = struct.Struct("<%dd" % len(nodes)).pack
+                pack = struct.Struct("<%dd" % len(getters)).pack
                 for _ in range(n):
                     alive = fdm.run()
-                    rows.append(pack(*[nd.get_double_value() for nd in nodes]))
+                    rows.append(pack(*[get() for get in getters]))
                     done += 1
                     if not alive:
                         break

@@ -2,18 +2,25 @@
 //!
 //! The bridge only loads scripts, steps and reads the watched properties; everything else (which
 //! properties, sampling, sensors, cutting a bad flight) is here. [`fly_script`] runs a JSBSim runscript to its
-//! end at 120 Hz, feeding the sensor models every step and keeping truth + sensed values at 20 Hz.
+//! end at the script's own dt (which must be 120 Hz), feeding the sensor models every step and keeping
+//! truth + sensed values at 20 Hz. A script is flown exactly as stock JSBSim flies it
+//! (`load_script(script, 0.0, initfile)`): same dt, same clock, same event instants, so truth is
+//! bit-identical to a stock run (`hil-sim/tests/data_stock_replay.rs`).
 
 use std::io::{BufRead, BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 
-use crate::dataset::{Flight, Sample, Truth};
+use crate::dataset::{Flight, Sample, Truth, Zone, ZoneTimes};
 use crate::sensors::{SensorConfig, SensorInput, SensorModel};
 
 /// JSBSim integration rate. The stock F-16 FCS is tuned for it.
 pub const SIM_HZ: u32 = 120;
+/// How far a script's rate may be from [`SIM_HZ`] (relative) and still be flown: the stock scripts
+/// write `dt="0.00833333"` (120.000005 Hz), which the 120 Hz sensor models and the 6-step decimation
+/// treat as 120 Hz with a timing error of 5e-7; anything further is refused.
+pub const SIM_HZ_TOLERANCE: f64 = 1e-4;
 /// Dataset / frame rate.
 pub const SAMPLE_HZ: u32 = 20;
 /// 120 Hz steps per 20 Hz sample.
@@ -44,6 +51,11 @@ pub enum PlantError {
     WrongAircraft { path: PathBuf, aircraft: String },
     #[error("JSBSim rejected {path}: {message}")]
     ScriptRejected { path: PathBuf, message: String },
+    #[error(
+        "{path} runs at dt = {dt_s} s ({hz:.4} Hz); hil-sim's sensor models and its 20 Hz frames \
+         need {SIM_HZ} Hz: set `<run ... dt=\"0.008333333333333333\">` (1/120 s) in the script"
+    )]
+    UnsupportedRate { path: PathBuf, dt_s: f64, hz: f64 },
     #[error("JSBSim bridge error in `{command}`: {message}")]
     Bridge { command: String, message: String },
     #[error("JSBSim bridge died ({why}); its last messages:\n{stderr_tail}")]
@@ -194,19 +206,27 @@ impl Plant {
         self.read_frame(fields.first().copied().unwrap_or(""))
     }
 
-    /// Loads a runscript (`initfile`: an initialize file path, or `None` to let JSBSim look in the
-    /// aircraft folder) and runs its initial conditions.
+    /// Loads a runscript at the dt it declares (`initfile`: an initialize file path, or `None` to let
+    /// JSBSim look in the aircraft folder) and runs its initial conditions. Returns JSBSim's dt, s.
     pub fn load_script(
         &mut self,
         script: &Path,
         initfile: Option<&Path>,
-    ) -> Result<(), PlantError> {
+    ) -> Result<f64, PlantError> {
         let s = script.to_string_lossy();
         let i = initfile.map(|p| p.to_string_lossy()).unwrap_or_default();
-        self.request(&["load", &s, &i]).map(|_| ())
+        let payload = self.request(&["load", &s, &i])?;
+        payload
+            .first_chunk::<8>()
+            .map(|b| f64::from_le_bytes(*b))
+            .ok_or_else(|| PlantError::Bridge {
+                command: "load".into(),
+                message: "reply has no dt".into(),
+            })
     }
 
-    /// Chooses the properties returned after every step.
+    /// Chooses the properties returned after every step. A name prefixed with `?` is optional: a
+    /// property the loaded model and script do not have reads NaN instead of failing.
     pub fn watch(&mut self, props: &[&str]) -> Result<(), PlantError> {
         let mut f = vec!["watch"];
         f.extend_from_slice(props);
@@ -299,8 +319,13 @@ mod at {
     pub const THROTTLE: usize = 32;
     pub const LAT: usize = 33;
     pub const LON: usize = 34;
+    pub const PI: usize = 35;
+    pub const QI: usize = 36;
+    pub const RI: usize = 37;
+    /// The generator's zone state (optional: NaN for scripts that do not have it).
+    pub const ZONE: usize = 38;
     /// Properties watched.
-    pub const COUNT: usize = LON + 1;
+    pub const COUNT: usize = ZONE + 1;
 }
 
 /// Properties read after every step, each written next to its position in [`at`]; a position
@@ -342,6 +367,11 @@ const WATCH: [&str; at::COUNT] = {
     w[at::THROTTLE] = "fcs/throttle-cmd-norm";
     w[at::LAT] = "position/lat-geod-deg";
     w[at::LON] = "position/long-gc-deg";
+    // Body rates relative to inertial space (Earth rate included): what a gyro measures.
+    w[at::PI] = "velocities/pi-rad_sec";
+    w[at::QI] = "velocities/qi-rad_sec";
+    w[at::RI] = "velocities/ri-rad_sec";
+    w[at::ZONE] = "?maneuver/zone";
     let mut i = 0;
     while i < at::COUNT {
         assert!(!w[i].is_empty(), "every position in `at` has a property");
@@ -445,7 +475,7 @@ fn truth_of(r: &[f64]) -> Truth {
 fn sensor_input(r: &[f64]) -> SensorInput {
     let m = r[at::MASS];
     SensorInput {
-        omega_rps: [r[at::P], r[at::Q], r[at::R]],
+        omega_rps: [r[at::PI], r[at::QI], r[at::RI]],
         omega_dot_rps2: [r[at::PDOT], r[at::QDOT], r[at::RDOT]],
         // Specific force at the CG: total non-gravity force over mass (not accelerations/N*, which lag a step).
         f_cg_mps2: [
@@ -475,10 +505,19 @@ pub fn fly_script(script: &Path, cfg: &FlyConfig) -> Result<Flight, PlantError> 
     fly_script_with(&mut plant, script, cfg)
 }
 
-/// Loads a runscript for the `f16` into `plant` and runs its initial conditions: the initialize
-/// file is taken from beside the script when it is there, else JSBSim looks in the aircraft folder.
-/// Returns the script's canonical path.
-pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<PathBuf, PlantError> {
+/// A runscript loaded into the bridge.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Loaded {
+    /// The script's canonical path.
+    pub path: PathBuf,
+    /// JSBSim's integration step, the script's own `dt`, s.
+    pub dt_s: f64,
+}
+
+/// Loads a runscript for the `f16` into `plant` at its own dt and runs its initial conditions: the
+/// initialize file is taken from beside the script when it is there, else JSBSim looks in the
+/// aircraft folder. A script whose rate is not [`SIM_HZ`] (within [`SIM_HZ_TOLERANCE`]) is refused.
+pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<Loaded, PlantError> {
     let script = std::fs::canonicalize(script).map_err(|source| PlantError::ScriptUnreadable {
         path: script.to_path_buf(),
         source,
@@ -496,7 +535,7 @@ pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<PathBuf, Plan
             .into_iter()
             .find(|p| p.is_file())
     });
-    plant
+    let dt_s = plant
         .load_script(&script, beside.as_deref())
         .map_err(|e| match e {
             PlantError::Bridge { message, .. } => PlantError::ScriptRejected {
@@ -505,7 +544,15 @@ pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<PathBuf, Plan
             },
             other => other,
         })?;
-    Ok(script)
+    let hz = 1.0 / dt_s;
+    if !(hz.is_finite() && (hz / f64::from(SIM_HZ) - 1.0).abs() <= SIM_HZ_TOLERANCE) {
+        return Err(PlantError::UnsupportedRate {
+            path: script,
+            dt_s,
+            hz,
+        });
+    }
+    Ok(Loaded { path: script, dt_s })
 }
 
 /// [`fly_script`] on an already started bridge (one process per flight keeps flights independent;
@@ -515,7 +562,7 @@ pub fn fly_script_with(
     script: &Path,
     cfg: &FlyConfig,
 ) -> Result<Flight, PlantError> {
-    let script = load_f16_script(plant, script)?;
+    let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
     plant.watch(&WATCH)?;
 
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
@@ -529,6 +576,7 @@ pub fn fly_script_with(
         name,
         samples: Vec::new(),
         cut: None,
+        zones: None,
     };
     let mut step_count: u64 = 0;
     let mut airborne = false;
@@ -541,7 +589,8 @@ pub fn fly_script_with(
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
                 break 'outer;
             }
-            if r.iter().any(|v| !v.is_finite()) {
+            // The optional zone column (last) is NaN for scripts without a generator state.
+            if r[..at::ZONE].iter().any(|v| !v.is_finite()) {
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;
             }
@@ -553,11 +602,18 @@ pub fn fly_script_with(
                 ));
                 break 'outer;
             }
+            if let Some(zone) = Zone::from_value(r[at::ZONE]) {
+                flight
+                    .zones
+                    .get_or_insert_with(ZoneTimes::default)
+                    .add(zone, dt_s);
+            }
             let si = sensors.step(&sensor_input(r));
             if step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE)) {
                 flight.samples.push(Sample {
-                    // Whole steps / 120 Hz: JSBSim's summed dt drifts in the last bits (0.04999…).
-                    time_s: step_count as f64 / f64::from(SIM_HZ),
+                    // JSBSim's own clock (its summed dt, e.g. 0.049999999999999996 after 6 steps):
+                    // the instants a stock run reports, so truth can be compared sample by sample.
+                    time_s: t,
                     truth: truth_of(r),
                     sensed: si,
                 });

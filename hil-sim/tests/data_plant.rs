@@ -151,6 +151,20 @@ fn bad_scripts_give_the_right_errors() {
     );
     assert!(e.to_string().contains("broken.xml"));
 
+    // Another integration rate: refused with the rate named, not flown with mis-timed sensors.
+    let slow = d.join("slow.xml");
+    std::fs::write(
+        &slow,
+        "<?xml version=\"1.0\"?>\n<runscript name=\"x\">\n<use aircraft=\"f16\" initialize=\"reset00\"/>\n<run start=\"0\" end=\"1\" dt=\"0.01\">\n</run>\n</runscript>\n",
+    )
+    .unwrap();
+    let e = plant::fly_script(&slow, &cfg).unwrap_err();
+    assert!(
+        matches!(&e, PlantError::UnsupportedRate { dt_s, .. } if *dt_s == 0.01),
+        "{e}"
+    );
+    assert!(e.to_string().contains("100.0000 Hz"), "{e}");
+
     let not_script = d.join("init.xml");
     std::fs::write(&not_script, "<initialize name=\"x\"/>").unwrap();
     let e = plant::fly_script(&not_script, &cfg).unwrap_err();

@@ -121,6 +121,53 @@ pub struct Sample {
     pub sensed: [f64; CHANNELS],
 }
 
+/// The maneuver generator's zones (Karali et al. 2023, Fig. 3), as its scripts code them in
+/// `maneuver/zone`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Zone {
+    /// Random maneuvers.
+    Flight,
+    /// A hazard (ground, ceiling, attitude, speed, α): the recovery law stops it.
+    Danger,
+    /// The attitude controller climbs back to the Flight Zone.
+    Reclimb,
+}
+
+impl Zone {
+    /// The zone a `maneuver/zone` value codes (0, 1, 2), `None` for anything else (NaN: the script
+    /// has no zone state).
+    pub fn from_value(v: f64) -> Option<Zone> {
+        match v {
+            0.0 => Some(Zone::Flight),
+            1.0 => Some(Zone::Danger),
+            2.0 => Some(Zone::Reclimb),
+            _ => None,
+        }
+    }
+}
+
+/// Time a flight spent in each zone, s (simulated time, JSBSim steps × dt).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ZoneTimes {
+    pub flight_s: f64,
+    pub danger_s: f64,
+    pub reclimb_s: f64,
+}
+
+impl ZoneTimes {
+    pub fn add(&mut self, zone: Zone, dt_s: f64) {
+        match zone {
+            Zone::Flight => self.flight_s += dt_s,
+            Zone::Danger => self.danger_s += dt_s,
+            Zone::Reclimb => self.reclimb_s += dt_s,
+        }
+    }
+
+    pub fn total_s(&self) -> f64 {
+        self.flight_s + self.danger_s + self.reclimb_s
+    }
+}
+
 /// One flight at 20 Hz.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Flight {
@@ -128,6 +175,9 @@ pub struct Flight {
     pub samples: Vec<Sample>,
     /// Why the flight stops early (ground contact, NaN), or `None` if it ran to its end.
     pub cut: Option<String>,
+    /// Time in each generator zone; `None` for a script without the generator's zone state.
+    /// Not stored in the CSV (it is in the manifest).
+    pub zones: Option<ZoneTimes>,
 }
 
 /// Dataset read/write failures.
@@ -262,6 +312,7 @@ impl Flight {
                 .unwrap_or_default(),
             samples,
             cut: None,
+            zones: None,
         })
     }
 }
@@ -288,6 +339,9 @@ pub struct FlightEntry {
     /// SHA-256 of the CSV file, hex.
     pub sha256: String,
     pub cut: Option<String>,
+    /// Time in each maneuver-generator zone (absent for scripts without zone state).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zones: Option<ZoneTimes>,
 }
 
 /// `manifest.json`.
@@ -305,8 +359,10 @@ pub struct Manifest {
 }
 
 impl Manifest {
-    /// 2: truth `lat_deg`, `lon_deg` added (1 had no position).
-    pub const FORMAT: u32 = 2;
+    /// 3: time on JSBSim's own clock, IMU with Earth rate, scale factor and misalignment, zone
+    /// times per flight (2: time as whole steps / 120 Hz, gyros blind to the Earth's rotation;
+    /// 1 had no position).
+    pub const FORMAT: u32 = 3;
 
     pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
         let path = dir.join("manifest.json");
@@ -443,6 +499,7 @@ pub fn write_flight(
         samples: flight.samples.len(),
         sha256: sha256_file(&path)?,
         cut: flight.cut.clone(),
+        zones: flight.zones,
     })
 }
 
@@ -465,6 +522,7 @@ mod tests {
             name: "t".into(),
             samples: vec![s, s],
             cut: None,
+            zones: None,
         };
         let dir = std::env::temp_dir().join(format!("hil-ds-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

@@ -404,6 +404,7 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
     for entry in &manifest.flights {
         let mut f = Flight::read_csv(&dir.join(&entry.file))?;
         f.cut = entry.cut.clone();
+        f.zones = entry.zones;
         flights.push((f, entry.split, entry.profile.clone()));
     }
     let of = |split| -> Vec<&Flight> {
@@ -556,21 +557,36 @@ fn markdown(m: &Manifest, r: &Report, flights: &[(Flight, Split, String)]) -> St
     let _ = writeln!(s, "## Flights\n");
     let _ = writeln!(
         s,
-        "| flight | split | profile | duration, s | α max, ° | cut |"
+        "Zones: time in the maneuver generator's Flight Zone (random maneuvers), Danger Zone \
+         (recovery from a hazard) and Re-climb Zone (attitude controller climbing back), from the \
+         script's `maneuver/zone` at every 120 Hz step (— for a script without zone state).\n"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| flight | split | profile | duration, s | α max, ° | Flight Zone | Danger Zone | Re-climb Zone | cut |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for (f, split, profile) in flights {
         let amax = f
             .samples
             .iter()
             .map(|x| x.truth.alpha_deg)
             .fold(f64::NEG_INFINITY, f64::max);
+        let zone = |get: fn(&super::ZoneTimes) -> f64| match f.zones {
+            Some(z) if z.total_s() > 0.0 => {
+                format!("{:.0} s ({:.1}%)", get(&z), 100.0 * get(&z) / z.total_s())
+            }
+            _ => "—".to_string(),
+        };
         let _ = writeln!(
             s,
-            "| {} | {:?} | {profile} | {:.0} | {amax:.1} | {} |",
+            "| {} | {:?} | {profile} | {:.0} | {amax:.1} | {} | {} | {} | {} |",
             f.name,
             split,
             f.duration_s(),
+            zone(|z| z.flight_s),
+            zone(|z| z.danger_s),
+            zone(|z| z.reclimb_s),
             f.cut.as_deref().unwrap_or("—")
         );
     }
