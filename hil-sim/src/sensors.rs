@@ -1,11 +1,13 @@
 //! Sensor error models: IMU (LN-200 class), GPS, control-surface position sensors.
 //!
 //! Fed with truth at every 120 Hz JSBSim step; returns the 16 sensed channels (SI, degrees for
-//! surfaces) in [`estimator_core::Channel`] order. The IMU path is: truth at the IMU location,
-//! plus turn-on bias, Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv
-//! quantization (residual carried, as an integrating IMU does), a first-order lag and a 2nd-order
-//! Butterworth anti-alias low-pass, so that the 20 Hz decimation does not fold vibration and noise
-//! into the band. Defaults and their sources: `docs/sensors.md`.
+//! surfaces) in [`estimator_core::Channel`] order. The IMU path is: truth at the IMU location
+//! (rates relative to inertial space, specific force moved from the CG), through the triad's
+//! per-flight scale-factor and misalignment matrix (I + S + M); then per axis turn-on bias,
+//! Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv quantization
+//! (residual carried, as an integrating IMU does), a first-order lag and a 2nd-order Butterworth
+//! anti-alias low-pass, so that the 20 Hz decimation does not fold vibration and noise into the
+//! band. Defaults and their sources: `docs/sensors.md`.
 
 use std::collections::VecDeque;
 use std::path::Path;
@@ -22,7 +24,8 @@ const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
 const G0: f64 = 9.80665;
 
-/// Errors of one inertial sensor type, the same for its three axes (units of the sensor: rad/s or m/s²).
+/// Errors of one inertial sensor type, the same σ for its three axes (units of the sensor: rad/s or
+/// m/s²).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InertialErrors {
@@ -36,6 +39,15 @@ pub struct InertialErrors {
     pub noise_density: f64,
     /// Output quantum of the integrated quantity (Δθ in rad, Δv in m/s); 0 = none.
     pub quantum: f64,
+    /// 1σ of each axis's scale-factor error, drawn once per flight (dimensionless: 100e-6 = 100 ppm).
+    /// Omitted from a TOML table → 0 (term off), so an override written for the five-field model
+    /// still parses and keeps meaning what it meant.
+    #[serde(default)]
+    pub scale_factor_sigma: f64,
+    /// 1σ of each off-diagonal element of the triad's small-angle misalignment / non-orthogonality
+    /// matrix, drawn once per flight, rad. Omitted → 0, as above.
+    #[serde(default)]
+    pub misalignment_sigma_rad: f64,
 }
 
 /// IMU model parameters.
@@ -66,14 +78,18 @@ impl Default for ImuConfig {
                 // 0.07 °/√h ARW
                 noise_density: 0.07 * std::f64::consts::PI / 180.0 / 60.0,
                 quantum: 2f64.powi(-19),
+                scale_factor_sigma: 100e-6,
+                misalignment_sigma_rad: 200e-6,
             },
             accel: InertialErrors {
                 turn_on_bias_sigma: 300e-6 * G0,
                 in_run_bias_sigma: 50e-6 * G0,
                 in_run_bias_tau_s: 60.0,
-                noise_density: 35e-6 * G0,
+                noise_density: 50e-6 * G0,
                 // 2^-14 ft/s per Δv count
                 quantum: 2f64.powi(-14) * crate::plant::FT_TO_M,
+                scale_factor_sigma: 300e-6,
+                misalignment_sigma_rad: 200e-6,
             },
             gyro_g_sensitivity_rps_per_mps2: 1.0 * DEG_PER_H / G0,
             lever_arm_m: [0.5, 0.0, 0.2],
@@ -181,7 +197,7 @@ impl SensorConfig {
 
     /// Rejects negative σ, non-finite values and settings the 120 Hz model cannot honour.
     pub fn validate(&self) -> Result<(), SensorConfigError> {
-        let nonneg: [(&'static str, f64); 20] = [
+        let nonneg: [(&'static str, f64); 24] = [
             (
                 "imu.gyro.turn_on_bias_sigma",
                 self.imu.gyro.turn_on_bias_sigma,
@@ -193,6 +209,14 @@ impl SensorConfig {
             ("imu.gyro.noise_density", self.imu.gyro.noise_density),
             ("imu.gyro.quantum", self.imu.gyro.quantum),
             (
+                "imu.gyro.scale_factor_sigma",
+                self.imu.gyro.scale_factor_sigma,
+            ),
+            (
+                "imu.gyro.misalignment_sigma_rad",
+                self.imu.gyro.misalignment_sigma_rad,
+            ),
+            (
                 "imu.accel.turn_on_bias_sigma",
                 self.imu.accel.turn_on_bias_sigma,
             ),
@@ -202,6 +226,14 @@ impl SensorConfig {
             ),
             ("imu.accel.noise_density", self.imu.accel.noise_density),
             ("imu.accel.quantum", self.imu.accel.quantum),
+            (
+                "imu.accel.scale_factor_sigma",
+                self.imu.accel.scale_factor_sigma,
+            ),
+            (
+                "imu.accel.misalignment_sigma_rad",
+                self.imu.accel.misalignment_sigma_rad,
+            ),
             ("imu.lag_tau_s", self.imu.lag_tau_s),
             ("imu.antialias_cutoff_hz", self.imu.antialias_cutoff_hz),
             ("gps.speed_noise_sigma_mps", self.gps.speed_noise_sigma_mps),
@@ -279,7 +311,9 @@ impl SensorConfig {
 /// Truth the sensors see at one 120 Hz step (SI; surfaces in degrees).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SensorInput {
-    /// Body rates p, q, r, rad/s.
+    /// Body rates p, q, r relative to inertial space, rad/s (JSBSim `velocities/{p,q,r}i-rad_sec`):
+    /// what a gyro measures, so the Earth's rotation (7.292115e-5 rad/s = 15.04 °/h) is in it, not
+    /// only the Earth-relative `velocities/{p,q,r}-rad_sec`.
     pub omega_rps: [f64; 3],
     /// Body angular accelerations, rad/s².
     pub omega_dot_rps2: [f64; 3],
@@ -439,8 +473,8 @@ impl ImuAxis {
         }
     }
 
-    fn step(&mut self, truth: f64, extra_bias: f64, rng: &mut ChaCha12Rng) -> f64 {
-        let raw = self.raw(truth, extra_bias, rng);
+    /// Lag and anti-alias filter applied to one raw sample.
+    fn filter(&mut self, raw: f64) -> f64 {
         let lagged = match self.lag {
             None => raw,
             Some(y) => y + self.lag_alpha * (raw - y),
@@ -458,6 +492,35 @@ impl ImuAxis {
     }
 }
 
+/// Scale-factor and misalignment errors of one sensor triad, drawn once per flight: E = S + M with
+/// S = diag(s) (s ~ N(0, σ_sf)) and M zero on the diagonal (elements ~ N(0, σ_mis), rad). Always
+/// nine draws in row-major order, whatever the σ, so the rest of the random stream does not shift
+/// when a σ is set to zero.
+fn draw_triad_errors(e: &InertialErrors, rng: &mut ChaCha12Rng) -> [[f64; 3]; 3] {
+    let mut m = [[0.0; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            let n: f64 = StandardNormal.sample(rng);
+            let sigma = if i == j {
+                e.scale_factor_sigma
+            } else {
+                e.misalignment_sigma_rad
+            };
+            *v = sigma * n;
+        }
+    }
+    m
+}
+
+/// (I + E)·v: what a triad with scale-factor/misalignment matrix E senses of the true vector v.
+fn through_triad(e: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    let mut out = v;
+    for (o, row) in out.iter_mut().zip(e) {
+        *o += row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
+    }
+    out
+}
+
 fn quantize(v: f64, q: f64) -> f64 {
     if q > 0.0 { (v / q).round() * q } else { v }
 }
@@ -468,6 +531,9 @@ pub struct SensorModel {
     rng: ChaCha12Rng,
     gyro: [ImuAxis; 3],
     accel: [ImuAxis; 3],
+    /// Per-flight scale-factor/misalignment matrices E (sensed = (I + E)·true).
+    gyro_triad: [[f64; 3]; 3],
+    accel_triad: [[f64; 3]; 3],
     gps_alt_bias: GaussMarkov,
     gps_delay: VecDeque<(f64, f64)>,
     gps_delay_steps: usize,
@@ -487,9 +553,14 @@ impl SensorModel {
         let accel = [axis(&i.accel), axis(&i.accel), axis(&i.accel)];
         let gps_alt_bias =
             GaussMarkov::new(cfg.gps.alt_bias_sigma_m, cfg.gps.alt_bias_tau_s, &mut rng);
+        // Drawn after the older terms, so a seed still gives the same turn-on and GPS biases.
+        let gyro_triad = draw_triad_errors(&i.gyro, &mut rng);
+        let accel_triad = draw_triad_errors(&i.accel, &mut rng);
         SensorModel {
             gyro,
             accel,
+            gyro_triad,
+            accel_triad,
             gps_alt_bias,
             gps_delay: VecDeque::new(),
             gps_delay_steps: (cfg.gps.latency_s * SIM_HZ as f64).round() as usize,
@@ -506,8 +577,27 @@ impl SensorModel {
         &self.gyro
     }
 
+    /// The per-axis accelerometer models (x, y, z), e.g. to read the drawn turn-on biases.
+    pub fn accel_axes(&self) -> &[ImuAxis; 3] {
+        &self.accel
+    }
+
+    /// The gyro scale-factor/misalignment matrix E drawn for this flight (sensed rate =
+    /// (I + E)·true rate): diagonal = scale-factor errors, off-diagonal = misalignment, rad. For
+    /// tests and error analysis; the model itself does not expose it to the estimator.
+    pub fn gyro_scale_misalignment(&self) -> [[f64; 3]; 3] {
+        self.gyro_triad
+    }
+
+    /// The accelerometer scale-factor/misalignment matrix drawn for this flight, as
+    /// [`SensorModel::gyro_scale_misalignment`].
+    pub fn accel_scale_misalignment(&self) -> [[f64; 3]; 3] {
+        self.accel_triad
+    }
+
     /// The raw 120 Hz output of gyro `axis` for a truth rate (errors + quantization, no lag or
-    /// anti-alias filter, no g term): for measuring the error model back in tests.
+    /// anti-alias filter, no g term, no scale factor or misalignment): for measuring the per-axis
+    /// error model back in tests.
     pub fn gyro_raw_for_test(&mut self, axis: usize, truth_rps: f64) -> f64 {
         match self.gyro.get_mut(axis) {
             Some(a) => a.raw(truth_rps, 0.0, &mut self.rng),
@@ -515,22 +605,46 @@ impl SensorModel {
         }
     }
 
-    /// One 120 Hz step: the 16 sensed channels at this instant.
-    pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
-        let mut out = [0.0; CHANNELS];
+    /// The raw 120 Hz IMU output for one truth step, gyro p, q, r (rad/s) then accel x, y, z
+    /// (m/s²): the whole error model of [`SensorModel::step`] (lever arm, scale factor and
+    /// misalignment, biases, g term, noise, quantization) without the lag and anti-alias filter,
+    /// and without stepping GPS or surfaces. For measuring the error model back in tests.
+    pub fn imu_raw_for_test(&mut self, t: &SensorInput) -> [f64; 6] {
+        let (g, a) = self.imu_raw(t);
+        [g[0], g[1], g[2], a[0], a[1], a[2]]
+    }
+
+    /// Raw gyro and accelerometer triads for one truth step (before lag and anti-alias filter).
+    fn imu_raw(&mut self, t: &SensorInput) -> ([f64; 3], [f64; 3]) {
         let f_imu = specific_force_at(
             t.f_cg_mps2,
             t.omega_rps,
             t.omega_dot_rps2,
             self.cfg.imu.lever_arm_m,
         );
+        // Scale factor and misalignment act on the true vector, before the per-axis bias and noise:
+        // they are errors of the instrument's gain and of where its input axis points.
+        let omega_sensed = through_triad(&self.gyro_triad, t.omega_rps);
+        let f_sensed = through_triad(&self.accel_triad, f_imu);
         let gsens = self.cfg.imu.gyro_g_sensitivity_rps_per_mps2;
-        for k in 0..3 {
-            out[Channel::GyroP.index() + k] =
-                self.gyro[k].step(t.omega_rps[k], gsens * f_imu[k], &mut self.rng);
+        let mut gyro = [0.0; 3];
+        for (k, g) in gyro.iter_mut().enumerate() {
+            *g = self.gyro[k].raw(omega_sensed[k], gsens * f_imu[k], &mut self.rng);
         }
+        let mut accel = [0.0; 3];
+        for (k, a) in accel.iter_mut().enumerate() {
+            *a = self.accel[k].raw(f_sensed[k], 0.0, &mut self.rng);
+        }
+        (gyro, accel)
+    }
+
+    /// One 120 Hz step: the 16 sensed channels at this instant.
+    pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
+        let mut out = [0.0; CHANNELS];
+        let (gyro_raw, accel_raw) = self.imu_raw(t);
         for k in 0..3 {
-            out[Channel::AccelX.index() + k] = self.accel[k].step(f_imu[k], 0.0, &mut self.rng);
+            out[Channel::GyroP.index() + k] = self.gyro[k].filter(gyro_raw[k]);
+            out[Channel::AccelX.index() + k] = self.accel[k].filter(accel_raw[k]);
         }
 
         // GPS: a fix is the truth `latency` ago plus noise, refreshed at the fix rate and held.
@@ -595,6 +709,37 @@ mod tests {
         // ω̇×r = (0,1,0)×(2,0,0) = (0,0,-2); ω×(ω×r) = -(0.25)·(2,0,0) = (-0.5,0,0).
         assert!((f[0] + 0.5).abs() < 1e-12);
         assert!((f[2] + 11.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn triad_matrix_is_identity_plus_scale_factor_plus_cross_axis() {
+        let e = [[1e-3, 2e-3, 0.0], [0.0, -1e-3, 0.0], [3e-3, 0.0, 0.0]];
+        let v = through_triad(&e, [2.0, -1.0, 0.5]);
+        // x: 2·(1 + 1e-3) + 2e-3·(−1); y: −1·(1 − 1e-3); z: 0.5 + 3e-3·2.
+        assert!((v[0] - (2.002 - 0.002)).abs() < 1e-15);
+        assert!((v[1] + 0.999).abs() < 1e-15);
+        assert!((v[2] - 0.506).abs() < 1e-15);
+    }
+
+    #[test]
+    fn triad_draws_use_their_own_sigma_and_a_fixed_count() {
+        let mut e = ImuConfig::default().gyro;
+        e.scale_factor_sigma = 0.0;
+        e.misalignment_sigma_rad = 1e-3;
+        let mut rng = ChaCha12Rng::seed_from_u64(7);
+        let m = draw_triad_errors(&e, &mut rng);
+        for (i, row) in m.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                assert_eq!(*v == 0.0, i == j, "[{i}][{j}] = {v}");
+            }
+        }
+        // Nine draws whatever the σ: the next draw is the same as with both σ non-zero.
+        let next_a: f64 = StandardNormal.sample(&mut rng);
+        e.scale_factor_sigma = 1e-4;
+        let mut rng = ChaCha12Rng::seed_from_u64(7);
+        draw_triad_errors(&e, &mut rng);
+        let next_b: f64 = StandardNormal.sample(&mut rng);
+        assert_eq!(next_a, next_b);
     }
 
     #[test]
