@@ -1,14 +1,29 @@
 //! Random maneuver generator (Karali et al. 2023, Fig. 3) producing complete JSBSim runscripts.
 //!
 //! A generated flight is a plain JSBSim runscript plus its initialize file: random commands are
-//! timed events writing `maneuver/*` properties, and the zone logic is continuous events whose
-//! `<set>` is a `<function>` of aircraft properties. Flight Zone: random attitude / α targets with
-//! random stick perturbations, rudder, throttle and speedbrake held for random durations. Danger
-//! Zone (low, too high, steep bank or pitch, slow, α near the limiter): a recovery law (wings level,
-//! pitch toward a safe altitude and speed, power by speed) holds until the aircraft is back well
-//! inside the Flight Zone. g protection (the F-16 model has no g-limiter) eases the stick when the
-//! load factor leaves the profile's band. Because everything is in the script, flying the saved
-//! file through JSBSim's own loader reproduces the flight.
+//! timed tables writing `maneuver/*` properties, and the zone logic and control laws are continuous
+//! events whose `<set>` is a `<function>` of aircraft properties, evaluated in file order each step
+//! at dt = exactly 1/120 s ([`SCRIPT_DT_S`]). The zone state `maneuver/zone` is 0 before t = 1 s and
+//! then one of three values at every step:
+//!
+//! - **0 Flight Zone**: random attitude / α targets with random stick perturbations, rudder,
+//!   throttle and speedbrake held for random durations.
+//! - **1 Danger Zone**, entered from any zone whenever the trigger fires (low, with an 8 s sink
+//!   look-ahead; above the ceiling; steep bank or pitch; slow; α out of range): the recovery law
+//!   (wings level, no rudder or speedbrake, pitch toward a safe altitude and speed, nose down while
+//!   slow, power by speed) stops the hazard.
+//! - **2 Re-climb Zone**, entered from Danger when the hazard is over, with hysteresis against the
+//!   trigger (sink stopped over a 15 s look-ahead, wings within 30°, α in −3…12°, pitch not steep,
+//!   30 kt above the slow limit, below the ceiling): the attitude controller climbs wings level at
+//!   up to [`Profile::reclimb_pitch_deg`] (descends if above the band) with at least military power,
+//!   back into the safe band; it hands back to the Flight Zone once the aircraft is well inside it
+//!   (2,500 ft above the floor, 3,000 ft below the ceiling, recovery speed, calm attitude and α).
+//!   The chain is strict: a short hazard met already inside the safe band (a brief α excursion at
+//!   altitude) passes Danger → Re-climb → Flight, so many Re-climb visits last a single step.
+//!
+//! g protection (the F-16 model has no g-limiter) eases the stick in every zone when the load factor
+//! leaves the profile's band. Because everything is in the script, flying the saved file through
+//! JSBSim's own loader reproduces the flight; the script's header comment gives the stock command.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -16,6 +31,44 @@ use std::path::{Path, PathBuf};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
 use serde::{Deserialize, Serialize};
+
+use crate::plant::SIM_HZ;
+
+/// The script's time step: exactly 1/[`SIM_HZ`], written as the shortest decimal that reads back
+/// as that double (JSBSim adds dt up each step; a truncated value such as 0.00833333333333 is
+/// another rate, and its clock drifts from k/120 s).
+pub const SCRIPT_DT_S: f64 = 1.0 / SIM_HZ as f64;
+
+/// `maneuver/zone` values (Karali et al. 2023, Fig. 3), exact small integers in a double.
+pub const ZONE_FLIGHT: f64 = 0.0;
+pub const ZONE_DANGER: f64 = 1.0;
+pub const ZONE_RECLIMB: f64 = 2.0;
+
+/// Danger Zone trigger: the low-altitude limit applies to the height this many seconds ahead along
+/// the sink rate.
+const TRIGGER_LOOKAHEAD_S: f64 = 8.0;
+/// Danger → Re-climb (the immediate hazard is over), each with hysteresis against the trigger:
+/// a longer sink look-ahead that must stay this far above the floor, this far below the ceiling,
+/// bank and α well inside the trigger's limits, pitch at most this (and 20° inside the trigger),
+/// and this much above the slow limit.
+const CALM_LOOKAHEAD_S: f64 = 15.0;
+const CALM_FLOOR_MARGIN_FT: f64 = 500.0;
+const CALM_CEILING_MARGIN_FT: f64 = 500.0;
+const CALM_BANK_DEG: f64 = 30.0;
+const CALM_ALPHA_DEG: Range = (-3.0, 12.0);
+const CALM_PITCH_DEG: f64 = 25.0;
+const CALM_VC_MARGIN_KTS: f64 = 30.0;
+/// Re-climb → Flight (back well inside the Flight Zone): this far above the floor and below the
+/// ceiling (with the recovery speed and the calm attitude and α).
+const SAFE_FLOOR_MARGIN_FT: f64 = 2_500.0;
+const SAFE_CEILING_MARGIN_FT: f64 = 3_000.0;
+/// Re-climb law: it aims this far beyond the safe band (so the exit is crossed still climbing),
+/// with this pitch gain, a descent (from above the ceiling) no steeper than this, and the nose
+/// lowered while within this margin of the slow limit.
+const RECLIMB_OVERSHOOT_FT: f64 = 1_000.0;
+const RECLIMB_PITCH_PER_FT: f64 = 0.006;
+const RECLIMB_DESCENT_PITCH_DEG: f64 = 8.0;
+const RECLIMB_VC_MARGIN_KTS: f64 = 50.0;
 
 /// The four training profiles of the paper preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -82,8 +135,10 @@ pub struct Profile {
     pub max_bank_deg: f64,
     pub max_pitch_deg: f64,
     pub min_vc_kts: f64,
-    /// Calibrated airspeed the recovery law climbs back to before handing back.
+    /// Calibrated airspeed the Re-climb Zone reaches before handing back to the Flight Zone.
     pub recover_vc_kts: f64,
+    /// Re-climb Zone: the largest pitch-attitude target of the climb back to a safe altitude, deg.
+    pub reclimb_pitch_deg: f64,
     pub max_alpha_deg: f64,
     /// Below this α (the aero tables end at −10°) the Danger Zone takes over too.
     pub min_alpha_deg: f64,
@@ -128,6 +183,7 @@ impl Profile {
             max_pitch_deg: 45.0,
             min_vc_kts: 150.0,
             recover_vc_kts: 250.0,
+            reclimb_pitch_deg: 15.0,
             max_alpha_deg: 22.0,
             min_alpha_deg: -8.0,
             target_ramp_s: 3.0,
@@ -309,9 +365,10 @@ pub fn generate(
     );
 
     let mut s = String::new();
+    // No "--" inside an XML comment: the C++ command line's options are named, not spelled.
     let _ = write!(
         s,
-        "<?xml version=\"1.0\"?>\n<!-- Generated by hil-sim (profile {}, seed {seed}); a plain JSBSim runscript: the\n     initialize file {init_name}.xml sits beside it. -->\n<runscript name=\"hil-sim maneuver {name}\">\n  <use aircraft=\"f16\" initialize=\"{init_name}\"/>\n  <run start=\"0.0\" end=\"{duration_s:.3}\" dt=\"0.00833333333333\">\n",
+        "<?xml version=\"1.0\"?>\n<!-- Generated by hil-sim (profile {}, seed {seed}): a plain JSBSim runscript; maneuver/zone\n     is 0 Flight, 1 Danger, 2 Re-climb. Stock JSBSim must be given the initialize file\n     {init_name}.xml beside it (else it looks in aircraft/f16/). From this folder (absolute\n     paths: Python resolves relative ones against the JSBSim root; dt 0.0 = this script's dt):\n       python -c \"import jsbsim, os; f = jsbsim.FGFDMExec(None); f.load_script(os.path.abspath('{name}.xml'), 0.0, os.path.abspath('{init_name}.xml')); f.run_ic(); all(iter(f.run, False))\"\n     The C++ JSBSim takes the same two files as its script and initfile options. -->\n<runscript name=\"hil-sim maneuver {name}\">\n  <use aircraft=\"f16\" initialize=\"{init_name}\"/>\n  <run start=\"0.0\" end=\"{duration_s:.3}\" dt=\"{SCRIPT_DT_S}\">\n",
         p.kind.name()
     );
     for (prop, v) in [
@@ -324,8 +381,14 @@ pub fn generate(
         ("maneuver/rudder", 0.0),
         ("maneuver/throttle", 0.6),
         ("maneuver/speedbrake", 0.0),
+        ("maneuver/trigger", 0.0),
+        ("maneuver/hazard-over", 0.0),
+        ("maneuver/recovered", 0.0),
+        ("maneuver/zone", ZONE_FLIGHT),
         ("maneuver/danger", 0.0),
+        ("maneuver/reclimb", 0.0),
         ("maneuver/theta-recover-deg", 0.0),
+        ("maneuver/theta-reclimb-deg", 0.0),
         ("maneuver/nz-g", 1.0),
         ("maneuver/g-protect", 0.0),
     ] {
@@ -353,11 +416,14 @@ pub fn generate(
         wind * wdir.sin(),
     );
 
-    // Zone logic, evaluated every step in this order (the command tables go just before it). The
-    // low-altitude limit looks 8 s ahead along the sink rate: fast dives overshot a plain height limit.
+    // Zone logic, evaluated every step in this order (the command tables go just before it): three
+    // 0/1 conditions, then the zone state machine (it reads its own value of the previous step),
+    // then the laws, each blending the three zones' commands by the zone flags.
     let laws_at = s.len();
+    // The low-altitude limit looks 8 s ahead along the sink rate: fast dives overshot a plain
+    // height limit.
     let trigger = format!(
-        "<or><lt><sum><property>position/h-agl-ft</property><product><value>8</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
+        "<or><lt><sum><property>position/h-agl-ft</property><product><value>{TRIGGER_LOOKAHEAD_S}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
         p.min_agl_ft,
         p.ceiling_ft,
         p.max_bank_deg,
@@ -366,24 +432,74 @@ pub fn generate(
         p.max_alpha_deg,
         p.min_alpha_deg
     );
-    let recovered = format!(
-        "<and><gt><property>position/h-agl-ft</property><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>30</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>20</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>12</value></lt><gt><property>aero/alpha-deg</property><value>-3</value></gt></and>",
-        p.min_agl_ft + 2_500.0,
-        p.ceiling_ft - 3_000.0,
-        p.recover_vc_kts
+    law(
+        &mut s,
+        "zone: Danger Zone trigger (low with sink look-ahead, ceiling, bank, pitch, slow, alpha)",
+        "maneuver/trigger",
+        &format!("          {trigger}\n"),
+    );
+    // Every limit with hysteresis against the trigger: a longer sink look-ahead and a floor margin,
+    // a ceiling margin, bank and α well inside, pitch at least 20° inside, a speed margin.
+    let hazard_over = format!(
+        "<and><gt><sum><property>position/h-agl-ft</property><product><value>{CALM_LOOKAHEAD_S}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{CALM_BANK_DEG}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>{}</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
+        p.min_agl_ft + CALM_FLOOR_MARGIN_FT,
+        p.ceiling_ft - CALM_CEILING_MARGIN_FT,
+        (p.max_pitch_deg - 20.0).min(CALM_PITCH_DEG),
+        p.min_vc_kts + CALM_VC_MARGIN_KTS,
+        CALM_ALPHA_DEG.1,
+        CALM_ALPHA_DEG.0,
     );
     law(
         &mut s,
-        "zone: Danger Zone latches until recovered",
-        "maneuver/danger",
+        "zone: Danger over (sink stopped, wings near level, alpha normal, pitch not steep, speed margin)",
+        "maneuver/hazard-over",
+        &format!("          {hazard_over}\n"),
+    );
+    let recovered = format!(
+        "<and><gt><property>position/h-agl-ft</property><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{CALM_BANK_DEG}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>20</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
+        p.min_agl_ft + SAFE_FLOOR_MARGIN_FT,
+        p.ceiling_ft - SAFE_CEILING_MARGIN_FT,
+        p.recover_vc_kts,
+        CALM_ALPHA_DEG.1,
+        CALM_ALPHA_DEG.0,
+    );
+    law(
+        &mut s,
+        "zone: back well inside the Flight Zone (safe altitude band, recovered speed)",
+        "maneuver/recovered",
+        &format!("          {recovered}\n"),
+    );
+    let zone = |v: f64| format!("<value>{v}</value>");
+    let is_zone = |v: f64| format!("<eq><property>maneuver/zone</property><value>{v}</value></eq>");
+    law(
+        &mut s,
+        "zone: 0 Flight, 1 Danger, 2 Re-climb (the trigger sends any zone to Danger)",
+        "maneuver/zone",
         &format!(
-            "          <or>{trigger}<and><property>maneuver/danger</property><not>{recovered}</not></and></or>\n"
+            "          <ifthen><property>maneuver/trigger</property>{danger}\n            <ifthen>{in_danger}<ifthen><property>maneuver/hazard-over</property>{reclimb}{danger}</ifthen>\n              <ifthen>{in_reclimb}<ifthen><property>maneuver/recovered</property>{flight}{reclimb}</ifthen>\n                {flight}</ifthen></ifthen></ifthen>\n",
+            danger = zone(ZONE_DANGER),
+            reclimb = zone(ZONE_RECLIMB),
+            flight = zone(ZONE_FLIGHT),
+            in_danger = is_zone(ZONE_DANGER),
+            in_reclimb = is_zone(ZONE_RECLIMB),
         ),
+    );
+    law(
+        &mut s,
+        "zone flag: in the Danger Zone",
+        "maneuver/danger",
+        &format!("          {}\n", is_zone(ZONE_DANGER)),
+    );
+    law(
+        &mut s,
+        "zone flag: in the Re-climb Zone",
+        "maneuver/reclimb",
+        &format!("          {}\n", is_zone(ZONE_RECLIMB)),
     );
     let mid_alt = (p.min_agl_ft + 4_000.0).max((p.init_alt_ft.0 + p.init_alt_ft.1) / 2.0);
     law(
         &mut s,
-        "recovery pitch target: toward a safe altitude, nose down while slow",
+        "Danger Zone pitch target: toward a safe altitude, nose down while slow",
         "maneuver/theta-recover-deg",
         &format!(
             "          {}\n",
@@ -393,6 +509,27 @@ pub fn generate(
                 &format!(
                     "<sum><product><value>0.004</value><difference><value>{mid_alt:.0}</value><property>position/h-sl-ft</property></difference></product><product><value>0.2</value><min><value>0</value><difference><property>velocities/vc-kts</property><value>{}</value></difference></min></product></sum>",
                     p.recover_vc_kts
+                )
+            )
+        ),
+    );
+    // Re-climb: climb (or descend) to a little beyond the Flight Zone's safe band so the exit is
+    // crossed with the climb still going, level inside it; lower the nose while close to the slow
+    // limit (power is up, so the speed comes back).
+    law(
+        &mut s,
+        "Re-climb Zone pitch target: climb back into the safe altitude band, level inside it",
+        "maneuver/theta-reclimb-deg",
+        &format!(
+            "          {}\n",
+            clamp(
+                -RECLIMB_DESCENT_PITCH_DEG,
+                p.reclimb_pitch_deg,
+                &format!(
+                    "<difference><product><value>{RECLIMB_PITCH_PER_FT}</value><difference><max><value>0</value><difference><value>{:.0}</value><property>position/h-agl-ft</property></difference></max><max><value>0</value><difference><property>position/h-sl-ft</property><value>{:.0}</value></difference></max></difference></product><product><value>0.3</value><max><value>0</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></max></product></difference>",
+                    p.min_agl_ft + SAFE_FLOOR_MARGIN_FT + RECLIMB_OVERSHOOT_FT,
+                    p.ceiling_ft - SAFE_CEILING_MARGIN_FT - RECLIMB_OVERSHOOT_FT,
+                    p.min_vc_kts + RECLIMB_VC_MARGIN_KTS,
                 )
             )
         ),
@@ -415,16 +552,21 @@ pub fn generate(
     // α mode: at low speed the F-16 stick roughly commands α (full aft ≈ the ~28° limiter), so a
     // feed-forward of the target plus a proportional correction holds it.
     let flight_elev = "<sum><property>maneuver/pitch-stick</property><product><difference><value>1</value><property>maneuver/alpha-mode</property></difference><value>0.04</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-target-deg</property></difference></product><product><property>maneuver/alpha-mode</property><sum><product><value>-0.036</value><property>maneuver/alpha-target-deg</property></product><product><value>0.1</value><difference><property>aero/alpha-deg</property><property>maneuver/alpha-target-deg</property></difference></product></sum></product></sum>";
-    // Recovery pitches only once the wings are within 60° of level (pulling inverted dives).
-    let rec_elev = "<product><lt><abs><property>attitude/phi-deg</property></abs><value>60</value></lt><value>0.05</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-recover-deg</property></difference></product>";
-    let blend = |flight: &str, rec: &str| {
+    // Danger and Re-climb pitch only once the wings are within 60° of level (pulling inverted dives).
+    let pitch_to = |target: &str| {
         format!(
-            "<sum><product><difference><value>1</value><property>maneuver/danger</property></difference>{flight}</product><product><property>maneuver/danger</property>{rec}</product></sum>"
+            "<product><lt><abs><property>attitude/phi-deg</property></abs><value>60</value></lt><value>0.05</value><difference><property>attitude/theta-deg</property><property>{target}</property></difference></product>"
+        )
+    };
+    // Commands by zone: Flight × (1 − danger − reclimb) + Danger × danger + Re-climb × reclimb.
+    let blend = |flight: &str, danger: &str, reclimb: &str| {
+        format!(
+            "<sum><product><difference><value>1</value><sum><property>maneuver/danger</property><property>maneuver/reclimb</property></sum></difference>{flight}</product><product><property>maneuver/danger</property>{danger}</product><product><property>maneuver/reclimb</property>{reclimb}</product></sum>"
         )
     };
     law(
         &mut s,
-        "elevator: Flight Zone targets + stick, or recovery; then g protection",
+        "elevator: Flight Zone targets + stick, Danger recovery or Re-climb attitude; then g protection",
         "fcs/elevator-cmd-norm",
         &format!(
             "          {}\n",
@@ -433,20 +575,25 @@ pub fn generate(
                 0.44,
                 &format!(
                     "<sum>{}<property>maneuver/g-protect</property></sum>",
-                    blend(flight_elev, rec_elev)
+                    blend(
+                        flight_elev,
+                        &pitch_to("maneuver/theta-recover-deg"),
+                        &pitch_to("maneuver/theta-reclimb-deg")
+                    )
                 )
             )
         ),
     );
     let flight_ail = "<sum><property>maneuver/roll-stick</property><product><value>0.02</value><difference><property>maneuver/bank-target-deg</property><property>attitude/phi-deg</property></difference></product></sum>";
-    let rec_ail = "<product><value>-0.03</value><property>attitude/phi-deg</property></product>";
+    let wings_level =
+        "<product><value>-0.03</value><property>attitude/phi-deg</property></product>";
     law(
         &mut s,
         "aileron: bank target + stick, or wings level",
         "fcs/aileron-cmd-norm",
         &format!(
             "          {}\n",
-            clamp(-1.0, 1.0, &blend(flight_ail, rec_ail))
+            clamp(-1.0, 1.0, &blend(flight_ail, wings_level, wings_level))
         ),
     );
     law(
@@ -458,13 +605,18 @@ pub fn generate(
             clamp(
                 -1.0,
                 1.0,
-                &blend("<property>maneuver/rudder</property>", "<value>0</value>")
+                &blend(
+                    "<property>maneuver/rudder</property>",
+                    "<value>0</value>",
+                    "<value>0</value>"
+                )
             )
         ),
     );
+    // Re-climb: at least military power, afterburner as the speed falls toward the recovery speed.
     law(
         &mut s,
-        "throttle: random, or by airspeed in recovery",
+        "throttle: random, by airspeed in Danger, power up in Re-climb",
         "fcs/throttle-cmd-norm",
         &format!(
             "          {}\n",
@@ -476,6 +628,10 @@ pub fn generate(
                     &format!(
                         "<sum><value>0.6</value><product><value>0.01</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
                         p.recover_vc_kts + 30.0
+                    ),
+                    &format!(
+                        "<max><value>0.5</value><sum><value>0.5</value><product><value>0.02</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum></max>",
+                        p.recover_vc_kts + 50.0
                     )
                 )
             )
@@ -489,6 +645,7 @@ pub fn generate(
             "          {}\n",
             blend(
                 "<property>maneuver/speedbrake</property>",
+                "<value>0</value>",
                 "<value>0</value>"
             )
         ),
@@ -679,6 +836,86 @@ mod tests {
             .iter()
             .filter(|f| f.split == crate::dataset::Split::Test);
         assert_eq!(tests.count(), 4);
+    }
+
+    #[test]
+    fn script_dt_is_exactly_one_over_sim_hz() {
+        let m = generate(&Profile::preset(ProfileKind::Gentle), 1, "g", 60.0).unwrap();
+        let at = m.script_xml.find(" dt=\"").unwrap() + 5;
+        let text = &m.script_xml[at..at + m.script_xml[at..].find('"').unwrap()];
+        assert_eq!(text, "0.008333333333333333");
+        assert_eq!(text.parse::<f64>().unwrap(), 1.0 / 120.0);
+        assert_eq!(SCRIPT_DT_S, 1.0 / f64::from(SIM_HZ));
+    }
+
+    #[test]
+    fn zone_event_chain_is_present_in_order() {
+        for kind in ProfileKind::ALL {
+            let x = generate(&Profile::preset(kind), 5, "z", 300.0)
+                .unwrap()
+                .script_xml;
+            // Declared 0 before the events run.
+            assert!(x.contains("<property value=\"0\"> maneuver/zone </property>"));
+            // Conditions, state machine, flags, then the laws that read them, after the tables.
+            let order = [
+                "<event name=\"maneuver/bank-target-deg schedule\"",
+                "<event name=\"zone: Danger Zone trigger",
+                "<event name=\"zone: Danger over",
+                "<event name=\"zone: back well inside the Flight Zone",
+                "<event name=\"zone: 0 Flight, 1 Danger, 2 Re-climb",
+                "<event name=\"zone flag: in the Danger Zone\"",
+                "<event name=\"zone flag: in the Re-climb Zone\"",
+                "<event name=\"Re-climb Zone pitch target",
+                "<event name=\"elevator:",
+                "<event name=\"throttle:",
+            ];
+            let at: Vec<usize> = order
+                .iter()
+                .map(|e| x.find(e).unwrap_or_else(|| panic!("{kind:?}: no {e}")))
+                .collect();
+            assert!(at.windows(2).all(|w| w[0] < w[1]), "{kind:?}: order {at:?}");
+            // One writer of the zone, from t = 1 s, reading its own previous value and only ever
+            // producing the three codes.
+            assert_eq!(x.matches("<set name=\"maneuver/zone\">").count(), 1);
+            let ev = &x[at[4]..at[5]];
+            assert!(ev.contains("<condition> simulation/sim-time-sec ge 1.0 </condition>"));
+            assert!(ev.contains("<property>maneuver/trigger</property><value>1</value>"));
+            assert!(ev.contains("<eq><property>maneuver/zone</property><value>1</value></eq>"));
+            assert!(ev.contains("<eq><property>maneuver/zone</property><value>2</value></eq>"));
+            let values: std::collections::BTreeSet<&str> = ev
+                .split("<value>")
+                .skip(1)
+                .map(|v| &v[..v.find('<').unwrap()])
+                .collect();
+            assert_eq!(values, ["0", "1", "2"].into_iter().collect());
+            // The laws blend all three zones.
+            let elev = &x[at[8]..at[9]];
+            for p in [
+                "maneuver/danger",
+                "maneuver/reclimb",
+                "maneuver/theta-recover-deg",
+                "maneuver/theta-reclimb-deg",
+            ] {
+                assert!(elev.contains(p), "{kind:?}: elevator law without {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn header_tells_the_stock_command_and_stays_well_formed() {
+        let x = generate(&Profile::preset(ProfileKind::HighAlpha), 2, "h_1", 60.0)
+            .unwrap()
+            .script_xml;
+        assert!(x.contains(
+            "f.load_script(os.path.abspath('h_1.xml'), 0.0, os.path.abspath('h_1_init.xml'))"
+        ));
+        // XML comments may not contain "--"; the first "<use " is the element, not a comment.
+        for c in x.split("<!--").skip(1) {
+            let body = &c[..c.find("-->").unwrap()];
+            assert!(!body.contains("--"), "comment with --: {body}");
+        }
+        assert!(x[x.find("<use ").unwrap()..].starts_with("<use aircraft=\"f16\""));
+        assert!(x.find("<use ").unwrap() > x.find("-->").unwrap());
     }
 
     #[test]

@@ -579,6 +579,7 @@ pub fn fly_script_with(
         zones: None,
     };
     let mut step_count: u64 = 0;
+    let mut zone_steps: Option<[u64; 3]> = None;
     let mut airborne = false;
     'outer: loop {
         let rows = plant.step(SIM_HZ * 5)?;
@@ -603,10 +604,8 @@ pub fn fly_script_with(
                 break 'outer;
             }
             if let Some(zone) = Zone::from_value(r[at::ZONE]) {
-                flight
-                    .zones
-                    .get_or_insert_with(ZoneTimes::default)
-                    .add(zone, dt_s);
+                let n = zone_steps.get_or_insert([0; 3]);
+                n[zone.index()] += 1;
             }
             let si = sensors.step(&sensor_input(r));
             if step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE)) {
@@ -623,6 +622,7 @@ pub fn fly_script_with(
             break;
         }
     }
+    flight.zones = zone_steps.map(|n| ZoneTimes::from_steps(n, dt_s));
     Ok(flight)
 }
 

@@ -134,6 +134,15 @@ pub enum Zone {
 }
 
 impl Zone {
+    /// Position in [`ZoneTimes::from_steps`]' array.
+    pub fn index(self) -> usize {
+        match self {
+            Zone::Flight => 0,
+            Zone::Danger => 1,
+            Zone::Reclimb => 2,
+        }
+    }
+
     /// The zone a `maneuver/zone` value codes (0, 1, 2), `None` for anything else (NaN: the script
     /// has no zone state).
     pub fn from_value(v: f64) -> Option<Zone> {
@@ -146,7 +155,8 @@ impl Zone {
     }
 }
 
-/// Time a flight spent in each zone, s (simulated time, JSBSim steps × dt).
+/// Time a flight spent in each zone, s (simulated time: JSBSim steps × dt, to the millisecond so
+/// that the manifest's JSON gives back the same numbers).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ZoneTimes {
     pub flight_s: f64,
@@ -155,11 +165,13 @@ pub struct ZoneTimes {
 }
 
 impl ZoneTimes {
-    pub fn add(&mut self, zone: Zone, dt_s: f64) {
-        match zone {
-            Zone::Flight => self.flight_s += dt_s,
-            Zone::Danger => self.danger_s += dt_s,
-            Zone::Reclimb => self.reclimb_s += dt_s,
+    /// From the number of steps spent in each zone ([`Zone`] order) at `dt_s` per step.
+    pub fn from_steps(steps: [u64; 3], dt_s: f64) -> ZoneTimes {
+        let s = |n: u64| (n as f64 * dt_s * 1000.0).round() / 1000.0;
+        ZoneTimes {
+            flight_s: s(steps[0]),
+            danger_s: s(steps[1]),
+            reclimb_s: s(steps[2]),
         }
     }
 
