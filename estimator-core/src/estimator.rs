@@ -105,6 +105,44 @@ pub trait AngleNet: Sync {
 
 /// Part 1 maps the `N` features to the intermediate; part 2 maps the features plus the normalised
 /// intermediate (`N1 = N + 1`, checked at compile time) to the angle.
+///
+/// A cascade of two features whose part 2 takes three inputs:
+/// ```
+/// # use estimator_core::nn::{Dense, Output, Requant};
+/// # use estimator_core::normalize::{Envelope, Norm};
+/// # use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
+/// let one = Norm { center: 0, mult: 1 << 20, shift: 20 };
+/// let net: CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> = CascadeNet {
+///     features: [Feature::Sensor(Channel::GyroQ), Feature::Sensor(Channel::Elevator)],
+///     norm: [one; 2],
+///     envelope: [Envelope::ANY; 2],
+///     part1: Output(Dense::new([[1, 1]], [7], [Requant::ONE])),
+///     mid_norm: one,
+///     part2: Output(Dense::new([[1, 1, 1]], [0], [Requant::ONE])),
+///     out_range: Envelope::ANY,
+/// };
+/// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
+/// assert_eq!(net.run(&values), (7, 7, false));
+/// ```
+/// A part 2 that does not take exactly the features plus the intermediate does not compile (the
+/// check runs where the cascade is used as an [`AngleNet`], as the estimator uses every model):
+/// ```compile_fail,E0080
+/// # use estimator_core::nn::{Dense, Output, Requant};
+/// # use estimator_core::normalize::{Envelope, Norm};
+/// # use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
+/// let one = Norm { center: 0, mult: 1 << 20, shift: 20 };
+/// let net: CascadeNet<Output<2, 1>, Output<4, 1>, 2, 4> = CascadeNet {
+///     features: [Feature::Sensor(Channel::GyroQ), Feature::Sensor(Channel::Elevator)],
+///     norm: [one; 2],
+///     envelope: [Envelope::ANY; 2],
+///     part1: Output(Dense::new([[1, 1]], [7], [Requant::ONE])),
+///     mid_norm: one,
+///     part2: Output(Dense::new([[1, 1, 1, 1]], [0], [Requant::ONE])),
+///     out_range: Envelope::ANY,
+/// };
+/// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
+/// assert_eq!(net.run(&values), (7, 7, false));
+/// ```
 pub struct CascadeNet<P1, P2, const N: usize, const N1: usize> {
     pub features: [Feature; N],
     pub norm: [Norm; N],
@@ -173,7 +211,8 @@ where
     }
 
     fn macs(&self) -> usize {
-        self.part1.macs() + self.part2.macs()
+        // A benchmark figure: a count saturates (it cannot come near usize::MAX anyway).
+        self.part1.macs().saturating_add(self.part2.macs())
     }
 }
 
@@ -236,7 +275,8 @@ impl<'m> Estimator<'m> {
 
     /// Multiply-accumulates per step.
     pub fn macs(&self) -> usize {
-        self.alpha.map_or(0, |m| m.net.macs()) + self.beta.map_or(0, |m| m.net.macs())
+        let macs = |m: Option<Model>| m.map_or(0, |m| m.net.macs());
+        macs(self.alpha).saturating_add(macs(self.beta))
     }
 
     /// Forgets health history, past frames and held values (e.g. after a long link outage).
@@ -258,8 +298,10 @@ impl<'m> Estimator<'m> {
             if !c.is_noisy() {
                 continue;
             }
+            // The repeat count saturates, and so must the comparison: `n + 1` wrapped to 0 once the
+            // count reached u16::MAX (55 minutes of one value), clearing STUCK_SENSOR for good.
             *n = if raw == last { n.saturating_add(1) } else { 0 };
-            if *n + 1 >= STUCK_FRAMES {
+            if n.saturating_add(1) >= STUCK_FRAMES {
                 stuck |= c.bit();
             }
         }

@@ -71,7 +71,8 @@ impl Lag {
     }
 
     pub const fn ms(self) -> u32 {
-        self.frames() * FRAME_PERIOD_MS
+        // At most 20 × 50: cannot overflow, and would saturate rather than wrap.
+        self.frames().saturating_mul(FRAME_PERIOD_MS)
     }
 }
 
@@ -81,6 +82,19 @@ pub const MIN_SPEED_MMS: i32 = 20_000;
 
 /// GPS speeds are clamped to this (mm/s, ≈ Mach 6) before squaring, so `ρV²` cannot overflow i64.
 pub const MAX_SPEED_MMS: i32 = 2_000_000;
+
+// Every density in the table times the largest speed squared fits i64, so the `ρV²` product in
+// `FeatureValues::compute` cannot wrap (interpolated densities lie between two entries).
+// Const evaluation: an out-of-bounds index is a compile error.
+#[allow(clippy::indexing_slicing)]
+const _: () = {
+    let v = MAX_SPEED_MMS as i128;
+    let mut i = 0;
+    while i < ISA.len() {
+        assert!(ISA[i].0 as i128 * v * v <= i64::MAX as i128);
+        i += 1;
+    }
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -129,6 +143,8 @@ impl Feature {
         all
     };
 
+    // Enum discriminants only: at most 16 + 5 + 15 × 4 + 3, far from overflowing.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn index(self) -> usize {
         match self {
             Feature::Sensor(c) => c.index(),
@@ -239,8 +255,10 @@ impl History {
         if let Some(p) = self.past.get_mut(self.head) {
             *p = *frame;
         }
-        self.head = (self.head + 1) % HISTORY_FRAMES;
-        self.len = (self.len + 1).min(HISTORY_FRAMES);
+        // `head < HISTORY_FRAMES` and `len <= HISTORY_FRAMES`: neither add can overflow. The slot
+        // index is modular by nature (wrapping); the count is bounded (saturating, then capped).
+        self.head = self.head.wrapping_add(1) % HISTORY_FRAMES;
+        self.len = self.len.saturating_add(1).min(HISTORY_FRAMES);
     }
 
     /// The frame stored last.
@@ -250,21 +268,25 @@ impl History {
 
     /// Stored frames, newest first.
     fn newest_first(&self) -> impl Iterator<Item = &SensorFrame> {
+        // Slot `head - k` modulo the ring: `head < HISTORY_FRAMES` and `1 <= k <= HISTORY_FRAMES`, so
+        // `head + HISTORY_FRAMES - k` stays in 0..2 × HISTORY_FRAMES and nothing wraps.
         (1..=self.len).filter_map(move |k| {
             self.past
-                .get((self.head + HISTORY_FRAMES - k) % HISTORY_FRAMES)
+                .get(self.head.wrapping_add(HISTORY_FRAMES).wrapping_sub(k) % HISTORY_FRAMES)
         })
     }
 
     /// Writes `Delta(c, lag)` for every channel into `raw`; returns whether any was not exact.
     fn deltas(&self, frame: &SensorFrame, lag: Lag, raw: &mut [i32; FEATURE_COUNT]) -> bool {
         let want = lag.ms();
+        // Time stamps wrap (u32 ms, 49 days), so ages are differences modulo 2^32.
         let age = |p: &SensorFrame| frame.time_ms.wrapping_sub(p.time_ms);
+        let max_age = want.saturating_mul(2);
         // The stored frame whose age is closest to the lag, in (0, 2 × lag], with the `need` channels
         // valid (the first, i.e. newest, of equally close ones). Age == lag is the exact frame.
         let closest = |need: u16| {
             self.newest_first()
-                .filter(|p| p.valid & need == need && age(p) > 0 && age(p) <= 2 * want)
+                .filter(|p| p.valid & need == need && age(p) > 0 && age(p) <= max_age)
                 .min_by_key(|p| age(p).abs_diff(want))
         };
         // One search serves every channel valid in the frame it finds: a channel's own search could
@@ -287,12 +309,20 @@ impl History {
                 None => None,
             };
             let d = from.map_or(0, |p| {
-                let d = frame.get(c) as i64 - p.get(c) as i64;
+                // Two i32 in i64: |d| < 2^32, so the subtraction cannot wrap.
+                let d = i64::from(frame.get(c)).wrapping_sub(i64::from(p.get(c)));
                 // Rate-scaled to the nominal lag when the frame is not the lagged one (an i64
                 // division is a library call on the Cortex-M4: skip it in the usual exact case).
+                // |d| × want < 2^32 × 1000 cannot wrap. Both searches only take frames with
+                // 0 < age <= 2 × lag, so the divisor is never 0; were it 0, the delta would be 0,
+                // the value of a delta with no usable frame, and flagged like every scaled one (the
+                // lag is already in `short` whenever the frame is not the exact one).
                 match age(p) {
                     a if a == want => d,
-                    a => d * want as i64 / a as i64,
+                    a => d
+                        .wrapping_mul(i64::from(want))
+                        .checked_div(i64::from(a))
+                        .unwrap_or(0),
                 }
             });
             if let Some(r) = raw.get_mut(Feature::Delta(c, lag).index()) {
@@ -319,14 +349,14 @@ impl FeatureValues {
         let speed = frame.get(Channel::GpsSpeed).clamp(0, MAX_SPEED_MMS) as i64;
         let alt_cm = frame.get(Channel::GpsAlt);
         let (rho, sound) = isa(alt_cm);
-        // ρ [1e-6 kg/m³] × V² [1e-6 m²/s²] = 1e-12 Pa; keep µPa (1e-6 Pa).
-        let rho_v2_upa = (rho as i64 * speed * speed) / 1_000_000;
+        // ρ [1e-6 kg/m³] × V² [1e-6 m²/s²] = 1e-12 Pa; keep µPa (1e-6 Pa). The product cannot
+        // wrap: ρ comes from the table, V is clamped (checked at compile time next to MAX_SPEED_MMS).
+        let rho_v2_upa = i64::from(rho).wrapping_mul(speed).wrapping_mul(speed) / 1_000_000;
         let low_speed = speed < MIN_SPEED_MMS as i64;
         let ratio = |f_raw: i32| -> i32 {
-            // f [1e-5 m/s²] / ρV² [1e-6 Pa] in 1e-7 m²/kg = f × 1e8 / ρV².
-            let num = f_raw as i64 * 100_000_000;
-            let den = rho_v2_upa.max(1);
-            sat_i32(num / den)
+            // f [1e-5 m/s²] / ρV² [1e-6 Pa] in 1e-7 m²/kg = f × 1e8 / ρV² (|f × 1e8| < 2^58).
+            let num = i64::from(f_raw).wrapping_mul(100_000_000);
+            sat_i32(div_at_least_1(num, rho_v2_upa))
         };
         let set = |raw: &mut [i32; FEATURE_COUNT], f: Feature, v: i32| {
             if let Some(r) = raw.get_mut(f.index()) {
@@ -351,7 +381,8 @@ impl FeatureValues {
         set(
             &mut raw,
             Feature::MachProxy,
-            sat_i32(speed * 10_000 / (sound as i64).max(1)),
+            // speed <= MAX_SPEED_MMS: × 1e4 < 2^35.
+            sat_i32(div_at_least_1(speed.wrapping_mul(10_000), i64::from(sound))),
         );
         set(&mut raw, Feature::RhoV2, sat_i32(rho_v2_upa / 1_000_000));
         let mut short_lags = 0;
@@ -372,8 +403,17 @@ fn sat_i32(v: i64) -> i32 {
     v.clamp(i32::MIN as i64, i32::MAX as i64) as i32
 }
 
+/// `num / den` (rounded toward zero) with the divisor raised to at least 1, as for a speed or a
+/// ρV² of zero: the quotient then saturates through [`sat_i32`] instead of dividing by zero. The
+/// divisor is positive, so `checked_div` cannot fail and its fallback is never taken.
+fn div_at_least_1(num: i64, den: i64) -> i64 {
+    num.checked_div(den.max(1)).unwrap_or(0)
+}
+
 /// ISA 1976 every 1000 m from 0 to 20 km: density (1e-6 kg/m³) and speed of sound (mm/s).
 const ISA_STEP_CM: i32 = 100_000;
+/// Top of the table, cm.
+const ISA_TOP_CM: i32 = (ISA.len() as i32 - 1) * ISA_STEP_CM;
 const ISA: [(i32, i32); 21] = [
     (1_225_000, 340_294),
     (1_111_643, 336_434),
@@ -400,14 +440,16 @@ const ISA: [(i32, i32); 21] = [
 
 /// Density and speed of sound at a GPS altitude (cm), linear between table points, clamped to 0–20 km.
 pub fn isa(alt_cm: i32) -> (i32, i32) {
-    let top = (ISA.len() as i32 - 1) * ISA_STEP_CM;
-    let h = alt_cm.clamp(0, top);
+    let h = alt_cm.clamp(0, ISA_TOP_CM);
     let i = (h / ISA_STEP_CM) as usize;
     let frac = (h % ISA_STEP_CM) as i64;
-    match (ISA.get(i), ISA.get(i + 1)) {
+    match (ISA.get(i), ISA.get(i.saturating_add(1))) {
         (Some(a), Some(b)) => {
+            // Table values < 2^21 and frac < 1e5: nothing here comes near wrapping.
+            const STEP: i64 = ISA_STEP_CM as i64;
             let lerp = |x: i32, y: i32| {
-                (x as i64 + (y as i64 - x as i64) * frac / ISA_STEP_CM as i64) as i32
+                let (x, y) = (i64::from(x), i64::from(y));
+                x.wrapping_add(y.wrapping_sub(x).wrapping_mul(frac) / STEP) as i32
             };
             (lerp(a.0, b.0), lerp(a.1, b.1))
         }

@@ -1,6 +1,15 @@
 //! Behaviour of `Estimator::step` on bad input, with a small fixed network (a test fixture, not a
 //! trained model): α reads the GPS speed and the elevator, β reads the rudder and the roll gyro.
 
+// Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects
+)]
+
 use estimator_core::channels::{ALL_VALID, CHANNELS};
 use estimator_core::estimator::STUCK_FRAMES;
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
@@ -166,6 +175,23 @@ fn a_stuck_gyro_is_detected_after_stuck_frames_and_recovers() {
     assert_eq!(flagged_at, Some(STUCK_FRAMES - 1));
     let out = e.step(&frame(100));
     assert!(!out.flags.has(Flags::STUCK_SENSOR));
+}
+
+/// The repeat count saturates at u16::MAX (55 minutes at 20 Hz); the sensor must stay stuck past
+/// it. (The flight image once wrapped `count + 1` to 0 there and cleared the flag for good.)
+#[test]
+fn a_sensor_stuck_for_an_hour_stays_stuck() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    for k in 0..u32::from(u16::MAX) + 100 {
+        let mut f = frame(k as u16);
+        f.time_ms = k * 50;
+        f.raw[Channel::GyroP.index()] = 4242;
+        let out = e.step(&f);
+        if k + 1 >= u32::from(STUCK_FRAMES) {
+            assert!(out.flags.has(Flags::STUCK_SENSOR), "frame {k}");
+        }
+    }
 }
 
 #[test]

@@ -2,6 +2,15 @@
 //! come from the trainer's independent i64 reference (trainer/src/quant.rs), not from this crate.
 //! `ESTIMATOR_VECTORS=/path` at build time checks another export (set with `ESTIMATOR_WEIGHTS`).
 
+// Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::arithmetic_side_effects
+)]
+
 #[cfg(estimator_weights)]
 use estimator_core::AngleNet;
 use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, History, SensorFrame};

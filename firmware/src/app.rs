@@ -82,6 +82,14 @@ impl<'m, C: Clock> App<'m, C> {
         self.stats
     }
 
+    /// The receiver's overrun count so far (bytes its queue or UART dropped before they reached
+    /// [`App::push`], e.g. [`crate::ByteQueue::overruns`]): sent as `rx_overruns` with the next
+    /// estimate. The board layer owns the receiver, so it reports the count; the in-process
+    /// firmware has no receiver queue and leaves it at 0.
+    pub fn set_rx_overruns(&mut self, total: u32) {
+        self.health.rx_overruns = total;
+    }
+
     /// Feeds one received byte. When it completes a new valid sensor frame, runs one step and writes
     /// the encoded estimate frame (COBS, CRC, delimiter) to `out`, returning its length.
     pub fn push(&mut self, byte: u8, out: &mut [u8; MAX_FRAME]) -> Option<usize> {
@@ -134,7 +142,9 @@ impl<'m, C: Clock> App<'m, C> {
             info!("sequence restarted at {} (was {})", seq, last);
             self.estimator.reset();
         } else {
-            self.health.rx_lost = self.health.rx_lost.saturating_add(u32::from(d - 1));
+            // 0 < d < 2^15 here, so `d - 1` cannot wrap.
+            let lost = u32::from(d.wrapping_sub(1));
+            self.health.rx_lost = self.health.rx_lost.saturating_add(lost);
         }
         self.last_seq = Some(seq);
         true
@@ -323,6 +333,31 @@ mod tests {
         assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [3, 6]);
         assert_eq!(r[1].health.rx_corrupt, 3);
         assert_eq!(r[1].health.rx_lost, 2);
+    }
+
+    #[test]
+    fn receiver_overruns_travel_with_the_next_estimate() {
+        let mut a = app(1, 1000);
+        let r = feed(&mut a, &wire(1));
+        assert_eq!(r[0].health.rx_overruns, 0);
+        // The board's queue dropped bytes of the next frame: that frame is lost (CRC), and the
+        // overrun count arrives with the one after it.
+        let queue = crate::ByteQueue::<8>::new();
+        for b in wire(2) {
+            let _ = queue.push(b);
+        }
+        let got: Vec<u8> = std::iter::from_fn(|| queue.pop()).collect();
+        assert_eq!(queue.overruns() as usize, wire(2).len() - 8);
+        a.set_rx_overruns(queue.overruns());
+        assert!(feed(&mut a, &got).is_empty());
+        let r = feed(
+            &mut a,
+            &[0].iter().copied().chain(wire(3)).collect::<Vec<_>>(),
+        );
+        assert_eq!(r.len(), 1);
+        assert_eq!(r[0].health.rx_overruns, queue.overruns());
+        assert_eq!(r[0].health.rx_corrupt, 1);
+        assert_eq!(r[0].health.rx_lost, 1);
     }
 
     #[test]

@@ -1,10 +1,9 @@
 //! STM32F4 / netduinoplus2 board layer: registers, interrupt, clocks, the main loop.
 #![allow(unsafe_code)]
 
-use core::cell::RefCell;
 use core::ptr::{read_volatile, write_volatile};
 
-use cortex_m::interrupt::{self, Mutex};
+use cortex_m::interrupt;
 use cortex_m_rt::{entry, exception};
 use defmt_rtt as _;
 use estimator_core::Estimator;
@@ -32,6 +31,7 @@ mod reg {
     pub const USART1_DR: usize = USART1 + 0x04;
     pub const USART1_BRR: usize = USART1 + 0x08;
     pub const USART1_CR1: usize = USART1 + 0x0C;
+    pub const SR_ORE: u32 = 1 << 3;
     pub const SR_RXNE: u32 = 1 << 5;
     pub const SR_TXE: u32 = 1 << 7;
     pub const CR1_UE: u32 = 1 << 13;
@@ -62,7 +62,9 @@ fn modify(addr: usize, f: impl FnOnce(u32) -> u32) {
     wr(addr, f(rd(addr)));
 }
 
-static RX: Mutex<RefCell<ByteQueue<RX_CAPACITY>>> = Mutex::new(RefCell::new(ByteQueue::new()));
+/// Received bytes: the USART1 interrupt is its only producer, the main loop its only consumer (the
+/// queue is lock-free, see `firmware::queue`).
+static RX: ByteQueue<RX_CAPACITY> = ByteQueue::new();
 
 #[derive(Clone, Copy)]
 struct Usart1Irq;
@@ -146,7 +148,8 @@ fn main() -> ! {
     let clock = init_step_clock(core);
     defmt::info!("estimator firmware up; step clock {}", clock.source());
     init_usart();
-    // SAFETY: the handler only touches `RX` inside a critical section.
+    // SAFETY: unmasking can break a critical section that relies on this interrupt being masked;
+    // there is none: the handler only pushes to the lock-free `RX` and reads USART1.
     unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
 
     let mut app = App::new(Estimator::shipped(), clock, Config::fifty_ms_at(SYSCLK_HZ));
@@ -156,24 +159,21 @@ fn main() -> ! {
     let mut out = [0u8; MAX_FRAME];
     let mut batch = [0u8; 64];
     loop {
-        let n = interrupt::free(|cs| {
-            let mut q = RX.borrow(cs).borrow_mut();
-            let mut n = 0;
-            for slot in batch.iter_mut() {
-                match q.pop() {
-                    Some(b) => {
-                        *slot = b;
-                        n += 1;
-                    }
-                    None => break,
+        let n = batch
+            .iter_mut()
+            .map_while(|slot| RX.pop().map(|b| *slot = b))
+            .count();
+        if n == 0 {
+            // Sleep with interrupts masked: a byte arriving after the check still wakes the core
+            // (its interrupt stays pending through WFI and runs when the mask is lifted).
+            interrupt::free(|_| {
+                if RX.is_empty() {
+                    cortex_m::asm::wfi();
                 }
-            }
-            if n == 0 {
-                // Sleep with interrupts masked: a byte arriving after the check still wakes the core.
-                cortex_m::asm::wfi();
-            }
-            n
-        });
+            });
+            continue;
+        }
+        app.set_rx_overruns(RX.overruns());
         for b in batch.iter().take(n) {
             if let Some(len) = app.push(*b, &mut out) {
                 send(out.get(..len).unwrap_or(&[]));
@@ -187,11 +187,21 @@ unsafe fn DefaultHandler(irqn: i16) {
     if irqn != reg::USART1_IRQ {
         return;
     }
-    interrupt::free(|cs| {
-        let mut q = RX.borrow(cs).borrow_mut();
-        // Reading SR then DR also clears an overrun.
-        while rd(reg::USART1_SR) & reg::SR_RXNE != 0 {
-            let _ = q.push(rd(reg::USART1_DR) as u8);
+    // The only producer of `RX`. Reading SR then DR clears RXNE and an overrun (ORE: a byte arrived
+    // while RXNE was still set and was lost; DR still holds the one before it). ORE also raises this
+    // interrupt, so it is cleared even without RXNE, or the interrupt would fire forever.
+    loop {
+        let sr = rd(reg::USART1_SR);
+        if sr & (reg::SR_RXNE | reg::SR_ORE) == 0 {
+            break;
         }
-    });
+        let byte = rd(reg::USART1_DR) as u8;
+        if sr & reg::SR_ORE != 0 {
+            RX.count_overrun();
+        }
+        if sr & reg::SR_RXNE != 0 {
+            // A full queue counts the byte as an overrun itself.
+            let _ = RX.push(byte);
+        }
+    }
 }

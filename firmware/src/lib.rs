@@ -8,13 +8,16 @@
 //! (`src/main.rs`) only moves bytes between USART1 and this library and reads a [`Clock`].
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
+// The flight-code lints (no unwrap/expect/panic/indexing, no unchecked arithmetic) come from
+// `[workspace.lints]` in the root Cargo.toml; unit tests may panic, that is how they fail.
 #![cfg_attr(
-    not(test),
-    deny(
+    test,
+    allow(
         clippy::unwrap_used,
         clippy::expect_used,
         clippy::panic,
-        clippy::indexing_slicing
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects
     )
 )]
 

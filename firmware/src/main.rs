@@ -2,11 +2,12 @@
 //! (whose first `-serial` is the same USART1). Build it with `cargo fw` from the workspace root.
 //!
 //! The board layer is kept thin; everything testable lives in the `firmware` library:
-//! * USART1 receive interrupt → [`ByteQueue`] (critical section) → main loop → [`App::push`] → estimate
-//!   frame → USART1, transmitted by polling TXE. Receiving in the interrupt is what keeps the link
-//!   whole on silicon: a step can take milliseconds, during which a 115 200 Bd line delivers tens of
-//!   bytes that a polling loop would lose to overruns. Transmission is a 45-byte burst once per frame
-//!   and may block.
+//! * USART1 receive interrupt → [`ByteQueue`] (lock-free, single producer and consumer) → main loop →
+//!   [`App::push`] → estimate frame → USART1, transmitted by polling TXE. Receiving in the interrupt is
+//!   what keeps the link whole on silicon: a step can take milliseconds, during which a 115 200 Bd line
+//!   delivers tens of bytes that a polling loop would lose to overruns. Bytes dropped anyway (queue
+//!   full, UART overrun) are counted and reported as `rx_overruns` in every estimate frame.
+//!   Transmission is a 53-byte burst once per frame and may block.
 //! * Clocks stay at the 16 MHz HSI (no PLL): nothing waits on RCC ready flags, which QEMU does not
 //!   model. Peripheral clocks are enabled by plain RCC register writes (ignored by QEMU).
 //! * Step timing: the DWT cycle counter on silicon; if it does not advance (QEMU), TIM2 with PSC = 0,

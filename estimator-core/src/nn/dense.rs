@@ -19,11 +19,15 @@ impl Requant {
         offset: 0,
     };
 
+    /// Nothing here can wrap: |acc × mult| <= 2^62, the rounding term is at most 2^61, and the shifted
+    /// value plus an i32 offset stays far inside i64 (the wrapping ops change nothing).
     #[inline(always)]
     pub fn apply(self, acc: i32) -> i64 {
         let shift = (self.shift as u32).clamp(1, 62);
-        let prod = acc as i64 * self.mult as i64 + (1i64 << (shift - 1));
-        (prod >> shift) + self.offset as i64
+        let prod = i64::from(acc)
+            .wrapping_mul(i64::from(self.mult))
+            .wrapping_add(1i64 << shift.wrapping_sub(1));
+        (prod >> shift).wrapping_add(i64::from(self.offset))
     }
 
     /// [`Requant::apply`] saturated to int32, computed in 32 bits for the usual shifts (33..=62):
@@ -32,11 +36,11 @@ impl Requant {
     /// product is at most 2^62 in magnitude, so its high word and the rounding sum fit in 31 bits.
     #[inline(always)]
     pub fn apply_sat(self, acc: i32) -> i32 {
-        let prod = acc as i64 * self.mult as i64;
+        let prod = i64::from(acc).wrapping_mul(i64::from(self.mult)); // |prod| <= 2^62: exact
         let k = (self.shift as u32).wrapping_sub(32);
         if (1..=30).contains(&k) {
             let hi = (prod >> 32) as i32;
-            return (hi.wrapping_add(1 << (k - 1)) >> k).saturating_add(self.offset);
+            return (hi.wrapping_add(1 << k.wrapping_sub(1)) >> k).saturating_add(self.offset);
         }
         apply_sat_64(acc, self.mult, self.shift, self.offset)
     }
@@ -56,6 +60,24 @@ fn apply_sat_64(acc: i32, mult: i32, shift: u8, offset: i32) -> i32 {
 }
 
 /// Weights, bias and requantization of one fully connected layer.
+///
+/// The shape is part of the type, so a table of another shape does not compile. A layer of three
+/// inputs and two outputs takes two rows of three weights, two biases and two requantizations, as
+/// the generated weights files declare their layers:
+/// ```
+/// use estimator_core::nn::{Dense, Requant};
+/// static LAYER: Dense<3, 2> = Dense::new([[1, 2, 3], [4, 5, 6]], [0, 0], [Requant::ONE; 2]);
+/// ```
+/// A weight table of the wrong length (a row missing) does not compile:
+/// ```compile_fail,E0308
+/// use estimator_core::nn::{Dense, Requant};
+/// static LAYER: Dense<3, 2> = Dense::new([[1, 2, 3]], [0, 0], [Requant::ONE; 2]);
+/// ```
+/// nor do rows of the wrong width:
+/// ```compile_fail,E0308
+/// use estimator_core::nn::{Dense, Requant};
+/// static LAYER: Dense<3, 2> = Dense::new([[1, 2], [4, 5]], [0, 0], [Requant::ONE; 2]);
+/// ```
 pub struct Dense<const IN: usize, const OUT: usize> {
     /// The int8 weights (-127..=127) in this build's storage format ([`kernel::Weights`]).
     weights: kernel::Weights<IN, OUT>,
@@ -71,8 +93,9 @@ pub struct Dense<const IN: usize, const OUT: usize> {
 impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
     /// Builds a layer, refusing (at compile time when used in a `static`) shapes and values that could
     /// overflow the int32 accumulator or break the symmetric int8 range.
-    // Indexing here runs in const evaluation for the generated statics: out of bounds is a compile error.
-    #[allow(clippy::indexing_slicing)]
+    // Indexing and arithmetic here run in const evaluation for the generated statics: out of bounds
+    // or an overflow is a compile error there.
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
     pub const fn new(weights: [[i8; IN]; OUT], bias: [i32; OUT], requant: [Requant; OUT]) -> Self {
         assert!(
             IN > 0 && OUT > 0,
@@ -118,6 +141,9 @@ impl<const IN: usize, const OUT: usize> Dense<IN, OUT> {
         }
     }
 
+    /// Multiply-accumulates per forward pass (computed at compile time).
+    const MACS: usize = IN * OUT;
+
     /// The requantizations in output order.
     #[inline(always)]
     fn requants(&self) -> impl Iterator<Item = Requant> + '_ {
@@ -158,7 +184,7 @@ impl<const IN: usize, const OUT: usize> Layer<IN, OUT> for Hidden<IN, OUT> {
     }
 
     fn macs(&self) -> usize {
-        IN * OUT
+        Dense::<IN, OUT>::MACS
     }
 }
 
@@ -175,7 +201,7 @@ impl<const IN: usize, const OUT: usize> Layer<IN, OUT> for Output<IN, OUT> {
     }
 
     fn macs(&self) -> usize {
-        IN * OUT
+        Dense::<IN, OUT>::MACS
     }
 }
 

@@ -46,7 +46,8 @@ pub fn accumulate_portable<const IN: usize, const OUT: usize>(
     for ((row, b), a) in w.iter().zip(bias.iter()).zip(acc.iter_mut()) {
         let mut s = *b;
         for (xi, wi) in x.iter().zip(row.iter()) {
-            s = s.wrapping_add(*xi as i32 * *wi as i32);
+            // |x × w| <= 2^15 × 2^7: the product is exact; the sum wraps by definition.
+            s = s.wrapping_add(i32::from(*xi).wrapping_mul(i32::from(*wi)));
         }
         *a = s;
     }
@@ -62,8 +63,9 @@ pub fn pack(lo: i16, hi: i16) -> u32 {
 #[cfg(not(target_arch = "arm"))]
 #[inline(always)]
 pub fn smlad(a: u32, b: u32, acc: i32) -> i32 {
-    let lo = (a as u16 as i16 as i32) * (b as u16 as i16 as i32);
-    let hi = ((a >> 16) as u16 as i16 as i32) * ((b >> 16) as u16 as i16 as i32);
+    // Products of two int16 are exact in i32 (|p| <= 2^30), as in SMLAD; the adds wrap, as in SMLAD.
+    let lo = (a as u16 as i16 as i32).wrapping_mul(b as u16 as i16 as i32);
+    let hi = ((a >> 16) as u16 as i16 as i32).wrapping_mul((b >> 16) as u16 as i16 as i32);
     acc.wrapping_add(lo).wrapping_add(hi)
 }
 

@@ -26,7 +26,8 @@ pub const MAX_IN: usize = 512;
 
 /// Largest magnitude of the worst-case sum of products for `inputs` inputs.
 pub const fn max_products(inputs: usize) -> i64 {
-    inputs as i64 * 32767 * 127
+    // A bound: saturating keeps it an upper bound for any width (exact up to far beyond MAX_IN).
+    (inputs as i64).saturating_mul(32767 * 127)
 }
 
 /// A layer (or a chain of layers) mapping `IN` int16 activations to `OUT` outputs.
@@ -43,7 +44,28 @@ pub trait Layer<const IN: usize, const OUT: usize> {
 #[repr(C, align(4))]
 pub(crate) struct Aligned<const N: usize>(pub [i16; N]);
 
-/// Two layers in sequence, with the intermediate width `MID` checked by the type system.
+/// Two layers in sequence, with the intermediate width `MID` checked by the type system. A chain
+/// is a layer only if the first layer's outputs are the second one's inputs:
+/// ```
+/// use estimator_core::nn::{Chain, Dense, Hidden, Layer, Output, Requant};
+/// let net = Chain::<_, _, 3>(
+///     Hidden(Dense::<2, 3>::new([[1, 2], [3, 4], [5, 6]], [0; 3], [Requant::ONE; 3])),
+///     Output(Dense::<3, 1>::new([[1, 1, 1]], [0], [Requant::ONE])),
+/// );
+/// let mut y = [0i32; 1];
+/// net.forward(&[1, 2], &mut y);
+/// assert_eq!(y, [5 + 11 + 17]);
+/// ```
+/// Dense layers with mismatched shapes (three outputs into four inputs) are not a layer:
+/// ```compile_fail,E0599
+/// use estimator_core::nn::{Chain, Dense, Hidden, Layer, Output, Requant};
+/// let net = Chain::<_, _, 3>(
+///     Hidden(Dense::<2, 3>::new([[1, 2], [3, 4], [5, 6]], [0; 3], [Requant::ONE; 3])),
+///     Output(Dense::<4, 1>::new([[1, 1, 1, 1]], [0], [Requant::ONE])),
+/// );
+/// let mut y = [0i32; 1];
+/// net.forward(&[1, 2], &mut y);
+/// ```
 pub struct Chain<A, B, const MID: usize>(pub A, pub B);
 
 impl<A, B, const IN: usize, const MID: usize, const OUT: usize> Layer<IN, OUT> for Chain<A, B, MID>
@@ -61,6 +83,6 @@ where
     }
 
     fn macs(&self) -> usize {
-        self.0.macs() + self.1.macs()
+        self.0.macs().saturating_add(self.1.macs())
     }
 }

@@ -12,20 +12,25 @@
 //! 23              rx_corrupt         u32    frames the receiver rejected so far (COBS, CRC, length, version)
 //! 27              rx_lost            u32    sensor frames never received (sequence gaps) so far
 //! 31              deadline_misses    u32    steps that overran their 50 ms period so far
+//! 35              rx_overruns        u32    received bytes dropped before the frame decoder saw them
+//!                                           (receive queue full, UART overrun) so far   [version 2]
 //! ```
-//! The header's seq and time echo the sensor frame answered.
+//! The header's seq and time echo the sensor frame answered. Version 1 of the wire format had no
+//! `rx_overruns` (a 35-byte payload); such a frame is refused as [`Error::Version`], never misread.
 
 use super::{
     Error, HEADER_LEN, Kind, check_header, emit_header, header_of, read_u16, read_u32, write,
 };
 use crate::estimator::{Estimate, Flags};
 
-pub const PAYLOAD_LEN: usize = 35;
+pub const PAYLOAD_LEN: usize = 39;
 pub const BODY_LEN: usize = HEADER_LEN + PAYLOAD_LEN;
 
 mod field {
     use super::HEADER_LEN;
     use core::ops::Range;
+    // Only evaluated for the constants below: an overflow would be a compile error.
+    #[allow(clippy::arithmetic_side_effects)]
     const fn at(o: usize, n: usize) -> Range<usize> {
         HEADER_LEN + o..HEADER_LEN + o + n
     }
@@ -39,6 +44,7 @@ mod field {
     pub const RX_CORRUPT: Range<usize> = at(23, 4);
     pub const RX_LOST: Range<usize> = at(27, 4);
     pub const DEADLINE_MISSES: Range<usize> = at(31, 4);
+    pub const RX_OVERRUNS: Range<usize> = at(35, 4);
 }
 
 /// What `step_ticks` counts.
@@ -76,6 +82,10 @@ pub struct Health {
     pub rx_corrupt: u32,
     pub rx_lost: u32,
     pub deadline_misses: u32,
+    /// Received bytes the estimator side dropped before decoding them: its receive queue was full
+    /// (steps too slow for the link) or the UART overran. Each one corrupts a frame, which then
+    /// also counts in `rx_corrupt`.
+    pub rx_overruns: u32,
 }
 
 /// The validated representation of an estimate frame.
@@ -135,6 +145,7 @@ impl EstimateFrame {
             rx_corrupt: p.u32(field::RX_CORRUPT),
             rx_lost: p.u32(field::RX_LOST),
             deadline_misses: p.u32(field::DEADLINE_MISSES),
+            rx_overruns: p.u32(field::RX_OVERRUNS),
         };
         Ok(EstimateFrame { estimate, health })
     }
@@ -156,6 +167,7 @@ impl EstimateFrame {
             field::DEADLINE_MISSES,
             &h.deadline_misses.to_le_bytes(),
         );
+        write(body, field::RX_OVERRUNS, &h.rx_overruns.to_le_bytes());
     }
 
     /// The whole wire frame (CRC, COBS, delimiter). Returns its length.
@@ -188,6 +200,7 @@ mod tests {
                 rx_corrupt: 3,
                 rx_lost: 2,
                 deadline_misses: 0,
+                rx_overruns: 7,
             },
         };
         let mut wire = [0u8; super::super::MAX_FRAME];
@@ -198,6 +211,48 @@ mod tests {
         assert_eq!(
             EstimateFrame::parse(&body[..BODY_LEN - 1]),
             Err(Error::Truncated)
+        );
+    }
+
+    #[test]
+    fn fields_land_at_their_documented_offsets() {
+        let mut f = EstimateFrame::default();
+        f.health.deadline_misses = 0x0102_0304;
+        f.health.rx_overruns = 0x0506_0708;
+        let mut body = [0u8; BODY_LEN];
+        f.emit(&mut body);
+        assert_eq!(body[0], super::super::VERSION);
+        assert_eq!(&body[8 + 31..8 + 35], &0x0102_0304u32.to_le_bytes());
+        assert_eq!(&body[8 + 35..8 + 39], &0x0506_0708u32.to_le_bytes());
+        assert_eq!(BODY_LEN, 8 + 39);
+    }
+
+    /// Version 1 estimate frames were 4 bytes shorter (no `rx_overruns`): one must be refused as a
+    /// version mismatch, not read with this layout nor reported as merely truncated.
+    #[test]
+    fn a_frame_of_another_version_is_refused_as_such() {
+        let f = EstimateFrame::default();
+        let mut body = [0u8; BODY_LEN];
+        f.emit(&mut body);
+        let mut v1 = body;
+        v1[0] = 1;
+        assert_eq!(EstimateFrame::parse(&v1[..8 + 35]), Err(Error::Version(1)));
+        assert_eq!(EstimateFrame::parse(&v1), Err(Error::Version(1)));
+        let mut v3 = body;
+        v3[0] = 3;
+        assert_eq!(EstimateFrame::parse(&v3), Err(Error::Version(3)));
+        // Through the whole stream too: the receiver decodes the frame (CRC fine) and refuses it.
+        let mut wire = [0u8; super::super::MAX_FRAME];
+        let n = super::super::encode(&v1[..8 + 35], &mut wire).unwrap();
+        let mut acc = super::super::Accumulator::<{ super::super::MAX_FRAME }>::new();
+        let got: Vec<_> = wire[..n]
+            .iter()
+            .filter_map(|b| acc.push(*b).map(|r| r.and_then(EstimateFrame::parse)))
+            .collect();
+        assert_eq!(got, [Err(Error::Version(1))]);
+        assert_eq!(
+            std::format!("{}", Error::Version(1)),
+            "wire format version 1, but this build speaks version 2"
         );
     }
 }

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! on the wire:  COBS( body | crc32 ) 0x00
-//! body:         header (8 bytes) | payload (sensor: 50 bytes, estimate: 35 bytes)
+//! body:         header (8 bytes) | payload (sensor: 50 bytes, estimate: 39 bytes)
 //! header:       version u8 | kind u8 | seq u16 | time_ms u32          (all little-endian)
 //! crc32:        CRC-32/ISO-HDLC of the body, little-endian
 //! ```
@@ -13,12 +13,21 @@
 //! bits in these lengths). Each payload has a zero-copy checked view (`*Packet<T: AsRef<[u8]>>`) and a
 //! validated representation that parses from and emits into it ([`SensorFrame`](crate::SensorFrame),
 //! [`EstimateFrame`](estimate::EstimateFrame)). Nothing here panics on any input.
+//!
+//! The version byte names the layout of every frame kind. A receiver refuses a frame of another
+//! version as [`Error::Version`] whatever its length (another version's frames may be longer or
+//! shorter), so two builds that disagree fail loudly instead of misreading each other.
+//!
+//! | version | change |
+//! |---|---|
+//! | 1 | first format: sensor payload 50 bytes, estimate payload 35 bytes |
+//! | 2 | estimate frames carry `rx_overruns` (payload 39 bytes); sensor frames unchanged |
 
 pub mod estimate;
 pub mod sensor;
 
-/// Wire format version carried in every header.
-pub const VERSION: u8 = 1;
+/// Wire format version carried in every header (the table in the module docs).
+pub const VERSION: u8 = 2;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0;
 /// Header length.
@@ -61,6 +70,23 @@ pub enum Error {
     Buffer,
 }
 
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::Truncated => f.write_str("frame shorter than its kind"),
+            Error::TooLong => f.write_str("frame longer than its kind"),
+            Error::Cobs => f.write_str("broken COBS stuffing"),
+            Error::Crc => f.write_str("CRC mismatch"),
+            Error::Version(v) => write!(
+                f,
+                "wire format version {v}, but this build speaks version {VERSION}"
+            ),
+            Error::Kind(k) => write!(f, "unexpected frame kind {k}"),
+            Error::Buffer => f.write_str("output buffer too small"),
+        }
+    }
+}
+
 /// Frame kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -100,13 +126,19 @@ pub(crate) fn write(b: &mut [u8], at: core::ops::Range<usize>, v: &[u8]) {
 
 /// Checks the header of a body of `kind` with a payload of `payload_len` bytes.
 pub(crate) fn check_header(body: &[u8], kind: Kind, payload_len: usize) -> Result<(), Error> {
-    let want = HEADER_LEN + payload_len;
+    // Another version's layout is unknown here, so its length proves nothing: a body naming another
+    // version is refused as such before its length is judged. Versions start at 1; a zero byte names
+    // none (garbage), and such a body is judged by its length first.
+    let version = body.get(field::VERSION).copied().unwrap_or(0);
+    if version != 0 && version != VERSION {
+        return Err(Error::Version(version));
+    }
+    let want = HEADER_LEN.saturating_add(payload_len);
     match body.len() {
         n if n < want => return Err(Error::Truncated),
         n if n > want => return Err(Error::TooLong),
         _ => {}
     }
-    let version = body.get(field::VERSION).copied().unwrap_or(0);
     if version != VERSION {
         return Err(Error::Version(version));
     }
@@ -132,14 +164,18 @@ pub(crate) fn emit_header(body: &mut [u8], kind: Kind, seq: u16, time_ms: u32) {
 pub fn encode(body: &[u8], out: &mut [u8]) -> Result<usize, Error> {
     let mut buf = [0u8; MAX_BODY + CRC_LEN];
     let n = body.len();
-    let framed = buf.get_mut(..n + CRC_LEN).ok_or(Error::Buffer)?;
+    // A saturated length is out of the buffer's range: `Buffer`, as for any body too long.
+    let framed = buf
+        .get_mut(..n.saturating_add(CRC_LEN))
+        .ok_or(Error::Buffer)?;
     let (b, c) = framed.split_at_mut(n);
     b.copy_from_slice(body);
     c.copy_from_slice(&CRC.checksum(body).to_le_bytes());
     let len = cobs::try_encode(framed, out).map_err(|_| Error::Buffer)?;
     let d = out.get_mut(len).ok_or(Error::Buffer)?;
     *d = DELIMITER;
-    Ok(len + 1)
+    // `out[len]` exists, so `len + 1 <= out.len()`: the add cannot saturate.
+    Ok(len.saturating_add(1))
 }
 
 /// Decodes one COBS frame (without its delimiter) into `out` and checks its CRC. Returns the body.
@@ -154,8 +190,10 @@ pub fn decode<'o>(encoded: &[u8], out: &'o mut [u8]) -> Result<&'o [u8], Error> 
     if n < HEADER_LEN + CRC_LEN {
         return Err(Error::Truncated);
     }
-    let (body, crc) = framed.split_at(n - CRC_LEN);
-    if read_u32(crc, 0..CRC_LEN) != CRC.checksum(body) {
+    let (body, crc) = framed
+        .split_last_chunk::<CRC_LEN>()
+        .ok_or(Error::Truncated)?;
+    if u32::from_le_bytes(*crc) != CRC.checksum(body) {
         return Err(Error::Crc);
     }
     Ok(body)
@@ -193,7 +231,8 @@ impl<const N: usize> Accumulator<N> {
             match self.buf.get_mut(self.len) {
                 Some(slot) => {
                     *slot = byte;
-                    self.len += 1;
+                    // `buf[len]` exists, so `len < N`: the add cannot saturate.
+                    self.len = self.len.saturating_add(1);
                 }
                 None => self.overflow = true,
             }

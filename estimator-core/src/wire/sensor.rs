@@ -32,6 +32,8 @@ mod field {
 /// Number of 32-bit channels; the rest are 16-bit.
 const WIDE: usize = 8;
 
+// A channel index is below 16: none of these operations can overflow.
+#[allow(clippy::arithmetic_side_effects)]
 fn channel_range(c: Channel) -> core::ops::Range<usize> {
     let i = c.index();
     if i < WIDE {
@@ -151,7 +153,11 @@ mod tests {
         f.raw[Channel::Throttle.index()] = 60000;
         let mut body = [0u8; BODY_LEN];
         f.emit(&mut SensorPacket::new_unchecked(&mut body[..]));
-        assert_eq!(&body[..8], &[1, 1, 0x02, 0x01, 0x06, 0x05, 0x04, 0x03]);
+        let version = super::super::VERSION;
+        assert_eq!(
+            &body[..8],
+            &[version, 1, 0x02, 0x01, 0x06, 0x05, 0x04, 0x03]
+        );
         assert_eq!(&body[8 + 8..8 + 12], &(-2i32).to_le_bytes());
         assert_eq!(&body[8 + 36..8 + 38], &(-3i16).to_le_bytes());
         assert_eq!(&body[8 + 46..8 + 48], &60000u16.to_le_bytes());

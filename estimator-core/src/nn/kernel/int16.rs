@@ -58,9 +58,17 @@ pub struct Int16Weights<const IN: usize, const OUT: usize> {
 }
 
 impl<const IN: usize, const OUT: usize> Int16Weights<IN, OUT> {
+    /// Rows in the blocks of four, and their halves.
+    const FULL_ROWS: usize = OUT / BLOCK * BLOCK;
+    const FULL_HALVES: usize = Self::FULL_ROWS * IN;
+    /// Rows in the block of two among the `OUT % 4` left (0 or 2), and their halves.
+    const TWO_ROWS: usize = if OUT % BLOCK >= 2 { 2 } else { 0 };
+    const TWO_HALVES: usize = Self::TWO_ROWS * IN;
+
     /// Widens and re-orders `w` (row `o` = the weights of output `o`, in input order).
-    // Indexing here runs in const evaluation for the generated statics: out of bounds is a compile error.
-    #[allow(clippy::indexing_slicing)]
+    // Indexing and arithmetic here run in const evaluation for the generated statics: out of bounds
+    // or an overflow is a compile error there.
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
     pub const fn new(w: &[[i8; IN]; OUT]) -> Self {
         let mut halves = [[0i16; IN]; OUT];
         let even = IN / 2 * 2;
@@ -147,21 +155,19 @@ pub fn accumulate_wide<const IN: usize, const OUT: usize>(
         &copy.0
     };
     let flat = w.halves.as_flattened();
-    let full = OUT / BLOCK * BLOCK;
     let (Some((w4, w_rest)), Some((b4, b_rest)), Some((a4, a_rest))) = (
-        flat.split_at_checked(full * IN),
-        bias.split_at_checked(full),
-        acc.split_at_mut_checked(full),
+        flat.split_at_checked(Int16Weights::<IN, OUT>::FULL_HALVES),
+        bias.split_at_checked(Int16Weights::<IN, OUT>::FULL_ROWS),
+        acc.split_at_mut_checked(Int16Weights::<IN, OUT>::FULL_ROWS),
     ) else {
         return;
     };
     blocks4(w4, x, b4, a4);
     // The `OUT % 4` rows left: a block of two, then a single row.
-    let two = if OUT % BLOCK >= 2 { 2 } else { 0 };
     if let (Some((w2, w1)), Some((b2, b1)), Some((a2, a1))) = (
-        w_rest.split_at_checked(two * IN),
-        b_rest.split_at_checked(two),
-        a_rest.split_at_mut_checked(two),
+        w_rest.split_at_checked(Int16Weights::<IN, OUT>::TWO_HALVES),
+        b_rest.split_at_checked(Int16Weights::<IN, OUT>::TWO_ROWS),
+        a_rest.split_at_mut_checked(Int16Weights::<IN, OUT>::TWO_ROWS),
     ) {
         rows(w2, x, b2, a2);
         rows(w1, x, b1, a1);
@@ -175,7 +181,7 @@ fn blocks4<const IN: usize>(w: &[i16], x: &[i16; IN], bias: &[i32], acc: &mut [i
     if arm::blocks4(w, x, bias, acc) {
         return;
     }
-    let blocks = w.chunks_exact(BLOCK * IN);
+    let blocks = w.chunks_exact(const { BLOCK * IN });
     for ((blk, b), a) in blocks
         .zip(bias.chunks_exact(BLOCK))
         .zip(acc.chunks_exact_mut(BLOCK))
@@ -195,14 +201,17 @@ fn rows(blk: &[i16], x: &[i16], bias: &[i32], acc: &mut [i32]) {
     for (sj, b) in s.iter_mut().zip(bias) {
         *sj = *b;
     }
-    let (pairs, last) = x.split_at(x.len() / 2 * 2);
-    let Some((w_pairs, w_last)) = blk.split_at_checked(s.len() * pairs.len()) else {
+    let (pairs, last) = x.as_chunks::<2>();
+    let pairs = pairs.as_flattened();
+    // At most 4 × MAX_IN; were it to saturate, the checked split would fail rather than cut wrongly.
+    let Some((w_pairs, w_last)) = blk.split_at_checked(s.len().saturating_mul(pairs.len())) else {
         return;
     };
     dot(w_pairs, pairs, s);
     if let Some(xl) = last.first() {
         for (sj, wj) in s.iter_mut().zip(w_last) {
-            *sj = sj.wrapping_add(*wj as i32 * *xl as i32);
+            // An int16 product is exact in i32; the sum wraps by definition (as SMLAD does).
+            *sj = sj.wrapping_add(i32::from(*wj).wrapping_mul(i32::from(*xl)));
         }
     }
     for (a, sj) in acc.iter_mut().zip(s.iter()) {
@@ -226,7 +235,11 @@ fn dot_emulated(w: &[i16], x: &[i16], s: &mut [i32]) {
     if s.is_empty() {
         return;
     }
-    for (wk, xk) in w.chunks_exact(2 * s.len()).zip(x.chunks_exact(2)) {
+    // `s` is not empty, so the chunk length is at least 2.
+    for (wk, xk) in w
+        .chunks_exact(s.len().saturating_mul(2))
+        .zip(x.chunks_exact(2))
+    {
         let xv = pair(xk);
         for (sr, wr) in s.iter_mut().zip(wk.chunks_exact(2)) {
             *sr = smlad(pair(wr), xv, *sr);
@@ -300,11 +313,16 @@ mod arm {
         bias: &[i32],
         acc: &mut [i32],
     ) -> bool {
+        // `n` blocks of four rows: `acc.len() * IN` halves of `w` (checked, not wrapped: the
+        // assembly's memory safety rests on these lengths).
         let n = acc.len() / 4;
+        let Some(halves) = acc.len().checked_mul(IN) else {
+            return false;
+        };
         if n == 0
-            || acc.len() != 4 * n
-            || bias.len() != 4 * n
-            || w.len() < 4 * n * IN
+            || !acc.len().is_multiple_of(4)
+            || bias.len() != acc.len()
+            || w.len() < halves
             || !(w.as_ptr() as usize | x.as_ptr() as usize).is_multiple_of(4)
         {
             return false;
@@ -371,7 +389,7 @@ mod arm {
                 inout("r1") acc.as_mut_ptr() => _,
                 inout("r2") bias.as_ptr() => _,
                 inout("r3") x.as_ptr() => _,
-                inout("r12") acc.as_mut_ptr().wrapping_add(4 * n) => _,
+                inout("r12") acc.as_mut_ptr_range().end => _,
                 out("r0") _, out("r4") _, out("r5") _, out("r8") _, out("r9") _, out("r10") _,
                 options(),
             );
@@ -384,12 +402,17 @@ mod arm {
     /// [`super::Int16Weights`] and a word-aligned input.
     #[inline(always)]
     pub fn dot(w: &[i16], x: &[i16], s: &mut [i32]) -> bool {
-        let words = x.len() / 2;
+        // The input pairs: `words` words, ending at `pairs_end`.
+        let (pairs, _) = x.as_chunks::<2>();
+        let (words, pairs_end) = (pairs.len(), pairs.as_flattened().as_ptr_range().end);
         if words == 0 {
             return true;
         }
+        // One weight word per row and input pair (checked, not wrapped: the assembly's memory
+        // safety rests on this length).
+        let need = s.len().checked_mul(pairs.as_flattened().len());
         if !(w.as_ptr() as usize | x.as_ptr() as usize).is_multiple_of(4)
-            || w.len() < 2 * s.len() * words
+            || need.is_none_or(|need| w.len() < need)
         {
             return false;
         }
@@ -397,7 +420,7 @@ mod arm {
         let mut pw = w.as_ptr();
         match s {
             [s0, s1] => {
-                let end = px.wrapping_add(2 * words);
+                let end = pairs_end;
                 // SAFETY: per iteration one input word at `px` and two weight words at `pw`, both
                 // advancing, `words` (> 0) iterations: within `x` and the `2 * words` words of `w`,
                 // word-aligned as LDRD requires (checked above).
@@ -430,7 +453,8 @@ mod arm {
                 }
                 let n = words / 4;
                 if n > 0 {
-                    let end = px.wrapping_add(8 * n);
+                    // After the single words above, the `4 × n` words left end with the pairs.
+                    let end = pairs_end;
                     // SAFETY: four input and four weight words per iteration, `n` iterations: the
                     // rest of `x`'s `words` words and of `w`'s (checked above), word-aligned for LDM.
                     unsafe {

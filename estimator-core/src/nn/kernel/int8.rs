@@ -43,9 +43,10 @@ pub fn accumulate_dsp<const IN: usize, const OUT: usize>(
             *p1 = pack(*x1, *x3);
         }
     }
-    let groups = IN / 4;
-    let packed = packed.get(..groups * 2).unwrap_or(&[]);
-    let tail_x = x.get(groups * 4..).unwrap_or(&[]);
+    // Groups of four inputs, their packed words, and where the inputs left over start.
+    let packed = packed.get(..const { IN / 4 * 2 }).unwrap_or(&[]);
+    let tail_start = const { IN / 4 * 4 };
+    let tail_x = x.get(tail_start..).unwrap_or(&[]);
 
     let mut rows = w.chunks_exact(2);
     let mut biases = bias.chunks_exact(2);
@@ -68,8 +69,8 @@ pub fn accumulate_dsp<const IN: usize, const OUT: usize>(
                     s1 = smlad(sxtb16_ror8(w1), *x13, s1);
                 }
             }
-            *a0 = tail(r0, tail_x, groups, s0);
-            *a1 = tail(r1, tail_x, groups, s1);
+            *a0 = tail(r0, tail_x, tail_start, s0);
+            *a1 = tail(r1, tail_x, tail_start, s1);
         }
     }
     // An odd last row.
@@ -87,15 +88,16 @@ pub fn accumulate_dsp<const IN: usize, const OUT: usize>(
                 s = smlad(sxtb16_ror8(wq), *x13, s);
             }
         }
-        *a = tail(r, tail_x, groups, s);
+        *a = tail(r, tail_x, tail_start, s);
     }
 }
 
-/// The last `IN % 4` products, one at a time.
+/// The last `IN % 4` products (inputs from `start` on), one at a time.
 #[inline(always)]
-fn tail(row: &[i8], tail_x: &[i16], groups: usize, mut s: i32) -> i32 {
-    for (xi, wi) in tail_x.iter().zip(row.get(groups * 4..).unwrap_or(&[])) {
-        s = s.wrapping_add(*xi as i32 * *wi as i32);
+fn tail(row: &[i8], tail_x: &[i16], start: usize, mut s: i32) -> i32 {
+    for (xi, wi) in tail_x.iter().zip(row.get(start..).unwrap_or(&[])) {
+        // |x × w| <= 2^15 × 2^7: the product is exact; the sum wraps by definition.
+        s = s.wrapping_add(i32::from(*xi).wrapping_mul(i32::from(*wi)));
     }
     s
 }
