@@ -9,11 +9,10 @@ use defmt_rtt as _;
 use estimator_core::Estimator;
 use estimator_core::wire::MAX_FRAME;
 use estimator_core::wire::estimate::TickSource;
+use firmware::rcc::{self, Mmio, Outcome};
 use firmware::{App, ByteQueue, Clock, Config};
 use panic_probe as _;
 
-/// HSI, the reset clock, which this firmware never changes.
-const SYSCLK_HZ: u32 = 16_000_000;
 const BAUD: u32 = 115_200;
 /// Room for several sensor frames (64 bytes each) while a step runs.
 const RX_CAPACITY: usize = 512;
@@ -62,6 +61,18 @@ fn modify(addr: usize, f: impl FnOnce(u32) -> u32) {
     wr(addr, f(rd(addr)));
 }
 
+/// The clock-tree registers of `firmware::rcc`, all fixed, aligned peripheral addresses.
+struct Registers;
+
+impl Mmio for Registers {
+    fn read(&mut self, addr: u32) -> u32 {
+        rd(addr as usize)
+    }
+    fn write(&mut self, addr: u32, value: u32) {
+        wr(addr as usize, value)
+    }
+}
+
 /// Received bytes: the USART1 interrupt is its only producer, the main loop its only consumer (the
 /// queue is lock-free, see `firmware::queue`).
 static RX: ByteQueue<RX_CAPACITY> = ByteQueue::new();
@@ -105,8 +116,9 @@ fn init_clocks_and_pins() {
     modify(reg::GPIOA_AFRH, |v| (v & !(0xFF << 4)) | 0x77 << 4);
 }
 
-fn init_usart() {
-    wr(reg::USART1_BRR, (SYSCLK_HZ + BAUD / 2) / BAUD);
+/// USART1 is on APB2: BRR = PCLK2 / baud, rounded (16× oversampling, mantissa and fraction as one).
+fn init_usart(pclk2_hz: u32) {
+    wr(reg::USART1_BRR, pclk2_hz.saturating_add(BAUD / 2) / BAUD);
     wr(
         reg::USART1_CR1,
         reg::CR1_UE | reg::CR1_TE | reg::CR1_RE | reg::CR1_RXNEIE,
@@ -144,15 +156,30 @@ fn main() -> ! {
             cortex_m::asm::wfi();
         }
     };
+    // 168 MHz from the HSE crystal through the PLL, or the 16 MHz HSI where the clock tree does not
+    // respond (QEMU does not model RCC): said once, then the firmware runs on whichever it got.
+    let outcome = rcc::configure(&mut Registers, &rcc::DISCOVERY);
+    let clocks = outcome.clocks();
+    match outcome {
+        Outcome::Pll(c) => defmt::info!("SYSCLK {} Hz from the PLL", c.sysclk_hz),
+        Outcome::Hsi(why) => defmt::warn!(
+            "clock tree not responding ({}): running on the 16 MHz HSI",
+            why
+        ),
+    }
     init_clocks_and_pins();
     let clock = init_step_clock(core);
     defmt::info!("estimator firmware up; step clock {}", clock.source());
-    init_usart();
+    init_usart(clocks.pclk2_hz);
     // SAFETY: unmasking can break a critical section that relies on this interrupt being masked;
     // there is none: the handler only pushes to the lock-free `RX` and reads USART1.
     unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
 
-    let mut app = App::new(Estimator::shipped(), clock, Config::fifty_ms_at(SYSCLK_HZ));
+    let mut app = App::new(
+        Estimator::shipped(),
+        clock,
+        Config::fifty_ms_at(clocks.sysclk_hz),
+    );
     // A lone delimiter says "ready": receivers skip empty frames, and hil-sim waits for it before
     // sending (bytes that reach USART1 before UE/RE are set are dropped).
     send(&[estimator_core::wire::DELIMITER]);

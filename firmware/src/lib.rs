@@ -27,6 +27,7 @@ mod fmt;
 pub mod app;
 pub mod clock;
 pub mod queue;
+pub mod rcc;
 
 pub use app::{App, Config, Stats};
 pub use clock::{Clock, NoClock};

@@ -8,8 +8,10 @@
 //!   delivers tens of bytes that a polling loop would lose to overruns. Bytes dropped anyway (queue
 //!   full, UART overrun) are counted and reported as `rx_overruns` in every estimate frame.
 //!   Transmission is a 53-byte burst once per frame and may block.
-//! * Clocks stay at the 16 MHz HSI (no PLL): nothing waits on RCC ready flags, which QEMU does not
-//!   model. Peripheral clocks are enabled by plain RCC register writes (ignored by QEMU).
+//! * Clocks: SYSCLK 168 MHz from the HSE crystal through the PLL (`firmware::rcc`, every wait
+//!   bounded); where the clock tree does not respond (QEMU does not model RCC) the firmware stays on
+//!   the 16 MHz HSI and says so once over defmt. The step budget and USART1's baud divider follow
+//!   whichever clock it got. Peripheral clocks are enabled by plain RCC register writes.
 //! * Step timing: the DWT cycle counter on silicon; if it does not advance (QEMU), TIM2 with PSC = 0,
 //!   which counts one per instruction under `-icount shift=0`.
 #![cfg_attr(target_os = "none", no_std, no_main)]
