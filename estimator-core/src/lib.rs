@@ -31,6 +31,7 @@
     )
 )]
 
+pub mod aero;
 pub mod channels;
 pub mod estimator;
 pub mod features;

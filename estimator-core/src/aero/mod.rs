@@ -1,0 +1,795 @@
+//! The F-16's aerodynamic force model, as JSBSim flies it: lift, drag and side-force coefficients
+//! and their body-axis components, with their slopes in α and β for a model-based filter.
+//!
+//! The model itself is data in [`f16_tables`], generated from the `jsbsim` package's
+//! `aircraft/f16/f16.xml` by `scripts/extract-aero` and never edited by hand. This module only knows
+//! how JSBSim evaluates such data:
+//! * every term of an axis is a product of factors ([`Factor`]): constants, state and surface
+//!   values ([`Var`]) and table lookups ([`Table1`], [`Table2`]); JSBSim's `qbar·Sw` is divided out;
+//! * a table is JSBSim's `FGTable`: linear in each dimension between the breakpoints, the end
+//!   value beyond them (no extrapolation); on a 2-D table the row is blended first;
+//! * the DRAG, SIDE and LIFT sums are wind-axis forces, turned into body axes with JSBSim's
+//!   `Tw2b(α, β)` applied to `(−drag, side, −lift)`.
+//!
+//! f32 throughout, no heap, no panics. Inputs that are not finite (or a true airspeed that is not
+//! positive) give all-zero coefficients with `valid == false`; NaN or ±Inf never comes out.
+//! `hil-sim/tests/aero_model_parity.rs` checks the result against JSBSim's own terms and forces.
+
+#[rustfmt::skip]
+pub mod f16_tables;
+
+pub use f16_tables::F16;
+
+/// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel
+/// (hil-sim's `plant::FLAPERON_DEG_PER_NORM`). JSBSim's model has no degree property for it.
+pub const FLAPERON_DEG_PER_NORM: f32 = 20.0;
+
+const FT_TO_M: f32 = 0.3048;
+
+/// A quantity a term or a table key reads, in JSBSim's units (its property in the docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Var {
+    /// `aero/alpha-rad`.
+    AlphaRad,
+    /// `aero/beta-rad`.
+    BetaRad,
+    /// `velocities/mach`.
+    Mach,
+    /// `fcs/elevator-pos-rad`.
+    ElevatorRad,
+    /// `fcs/aileron-pos-rad`.
+    AileronRad,
+    /// `fcs/rudder-pos-rad`.
+    RudderRad,
+    /// `fcs/lef-pos-rad`.
+    LefRad,
+    /// `fcs/speedbrake-pos-rad`.
+    SpeedbrakeRad,
+    /// `fcs/flaperon-mix-rad`.
+    FlaperonMixRad,
+    /// `gear/gear-pos-norm`.
+    GearNorm,
+    /// `velocities/p-aero-rad_sec`.
+    PAeroRps,
+    /// `velocities/q-aero-rad_sec`.
+    QAeroRps,
+    /// `velocities/r-aero-rad_sec`.
+    RAeroRps,
+    /// `aero/bi2vel`: wingspan / (2 · true airspeed), s.
+    Bi2Vel,
+    /// `aero/ci2vel`: chord / (2 · true airspeed), s.
+    Ci2Vel,
+    /// `aero/h_b-mac-ft`: height of the aero reference point above ground / wingspan.
+    HOverBMac,
+}
+
+/// A value with its partial derivatives in α and β (per radian).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Partial {
+    pub value: f32,
+    pub d_alpha: f32,
+    pub d_beta: f32,
+}
+
+impl Partial {
+    const ONE: Partial = Partial {
+        value: 1.0,
+        d_alpha: 0.0,
+        d_beta: 0.0,
+    };
+
+    fn times(self, o: Partial) -> Partial {
+        Partial {
+            value: self.value * o.value,
+            d_alpha: self.d_alpha * o.value + self.value * o.d_alpha,
+            d_beta: self.d_beta * o.value + self.value * o.d_beta,
+        }
+    }
+
+    fn plus(self, o: Partial) -> Partial {
+        Partial {
+            value: self.value + o.value,
+            d_alpha: self.d_alpha + o.d_alpha,
+            d_beta: self.d_beta + o.d_beta,
+        }
+    }
+
+    /// A value that depends on `v` alone, with slope `slope` in it: nonzero partials only if `v`
+    /// is α or β.
+    fn through(v: Var, value: f32, slope: f32) -> Partial {
+        Partial {
+            value,
+            d_alpha: if v == Var::AlphaRad { slope } else { 0.0 },
+            d_beta: if v == Var::BetaRad { slope } else { 0.0 },
+        }
+    }
+}
+
+/// Everything the model reads, in JSBSim's units: one operating point.
+///
+/// [`Point::new`] makes it from the estimator's quantities; a caller holding JSBSim's own property
+/// values (a test) may fill it directly.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Point {
+    pub alpha_rad: f32,
+    pub beta_rad: f32,
+    pub mach: f32,
+    pub elevator_rad: f32,
+    pub aileron_rad: f32,
+    pub rudder_rad: f32,
+    pub lef_rad: f32,
+    pub speedbrake_rad: f32,
+    pub flaperon_mix_rad: f32,
+    pub gear_norm: f32,
+    pub p_aero_rps: f32,
+    pub q_aero_rps: f32,
+    pub r_aero_rps: f32,
+    pub bi2vel_s: f32,
+    pub ci2vel_s: f32,
+    pub h_over_b: f32,
+}
+
+/// The air-relative state.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct AirState {
+    /// Angle of attack, rad.
+    pub alpha_rad: f32,
+    /// Sideslip, rad.
+    pub beta_rad: f32,
+    pub mach: f32,
+    /// True airspeed, m/s: scales the rates (JSBSim's `b/(2V)`, `c/(2V)`).
+    pub tas_mps: f32,
+    /// Body rates relative to the air mass, rad/s. JSBSim's aero uses `velocities/*-aero-rad_sec`
+    /// (the inertial rates minus the rotational turbulence), not what a gyro measures.
+    pub p_rps: f32,
+    pub q_rps: f32,
+    pub r_rps: f32,
+    /// Height of the aerodynamic reference point above ground over the wingspan (JSBSim's
+    /// `aero/h_b-mac-ft`, a ratio despite its name). Ground effect on lift ends at 1.1: any larger
+    /// value (e.g. [`AirState::NO_GROUND_EFFECT`]) is out of ground effect.
+    pub h_over_b: f32,
+}
+
+impl AirState {
+    /// A [`AirState::h_over_b`] far above any ground effect.
+    pub const NO_GROUND_EFFECT: f32 = 1000.0;
+}
+
+/// Control-surface positions in the sensor channels' units (degrees, see [`crate::channels`]).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Surfaces {
+    /// Elevator (`fcs/elevator-pos-deg`).
+    pub elevator_deg: f32,
+    /// Aileron (`fcs/aileron-pos-rad` in degrees).
+    pub aileron_deg: f32,
+    /// Rudder (`fcs/rudder-pos-deg`).
+    pub rudder_deg: f32,
+    /// Leading-edge flap as the aero model sees it: JSBSim's aero reads the scheduled
+    /// `fcs/lef-pos-rad`, not the rate-limited actuator `fcs/lef-pos-deg` the `Lef` channel carries.
+    pub lef_deg: f32,
+    /// Left and right flaperon, degrees at [`FLAPERON_DEG_PER_NORM`] per norm. The aero reads only
+    /// their sum (`fcs/flaperon-mix-rad`); the `Flaperon` channel carries the left one alone.
+    pub flaperon_left_deg: f32,
+    pub flaperon_right_deg: f32,
+    /// Speedbrake (`fcs/speedbrake-pos-deg`).
+    pub speedbrake_deg: f32,
+    /// Landing gear, 0 up … 1 down (`gear/gear-pos-norm`).
+    pub gear_norm: f32,
+}
+
+impl Point {
+    /// The operating point for `model`; `None` if an input is not finite or the airspeed is not
+    /// positive.
+    pub fn new(model: &Model<'_>, air: &AirState, s: &Surfaces) -> Option<Point> {
+        let finite = [
+            air.alpha_rad,
+            air.beta_rad,
+            air.mach,
+            air.tas_mps,
+            air.p_rps,
+            air.q_rps,
+            air.r_rps,
+            air.h_over_b,
+            s.elevator_deg,
+            s.aileron_deg,
+            s.rudder_deg,
+            s.lef_deg,
+            s.flaperon_left_deg,
+            s.flaperon_right_deg,
+            s.speedbrake_deg,
+            s.gear_norm,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite || air.tas_mps <= 0.0 {
+            return None;
+        }
+        let two_v = 2.0 * air.tas_mps;
+        let p = Point {
+            alpha_rad: air.alpha_rad,
+            beta_rad: air.beta_rad,
+            mach: air.mach,
+            elevator_rad: s.elevator_deg.to_radians(),
+            aileron_rad: s.aileron_deg.to_radians(),
+            rudder_rad: s.rudder_deg.to_radians(),
+            lef_rad: s.lef_deg.to_radians(),
+            speedbrake_rad: s.speedbrake_deg.to_radians(),
+            flaperon_mix_rad: model.flaperon_mix_gain
+                * (s.flaperon_left_deg + s.flaperon_right_deg)
+                / FLAPERON_DEG_PER_NORM,
+            gear_norm: s.gear_norm,
+            p_aero_rps: air.p_rps,
+            q_aero_rps: air.q_rps,
+            r_aero_rps: air.r_rps,
+            bi2vel_s: model.wingspan_ft * FT_TO_M / two_v,
+            ci2vel_s: model.chord_ft * FT_TO_M / two_v,
+            h_over_b: air.h_over_b,
+        };
+        p.is_finite().then_some(p)
+    }
+
+    pub fn get(&self, v: Var) -> f32 {
+        match v {
+            Var::AlphaRad => self.alpha_rad,
+            Var::BetaRad => self.beta_rad,
+            Var::Mach => self.mach,
+            Var::ElevatorRad => self.elevator_rad,
+            Var::AileronRad => self.aileron_rad,
+            Var::RudderRad => self.rudder_rad,
+            Var::LefRad => self.lef_rad,
+            Var::SpeedbrakeRad => self.speedbrake_rad,
+            Var::FlaperonMixRad => self.flaperon_mix_rad,
+            Var::GearNorm => self.gear_norm,
+            Var::PAeroRps => self.p_aero_rps,
+            Var::QAeroRps => self.q_aero_rps,
+            Var::RAeroRps => self.r_aero_rps,
+            Var::Bi2Vel => self.bi2vel_s,
+            Var::Ci2Vel => self.ci2vel_s,
+            Var::HOverBMac => self.h_over_b,
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        [
+            self.alpha_rad,
+            self.beta_rad,
+            self.mach,
+            self.elevator_rad,
+            self.aileron_rad,
+            self.rudder_rad,
+            self.lef_rad,
+            self.speedbrake_rad,
+            self.flaperon_mix_rad,
+            self.gear_norm,
+            self.p_aero_rps,
+            self.q_aero_rps,
+            self.r_aero_rps,
+            self.bi2vel_s,
+            self.ci2vel_s,
+            self.h_over_b,
+        ]
+        .iter()
+        .all(|v| v.is_finite())
+    }
+}
+
+/// A table lookup at an operating point, with its slopes in α and β. Only this module can call it
+/// (the lookup of a non-finite point is not checked); use [`Term::eval`] or [`Model`].
+pub trait Lookup: Sync {
+    #[doc(hidden)]
+    fn look_up(&self, p: &Point, _: sealed::Token) -> Partial;
+}
+
+mod sealed {
+    /// Makes [`super::Lookup::look_up`] uncallable outside this module.
+    #[derive(Clone, Copy)]
+    pub struct Token;
+}
+
+/// A 1-D table: `y(key)` at breakpoints `x`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table1<const N: usize> {
+    pub key: Var,
+    pub x: [f32; N],
+    pub y: [f32; N],
+}
+
+/// A 2-D table: `data[row][col]` at breakpoints `rows` × `cols`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table2<const R: usize, const C: usize> {
+    pub row: Var,
+    pub col: Var,
+    pub rows: [f32; R],
+    pub cols: [f32; C],
+    pub data: [[f32; C]; R],
+}
+
+/// Where `k` falls in breakpoints `bp`, as JSBSim's `FGTable` searches: the first segment whose
+/// upper breakpoint is `>= k`, else the last one. Returns (index of the segment's lower breakpoint,
+/// fraction clamped to [0, 1] as JSBSim clamps it, d fraction / d k: `1/span` strictly between the
+/// end breakpoints, 0 at and beyond them).
+fn segment(bp: &[f32], k: f32) -> Option<(usize, f32, f32)> {
+    let mut found = None;
+    for (i, (&lo, &hi)) in bp.iter().zip(bp.iter().skip(1)).enumerate() {
+        // Spans are > 0: the generated file asserts strictly ascending breakpoints.
+        let span = hi - lo;
+        // JSBSim's Constrain(0, f, 1). (`clamp`'s bounds assertion folds away: constant bounds.)
+        let f = ((k - lo) / span).clamp(0.0, 1.0);
+        found = Some((i, f, 1.0 / span));
+        if hi >= k {
+            break;
+        }
+    }
+    let (i, f, inv) = found?;
+    let inside = matches!((bp.first(), bp.last()), (Some(&a), Some(&b)) if k > a && k < b);
+    Some((i, f, if inside { inv } else { 0.0 }))
+}
+
+impl<const N: usize> Lookup for Table1<N> {
+    fn look_up(&self, p: &Point, _: sealed::Token) -> Partial {
+        let k = p.get(self.key);
+        let ends = (self.x.first(), self.y.first(), self.x.last(), self.y.last());
+        let (Some(&x0), Some(&y0), Some(&xn), Some(&yn)) = ends else {
+            return Partial::default();
+        };
+        // JSBSim returns the end values themselves at and beyond the ends.
+        if k <= x0 {
+            return Partial::through(self.key, y0, 0.0);
+        }
+        if k >= xn {
+            return Partial::through(self.key, yn, 0.0);
+        }
+        let Some((i, f, inv)) = segment(&self.x, k) else {
+            return Partial::default();
+        };
+        let (Some(&ya), Some(&yb)) = (self.y.get(i), self.y.get(i.wrapping_add(1))) else {
+            return Partial::default();
+        };
+        // JSBSim: Factor·(y1 − y0) + y0.
+        Partial::through(self.key, f * (yb - ya) + ya, (yb - ya) * inv)
+    }
+}
+
+impl<const R: usize, const C: usize> Lookup for Table2<R, C> {
+    fn look_up(&self, p: &Point, _: sealed::Token) -> Partial {
+        let (rk, ck) = (p.get(self.row), p.get(self.col));
+        let (Some((r, rf, rinv)), Some((c, cf, cinv))) =
+            (segment(&self.rows, rk), segment(&self.cols, ck))
+        else {
+            return Partial::default();
+        };
+        let cell = |ri: usize, ci: usize| {
+            self.data
+                .get(ri)
+                .and_then(|row| row.get(ci))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        let (r1, c1) = (r.wrapping_add(1), c.wrapping_add(1));
+        let (a0, a1, b0, b1) = (cell(r, c), cell(r1, c), cell(r, c1), cell(r1, c1));
+        // JSBSim blends along the row key first (rF·upper + (1 − rF)·lower in both columns), then
+        // along the column key (cF·(col2 − col1) + col1); both fractions clamped, so the ends hold.
+        let col1 = rf * a1 + (1.0 - rf) * a0;
+        let col2 = rf * b1 + (1.0 - rf) * b0;
+        let value = cf * (col2 - col1) + col1;
+        let d_row = (cf * (b1 - b0) + (1.0 - cf) * (a1 - a0)) * rinv;
+        let d_col = (col2 - col1) * cinv;
+        Partial::through(self.row, value, d_row).plus(Partial::through(self.col, 0.0, d_col))
+    }
+}
+
+/// One factor of a term's product.
+#[derive(Clone, Copy)]
+pub enum Factor<'a> {
+    Const(f32),
+    Var(Var),
+    Table(&'a dyn Lookup),
+}
+
+impl Factor<'_> {
+    fn eval(&self, p: &Point) -> Partial {
+        match *self {
+            Factor::Const(c) => Partial {
+                value: c,
+                d_alpha: 0.0,
+                d_beta: 0.0,
+            },
+            Factor::Var(v) => Partial::through(v, p.get(v), 1.0),
+            Factor::Table(t) => t.look_up(p, sealed::Token),
+        }
+    }
+}
+
+/// One JSBSim aero function of a force axis, as a coefficient (its product over `qbar·Sw`).
+#[derive(Clone, Copy)]
+pub struct Term<'a> {
+    /// The JSBSim function (and property) name, e.g. `aero/coefficient/CLDh`.
+    pub name: &'static str,
+    pub factors: &'a [Factor<'a>],
+}
+
+impl Term<'_> {
+    /// The term's coefficient and slopes at `p`; `None` if `p` or the result is not finite.
+    pub fn eval(&self, p: &Point) -> Option<Partial> {
+        let v = self.partial(p);
+        (p.is_finite() && [v.value, v.d_alpha, v.d_beta].iter().all(|x| x.is_finite())).then_some(v)
+    }
+
+    fn partial(&self, p: &Point) -> Partial {
+        self.factors
+            .iter()
+            .fold(Partial::ONE, |acc, f| acc.times(f.eval(p)))
+    }
+}
+
+/// An aircraft's force model: three wind-axis sums and the constants its inputs need.
+#[derive(Clone, Copy)]
+pub struct Model<'a> {
+    pub drag: &'a [Term<'a>],
+    pub side: &'a [Term<'a>],
+    pub lift: &'a [Term<'a>],
+    /// `metrics/Sw-sqft`: what the coefficients multiply with dynamic pressure.
+    pub wing_area_ft2: f32,
+    pub wingspan_ft: f32,
+    pub chord_ft: f32,
+    /// `fcs/flaperon-mix-rad` per unit of (left + right flaperon norm).
+    pub flaperon_mix_gain: f32,
+}
+
+/// Wind-axis coefficients with JSBSim's signs: drag positive aft, lift positive up, side positive
+/// toward the right wing (body +y at β = 0).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Wind {
+    pub drag: f32,
+    pub side: f32,
+    pub lift: f32,
+}
+
+/// Body-axis coefficients: JSBSim's `forces/fb{x,y,z}-aero-lbs` over `qbar·Sw` (x forward, y right,
+/// z down; the normal-force coefficient is `−z`).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Body {
+    pub x: f32,
+    pub y: f32,
+    pub z: f32,
+}
+
+/// The force coefficients at one point and their analytic slopes in α and β (per radian).
+///
+/// The slopes are the exact derivatives of the interpolated model: within a table segment the
+/// segment's slope; at an interior breakpoint the segment to its left (the one JSBSim interpolates
+/// on there); zero at and beyond the end breakpoints, where JSBSim holds the end value. The body
+/// slopes include the turning of `Tw2b` with α and β.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Coefficients {
+    pub wind: Wind,
+    pub body: Body,
+    pub wind_d_alpha: Wind,
+    pub wind_d_beta: Wind,
+    pub body_d_alpha: Body,
+    pub body_d_beta: Body,
+    /// False when the inputs were not finite or the airspeed not positive: then everything is 0.
+    pub valid: bool,
+}
+
+impl Model<'_> {
+    /// The coefficients for the estimator's quantities.
+    pub fn coefficients(&self, air: &AirState, s: &Surfaces) -> Coefficients {
+        match Point::new(self, air, s) {
+            Some(p) => self.coefficients_at(&p),
+            None => Coefficients::default(),
+        }
+    }
+
+    fn axis(terms: &[Term<'_>], p: &Point) -> Partial {
+        terms
+            .iter()
+            .fold(Partial::default(), |acc, t| acc.plus(t.partial(p)))
+    }
+
+    /// The coefficients at a point given in JSBSim's units.
+    pub fn coefficients_at(&self, p: &Point) -> Coefficients {
+        if !p.is_finite() {
+            return Coefficients::default();
+        }
+        let (d, y, l) = (
+            Self::axis(self.drag, p),
+            Self::axis(self.side, p),
+            Self::axis(self.lift, p),
+        );
+        let (sa, ca) = (libm::sinf(p.alpha_rad), libm::cosf(p.alpha_rad));
+        let (sb, cb) = (libm::sinf(p.beta_rad), libm::cosf(p.beta_rad));
+        // JSBSim: F_body = Tw2b · (−D, Y, −L), with
+        //   Tw2b = [ ca·cb  −ca·sb  −sa ]
+        //          [ sb      cb      0  ]
+        //          [ sa·cb  −sa·sb   ca ]
+        let tw2b = |m: [[f32; 3]; 3], w: [f32; 3]| -> [f32; 3] {
+            let [r0, r1, r2] = m;
+            let dot = |r: [f32; 3]| r[0] * w[0] + r[1] * w[1] + r[2] * w[2];
+            [dot(r0), dot(r1), dot(r2)]
+        };
+        let m = [
+            [ca * cb, -ca * sb, -sa],
+            [sb, cb, 0.0],
+            [sa * cb, -sa * sb, ca],
+        ];
+        let dm_da = [
+            [-sa * cb, sa * sb, -ca],
+            [0.0, 0.0, 0.0],
+            [ca * cb, -ca * sb, -sa],
+        ];
+        let dm_db = [
+            [-ca * sb, -ca * cb, 0.0],
+            [cb, -sb, 0.0],
+            [-sa * sb, -sa * cb, 0.0],
+        ];
+        let w = [-d.value, y.value, -l.value];
+        let w_da = [-d.d_alpha, y.d_alpha, -l.d_alpha];
+        let w_db = [-d.d_beta, y.d_beta, -l.d_beta];
+        let add = |a: [f32; 3], b: [f32; 3]| [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+        let body = |v: [f32; 3]| Body {
+            x: v[0],
+            y: v[1],
+            z: v[2],
+        };
+        let out = Coefficients {
+            wind: Wind {
+                drag: d.value,
+                side: y.value,
+                lift: l.value,
+            },
+            body: body(tw2b(m, w)),
+            wind_d_alpha: Wind {
+                drag: d.d_alpha,
+                side: y.d_alpha,
+                lift: l.d_alpha,
+            },
+            wind_d_beta: Wind {
+                drag: d.d_beta,
+                side: y.d_beta,
+                lift: l.d_beta,
+            },
+            body_d_alpha: body(add(tw2b(dm_da, w), tw2b(m, w_da))),
+            body_d_beta: body(add(tw2b(dm_db, w), tw2b(m, w_db))),
+            valid: true,
+        };
+        if out.is_finite() {
+            out
+        } else {
+            Coefficients::default()
+        }
+    }
+}
+
+impl Coefficients {
+    fn is_finite(&self) -> bool {
+        let w = |w: &Wind| [w.drag, w.side, w.lift];
+        let b = |b: &Body| [b.x, b.y, b.z];
+        [
+            w(&self.wind),
+            w(&self.wind_d_alpha),
+            w(&self.wind_d_beta),
+            b(&self.body),
+            b(&self.body_d_alpha),
+            b(&self.body_d_beta),
+        ]
+        .iter()
+        .flatten()
+        .all(|v| v.is_finite())
+    }
+}
+
+/// Strictly ascending, so every table span is positive: asserted at compile time for each
+/// generated table.
+pub const fn strictly_ascending(mut x: &[f32]) -> bool {
+    while let [a, b, ..] = x {
+        // Not `a >= b`: a NaN must fail too.
+        let ascending = *a < *b;
+        if !ascending {
+            return false;
+        }
+        x = match x {
+            [_, rest @ ..] => rest,
+            [] => return true,
+        };
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(alpha_rad: f32, beta_rad: f32) -> Point {
+        Point {
+            alpha_rad,
+            beta_rad,
+            mach: 0.7,
+            elevator_rad: -0.05,
+            aileron_rad: 0.1,
+            rudder_rad: -0.05,
+            lef_rad: 0.2,
+            speedbrake_rad: 0.3,
+            flaperon_mix_rad: -0.2,
+            gear_norm: 0.0,
+            p_aero_rps: 0.5,
+            q_aero_rps: 0.2,
+            r_aero_rps: -0.1,
+            bi2vel_s: 0.05,
+            ci2vel_s: 0.02,
+            h_over_b: 0.5,
+        }
+    }
+
+    #[test]
+    fn one_d_lookup_is_jsbsims() {
+        let t = Table1 {
+            key: Var::AlphaRad,
+            x: [0.0, 0.1, 0.3],
+            y: [1.0, 2.0, 0.0],
+        };
+        let look = |a: f32| t.look_up(&at(a, 0.0), sealed::Token);
+        // The end values themselves at and beyond the ends, with no slope.
+        for (a, v) in [(-1.0, 1.0), (0.0, 1.0), (0.3, 0.0), (5.0, 0.0)] {
+            assert_eq!(look(a), Partial::through(Var::AlphaRad, v, 0.0), "{a}");
+        }
+        let m = look(0.05);
+        assert!((m.value - 1.5).abs() < 1e-6 && (m.d_alpha - 10.0).abs() < 1e-4);
+        // At an interior breakpoint: the value there, the slope of the segment to its left.
+        let b = look(0.1);
+        assert!((b.value - 2.0).abs() < 1e-6 && (b.d_alpha - 10.0).abs() < 1e-4);
+        assert!((look(0.2).d_alpha + 10.0).abs() < 1e-4);
+        assert_eq!(look(0.2).d_beta, 0.0);
+    }
+
+    #[test]
+    fn two_d_lookup_is_bilinear_and_clamped() {
+        let t = Table2 {
+            row: Var::AlphaRad,
+            col: Var::BetaRad,
+            rows: [0.0, 1.0],
+            cols: [0.0, 2.0, 4.0],
+            data: [[0.0, 2.0, 2.0], [1.0, 5.0, 9.0]],
+        };
+        let look = |a: f32, b: f32| t.look_up(&at(a, b), sealed::Token);
+        let p = look(0.5, 1.0);
+        // Row blend: (0.5, 3.5) at cols 0 and 2; column blend halfway: 2.0.
+        assert!((p.value - 2.0).abs() < 1e-6, "{p:?}");
+        assert!(
+            (p.d_alpha - 2.0).abs() < 1e-5 && (p.d_beta - 1.5).abs() < 1e-5,
+            "{p:?}"
+        );
+        // Beyond the ends both fractions clamp: the corner value, no slopes.
+        assert_eq!(look(-3.0, 9.0).value, 2.0);
+        assert_eq!(
+            (look(-3.0, 9.0).d_alpha, look(-3.0, 9.0).d_beta),
+            (0.0, 0.0)
+        );
+        assert_eq!(look(7.0, -1.0).value, 1.0);
+    }
+
+    /// Central differences over a step that stays inside one table segment.
+    #[test]
+    fn slopes_are_the_derivatives_of_the_model() {
+        let h = 1e-3_f32;
+        let alphas = F16_ALPHA_MIDPOINTS;
+        for (i, &a) in alphas.iter().enumerate() {
+            let b = [-0.15_f32, -0.02, 0.0, 0.07, 0.2][i % 5];
+            let c = F16.coefficients_at(&at(a, b));
+            assert!(c.valid);
+            let fd = |da: f32, db: f32| {
+                let hi = F16.coefficients_at(&at(a + da, b + db));
+                let lo = F16.coefficients_at(&at(a - da, b - db));
+                let d = |x: f32, y: f32| (x - y) / (2.0 * h);
+                (
+                    [
+                        d(hi.wind.drag, lo.wind.drag),
+                        d(hi.wind.side, lo.wind.side),
+                        d(hi.wind.lift, lo.wind.lift),
+                    ],
+                    [
+                        d(hi.body.x, lo.body.x),
+                        d(hi.body.y, lo.body.y),
+                        d(hi.body.z, lo.body.z),
+                    ],
+                )
+            };
+            let w = |w: Wind| [w.drag, w.side, w.lift];
+            let bd = |b: Body| [b.x, b.y, b.z];
+            for (what, analytic, (fw, fb)) in [
+                ("alpha", (w(c.wind_d_alpha), bd(c.body_d_alpha)), fd(h, 0.0)),
+                ("beta", (w(c.wind_d_beta), bd(c.body_d_beta)), fd(0.0, h)),
+            ] {
+                for (k, (x, y)) in analytic
+                    .0
+                    .iter()
+                    .chain(&analytic.1)
+                    .zip(fw.iter().chain(&fb))
+                    .enumerate()
+                {
+                    assert!(
+                        (x - y).abs() <= 2e-3 * (1.0 + y.abs()),
+                        "d/d{what} component {k} at α {a} β {b}: analytic {x}, differences {y}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Midpoints of the F-16's α segments (every α table shares these breakpoints).
+    const F16_ALPHA_MIDPOINTS: [f32; 11] = [
+        -0.131, -0.0435, 0.0435, 0.131, 0.2185, 0.3055, 0.3925, 0.48, 0.5675, 0.6545, 0.7415,
+    ];
+
+    #[test]
+    fn bad_inputs_give_zeros_and_invalid() {
+        let air = AirState {
+            alpha_rad: 0.1,
+            beta_rad: 0.0,
+            mach: 0.6,
+            tas_mps: 200.0,
+            p_rps: 0.0,
+            q_rps: 0.0,
+            r_rps: 0.0,
+            h_over_b: AirState::NO_GROUND_EFFECT,
+        };
+        let s = Surfaces::default();
+        assert!(F16.coefficients(&air, &s).valid);
+        for bad in [
+            AirState {
+                alpha_rad: f32::NAN,
+                ..air
+            },
+            AirState {
+                beta_rad: f32::INFINITY,
+                ..air
+            },
+            AirState {
+                tas_mps: 0.0,
+                ..air
+            },
+            AirState {
+                tas_mps: -3.0,
+                ..air
+            },
+            AirState {
+                q_rps: f32::NEG_INFINITY,
+                ..air
+            },
+            // Finite but overflowing: q·c/(2V) is +Inf in f32.
+            AirState {
+                tas_mps: 1e-38,
+                q_rps: 1e30,
+                ..air
+            },
+        ] {
+            assert_eq!(
+                F16.coefficients(&bad, &s),
+                Coefficients::default(),
+                "{bad:?}"
+            );
+        }
+        let nan_surface = Surfaces {
+            elevator_deg: f32::NAN,
+            ..s
+        };
+        assert_eq!(
+            F16.coefficients(&air, &nan_surface),
+            Coefficients::default()
+        );
+        let p = Point {
+            mach: f32::NAN,
+            ..at(0.1, 0.0)
+        };
+        assert_eq!(F16.coefficients_at(&p), Coefficients::default());
+        assert!(F16.lift.iter().all(|t| t.eval(&p).is_none()));
+    }
+
+    #[test]
+    fn breakpoint_check_sees_order() {
+        assert!(strictly_ascending(&[0.0, 1.0, 2.0]));
+        assert!(!strictly_ascending(&[0.0, 1.0, 1.0]));
+        assert!(!strictly_ascending(&[0.0, f32::NAN]));
+        assert!(strictly_ascending(&[]) && strictly_ascending(&[3.0]));
+    }
+}
