@@ -210,3 +210,93 @@ fn lost_frames_are_counted_not_scored() {
             .collect::<Vec<_>>()
     );
 }
+
+/// The in-process firmware, with the wall time and length of every write to it.
+struct Recording {
+    fw: InProcess,
+    writes: Vec<(std::time::Instant, usize)>,
+}
+
+impl runner::Target for Recording {
+    fn name(&self) -> &'static str {
+        "recording"
+    }
+    fn send(&mut self, bytes: &[u8]) -> Result<(), runner::RunError> {
+        self.writes.push((std::time::Instant::now(), bytes.len()));
+        self.fw.send(bytes)
+    }
+    fn recv(
+        &mut self,
+        timeout: std::time::Duration,
+        out: &mut Vec<u8>,
+    ) -> Result<(), runner::RunError> {
+        self.fw.recv(timeout, out)
+    }
+    fn synchronous(&self) -> bool {
+        true
+    }
+}
+
+#[test]
+fn realtime_paces_every_byte_at_the_link_baud() {
+    // 19 200 Bd: 0.52 ms a byte, a frame takes ~33 ms of its 50 ms period, so each frame starts on
+    // its period and byte k of frame i is due at 50 ms · i + (k + 1) byte times.
+    const BAUD: u32 = 19_200;
+    let byte_s = 10.0 / f64::from(BAUD);
+    let frames: Vec<SensorFrame> = (0..6u16).map(frame).collect();
+    let due: Vec<f64> = frames
+        .iter()
+        .enumerate()
+        .flat_map(|(i, f)| {
+            (0..encode(f).len()).map(move |k| i as f64 * 0.05 + (k + 1) as f64 * byte_s)
+        })
+        .collect();
+    let samples: Vec<Sample> = frames
+        .iter()
+        .map(|f| Sample {
+            frame: *f,
+            time_s: f64::from(f.seq) * 0.05,
+            alpha_true_deg: 2.0,
+            beta_true_deg: 0.0,
+        })
+        .collect();
+    let mut t = Recording {
+        fw: InProcess::new(),
+        writes: Vec::new(),
+    };
+    let cfg = RunConfig {
+        link: LinkConfig {
+            baud: BAUD,
+            ..LinkConfig::default()
+        },
+        fast: false,
+        ..RunConfig::default()
+    };
+    let started = std::time::Instant::now();
+    let o = runner::run(&mut t, &samples, &cfg).unwrap();
+    assert!(o.records.iter().all(|r| r.reply.is_some()));
+    assert_eq!(t.writes.iter().map(|w| w.1).sum::<usize>(), due.len());
+    // No byte leaves more than the runner's 1 ms of slack before it is due (plus 0.1 ms for rounding;
+    // `started` is a few microseconds before the run's own clock starts, which is lenient by as much).
+    let mut sent = 0;
+    for &(at, n) in &t.writes {
+        sent += n;
+        let at_s = at.duration_since(started).as_secs_f64();
+        assert!(
+            due[sent - 1] <= at_s + 1e-3 + 1e-4,
+            "byte {sent} due {} sent {at_s}",
+            due[sent - 1]
+        );
+    }
+    // And the line is really paced: the bytes trickle out in small writes, and the last one goes no
+    // earlier than it is due.
+    assert!(t.writes.len() > due.len() / 4, "{} writes", t.writes.len());
+    let last = t
+        .writes
+        .last()
+        .unwrap()
+        .0
+        .duration_since(started)
+        .as_secs_f64();
+    assert!(last >= due[due.len() - 1] - 1e-3, "last write at {last}");
+}

@@ -47,11 +47,16 @@ pub struct RunArgs {
     /// Serial device of a flashed board.
     #[arg(long)]
     pub port: Option<PathBuf>,
-    /// Baud rate of --port (the board's USART1 runs 115200 at the 16 MHz HSI clock).
+    /// Baud rate of --port (the board's USART1 runs 115 200 Bd, from whichever clock it got).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
-    /// Send frames as fast as the firmware answers instead of every 50 ms of wall time.
+    /// Pace the link in real time: every byte leaves when the link model (at its baud, `--link-baud`)
+    /// says it arrives, one frame per 50 ms of wall time. For a board on `--port`; without it frames
+    /// go as fast as the firmware answers.
     #[arg(long)]
+    pub realtime: bool,
+    /// As fast as the firmware answers: the default, kept so that older commands still parse.
+    #[arg(long, hide = true, conflicts_with = "realtime")]
     pub fast: bool,
     /// Print exactly one JSON summary object on stdout (messages go to stderr).
     #[arg(long)]
@@ -194,36 +199,124 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     let cfg = RunConfig {
         link: a.link_config()?,
         seed: a.seed,
-        fast: a.fast,
+        fast: !a.realtime,
         reply_timeout: Duration::from_millis(a.reply_timeout_ms),
         ..RunConfig::default()
     };
+    if a.source.script.is_some() {
+        eprintln!("flying the script in JSBSim ...");
+    }
     let flight = flight(&a.source, a.seed, a.max_time_s)?;
     let samples = samples_of(&flight);
     let mut target = open_target(a)?;
-    let outcome = super::run(target.as_mut(), &samples, &cfg)?;
+    let bar = progress_bar(samples.len());
+    let outcome = super::run_with_progress(target.as_mut(), &samples, &cfg, &mut |p| {
+        // indicatif redraws at most 20 times a second; the message is rebuilt once per flight second.
+        bar.set_position(p.sent as u64);
+        if p.sent % 20 == 0 || p.sent == p.total {
+            bar.set_message(progress_message(p));
+        }
+    })?;
+    bar.finish_and_clear();
     drop(target);
     let summary = score::summarize(&outcome);
     let w = write_outputs(&a.out, &outcome, &summary)?;
-    let msg = format!(
-        "{}: {} frames, {} scored, {} lost; wrote {}, {}, {}",
-        flight.name,
-        summary.frames_sent,
-        summary.frames_scored,
-        summary.frames_lost,
-        w.csv.display(),
-        w.json.display(),
-        w.png.display()
-    );
     if a.json {
-        eprintln!("{msg}");
+        eprintln!(
+            "{}: {} frames, {} scored, {} lost; wrote {}, {}, {}",
+            flight.name,
+            summary.frames_sent,
+            summary.frames_scored,
+            summary.frames_lost,
+            w.csv.display(),
+            w.json.display(),
+            w.png.display()
+        );
         println!("{}", serde_json::to_string(&summary).unwrap_or_default());
     } else {
-        println!("{msg}");
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&summary).unwrap_or_default()
-        );
+        print!("{}", table(&flight.name, &summary, &w));
     }
     Ok(summary)
+}
+
+/// Frames sent, ETA and the running scores on stderr; drawn only when stderr is a terminal.
+fn progress_bar(frames: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(frames as u64),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} frames, ETA {eta} {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar
+}
+
+fn progress_message(p: &super::Progress) -> String {
+    let deg = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v:.3}°"));
+    format!(
+        "| MAE α {} β {} | deadline misses {}",
+        deg(p.alpha_mae_deg),
+        deg(p.beta_mae_deg),
+        p.deadline_misses
+    )
+}
+
+/// The short table printed at the end of a run (without `--json`).
+fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
+    use std::fmt::Write as _;
+    let deg = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{v:.3}°"));
+    let count = |v: Option<u32>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+    let unit = match s.tick_source.as_str() {
+        "Instructions" => "instructions",
+        "Cycles" => "cycles",
+        "HostNanos" => "ns",
+        _ => "ticks",
+    };
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "{flight} on {}: {:.0} s of flight in {:.1} s ({:.1}x real time)",
+        s.firmware,
+        s.flight_s,
+        s.wall_s,
+        s.flight_s / s.wall_s.max(1e-9)
+    );
+    let _ = writeln!(t, "  {:<16} {:>9} {:>9}", "", "α", "β");
+    for (name, a, b) in [
+        ("MAE", s.alpha_mae_deg, s.beta_mae_deg),
+        ("RMSE", s.alpha_rmse_deg, s.beta_rmse_deg),
+        (
+            "max |error|",
+            s.alpha_max_abs_err_deg,
+            s.beta_max_abs_err_deg,
+        ),
+    ] {
+        let _ = writeln!(t, "  {name:<16} {:>9} {:>9}", deg(a), deg(b));
+    }
+    let _ = writeln!(
+        t,
+        "  {:<16} {} sent, {} answered, {} scored, {} lost, {} rejected as corrupt",
+        "frames",
+        s.frames_sent,
+        s.frames_answered,
+        s.frames_scored,
+        s.frames_lost,
+        s.frames_corrupt_rejected
+    );
+    let _ = writeln!(
+        t,
+        "  {:<16} max {}, median {} {unit}; deadline misses {}",
+        "step",
+        count(s.step_ticks_max),
+        count(s.step_ticks_median),
+        s.deadline_misses
+    );
+    let _ = writeln!(t, "  {:<16} {}", "plot", w.png.display());
+    let _ = writeln!(t, "  {:<16} {}", "summary (JSON)", w.json.display());
+    let _ = writeln!(t, "  {:<16} {}", "estimates (CSV)", w.csv.display());
+    t
 }

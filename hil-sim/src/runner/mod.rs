@@ -2,11 +2,11 @@
 //! collects its estimate frames, matched to the truth by sequence number.
 //!
 //! One sensor frame per 50 ms of flight time. Real-time pacing sends each byte when the link model
-//! says it arrives; `fast` sends each frame as soon as the previous one is answered. In fast mode the
-//! runner waits for the firmware's reply before the next frame: long when the frame (and the one
-//! before, whose delimiter it relies on) went through untouched, briefly when the link altered it
-//! (the firmware will then normally drop it). The wait is pacing only: replies are matched by seq
-//! whenever they arrive, and frames never answered count as lost, never scored.
+//! says it arrives; `fast` (the default) sends each frame as soon as the previous one is answered.
+//! In fast mode the runner waits for the firmware's reply before the next frame: long when the frame
+//! (and the one before, whose delimiter it relies on) went through untouched, briefly when the link
+//! altered it (the firmware will then normally drop it). The wait is pacing only: replies are
+//! matched by seq whenever they arrive, and frames never answered count as lost, never scored.
 
 pub mod cli;
 pub mod target;
@@ -53,7 +53,8 @@ pub enum RunError {
 pub struct RunConfig {
     pub link: LinkConfig,
     pub seed: u64,
-    /// Send as fast as the firmware answers instead of every 50 ms of wall time.
+    /// Send as fast as the firmware answers; `false` paces every byte at the link's baud and one
+    /// frame per 50 ms of wall time (a real board on a serial port).
     pub fast: bool,
     /// Fast mode: how long to wait for the reply to an untouched frame.
     pub reply_timeout: Duration,
@@ -108,6 +109,56 @@ pub struct Sample {
     pub time_s: f64,
     pub alpha_true_deg: f64,
     pub beta_true_deg: f64,
+}
+
+/// Where a run stands, reported after every frame sent (and its reply waited for).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Progress {
+    /// Frames sent so far, of `total`.
+    pub sent: usize,
+    pub total: usize,
+    /// Running α and β mean absolute error over the estimates scored so far, degrees.
+    pub alpha_mae_deg: Option<f64>,
+    pub beta_mae_deg: Option<f64>,
+    /// Frames scored so far.
+    pub scored: usize,
+    /// The firmware's deadline-miss counter, the largest seen so far (it only grows).
+    pub deadline_misses: u32,
+}
+
+/// Running sums behind [`Progress`]: fed each record once, when its reply is matched.
+#[derive(Default)]
+struct Running {
+    scored: usize,
+    alpha_abs_sum: f64,
+    beta_abs_sum: f64,
+    deadline_misses: u32,
+}
+
+impl Running {
+    fn add(&mut self, r: &FrameRecord) {
+        if let Some(f) = r.reply {
+            self.deadline_misses = self.deadline_misses.max(f.health.deadline_misses);
+        }
+        if crate::score::scorable(r) {
+            let err = |(truth, estimate): (f64, f64)| (estimate - truth).abs();
+            self.scored += 1;
+            self.alpha_abs_sum += err(crate::score::alpha_deg(r));
+            self.beta_abs_sum += err(crate::score::beta_deg(r));
+        }
+    }
+
+    fn progress(&self, sent: usize, total: usize) -> Progress {
+        let mean = |sum: f64| (self.scored > 0).then(|| sum / self.scored as f64);
+        Progress {
+            sent,
+            total,
+            alpha_mae_deg: mean(self.alpha_abs_sum),
+            beta_mae_deg: mean(self.beta_abs_sum),
+            scored: self.scored,
+            deadline_misses: self.deadline_misses,
+        }
+    }
 }
 
 /// Collects the firmware's output: a clean decoder for pacing, then the downlink model, then the
@@ -174,6 +225,16 @@ pub fn run(
     samples: &[Sample],
     cfg: &RunConfig,
 ) -> Result<RunOutcome, RunError> {
+    run_with_progress(target, samples, cfg, &mut |_| {})
+}
+
+/// [`run`], calling `on_frame` after each frame is sent and its reply waited for.
+pub fn run_with_progress(
+    target: &mut dyn Target,
+    samples: &[Sample],
+    cfg: &RunConfig,
+    on_frame: &mut dyn FnMut(&Progress),
+) -> Result<RunOutcome, RunError> {
     cfg.link.validate()?;
     let mut link = Link::new(&cfg.link, cfg.seed);
     let mut down = Downlink {
@@ -200,6 +261,23 @@ pub fn run(
         .map(|(i, r)| (r.seq, i))
         .collect();
     let mut unmatched = 0u32;
+    let mut running = Running::default();
+    // Puts each reply on the record of the frame it answers, the first intact one winning.
+    let mut file_replies =
+        |down: &mut Downlink, records: &mut [FrameRecord], running: &mut Running| {
+            for f in down.replies.drain(..) {
+                match index_of
+                    .get(&f.estimate.seq)
+                    .and_then(|&i| records.get_mut(i))
+                {
+                    Some(r) if r.reply.is_none() => {
+                        r.reply = Some(f);
+                        running.add(r);
+                    }
+                    _ => unmatched += 1,
+                }
+            }
+        };
     let start = Instant::now();
     let sync = target.synchronous();
     let mut prev_altered = false;
@@ -238,21 +316,16 @@ pub fn run(
         };
         let want = cfg.fast.then_some(s.frame.seq);
         down.pump(target, &mut link, t, deadline, want, &mut buf)?;
+        file_replies(&mut down, &mut records, &mut running);
+        on_frame(&running.progress(i + 1, samples.len()));
     }
     // Late replies.
     if !sync {
         let t = samples.len() as f64 * PERIOD_S;
         let until = Instant::now() + cfg.altered_grace;
         down.pump(target, &mut link, t, until, None, &mut buf)?;
-    }
-    for f in &down.replies {
-        match index_of
-            .get(&f.estimate.seq)
-            .and_then(|&i| records.get_mut(i))
-        {
-            Some(r) if r.reply.is_none() => r.reply = Some(*f),
-            _ => unmatched += 1,
-        }
+        file_replies(&mut down, &mut records, &mut running);
+        on_frame(&running.progress(samples.len(), samples.len()));
     }
     Ok(RunOutcome {
         target: target.name(),
