@@ -35,6 +35,7 @@ pub mod aero;
 pub mod channels;
 pub mod estimator;
 pub mod features;
+pub mod filter;
 pub mod model;
 pub mod nn;
 pub mod normalize;

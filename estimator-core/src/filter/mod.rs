@@ -1,0 +1,604 @@
+//! Model-based air-data filter: an extended Kalman filter that estimates the wind vector and a lift
+//! scale from EGI kinematics and the aircraft's aerodynamic model, and from them α and β.
+//!
+//! # Why this works
+//! With attitude and the GPS/INS velocity, the body-axis air velocity is exact once the wind is
+//! known: `v_air = C_bn · (v_ground − wind)`, α = atan2(w, u), β = asin(v / |v|). The wind is what is
+//! unknown, and the specific force tells it: the accelerometers measure the aerodynamic force over
+//! the mass, and the model ([`crate::aero`], extracted from the JSBSim F-16 the plant flies) predicts
+//! that force from α, β, dynamic pressure, rates and surfaces. A wrong wind gives a wrong α and β,
+//! hence a normal and lateral specific force that disagree with the IMU, and the filter corrects it.
+//! Changes of heading and attitude make every wind component observable over time; in long straight
+//! flight the along-track component is not, which the covariance shows and the flags report.
+//!
+//! # State (7)
+//! `[mean wind N, E, D; gust N, E, D; lift scale k]`, m/s and 1. The mean wind is a random walk; the
+//! gust a first-order Gauss–Markov process (turbulence changes α within a second; the model force sees
+//! it at once); `k` multiplies the predicted force and takes up what the mass from the fuel gauge and
+//! the model get wrong (≈ 1).
+//!
+//! # Measurement (2)
+//! Body y and z specific force at the centre of gravity (IMU reading minus the lever-arm terms),
+//! compared with `k · q̄ · S · C_{Y,Z} / m`. The axial force is not used: thrust is not measured. The
+//! model is evaluated with the inputs of the instant the accelerometers represent (their
+//! anti-alias filter delays them by [`Config::accel_delay_s`]), interpolated between frames. The
+//! Jacobian is a forward difference of the model in the body air velocity, chained through the
+//! attitude matrix. A normalised innovation above [`Config::gate`] is not used.
+//!
+//! # Outputs and trust
+//! α and β are kinematic, at the current frame, with the estimated wind (mean + gust); their 1σ comes
+//! from the wind covariance. [`flags`] say when not to trust them: inputs missing, innovations gated
+//! for a while, covariance blow-up (the filter then restarts), confidence worse than a limit
+//! (including the unobservable wind of long straight flight).
+//!
+//! f32, no heap, no panics; NaN or Inf never leaves: a step whose arithmetic is not finite restarts
+//! the filter and says so.
+
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
+
+use crate::aero::{self, AirState, F16, Surfaces};
+
+/// Number of states.
+pub const STATES: usize = 7;
+const K: usize = 6;
+
+type Vec7 = SVector<f32, STATES>;
+type Mat7 = SMatrix<f32, STATES, STATES>;
+type Mat27 = SMatrix<f32, 2, STATES>;
+
+/// Output flags.
+pub mod flags {
+    /// The inputs the filter needs (EGI attitude and velocity, IMU, surfaces, altitude) were not all
+    /// valid this step: prediction only, outputs held from the last good step.
+    pub const NO_INPUT: u8 = 1 << 0;
+    /// Innovations failed the gate for [`super::Config::gate_run`] steps in a row: the model and
+    /// the sensors disagree (model error, sensor fault, unmodelled configuration).
+    pub const GATED: u8 = 1 << 1;
+    /// The covariance blew up or a step was not finite: the filter restarted this step.
+    pub const RESTARTED: u8 = 1 << 2;
+    /// 1σ of α or β above [`super::Config::max_sigma_rad`]: too uncertain to use (start-up, long
+    /// straight flight with an unobservable wind component, after an outage).
+    pub const LOW_CONFIDENCE: u8 = 1 << 3;
+    /// Airspeed below [`super::Config::min_airspeed_mps`]: α and β are not defined well enough.
+    pub const SLOW: u8 = 1 << 4;
+}
+
+/// Tuning and installation constants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Random-walk power spectral density of the mean wind, (m/s)²/s, N, E, D.
+    pub mean_wind_psd: [f32; 3],
+    /// Initial 1σ of the mean wind, m/s, N, E, D.
+    pub mean_wind_sigma0: [f32; 3],
+    /// Gust: correlation time, s, and steady-state 1σ, m/s.
+    pub gust_tau_s: f32,
+    pub gust_sigma: f32,
+    /// Lift scale: random-walk PSD (1/s) and initial 1σ.
+    pub lift_scale_psd: f32,
+    pub lift_scale_sigma0: f32,
+    /// Measurement 1σ of the y and z specific force at the CG, m/s² (model error dominates).
+    pub accel_sigma: [f32; 2],
+    /// Normalised-innovation gate (χ², 2 degrees of freedom).
+    pub gate: f32,
+    /// Consecutive gated steps before [`flags::GATED`].
+    pub gate_run: u16,
+    /// IMU position from the centre of gravity, body axes (forward, right, down), m.
+    pub lever_arm_m: [f32; 3],
+    /// Group delay of the accelerometers' anti-alias filter, s.
+    pub accel_delay_s: f32,
+    /// Operating empty weight (aircraft and pilot), kg: the mass is this plus the fuel quantity.
+    pub empty_mass_kg: f32,
+    /// [`flags::LOW_CONFIDENCE`] above this 1σ of α or β, rad.
+    pub max_sigma_rad: f32,
+    /// Restart when any wind variance exceeds this, (m/s)².
+    pub max_wind_var: f32,
+    /// [`flags::SLOW`] below this airspeed, m/s.
+    pub min_airspeed_mps: f32,
+}
+
+/// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
+/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The noise figures are
+/// tuned on the training flights of the `paper` preset (`docs/filter.md`).
+pub const F16_CONFIG: Config = Config {
+    mean_wind_psd: [0.02, 0.02, 0.0005],
+    mean_wind_sigma0: [15.0, 15.0, 1.0],
+    gust_tau_s: 1.0,
+    gust_sigma: 2.0,
+    lift_scale_psd: 1e-6,
+    lift_scale_sigma0: 0.05,
+    accel_sigma: [0.3, 0.5],
+    gate: 25.0,
+    gate_run: 20,
+    lever_arm_m: [0.5, 0.0, 0.2],
+    accel_delay_s: 0.0417,
+    empty_mass_kg: (17_400.0 + 230.0) * 0.453_592_37,
+    max_sigma_rad: 0.0175,
+    max_wind_var: 400.0,
+    min_airspeed_mps: 30.0,
+};
+
+/// One frame of what the filter reads, in SI units and radians.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Input {
+    /// Time since the previous input, s.
+    pub dt_s: f32,
+    /// EGI roll, pitch, heading, rad.
+    pub euler_rad: [f32; 3],
+    /// EGI velocity over the ground, north, east, down, m/s.
+    pub vel_ned_mps: [f32; 3],
+    /// GPS altitude, m.
+    pub alt_m: f32,
+    /// Gyro p, q, r, rad/s.
+    pub gyro_rps: [f32; 3],
+    /// Specific force at the IMU, body x, y, z, m/s².
+    pub accel_mps2: [f32; 3],
+    /// Elevator, aileron, rudder, left flaperon, trailing-edge flap, speedbrake, degrees.
+    pub elevator_deg: f32,
+    pub aileron_deg: f32,
+    pub rudder_deg: f32,
+    pub flaperon_left_deg: f32,
+    pub tef_deg: f32,
+    pub speedbrake_deg: f32,
+    /// Fuel quantity, kg.
+    pub fuel_kg: f32,
+}
+
+impl Input {
+    fn is_finite(&self) -> bool {
+        let scalars = [
+            self.dt_s,
+            self.alt_m,
+            self.elevator_deg,
+            self.aileron_deg,
+            self.rudder_deg,
+            self.flaperon_left_deg,
+            self.tef_deg,
+            self.speedbrake_deg,
+            self.fuel_kg,
+        ];
+        scalars
+            .iter()
+            .chain(&self.euler_rad)
+            .chain(&self.vel_ned_mps)
+            .chain(&self.gyro_rps)
+            .chain(&self.accel_mps2)
+            .all(|v| v.is_finite())
+    }
+
+    /// `self` moved `back` (0…1) of the way toward `prev`; heading along the short arc.
+    fn toward(&self, prev: &Input, back: f32) -> Input {
+        let l = |a: f32, b: f32| a + (b - a) * back;
+        let l3 = |a: [f32; 3], b: [f32; 3]| [l(a[0], b[0]), l(a[1], b[1]), l(a[2], b[2])];
+        let mut out = *self;
+        let dpsi = wrap_pi(prev.euler_rad[2] - self.euler_rad[2]);
+        out.euler_rad = [
+            l(self.euler_rad[0], prev.euler_rad[0]),
+            l(self.euler_rad[1], prev.euler_rad[1]),
+            self.euler_rad[2] + dpsi * back,
+        ];
+        out.vel_ned_mps = l3(self.vel_ned_mps, prev.vel_ned_mps);
+        out.alt_m = l(self.alt_m, prev.alt_m);
+        out.elevator_deg = l(self.elevator_deg, prev.elevator_deg);
+        out.aileron_deg = l(self.aileron_deg, prev.aileron_deg);
+        out.rudder_deg = l(self.rudder_deg, prev.rudder_deg);
+        out.flaperon_left_deg = l(self.flaperon_left_deg, prev.flaperon_left_deg);
+        out.tef_deg = l(self.tef_deg, prev.tef_deg);
+        out.speedbrake_deg = l(self.speedbrake_deg, prev.speedbrake_deg);
+        out
+    }
+}
+
+/// What the filter reports each step.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Output {
+    pub alpha_rad: f32,
+    pub beta_rad: f32,
+    /// Estimated wind (mean + gust), north, east, down, m/s (the air mass's velocity).
+    pub wind_ned_mps: [f32; 3],
+    /// True airspeed, m/s.
+    pub airspeed_mps: f32,
+    /// Lift scale (≈ 1).
+    pub lift_scale: f32,
+    /// 1σ of α and β from the covariance, rad.
+    pub sigma_alpha_rad: f32,
+    pub sigma_beta_rad: f32,
+    /// Normalised innovation squared of this step's measurement (0 when none).
+    pub nis: f32,
+    /// [`flags`].
+    pub flags: u8,
+}
+
+/// The filter.
+#[derive(Clone, Debug)]
+pub struct AirDataFilter {
+    cfg: Config,
+    x: Vec7,
+    p: Mat7,
+    prev: Option<Input>,
+    gated_run: u16,
+    last: Output,
+}
+
+fn wrap_pi(a: f32) -> f32 {
+    let two_pi = 2.0 * core::f32::consts::PI;
+    a - two_pi * libm::floorf((a + core::f32::consts::PI) / two_pi)
+}
+
+/// NED → body direction-cosine matrix from roll, pitch, heading.
+fn c_bn(euler: [f32; 3]) -> Matrix3<f32> {
+    let (sf, cf) = (libm::sinf(euler[0]), libm::cosf(euler[0]));
+    let (st, ct) = (libm::sinf(euler[1]), libm::cosf(euler[1]));
+    let (sp, cp) = (libm::sinf(euler[2]), libm::cosf(euler[2]));
+    Matrix3::new(
+        ct * cp,
+        ct * sp,
+        -st,
+        sf * st * cp - cf * sp,
+        sf * st * sp + cf * cp,
+        sf * ct,
+        cf * st * cp + sf * sp,
+        cf * st * sp - sf * cp,
+        cf * ct,
+    )
+}
+
+/// ISA density (kg/m³) and speed of sound (m/s) at a geometric altitude (m): troposphere and the
+/// isothermal layer above it.
+pub fn isa(alt_m: f32) -> (f32, f32) {
+    const R_EARTH: f32 = 6_356_766.0;
+    const T0: f32 = 288.15;
+    const P0: f32 = 101_325.0;
+    const LAPSE: f32 = -0.0065;
+    const R_AIR: f32 = 287.052_87;
+    const G0: f32 = 9.806_65;
+    let h = R_EARTH * alt_m / (R_EARTH + alt_m);
+    let t11 = T0 + LAPSE * 11_000.0;
+    let expo = -G0 / (LAPSE * R_AIR);
+    let (t, p) = if h < 11_000.0 {
+        let t = T0 + LAPSE * h;
+        (t, P0 * libm::powf(t / T0, expo))
+    } else {
+        let p11 = P0 * libm::powf(t11 / T0, expo);
+        (t11, p11 * libm::expf(-G0 * (h - 11_000.0) / (R_AIR * t11)))
+    };
+    (p / (R_AIR * t), libm::sqrtf(1.4 * R_AIR * t))
+}
+
+/// The leading-edge flap the aero model reads (`fcs/lef-pos-rad`), scheduled by the F-16 model's
+/// flight-control system from α and Mach in flight (gear up): 25° above 15° α, 15° above 5° α,
+/// −2° above Mach 0.9, else 0. In degrees.
+fn lef_schedule_deg(alpha_rad: f32, mach: f32) -> f32 {
+    let rad = if alpha_rad > 0.2618 {
+        0.436
+    } else if alpha_rad > 0.0873 {
+        0.262
+    } else if mach > 0.9 {
+        -0.0349
+    } else {
+        0.0
+    };
+    rad * (180.0 / core::f32::consts::PI)
+}
+
+/// The right flaperon, which no channel carries, from the left one and the trailing-edge flap: the
+/// F-16 model mixes left = −tef − a, right = tef − a (norms, each clipped to ±1), so right =
+/// left + 2·tef while the left one is not at its stop. At the stop, `a` comes from the aileron
+/// (÷ 0.375 rad, speed-compensated by 1 − 0.85·Mach).
+fn flaperon_right_deg(inp: &Input, mach: f32) -> f32 {
+    let per = aero::FLAPERON_DEG_PER_NORM;
+    let left = inp.flaperon_left_deg / per;
+    let tef = inp.tef_deg / per;
+    let right = if libm::fabsf(left) > 0.995 {
+        let a = inp.aileron_deg.to_radians() / 0.375 * (1.0 - 0.85 * mach).clamp(0.15, 1.0);
+        tef - a
+    } else {
+        left + 2.0 * tef
+    };
+    right.clamp(-1.0, 1.0) * per
+}
+
+/// Specific force at the CG per unit lift scale, body axes, for a body air velocity; `None` when the
+/// model cannot be evaluated there.
+fn model_force(
+    vb: &Vector3<f32>,
+    inp: &Input,
+    gyro: [f32; 3],
+    rho: f32,
+    a_sound: f32,
+    mass_kg: f32,
+) -> Option<Vector3<f32>> {
+    let v = vb.norm();
+    if v.is_nan() || v <= 1.0 {
+        return None;
+    }
+    let alpha = libm::atan2f(vb.z, vb.x);
+    let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
+    let mach = v / a_sound;
+    let air = AirState {
+        alpha_rad: alpha,
+        beta_rad: beta,
+        mach,
+        tas_mps: v,
+        p_rps: gyro[0],
+        q_rps: gyro[1],
+        r_rps: gyro[2],
+        h_over_b: AirState::NO_GROUND_EFFECT,
+    };
+    let s = Surfaces {
+        elevator_deg: inp.elevator_deg,
+        aileron_deg: inp.aileron_deg,
+        rudder_deg: inp.rudder_deg,
+        lef_deg: lef_schedule_deg(alpha, mach),
+        flaperon_left_deg: inp.flaperon_left_deg,
+        flaperon_right_deg: flaperon_right_deg(inp, mach),
+        speedbrake_deg: inp.speedbrake_deg,
+        gear_norm: 0.0,
+    };
+    let c = F16.coefficients(&air, &s);
+    if !c.valid {
+        return None;
+    }
+    let s_m2 = F16.wing_area_ft2 * 0.3048 * 0.3048;
+    let qs_m = 0.5 * rho * v * v * s_m2 / mass_kg;
+    Some(Vector3::new(c.body.x, c.body.y, c.body.z) * qs_m)
+}
+
+impl AirDataFilter {
+    pub fn new(cfg: Config) -> Self {
+        let mut f = AirDataFilter {
+            cfg,
+            x: Vec7::zeros(),
+            p: Mat7::zeros(),
+            prev: None,
+            gated_run: 0,
+            last: Output::default(),
+        };
+        f.restart();
+        f
+    }
+
+    /// Back to the initial state and covariance (wind unknown, lift scale 1).
+    pub fn restart(&mut self) {
+        let c = &self.cfg;
+        self.x = Vec7::zeros();
+        if let Some(k) = self.x.get_mut(K) {
+            *k = 1.0;
+        }
+        let sq = |v: f32| v * v;
+        self.p = Mat7::from_diagonal(&Vec7::from([
+            sq(c.mean_wind_sigma0[0]),
+            sq(c.mean_wind_sigma0[1]),
+            sq(c.mean_wind_sigma0[2]),
+            sq(c.gust_sigma),
+            sq(c.gust_sigma),
+            sq(c.gust_sigma),
+            sq(c.lift_scale_sigma0),
+        ]));
+        self.prev = None;
+        self.gated_run = 0;
+    }
+
+    pub fn wind(&self) -> Vector3<f32> {
+        self.x.fixed_rows::<3>(0) + self.x.fixed_rows::<3>(3)
+    }
+
+    pub fn lift_scale(&self) -> f32 {
+        self.x.get(K).copied().unwrap_or(1.0)
+    }
+
+    fn predict(&mut self, dt: f32) {
+        let c = &self.cfg;
+        let phi = libm::expf(-dt / c.gust_tau_s);
+        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0]));
+        let gust_q = c.gust_sigma * c.gust_sigma * (1.0 - phi * phi);
+        let [qn, qe, qd] = c.mean_wind_psd;
+        let q = Mat7::from_diagonal(&Vec7::from([
+            qn * dt,
+            qe * dt,
+            qd * dt,
+            gust_q,
+            gust_q,
+            gust_q,
+            c.lift_scale_psd * dt,
+        ]));
+        self.x = f * self.x;
+        self.p = f * self.p * f.transpose() + q;
+    }
+
+    /// The measurement update; returns the NIS, or `None` when there was nothing to compare.
+    fn update(&mut self, inp: &Input, prev: &Input) -> Option<f32> {
+        let c = self.cfg;
+        let dt = inp.dt_s;
+        let back = if dt > 0.0 {
+            (c.accel_delay_s / dt).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let u = inp.toward(prev, back);
+        let (rho, a_sound) = isa(u.alt_m);
+        let mass = c.empty_mass_kg + inp.fuel_kg.max(0.0);
+        // Specific force at the CG: f_cg = f_imu − ω̇ × r − ω × (ω × r).
+        let w = Vector3::from(inp.gyro_rps);
+        let w_prev = Vector3::from(prev.gyro_rps);
+        let w_dot = if dt > 0.0 {
+            (w - w_prev) / dt
+        } else {
+            Vector3::zeros()
+        };
+        let r = Vector3::from(c.lever_arm_m);
+        let f_cg = Vector3::from(inp.accel_mps2) - w_dot.cross(&r) - w.cross(&w.cross(&r));
+
+        let cbn = c_bn(u.euler_rad);
+        let vb = cbn * (Vector3::from(u.vel_ned_mps) - self.wind());
+        let f0 = model_force(&vb, &u, inp.gyro_rps, rho, a_sound, mass)?;
+        let k = self.lift_scale();
+        // d f / d v_body by forward differences, then d h / d wind = −k · (df/dvb) · C_bn.
+        const D: f32 = 0.01;
+        let mut dfdvb = Matrix3::zeros();
+        for j in 0..3 {
+            let mut vj = vb;
+            if let Some(e) = vj.get_mut(j) {
+                *e += D;
+            }
+            let fj = model_force(&vj, &u, inp.gyro_rps, rho, a_sound, mass)?;
+            dfdvb.set_column(j, &((fj - f0) / D));
+        }
+        let dhdw = -(dfdvb * cbn) * k;
+        // Rows: the y and z specific force. Mean wind and gust enter alike; k scales the model.
+        let mut h = Mat27::zeros();
+        for (row, axis) in [(0usize, 1usize), (1, 2)] {
+            let d = dhdw.row(axis);
+            h.fixed_view_mut::<1, 3>(row, 0).copy_from(&d);
+            h.fixed_view_mut::<1, 3>(row, 3).copy_from(&d);
+            if let Some(e) = h.get_mut((row, K)) {
+                *e = f0.get(axis).copied().unwrap_or(0.0);
+            }
+        }
+        let nu = Vector2::new(f_cg.y - k * f0.y, f_cg.z - k * f0.z);
+        let rm = Matrix2::new(
+            c.accel_sigma[0] * c.accel_sigma[0],
+            0.0,
+            0.0,
+            c.accel_sigma[1] * c.accel_sigma[1],
+        );
+        let s = h * self.p * h.transpose() + rm;
+        let s_inv = s.try_inverse()?;
+        let nis = (nu.transpose() * s_inv * nu).x;
+        if !nis.is_finite() {
+            return None;
+        }
+        if nis > c.gate {
+            self.gated_run = self.gated_run.saturating_add(1);
+            return Some(nis);
+        }
+        self.gated_run = 0;
+        let gain = self.p * h.transpose() * s_inv;
+        self.x += gain * nu;
+        let ikh = Mat7::identity() - gain * h;
+        self.p = ikh * self.p * ikh.transpose() + gain * rm * gain.transpose();
+        Some(nis)
+    }
+
+    fn healthy(&self) -> bool {
+        let var_ok = self
+            .p
+            .diagonal()
+            .iter()
+            .take(6)
+            .all(|v| *v >= 0.0 && *v <= self.cfg.max_wind_var);
+        let k = self.lift_scale();
+        var_ok && self.x.iter().all(|v| v.is_finite()) && (0.5..=1.5).contains(&k)
+    }
+
+    /// One 20 Hz step. `inputs_valid` false (or any input not finite) runs the prediction only and
+    /// holds the outputs.
+    pub fn step(&mut self, inp: &Input, inputs_valid: bool) -> Output {
+        let mut flags = 0;
+        let dt = if inp.dt_s.is_finite() {
+            inp.dt_s.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self.predict(dt);
+        if !inputs_valid || !inp.is_finite() {
+            self.prev = None;
+            if !self.healthy() {
+                self.restart();
+                flags |= flags::RESTARTED;
+            }
+            let mut out = self.last;
+            out.flags = flags | flags::NO_INPUT | flags::LOW_CONFIDENCE;
+            out.nis = 0.0;
+            self.last = out;
+            return out;
+        }
+        let nis = match self.prev {
+            Some(prev) => self.update(inp, &prev).unwrap_or(0.0),
+            None => 0.0,
+        };
+        self.prev = Some(*inp);
+        if !self.healthy() {
+            self.restart();
+            self.prev = Some(*inp);
+            flags |= flags::RESTARTED;
+        }
+        if self.gated_run >= self.cfg.gate_run {
+            flags |= flags::GATED;
+        }
+        match self.output(inp, nis) {
+            Some(mut out) => {
+                if out.sigma_alpha_rad > self.cfg.max_sigma_rad
+                    || out.sigma_beta_rad > self.cfg.max_sigma_rad
+                {
+                    flags |= flags::LOW_CONFIDENCE;
+                }
+                if out.airspeed_mps < self.cfg.min_airspeed_mps {
+                    flags |= flags::SLOW;
+                }
+                out.flags = flags;
+                self.last = out;
+                out
+            }
+            None => {
+                self.restart();
+                let mut out = self.last;
+                out.flags = flags | flags::RESTARTED | flags::LOW_CONFIDENCE;
+                self.last = out;
+                out
+            }
+        }
+    }
+
+    /// α, β, their 1σ and the rest at the current frame; `None` if anything is not finite.
+    fn output(&self, inp: &Input, nis: f32) -> Option<Output> {
+        let wind = self.wind();
+        let cbn = c_bn(inp.euler_rad);
+        let vb = cbn * (Vector3::from(inp.vel_ned_mps) - wind);
+        let v = vb.norm();
+        if v.is_nan() || v <= 1.0 {
+            return None;
+        }
+        let alpha = libm::atan2f(vb.z, vb.x);
+        let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
+        // ∂α/∂vb and ∂β/∂vb, then through vb = C_bn (v − wind): ∂/∂wind = −(∂/∂vb) C_bn.
+        let uw2 = vb.x * vb.x + vb.z * vb.z;
+        let da = Vector3::new(-vb.z / uw2, 0.0, vb.x / uw2);
+        let sq = libm::sqrtf(uw2);
+        let db = Vector3::new(-vb.x * vb.y, uw2, -vb.z * vb.y) / (v * v * sq);
+        let pw = self.p.fixed_view::<3, 3>(0, 0)
+            + self.p.fixed_view::<3, 3>(3, 3)
+            + self.p.fixed_view::<3, 3>(0, 3)
+            + self.p.fixed_view::<3, 3>(3, 0);
+        let ja = cbn.transpose() * da;
+        let jb = cbn.transpose() * db;
+        let var_a = (ja.transpose() * pw * ja).x;
+        let var_b = (jb.transpose() * pw * jb).x;
+        let out = Output {
+            alpha_rad: alpha,
+            beta_rad: beta,
+            wind_ned_mps: [wind.x, wind.y, wind.z],
+            airspeed_mps: v,
+            lift_scale: self.lift_scale(),
+            sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
+            sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
+            nis,
+            flags: 0,
+        };
+        let finite = [
+            out.alpha_rad,
+            out.beta_rad,
+            out.airspeed_mps,
+            out.lift_scale,
+            out.sigma_alpha_rad,
+            out.sigma_beta_rad,
+            out.nis,
+        ]
+        .iter()
+        .chain(&out.wind_ned_mps)
+        .all(|v| v.is_finite());
+        finite.then_some(out)
+    }
+}
+
+#[cfg(test)]
+mod tests;

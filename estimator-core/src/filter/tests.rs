@@ -1,0 +1,230 @@
+//! The filter against a world made with its own model: a steady wind, an aircraft turning through
+//! it, the IMU reading exactly the model's specific force. What must hold: it finds the wind and
+//! α/β, it says when it cannot, and nothing it returns is ever NaN.
+
+use super::*;
+use proptest::prelude::*;
+
+const DT: f32 = 0.05;
+
+/// The flight: 150 m/s air-relative, α 6°, β 1°, banking ±40° so the heading swings; wind `wind`.
+struct World {
+    wind: Vector3<f32>,
+    k: f32,
+}
+
+struct Truth {
+    alpha: f32,
+    beta: f32,
+}
+
+impl World {
+    fn frame(&self, t: f32, cfg: &Config) -> (Input, Truth) {
+        let alpha = 6f32.to_radians();
+        let beta = 1f32.to_radians();
+        let v = 150.0;
+        let vb = Vector3::new(
+            v * libm::cosf(alpha) * libm::cosf(beta),
+            v * libm::sinf(beta),
+            v * libm::sinf(alpha) * libm::cosf(beta),
+        );
+        let phi = 40f32.to_radians() * libm::sinf(t / 20.0);
+        let theta = alpha;
+        let psi = wrap_pi(0.8 * t / 10.0 + 0.3 * libm::sinf(t / 7.0));
+        let euler = [phi, theta, psi.rem_euclid(2.0 * core::f32::consts::PI)];
+        let cbn = c_bn(euler);
+        let v_ned = cbn.transpose() * vb + self.wind;
+        let mut inp = Input {
+            dt_s: DT,
+            euler_rad: euler,
+            vel_ned_mps: [v_ned.x, v_ned.y, v_ned.z],
+            alt_m: 5000.0,
+            gyro_rps: [0.0; 3],
+            accel_mps2: [0.0; 3],
+            elevator_deg: -3.0,
+            aileron_deg: 0.5,
+            rudder_deg: 0.0,
+            flaperon_left_deg: 0.0,
+            tef_deg: 0.0,
+            speedbrake_deg: 0.0,
+            fuel_kg: 1500.0,
+        };
+        let (rho, a) = isa(inp.alt_m);
+        let mass = cfg.empty_mass_kg + inp.fuel_kg;
+        let f = model_force(&vb, &inp, inp.gyro_rps, rho, a, mass).unwrap() * self.k;
+        inp.accel_mps2 = [f.x, f.y, f.z];
+        (inp, Truth { alpha, beta })
+    }
+}
+
+fn cfg() -> Config {
+    Config {
+        accel_delay_s: 0.0,
+        lever_arm_m: [0.0; 3],
+        ..F16_CONFIG
+    }
+}
+
+fn fly(
+    f: &mut AirDataFilter,
+    w: &World,
+    from_s: f32,
+    to_s: f32,
+    mut each: impl FnMut(f32, &Output, &Truth),
+) {
+    let c = cfg();
+    let mut t = from_s;
+    while t < to_s {
+        let (inp, truth) = w.frame(t, &c);
+        let out = f.step(&inp, true);
+        each(t, &out, &truth);
+        t += DT;
+    }
+}
+
+#[test]
+fn finds_a_steady_wind_and_alpha_beta_while_turning() {
+    let w = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.0,
+    };
+    let mut f = AirDataFilter::new(cfg());
+    let mut worst = (0f32, 0f32);
+    fly(&mut f, &w, 0.0, 120.0, |t, out, truth| {
+        if t > 60.0 {
+            worst.0 = worst.0.max((out.alpha_rad - truth.alpha).abs());
+            worst.1 = worst.1.max((out.beta_rad - truth.beta).abs());
+            assert_eq!(out.flags & !flags::LOW_CONFIDENCE, 0, "t {t}: {out:?}");
+        }
+    });
+    let wind = f.wind();
+    assert!((wind - w.wind).norm() < 1.0, "wind {wind:?}");
+    assert!(
+        worst.0.to_degrees() < 0.1,
+        "α error {}°",
+        worst.0.to_degrees()
+    );
+    assert!(
+        worst.1.to_degrees() < 0.1,
+        "β error {}°",
+        worst.1.to_degrees()
+    );
+    assert!((f.lift_scale() - 1.0).abs() < 0.02, "k {}", f.lift_scale());
+}
+
+#[test]
+fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
+    // 4 % more force per unit of model coefficient than mass and model predict.
+    let w = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.04,
+    };
+    let mut f = AirDataFilter::new(cfg());
+    let mut worst_alpha = 0f32;
+    fly(&mut f, &w, 0.0, 240.0, |t, out, truth| {
+        if t > 180.0 {
+            worst_alpha = worst_alpha.max((out.alpha_rad - truth.alpha).abs());
+        }
+    });
+    assert!((f.lift_scale() - 1.04).abs() < 0.02, "k {}", f.lift_scale());
+    assert!(
+        worst_alpha.to_degrees() < 0.15,
+        "α error {}°",
+        worst_alpha.to_degrees()
+    );
+}
+
+#[test]
+fn a_dropout_is_flagged_at_once_and_recovered_within_5_s() {
+    let w = World {
+        wind: Vector3::new(-9.0, 4.0, 0.0),
+        k: 1.0,
+    };
+    let mut f = AirDataFilter::new(cfg());
+    fly(&mut f, &w, 0.0, 90.0, |_, _, _| {});
+    // 30 s without EGI/GPS.
+    let c = cfg();
+    for i in 0..600 {
+        let (inp, _) = w.frame(90.0 + i as f32 * DT, &c);
+        let out = f.step(&inp, false);
+        assert_ne!(out.flags & flags::NO_INPUT, 0);
+        assert_ne!(out.flags & flags::LOW_CONFIDENCE, 0);
+        assert!(out.alpha_rad.is_finite() && out.beta_rad.is_finite());
+    }
+    let mut back_at = None;
+    fly(&mut f, &w, 120.0, 140.0, |t, out, truth| {
+        let good = out.flags == 0
+            && (out.alpha_rad - truth.alpha).abs().to_degrees() < 0.25
+            && (out.beta_rad - truth.beta).abs().to_degrees() < 0.25;
+        if good && back_at.is_none() {
+            back_at = Some(t - 120.0);
+        }
+    });
+    let back = back_at.expect("never recovered");
+    assert!(back <= 5.0, "recovered after {back} s");
+}
+
+#[test]
+fn model_and_sensors_that_disagree_are_gated_and_flagged() {
+    let w = World {
+        wind: Vector3::new(5.0, 5.0, 0.0),
+        k: 1.0,
+    };
+    let mut f = AirDataFilter::new(cfg());
+    fly(&mut f, &w, 0.0, 60.0, |_, _, _| {});
+    let c = cfg();
+    let mut flagged_after = None;
+    for i in 0..100 {
+        let (mut inp, _) = w.frame(60.0 + i as f32 * DT, &c);
+        inp.accel_mps2[2] -= 40.0; // a 4 g error on the normal axis
+        let out = f.step(&inp, true);
+        if out.flags & flags::GATED != 0 && flagged_after.is_none() {
+            flagged_after = Some(i + 1);
+        }
+    }
+    assert_eq!(flagged_after, Some(usize::from(c.gate_run)));
+}
+
+fn any_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        4 => -1e4f32..1e4,
+        1 => Just(f32::NAN),
+        1 => Just(f32::INFINITY),
+        1 => Just(f32::NEG_INFINITY),
+        1 => Just(0.0f32),
+        1 => any::<f32>(),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Whatever arrives, what leaves is finite, and a step without usable inputs says so.
+    #[test]
+    fn nothing_non_finite_ever_leaves(values in proptest::collection::vec(any_f32(), 22 * 8), valid in any::<[bool; 8]>()) {
+        let mut f = AirDataFilter::new(F16_CONFIG);
+        for (chunk, ok) in values.chunks(22).zip(valid) {
+            let g = |i: usize| chunk[i];
+            let inp = Input {
+                dt_s: g(0),
+                euler_rad: [g(1), g(2), g(3)],
+                vel_ned_mps: [g(4), g(5), g(6)],
+                alt_m: g(7),
+                gyro_rps: [g(8), g(9), g(10)],
+                accel_mps2: [g(11), g(12), g(13)],
+                elevator_deg: g(14),
+                aileron_deg: g(15),
+                rudder_deg: g(16),
+                flaperon_left_deg: g(17),
+                tef_deg: g(18),
+                speedbrake_deg: g(19),
+                fuel_kg: g(20),
+            };
+            let out = f.step(&inp, ok);
+            let all = [out.alpha_rad, out.beta_rad, out.airspeed_mps, out.lift_scale, out.sigma_alpha_rad, out.sigma_beta_rad, out.nis, out.wind_ned_mps[0], out.wind_ned_mps[1], out.wind_ned_mps[2]];
+            prop_assert!(all.iter().all(|v| v.is_finite()), "{:?}", out);
+            if !ok || !inp.is_finite() {
+                prop_assert!(out.flags & flags::NO_INPUT != 0);
+            }
+        }
+    }
+}
