@@ -265,6 +265,14 @@ fn progress_message(p: &super::Progress) -> String {
     )
 }
 
+/// SYSCLK of the flight computer with its PLL up (168 MHz): DWT cycle counts from a board convert to
+/// time at this rate.
+const SILICON_SYSCLK_HZ: u32 = firmware::rcc::DISCOVERY.sysclk_hz();
+
+fn cycles_to_us(cycles: u32) -> f64 {
+    f64::from(cycles) * 1e6 / f64::from(SILICON_SYSCLK_HZ)
+}
+
 /// The short table printed at the end of a run (without `--json`).
 fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
     use std::fmt::Write as _;
@@ -315,8 +323,32 @@ fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
         count(s.step_ticks_median),
         s.deadline_misses
     );
+    if unit == "cycles" {
+        // DWT cycles on silicon: the firmware runs at 168 MHz (firmware::rcc) once the PLL is up.
+        let us = |v: Option<u32>| {
+            v.map_or_else(|| "-".to_string(), |c| format!("{:.1}", cycles_to_us(c)))
+        };
+        let _ = writeln!(
+            t,
+            "  {:<16} max {} µs, median {} µs at {} MHz (budget 50,000 µs)",
+            "",
+            us(s.step_ticks_max),
+            us(s.step_ticks_median),
+            SILICON_SYSCLK_HZ / 1_000_000
+        );
+    }
     let _ = writeln!(t, "  {:<16} {}", "plot", w.png.display());
     let _ = writeln!(t, "  {:<16} {}", "summary (JSON)", w.json.display());
     let _ = writeln!(t, "  {:<16} {}", "estimates (CSV)", w.csv.display());
     t
+}
+
+#[cfg(test)]
+mod silicon_time {
+    #[test]
+    fn dwt_cycles_convert_at_168_mhz() {
+        assert_eq!(super::SILICON_SYSCLK_HZ, 168_000_000);
+        assert_eq!(super::cycles_to_us(8_400_000), 50_000.0);
+        assert_eq!(super::cycles_to_us(168), 1.0);
+    }
 }
