@@ -638,9 +638,10 @@ impl SensorModel {
         (gyro, accel)
     }
 
-    /// One 120 Hz step: the 16 sensed channels at this instant.
+    /// One 120 Hz step: the sensed channels at this instant (the EGI channels are not modelled yet:
+    /// NaN, i.e. absent).
     pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
-        let mut out = [0.0; CHANNELS];
+        let mut out = [f64::NAN; CHANNELS];
         let (gyro_raw, accel_raw) = self.imu_raw(t);
         for k in 0..3 {
             out[Channel::GyroP.index() + k] = self.gyro[k].filter(gyro_raw[k]);

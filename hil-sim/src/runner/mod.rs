@@ -15,9 +15,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use estimator_core::SensorFrame;
 use estimator_core::wire::estimate::EstimateFrame;
 use estimator_core::wire::{Accumulator, MAX_FRAME};
+use estimator_core::{SensorFrame, Suite};
 
 use crate::link::{Link, LinkConfig, LinkStats};
 pub use target::{InProcess, Qemu, Serial, Target};
@@ -59,6 +59,10 @@ pub struct RunConfig {
     pub reply_timeout: Duration,
     /// Fast mode: how long to wait for the reply to a frame the link altered.
     pub altered_grace: Duration,
+    /// The sensor suite sent, i.e. the frame kind: as `Table1` the frames carry the paper's inputs
+    /// only (the EGI channels are not sent, so the byte stream, and what the link does to it, is
+    /// the same as before the EGI suite existed).
+    pub suite: Suite,
 }
 
 impl Default for RunConfig {
@@ -69,6 +73,7 @@ impl Default for RunConfig {
             fast: true,
             reply_timeout: Duration::from_secs(10),
             altered_grace: Duration::from_millis(50),
+            suite: Suite::Table1,
         }
     }
 }
@@ -208,7 +213,7 @@ pub fn run(
 
     for (i, s) in samples.iter().enumerate() {
         let t = i as f64 * PERIOD_S;
-        let n = s.frame.encode(&mut wire).unwrap_or(0);
+        let n = s.frame.encode(cfg.suite, &mut wire).unwrap_or(0);
         let d = link.up.transmit(t, wire.get(..n).unwrap_or(&[]));
         if cfg.fast {
             target.send(&d.bytes)?;
