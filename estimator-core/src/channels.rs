@@ -274,7 +274,7 @@ channel_names!(
     VelNorth => "egi_v_north_mps",
     VelEast => "egi_v_east_mps",
     VelDown => "egi_v_down_mps",
-    Fuel => "fuel_kg",
+    Fuel => "fuel_qty_kg",
 );
 
 /// One validated sensor sample: the payload of a sensor frame.
