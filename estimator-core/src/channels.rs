@@ -1,12 +1,23 @@
-//! The sensed channels, their integer units, and the validated sensor frame.
+//! The sensed channels, their integer units, the sensor suites, and the validated sensor frame.
 //!
 //! This is the single definition of what a sensor frame carries and in which fixed-point unit. Every
 //! value is an integer in the unit named here, as a sensor bus would deliver it; the estimator never
 //! sees floats. `SensorFrame::from_si` is the host-side conversion (NaN, ±Inf and out-of-range values
 //! become invalid channels, never numbers).
+//!
+//! # Sensor suites
+//! A [`Suite`] is a named set of channels an aircraft delivers. [`Suite::Table1`] is exactly the
+//! inputs of Karali et al. 2023, Table 1 (the first 16 channels), kept so the comparison with the
+//! paper stays reproducible. [`Suite::Egi`] adds what a fighter's embedded GPS/INS also gives:
+//! attitude, the GPS/INS velocity vector and the fuel quantity (channels 16–22, appended so every
+//! Table 1 channel keeps its index). No suite carries an air-data quantity.
 
-/// Number of sensed channels in a frame.
-pub const CHANNELS: usize = 16;
+/// Number of sensed channels in a frame (every suite's channels; a frame of a smaller suite marks
+/// the others invalid).
+pub const CHANNELS: usize = 23;
+
+/// Number of channels of [`Suite::Table1`]: channels `0..TABLE1_CHANNELS`.
+pub const TABLE1_CHANNELS: usize = 16;
 
 /// A sensed channel, in frame order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -45,6 +56,20 @@ pub enum Channel {
     Speedbrake,
     /// Throttle lever, 1e-4 of full travel (0.5 = military power, 1.0 = full afterburner).
     Throttle,
+    /// EGI roll angle φ, µrad, in (−π, π].
+    Roll,
+    /// EGI pitch angle θ, µrad, in [−π/2, π/2].
+    Pitch,
+    /// EGI true heading ψ, µrad, wrapped to [0, 2π) (as JSBSim's `attitude/psi-rad`).
+    Heading,
+    /// EGI (GPS/INS) velocity north over the ground, mm/s.
+    VelNorth,
+    /// EGI velocity east, mm/s.
+    VelEast,
+    /// EGI velocity down, mm/s (positive descending).
+    VelDown,
+    /// Fuel quantity (gauging system total), 0.1 kg; 16-bit on the wire (0–6553.5 kg).
+    Fuel,
 }
 
 impl Channel {
@@ -65,14 +90,31 @@ impl Channel {
         Channel::Flaperon,
         Channel::Speedbrake,
         Channel::Throttle,
+        Channel::Roll,
+        Channel::Pitch,
+        Channel::Heading,
+        Channel::VelNorth,
+        Channel::VelEast,
+        Channel::VelDown,
+        Channel::Fuel,
     ];
 
     pub const fn index(self) -> usize {
         self as usize
     }
 
-    pub const fn bit(self) -> u16 {
-        1 << (self as u16)
+    /// This channel's bit in a validity mask ([`SensorFrame::valid`]) or a source mask.
+    pub const fn bit(self) -> u32 {
+        1 << (self as u32)
+    }
+
+    /// The smallest suite that carries this channel.
+    pub const fn suite(self) -> Suite {
+        if self.index() < TABLE1_CHANNELS {
+            Suite::Table1
+        } else {
+            Suite::Egi
+        }
     }
 
     /// Size of one integer step in the SI (or degree / normalised) unit of [`Channel::name`].
@@ -83,14 +125,17 @@ impl Channel {
             Channel::GpsSpeed => 1e-3,
             Channel::GpsAlt => 1e-2,
             Channel::Throttle => 1e-4,
+            Channel::Roll | Channel::Pitch | Channel::Heading => 1e-6,
+            Channel::VelNorth | Channel::VelEast | Channel::VelDown => 1e-3,
+            Channel::Fuel => 1e-1,
             _ => 1e-2,
         }
     }
 
-    /// Range the wire type can carry (surfaces and throttle are 16-bit on the wire).
+    /// Range the wire type can carry (surfaces, throttle and fuel are 16-bit on the wire).
     pub const fn raw_range(self) -> (i32, i32) {
         match self {
-            Channel::Throttle => (0, u16::MAX as i32),
+            Channel::Throttle | Channel::Fuel => (0, u16::MAX as i32),
             Channel::Elevator
             | Channel::Aileron
             | Channel::Rudder
@@ -102,14 +147,83 @@ impl Channel {
         }
     }
 
-    /// Channels whose noise makes an unchanged value over many frames a sign of a stuck sensor.
+    /// Channels whose noise makes an unchanged value over many frames a sign of a stuck sensor: the
+    /// IMU, GPS and EGI outputs (not the surfaces, the throttle or the coarse, slow fuel gauge).
     pub const fn is_noisy(self) -> bool {
-        (self as u8) <= Channel::GpsAlt as u8
+        matches!(
+            self,
+            Channel::GyroP
+                | Channel::GyroQ
+                | Channel::GyroR
+                | Channel::AccelX
+                | Channel::AccelY
+                | Channel::AccelZ
+                | Channel::GpsSpeed
+                | Channel::GpsAlt
+                | Channel::Roll
+                | Channel::Pitch
+                | Channel::Heading
+                | Channel::VelNorth
+                | Channel::VelEast
+                | Channel::VelDown
+        )
     }
 }
 
 /// All channels valid.
-pub const ALL_VALID: u16 = u16::MAX >> (16 - CHANNELS);
+pub const ALL_VALID: u32 = u32::MAX >> (32 - CHANNELS);
+
+/// A named, versioned set of sensed channels: what a frame of the wire format, a dataset and a
+/// model's inputs may carry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Suite {
+    /// Exactly the paper's inputs (Karali et al. 2023, Table 1): IMU rates and specific force, GPS
+    /// speed and altitude, seven surfaces, throttle. Channels `0..16`.
+    Table1,
+    /// Table 1 plus what a fighter's embedded GPS/INS gives: roll, pitch, heading, velocity
+    /// north/east/down, and the fuel quantity. All [`CHANNELS`] channels.
+    Egi,
+}
+
+impl Suite {
+    pub const ALL: [Suite; 2] = [Suite::Table1, Suite::Egi];
+
+    /// Name used on command lines, in manifests and reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Suite::Table1 => "table1",
+            Suite::Egi => "egi",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Suite> {
+        Suite::ALL.iter().copied().find(|s| s.name() == name)
+    }
+
+    /// The channels this suite carries (bit per [`Channel`]).
+    pub const fn channels(self) -> u32 {
+        match self {
+            Suite::Table1 => u32::MAX >> (32 - TABLE1_CHANNELS),
+            Suite::Egi => ALL_VALID,
+        }
+    }
+
+    pub const fn carries(self, c: Channel) -> bool {
+        self.channels() & c.bit() != 0
+    }
+
+    /// The smallest suite carrying every channel of `mask`, or `None` if no suite does.
+    pub const fn covering(mask: u32) -> Option<Suite> {
+        if mask & !Suite::Table1.channels() == 0 {
+            Some(Suite::Table1)
+        } else if mask & !Suite::Egi.channels() == 0 {
+            Some(Suite::Egi)
+        } else {
+            None
+        }
+    }
+}
 
 /// [`Channel::name`] and the delta-feature names from one list: `"<name>_d<frames>"` for every lag.
 macro_rules! channel_names {
@@ -154,6 +268,13 @@ channel_names!(
     Flaperon => "flaperon_deg",
     Speedbrake => "speedbrake_deg",
     Throttle => "throttle_norm",
+    Roll => "egi_roll_rad",
+    Pitch => "egi_pitch_rad",
+    Heading => "egi_heading_rad",
+    VelNorth => "egi_v_north_mps",
+    VelEast => "egi_v_east_mps",
+    VelDown => "egi_v_down_mps",
+    Fuel => "fuel_qty_kg",
 );
 
 /// One validated sensor sample: the payload of a sensor frame.
@@ -166,8 +287,9 @@ pub struct SensorFrame {
     pub time_ms: u32,
     /// Channel values in [`Channel`] order and units.
     pub raw: [i32; CHANNELS],
-    /// Bit `c` set: channel `c` is valid (sensor self-test passed, value finite and in range).
-    pub valid: u16,
+    /// Bit `c` set: channel `c` is valid (sensor self-test passed, value finite and in range). A
+    /// channel the sending suite does not carry is invalid.
+    pub valid: u32,
 }
 
 impl SensorFrame {
@@ -194,6 +316,19 @@ impl SensorFrame {
                 f.valid |= c.bit();
             }
         }
+        f
+    }
+
+    /// The frame as a sender of `suite` delivers it: channels the suite does not carry are invalid
+    /// and read 0 (what decoding a frame of that suite gives).
+    pub fn restricted_to(&self, suite: Suite) -> SensorFrame {
+        let mut f = *self;
+        for (c, r) in Channel::ALL.iter().zip(f.raw.iter_mut()) {
+            if !suite.carries(*c) {
+                *r = 0;
+            }
+        }
+        f.valid &= suite.channels();
         f
     }
 
@@ -240,6 +375,42 @@ mod tests {
         assert_eq!(f.get(Channel::GpsSpeed), 250_000);
         assert_eq!(f.get(Channel::GyroP), 0);
         assert_eq!(f.valid.count_ones(), CHANNELS as u32 - 3);
+    }
+
+    #[test]
+    fn table1_channels_keep_their_indices_and_egi_ones_follow() {
+        // The wire format, the datasets and the shipped model index the first 16 channels.
+        assert_eq!(Channel::Throttle.index(), 15);
+        assert_eq!(Channel::Roll.index(), TABLE1_CHANNELS);
+        assert_eq!(Channel::Fuel.index(), CHANNELS - 1);
+        for (i, c) in Channel::ALL.iter().enumerate() {
+            assert_eq!(c.index(), i);
+            assert_eq!(c.suite() == Suite::Table1, i < TABLE1_CHANNELS);
+            assert!(Suite::Egi.carries(*c));
+        }
+        assert_eq!(
+            Suite::Table1.channels().count_ones() as usize,
+            TABLE1_CHANNELS
+        );
+        assert_eq!(Suite::Egi.channels(), ALL_VALID);
+        assert_eq!(Suite::covering(Channel::Rudder.bit()), Some(Suite::Table1));
+        assert_eq!(Suite::covering(Channel::Fuel.bit()), Some(Suite::Egi));
+        assert_eq!(Suite::covering(1 << CHANNELS), None);
+        for s in Suite::ALL {
+            assert_eq!(Suite::from_name(s.name()), Some(s));
+        }
+    }
+
+    #[test]
+    fn a_frame_restricted_to_table1_has_no_egi_channel() {
+        let si = [1.0; CHANNELS];
+        let f = SensorFrame::from_si(1, 50, &si);
+        assert_eq!(f.valid, ALL_VALID);
+        let t = f.restricted_to(Suite::Table1);
+        assert_eq!(t.valid, Suite::Table1.channels());
+        assert_eq!(t.get(Channel::Fuel), 0);
+        assert_eq!(t.get(Channel::Throttle), f.get(Channel::Throttle));
+        assert_eq!(f.restricted_to(Suite::Egi), f);
     }
 
     #[test]

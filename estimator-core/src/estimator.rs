@@ -7,6 +7,8 @@
 //! | a noisy channel (IMU, GPS) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR`, held as above |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | GPS speed below [`crate::features::MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
+//! | EGI ground speed below [`crate::features::MIN_SPEED_MMS`], for a model reading the EGI velocity | kinematic angles are noise: `OUT_OF_ENVELOPE` |
+//! | a model reads an EGI channel and the frame is of the Table 1 suite (the channel is absent) | as an invalid channel: `INVALID_INPUT`, held |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
@@ -14,7 +16,7 @@
 //! the step panic or return anything but the integers described here.
 
 use crate::channels::{CHANNELS, Channel, SensorFrame};
-use crate::features::{Feature, FeatureValues, History};
+use crate::features::{Feature, FeatureValues, History, VELOCITY_SOURCES};
 use crate::nn::{Aligned, Layer};
 use crate::normalize::{Envelope, Norm};
 
@@ -94,7 +96,7 @@ pub trait AngleNet: Sync {
     /// Multiply-accumulates per run.
     fn macs(&self) -> usize;
     /// Channels the features are computed from.
-    fn sources(&self) -> u16 {
+    fn sources(&self) -> u32 {
         self.features().iter().fold(0, |m, f| m | f.sources())
     }
     /// Lags of the delta features it reads (bit per [`crate::features::Lag`]).
@@ -206,7 +208,10 @@ where
         let mut out = [0i32; 1];
         self.part2.forward(&x1.0, &mut out);
         let (angle, out_clamped) = self.out_range.clamp(out[0]);
-        clamped |= out_clamped || values.low_speed && self.sources() & Channel::GpsSpeed.bit() != 0;
+        let sources = self.sources();
+        clamped |= out_clamped
+            || values.low_speed && sources & Channel::GpsSpeed.bit() != 0
+            || values.low_ground_speed && sources & VELOCITY_SOURCES != 0;
         (mid[0], angle, clamped)
     }
 
@@ -221,7 +226,7 @@ where
 #[derive(Clone, Copy)]
 struct Model<'m> {
     net: &'m dyn AngleNet,
-    sources: u16,
+    sources: u32,
     lags: u8,
 }
 
@@ -286,8 +291,8 @@ impl<'m> Estimator<'m> {
 
     /// Bit per channel: noisy channels unchanged for [`STUCK_FRAMES`] frames. The previous frame is
     /// the history's newest (0s before the first).
-    fn update_stuck(&mut self, frame: &SensorFrame) -> u16 {
-        let mut stuck = 0u16;
+    fn update_stuck(&mut self, frame: &SensorFrame) -> u32 {
+        let mut stuck = 0u32;
         let previous = self.history.newest().map_or(&[0; CHANNELS], |p| &p.raw);
         for (((c, raw), last), n) in Channel::ALL
             .iter()

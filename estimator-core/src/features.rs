@@ -1,12 +1,29 @@
 //! Candidate model inputs, computed in integer arithmetic from a [`SensorFrame`] and, for the
 //! delta features, a [`History`] of past frames.
 //!
-//! The first 16 features are the sensed channels themselves. The derived ones carry the
+//! The first [`CHANNELS`] features are the sensed channels themselves. The derived ones carry the
 //! dynamic-pressure information that the sensed channels lack, from sensors alone (never air data):
 //! an ISA density at GPS altitude times GPS speed squared (`ρV²`, a proxy for twice the dynamic
 //! pressure), specific force divided by it (≈ aerodynamic coefficient × S/m), and GPS speed over the
 //! ISA speed of sound at altitude (a Mach proxy). Air-data quantities (air-relative velocities,
 //! airspeeds, dynamic pressure, Mach, α, β) are not channels, so no model can take them as input.
+//!
+//! # EGI kinematic features ([`crate::Suite::Egi`] only)
+//! From the EGI attitude and ground velocity: the ground velocity in body axes
+//! `(u_g, v_g, w_g) = C_bn(φ, θ, ψ) · (v_N, v_E, v_D)` and the wind-free kinematic angles
+//! `α_kin = atan2(w_g, u_g)` and `β_kin = asin(v_g / |V_g|)` (computed as `atan2(v_g, √(u_g² + w_g²))`,
+//! the same angle, better conditioned). They equal the air-data α and β only in still air; the
+//! difference is the wind, which a model or a filter has to account for. Computed in `f32` with the
+//! pure-Rust `libm` (sin, cos, atan2, sqrt) and basic IEEE-754 operations only, so host and
+//! Cortex-M4F give bit-identical results (no fused multiply-add, no platform math library; libm's
+//! `sqrtf` uses the SSE instruction on x86, which is correctly rounded like the software path). A
+//! frame without all six source channels valid gives 0 for all five (the model that reads them is
+//! held as `INVALID_INPUT` anyway), so a Table 1 frame costs no floating-point work.
+//! [`FeatureValues::low_ground_speed`] marks a ground speed below [`MIN_SPEED_MMS`], where the
+//! angles are noise.
+//!
+//! Delta features exist for the Table 1 channels only (`Feature::Delta` of an EGI channel is not a
+//! candidate: it has no index below [`FEATURE_COUNT`] and reads 0).
 //!
 //! The delta features carry the short-term dynamics a single frame cannot show (a pull-up building,
 //! a climb rate, a speed trend): [`Feature::Delta`]`(c, lag)` is channel `c` now minus channel `c`
@@ -20,13 +37,20 @@
 //! way the lag's bit is set in [`FeatureValues::short_lags`], which the estimator reports as
 //! `HISTORY_SHORT` when a model uses that lag.
 
-use crate::channels::{CHANNELS, Channel, SensorFrame};
+use crate::channels::{CHANNELS, Channel, SensorFrame, Suite, TABLE1_CHANNELS};
 
-/// Number of derived single-frame features after the sensed channels.
+/// Number of derived single-frame features of the Table 1 channels, after the sensed channels.
 const DERIVED: usize = 5;
 
-/// Number of candidate features: sensed channels, derived features, and a delta per channel and lag.
-pub const FEATURE_COUNT: usize = CHANNELS + DERIVED + CHANNELS * Lag::COUNT;
+/// Number of EGI kinematic features, after the Table 1 derived ones.
+const EGI_DERIVED: usize = 5;
+
+/// First delta feature.
+const DELTAS: usize = CHANNELS + DERIVED + EGI_DERIVED;
+
+/// Number of candidate features: sensed channels, derived features, and a delta per Table 1 channel
+/// and lag.
+pub const FEATURE_COUNT: usize = DELTAS + TABLE1_CHANNELS * Lag::COUNT;
 
 /// Frames a [`History`] keeps: 1 s at 20 Hz plus room for lost frames.
 pub const HISTORY_FRAMES: usize = 24;
@@ -111,9 +135,27 @@ pub enum Feature {
     MachProxy,
     /// ISA density at GPS altitude × GPS speed², Pa.
     RhoV2,
-    /// The channel now minus the channel `Lag` ago, in the channel's unit.
+    /// EGI ground velocity along body x, mm/s.
+    UGround,
+    /// EGI ground velocity along body y, mm/s.
+    VGround,
+    /// EGI ground velocity along body z, mm/s.
+    WGround,
+    /// Wind-free kinematic angle of attack `atan2(w_g, u_g)`, µrad.
+    AlphaKin,
+    /// Wind-free kinematic sideslip `asin(v_g / |V_g|)`, µrad.
+    BetaKin,
+    /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
 }
+
+/// The EGI channels the kinematic features are computed from.
+const KINEMATIC_SOURCES: u32 =
+    Channel::Roll.bit() | Channel::Pitch.bit() | Channel::Heading.bit() | VELOCITY_SOURCES;
+
+/// The EGI velocity channels: a ground speed below [`MIN_SPEED_MMS`] flags models reading them.
+pub const VELOCITY_SOURCES: u32 =
+    Channel::VelNorth.bit() | Channel::VelEast.bit() | Channel::VelDown.bit();
 
 impl Feature {
     // Const evaluation: an out-of-bounds index here is a compile error, not a runtime panic.
@@ -130,12 +172,16 @@ impl Feature {
         all[CHANNELS + 2] = Feature::FzOverRhoV2;
         all[CHANNELS + 3] = Feature::MachProxy;
         all[CHANNELS + 4] = Feature::RhoV2;
+        all[CHANNELS + DERIVED] = Feature::UGround;
+        all[CHANNELS + DERIVED + 1] = Feature::VGround;
+        all[CHANNELS + DERIVED + 2] = Feature::WGround;
+        all[CHANNELS + DERIVED + 3] = Feature::AlphaKin;
+        all[CHANNELS + DERIVED + 4] = Feature::BetaKin;
         let mut c = 0;
-        while c < CHANNELS {
+        while c < TABLE1_CHANNELS {
             let mut l = 0;
             while l < Lag::COUNT {
-                all[CHANNELS + DERIVED + c * Lag::COUNT + l] =
-                    Feature::Delta(Channel::ALL[c], Lag::ALL[l]);
+                all[DELTAS + c * Lag::COUNT + l] = Feature::Delta(Channel::ALL[c], Lag::ALL[l]);
                 l += 1;
             }
             c += 1;
@@ -143,7 +189,9 @@ impl Feature {
         all
     };
 
-    // Enum discriminants only: at most 16 + 5 + 15 × 4 + 3, far from overflowing.
+    /// Position in [`Feature::ALL`] and [`FeatureValues::raw`]. A delta of an EGI channel, not a
+    /// candidate, gets a position at or past [`FEATURE_COUNT`] (every reader treats it as absent).
+    // Enum discriminants only: at most 23 + 10 + 22 × 4 + 3, far from overflowing.
     #[allow(clippy::arithmetic_side_effects)]
     pub const fn index(self) -> usize {
         match self {
@@ -153,7 +201,12 @@ impl Feature {
             Feature::FzOverRhoV2 => CHANNELS + 2,
             Feature::MachProxy => CHANNELS + 3,
             Feature::RhoV2 => CHANNELS + 4,
-            Feature::Delta(c, l) => CHANNELS + DERIVED + c.index() * Lag::COUNT + l.index(),
+            Feature::UGround => CHANNELS + DERIVED,
+            Feature::VGround => CHANNELS + DERIVED + 1,
+            Feature::WGround => CHANNELS + DERIVED + 2,
+            Feature::AlphaKin => CHANNELS + DERIVED + 3,
+            Feature::BetaKin => CHANNELS + DERIVED + 4,
+            Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
         }
     }
 
@@ -165,6 +218,11 @@ impl Feature {
             Feature::FzOverRhoV2 => "fz_over_rho_v2",
             Feature::MachProxy => "mach_proxy",
             Feature::RhoV2 => "rho_v2_pa",
+            Feature::UGround => "u_ground_mps",
+            Feature::VGround => "v_ground_mps",
+            Feature::WGround => "w_ground_mps",
+            Feature::AlphaKin => "alpha_kin_rad",
+            Feature::BetaKin => "beta_kin_rad",
             Feature::Delta(c, l) => c.delta_name(l),
         }
     }
@@ -176,11 +234,23 @@ impl Feature {
             Feature::FxOverRhoV2 | Feature::FyOverRhoV2 | Feature::FzOverRhoV2 => 1e-7,
             Feature::MachProxy => 1e-4,
             Feature::RhoV2 => 1.0,
+            Feature::UGround | Feature::VGround | Feature::WGround => 1e-3,
+            Feature::AlphaKin | Feature::BetaKin => 1e-6,
+        }
+    }
+
+    /// The smallest sensor suite whose frames carry every channel this feature is computed from: a
+    /// model of a suite can only select features of that suite (or of a smaller one).
+    pub const fn suite(self) -> Suite {
+        match Suite::covering(self.sources()) {
+            Some(s) => s,
+            // Every source is a channel, and the largest suite carries every channel.
+            None => Suite::Egi,
         }
     }
 
     /// The channels this feature is computed from (bit per [`Channel`]).
-    pub const fn sources(self) -> u16 {
+    pub const fn sources(self) -> u32 {
         let speed_alt = Channel::GpsSpeed.bit() | Channel::GpsAlt.bit();
         match self {
             Feature::Sensor(c) | Feature::Delta(c, _) => c.bit(),
@@ -188,6 +258,11 @@ impl Feature {
             Feature::FyOverRhoV2 => speed_alt | Channel::AccelY.bit(),
             Feature::FzOverRhoV2 => speed_alt | Channel::AccelZ.bit(),
             Feature::MachProxy | Feature::RhoV2 => speed_alt,
+            Feature::UGround
+            | Feature::VGround
+            | Feature::WGround
+            | Feature::AlphaKin
+            | Feature::BetaKin => KINEMATIC_SOURCES,
         }
     }
 
@@ -210,6 +285,8 @@ pub struct FeatureValues {
     pub raw: [i32; FEATURE_COUNT],
     /// GPS speed below [`MIN_SPEED_MMS`]: the derived features are saturated.
     pub low_speed: bool,
+    /// EGI ground speed `|(v_N, v_E, v_D)|` below [`MIN_SPEED_MMS`]: the kinematic angles are noise.
+    pub low_ground_speed: bool,
     /// Bit per [`Lag`]: for some channel the frame exactly that lag back was missing (see the module
     /// docs), so the delta was rate-scaled from another frame or set to 0.
     pub short_lags: u8,
@@ -284,7 +361,7 @@ impl History {
         let max_age = want.saturating_mul(2);
         // The stored frame whose age is closest to the lag, in (0, 2 × lag], with the `need` channels
         // valid (the first, i.e. newest, of equally close ones). Age == lag is the exact frame.
-        let closest = |need: u16| {
+        let closest = |need: u32| {
             self.newest_first()
                 .filter(|p| p.valid & need == need && age(p) > 0 && age(p) <= max_age)
                 .min_by_key(|p| age(p).abs_diff(want))
@@ -297,7 +374,7 @@ impl History {
             .find(|p| age(p) == want)
             .or_else(|| closest(0));
         let mut short = shared.is_none_or(|p| age(p) != want);
-        for c in Channel::ALL {
+        for c in Channel::ALL.iter().copied().take(TABLE1_CHANNELS) {
             let bit = c.bit();
             let from = match shared {
                 Some(p) if p.is_valid(c) => Some(p),
@@ -385,6 +462,16 @@ impl FeatureValues {
             sat_i32(div_at_least_1(speed.wrapping_mul(10_000), i64::from(sound))),
         );
         set(&mut raw, Feature::RhoV2, sat_i32(rho_v2_upa / 1_000_000));
+        let mut low_ground_speed = false;
+        if frame.valid & KINEMATIC_SOURCES == KINEMATIC_SOURCES {
+            let k = Kinematics::of(frame);
+            set(&mut raw, Feature::UGround, k.body_mms[0]);
+            set(&mut raw, Feature::VGround, k.body_mms[1]);
+            set(&mut raw, Feature::WGround, k.body_mms[2]);
+            set(&mut raw, Feature::AlphaKin, k.alpha_urad);
+            set(&mut raw, Feature::BetaKin, k.beta_urad);
+            low_ground_speed = k.low_speed;
+        }
         let mut short_lags = 0;
         for lag in Lag::ALL {
             if history.deltas(frame, lag, &mut raw) {
@@ -394,7 +481,57 @@ impl FeatureValues {
         FeatureValues {
             raw,
             low_speed,
+            low_ground_speed,
             short_lags,
+        }
+    }
+}
+
+/// The EGI kinematic features of one frame.
+struct Kinematics {
+    /// Ground velocity in body axes, mm/s.
+    body_mms: [i32; 3],
+    alpha_urad: i32,
+    beta_urad: i32,
+    low_speed: bool,
+}
+
+impl Kinematics {
+    /// `f32` arithmetic only (see the module docs): every operation is an IEEE-754 basic operation
+    /// or a pure-Rust `libm` function, evaluated in the order written, so the result is the same bit
+    /// pattern on every target. Every value stays finite: the inputs are i32 (|v| < 2^31 mm/s,
+    /// angles read modulo nothing, sin/cos of any finite f32 are in [−1, 1]), the products and sums
+    /// stay below 2^34, and `atan2f(0, 0)` is 0.
+    fn of(frame: &SensorFrame) -> Kinematics {
+        let angle = |c: Channel| frame.get(c) as f32 * 1e-6;
+        let (sf, cf) = (
+            libm::sinf(angle(Channel::Roll)),
+            libm::cosf(angle(Channel::Roll)),
+        );
+        let (st, ct) = (
+            libm::sinf(angle(Channel::Pitch)),
+            libm::cosf(angle(Channel::Pitch)),
+        );
+        let (sp, cp) = (
+            libm::sinf(angle(Channel::Heading)),
+            libm::cosf(angle(Channel::Heading)),
+        );
+        let vn = frame.get(Channel::VelNorth) as f32;
+        let ve = frame.get(Channel::VelEast) as f32;
+        let vd = frame.get(Channel::VelDown) as f32;
+        // Rows of C_bn, the NED → body direction cosine matrix of the 3-2-1 Euler angles.
+        let u = (ct * cp) * vn + (ct * sp) * ve - st * vd;
+        let v = (sf * st * cp - cf * sp) * vn + (sf * st * sp + cf * cp) * ve + (sf * ct) * vd;
+        let w = (cf * st * cp + sf * sp) * vn + (cf * st * sp - sf * cp) * ve + (cf * ct) * vd;
+        let uw = libm::sqrtf(u * u + w * w);
+        let speed = libm::sqrtf(vn * vn + ve * ve + vd * vd);
+        // `as` saturates (and maps NaN, which cannot occur here, to 0).
+        let round = |x: f32| libm::roundf(x) as i32;
+        Kinematics {
+            body_mms: [round(u), round(v), round(w)],
+            alpha_urad: round(libm::atan2f(w, u) * 1e6),
+            beta_urad: round(libm::atan2f(v, uw) * 1e6),
+            low_speed: speed < MIN_SPEED_MMS as f32,
         }
     }
 }
@@ -515,6 +652,103 @@ mod tests {
             raw: [t_ms as i32 * 7; CHANNELS],
             valid: crate::channels::ALL_VALID,
         }
+    }
+
+    /// A frame with the EGI channels set: attitude in degrees, NED velocity in m/s.
+    fn egi(roll_deg: f64, pitch_deg: f64, heading_deg: f64, v_ned: [f64; 3]) -> SensorFrame {
+        let mut si = [0.0; CHANNELS];
+        si[Channel::Roll.index()] = roll_deg.to_radians();
+        si[Channel::Pitch.index()] = pitch_deg.to_radians();
+        si[Channel::Heading.index()] = heading_deg.to_radians();
+        si[Channel::VelNorth.index()] = v_ned[0];
+        si[Channel::VelEast.index()] = v_ned[1];
+        si[Channel::VelDown.index()] = v_ned[2];
+        si[Channel::GpsSpeed.index()] = 200.0;
+        SensorFrame::from_si(0, 0, &si)
+    }
+
+    #[test]
+    fn kinematic_angles_of_a_climb_heading_east() {
+        // Wings level, nose 5° up, flying east at 200 m/s level: α_kin = θ = 5°, no sideslip.
+        let v = FeatureValues::compute(&egi(0.0, 5.0, 90.0, [0.0, 200.0, 0.0]), &History::new());
+        let close = |f: Feature, want: f64, tol: f64| {
+            let got = v.get(f) as f64 * f.lsb();
+            assert!((got - want).abs() <= tol, "{}: {got} vs {want}", f.name());
+        };
+        close(Feature::AlphaKin, 5f64.to_radians(), 2e-6);
+        close(Feature::BetaKin, 0.0, 2e-6);
+        close(Feature::UGround, 200.0 * 5f64.to_radians().cos(), 2e-3);
+        close(Feature::VGround, 0.0, 2e-3);
+        close(Feature::WGround, 200.0 * 5f64.to_radians().sin(), 2e-3);
+        assert!(!v.low_ground_speed);
+        // A 30° bank does not change them (velocity along the nose's vertical plane is rotated with
+        // the body), but a crosswind-like lateral velocity gives β = asin(v / |V|).
+        let v = FeatureValues::compute(&egi(30.0, 0.0, 0.0, [200.0, 10.0, 0.0]), &History::new());
+        let close = |f: Feature, want: f64, tol: f64| {
+            let got = v.get(f) as f64 * f.lsb();
+            assert!((got - want).abs() <= tol, "{}: {got} vs {want}", f.name());
+        };
+        let beta = (10.0 * 30f64.to_radians().cos() / 200.0f64.hypot(10.0)).asin();
+        close(Feature::BetaKin, beta, 3e-6);
+        close(
+            Feature::AlphaKin,
+            (-10.0 * 30f64.to_radians().sin() / 200.0f64).atan(),
+            3e-6,
+        );
+    }
+
+    #[test]
+    fn kinematic_features_are_pinned_to_the_bit() {
+        // The integers this arithmetic gives (host and Cortex-M4F alike, see the module docs): a
+        // change of the operation order or of the math library shows here first.
+        let v = FeatureValues::compute(
+            &egi(-37.5, 12.25, 301.0, [-123.456, 87.654, -9.87]),
+            &History::new(),
+        );
+        let got = [
+            Feature::UGround,
+            Feature::VGround,
+            Feature::WGround,
+            Feature::AlphaKin,
+            Feature::BetaKin,
+        ]
+        .map(|f| v.get(f));
+        assert_eq!(got, PINNED);
+    }
+    // An f64 evaluation of the same formulas gives -133466.02, -24349.19, -67940.88 mm/s and
+    // -2670731.25, -161173.88 µrad.
+    const PINNED: [i32; 5] = [-133_466, -24_349, -67_941, -2_670_731, -161_174];
+
+    #[test]
+    fn kinematic_features_need_all_six_egi_channels() {
+        let mut f = egi(10.0, 5.0, 45.0, [100.0, 100.0, 5.0]);
+        f.valid &= !Channel::Heading.bit();
+        let v = FeatureValues::compute(&f, &History::new());
+        assert_eq!(v.get(Feature::AlphaKin), 0);
+        assert_eq!(v.get(Feature::UGround), 0);
+        assert!(!v.low_ground_speed);
+        // Below 20 m/s over the ground the angles are computed but flagged.
+        let v = FeatureValues::compute(&egi(0.0, 0.0, 0.0, [5.0, 0.0, 0.0]), &History::new());
+        assert!(v.low_ground_speed);
+        assert_eq!(v.get(Feature::UGround), 5_000);
+    }
+
+    #[test]
+    fn every_feature_belongs_to_the_suite_of_its_sources() {
+        for f in Feature::ALL {
+            assert_eq!(
+                f.suite() == Suite::Table1,
+                f.sources() & !Suite::Table1.channels() == 0
+            );
+        }
+        assert_eq!(Feature::AlphaKin.suite(), Suite::Egi);
+        assert_eq!(Feature::Sensor(Channel::Fuel).suite(), Suite::Egi);
+        assert_eq!(Feature::MachProxy.suite(), Suite::Table1);
+        // No delta of an EGI channel is a candidate.
+        let d = Feature::Delta(Channel::Roll, Lag::F1);
+        assert!(d.index() >= FEATURE_COUNT);
+        assert!(!Feature::ALL.contains(&d));
+        assert_eq!(Feature::from_name(d.name()), None);
     }
 
     #[test]

@@ -8,7 +8,7 @@
 //! arbitrary bytes off a serial line, has a defined result.
 //!
 //! This crate is the single source of truth for
-//! * the sensed channels, their order and integer units ([`channels`]),
+//! * the sensed channels, their order and integer units, and the sensor suites ([`channels`]),
 //! * the candidate model inputs and how they are computed ([`features`]),
 //! * normalisation ([`normalize`]) and the quantized layers ([`nn`]),
 //! * the frame formats on the serial link ([`wire`]).
@@ -41,6 +41,6 @@ pub mod nn;
 pub mod normalize;
 pub mod wire;
 
-pub use channels::{CHANNELS, Channel, SensorFrame};
+pub use channels::{CHANNELS, Channel, SensorFrame, Suite};
 pub use estimator::{AngleNet, CascadeNet, Estimate, Estimator, Flags};
 pub use features::{FEATURE_COUNT, Feature, FeatureValues, History, Lag};

@@ -218,7 +218,7 @@ fn extreme_raw_values_never_panic() {
             seq: s as u16,
             time_ms: 0,
             raw: [v; CHANNELS],
-            valid: u16::MAX,
+            valid: u32::MAX,
         };
         let out = e.step(&f);
         assert!(out.alpha_mdeg.abs() <= 90_000);
@@ -270,4 +270,84 @@ fn short_history_is_flagged_only_for_the_angle_that_uses_deltas() {
     // Models that read no delta feature are never flagged, even on the first frame.
     let mut e2 = Estimator::new(&b, &b);
     assert!(!short(&mut e2, 0));
+}
+
+/// `frame(seq)` with EGI values a kinematic feature can use: level, heading east at 200 m/s.
+fn egi_frame(seq: u16, v_east_mms: i32) -> SensorFrame {
+    let mut f = frame(seq);
+    f.raw[Channel::Roll.index()] = 1_000 + i32::from(seq % 7);
+    f.raw[Channel::Pitch.index()] = 40_000 + i32::from(seq % 5);
+    f.raw[Channel::Heading.index()] = 1_570_796;
+    f.raw[Channel::VelNorth.index()] = 3 * i32::from(seq % 11);
+    f.raw[Channel::VelEast.index()] = v_east_mms + i32::from(seq % 3);
+    f.raw[Channel::VelDown.index()] = 100 + i32::from(seq % 13);
+    f.raw[Channel::Fuel.index()] = 20_000;
+    f
+}
+
+#[test]
+fn a_model_reading_egi_channels_is_held_on_table1_frames() {
+    // α reads the kinematic angle of attack (EGI suite); β reads Table 1 channels only.
+    let a = net_of(
+        Feature::AlphaKin,
+        Feature::Sensor(Channel::Elevator),
+        400_000_000,
+    );
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    assert_ne!(a.sources() & !estimator_core::Suite::Table1.channels(), 0);
+    let mut e = Estimator::new(&a, &b);
+    // EGI frames: both live.
+    for s in 0..5 {
+        let out = e.step(&egi_frame(s, 200_000));
+        assert_eq!(out.flags, Flags::default(), "frame {s}");
+    }
+    // The same frames as a Table 1 sender delivers them: α is held (the channel is absent, an
+    // invalid input), β stays live.
+    let t1 = egi_frame(5, 200_000).restricted_to(estimator_core::Suite::Table1);
+    let out = e.step(&t1);
+    assert!(out.flags.has(Flags::INVALID_INPUT | Flags::ALPHA_HELD));
+    assert!(!out.flags.has(Flags::BETA_HELD));
+    // From a fresh start there is nothing to hold.
+    let mut fresh = Estimator::new(&a, &b);
+    let out = fresh.step(&t1);
+    assert!(
+        out.flags
+            .has(Flags::INVALID_INPUT | Flags::ALPHA_HELD | Flags::NO_ESTIMATE)
+    );
+    assert_eq!((out.alpha_mdeg, out.w_aero_mms), (0, 0));
+}
+
+#[test]
+fn low_ground_speed_flags_only_models_reading_the_egi_velocity() {
+    let a = net_of(
+        Feature::AlphaKin,
+        Feature::Sensor(Channel::Elevator),
+        400_000_000,
+    );
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    let mut e = Estimator::new(&a, &b);
+    let out = e.step(&egi_frame(0, 5_000));
+    assert!(out.flags.has(Flags::OUT_OF_ENVELOPE));
+    assert!(out.flags.is_usable());
+    // A Table 1 model on the same frame: unaffected.
+    let mut t = Estimator::new(&b, &b);
+    assert!(
+        !t.step(&egi_frame(0, 5_000))
+            .flags
+            .has(Flags::OUT_OF_ENVELOPE)
+    );
+}
+
+#[test]
+fn table1_models_give_the_same_estimates_with_or_without_egi_channels() {
+    let (a, b) = nets();
+    let mut with = Estimator::new(&a, &b);
+    let mut without = Estimator::new(&a, &b);
+    for s in 0..40 {
+        let f = egi_frame(s, 200_000);
+        assert_eq!(
+            with.step(&f),
+            without.step(&f.restricted_to(estimator_core::Suite::Table1))
+        );
+    }
 }

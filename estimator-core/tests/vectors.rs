@@ -13,6 +13,7 @@
 
 #[cfg(estimator_weights)]
 use estimator_core::AngleNet;
+use estimator_core::channels::TABLE1_CHANNELS;
 use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, History, SensorFrame};
 
 const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
@@ -39,23 +40,29 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             .split_whitespace()
             .map(|t| t.parse().expect("integer"))
             .collect();
-        assert_eq!(v.len(), 4 + CHANNELS + 6, "malformed vector line: {line}");
+        // A line carries the channels of its model's suite: 16 (Table 1) or all 23 (EGI).
+        let n = v.len() - 4 - 6;
+        assert!(
+            n == TABLE1_CHANNELS || n == CHANNELS,
+            "malformed vector line: {line}"
+        );
         if v[0] == 1 {
             history.clear();
             est.reset();
         }
         let v = &v[1..];
-        let raw: [i32; CHANNELS] = core::array::from_fn(|i| v[3 + i] as i32);
+        let raw: [i32; CHANNELS] =
+            core::array::from_fn(|i| if i < n { v[3 + i] as i32 } else { 0 });
         let frame = SensorFrame {
             seq: v[0] as u16,
             time_ms: v[1] as u32,
             raw,
-            valid: v[2] as u16,
+            valid: v[2] as u32,
         };
         let values = FeatureValues::compute(&frame, &history);
         history.push(&frame);
         let e = est.step(&frame);
-        let o = &v[3 + CHANNELS..];
+        let o = &v[3 + n..];
         let want_alpha = (o[0] as i32, o[1] as i32, o[2] != 0);
         let want_beta = (o[3] as i32, o[4] as i32, o[5] != 0);
         #[cfg(estimator_weights)]
@@ -71,9 +78,13 @@ fn compiled_in_model_matches_the_trainer_vectors() {
                 "beta, line: {line}"
             );
         }
-        // The full step gives the same numbers when every channel is valid.
-        if frame.valid & estimator_core::channels::ALL_VALID == estimator_core::channels::ALL_VALID
-        {
+        // The full step gives the same numbers when every channel of the line's suite is valid.
+        let suite = if n == CHANNELS {
+            estimator_core::Suite::Egi
+        } else {
+            estimator_core::Suite::Table1
+        };
+        if frame.valid & suite.channels() == suite.channels() {
             assert_eq!(
                 (e.w_aero_mms, e.alpha_mdeg),
                 (want_alpha.0, want_alpha.1),

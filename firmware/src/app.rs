@@ -90,8 +90,9 @@ impl<'m, C: Clock> App<'m, C> {
         self.health.rx_overruns = total;
     }
 
-    /// Feeds one received byte. When it completes a new valid sensor frame, runs one step and writes
-    /// the encoded estimate frame (COBS, CRC, delimiter) to `out`, returning its length.
+    /// Feeds one received byte. When it completes a new valid sensor frame (either kind: a Table 1
+    /// frame steps with the EGI channels invalid), runs one step and writes the encoded estimate
+    /// frame (COBS, CRC, delimiter) to `out`, returning its length.
     pub fn push(&mut self, byte: u8, out: &mut [u8; MAX_FRAME]) -> Option<usize> {
         let start = self.clock.now();
         let frame = match self.acc.push(byte)? {
@@ -156,7 +157,7 @@ mod tests {
     use super::*;
     use estimator_core::channels::ALL_VALID;
     use estimator_core::wire::estimate::TickSource;
-    use estimator_core::{CHANNELS, Channel, Flags};
+    use estimator_core::{CHANNELS, Channel, Flags, Suite};
 
     /// A clock that advances a fixed amount per reading.
     struct Stepping {
@@ -201,8 +202,12 @@ mod tests {
     }
 
     fn wire(seq: u16) -> Vec<u8> {
+        wire_of(Suite::Table1, seq)
+    }
+
+    fn wire_of(suite: Suite, seq: u16) -> Vec<u8> {
         let mut out = [0u8; MAX_FRAME];
-        let n = frame(seq).encode(&mut out).unwrap();
+        let n = frame(seq).encode(suite, &mut out).unwrap();
         out[..n].to_vec()
     }
 
@@ -247,6 +252,24 @@ mod tests {
             a.stats().stepped,
             6 - u32::from(estimator_core::model::HAS_MODEL)
         );
+    }
+
+    #[test]
+    fn both_sensor_kinds_are_stepped_in_one_sequence() {
+        let mut a = app(10, 1000);
+        let mut reference = Estimator::shipped();
+        for seq in 0..6u16 {
+            let suite = if seq % 2 == 0 {
+                Suite::Egi
+            } else {
+                Suite::Table1
+            };
+            let r = feed(&mut a, &wire_of(suite, seq));
+            assert_eq!(r.len(), 1, "{suite:?} frame {seq}");
+            let sent = frame(seq).restricted_to(suite);
+            assert_eq!(r[0].estimate, reference.step(&sent));
+            assert_eq!(r[0].health.rx_corrupt, 0);
+        }
     }
 
     #[test]

@@ -81,6 +81,7 @@ mod hil_sim_cli {
         let entry = dataset::write_flight(&a.out, &flight, Split::Test, "script", a.seed)?;
         let manifest = Manifest {
             format: Manifest::FORMAT,
+            suites: Manifest::written_suites(),
             preset: "fly".into(),
             jsbsim_version: version,
             git_rev: dataset::git_rev(),

@@ -322,8 +322,15 @@ mod at {
     pub const PI: usize = 35;
     pub const QI: usize = 36;
     pub const RI: usize = 37;
+    pub const V_NORTH: usize = 38;
+    pub const V_EAST: usize = 39;
+    pub const V_DOWN: usize = 40;
+    pub const FUEL: usize = 41;
+    pub const WIND_NORTH: usize = 42;
+    pub const WIND_EAST: usize = 43;
+    pub const WIND_DOWN: usize = 44;
     /// The generator's zone state (optional: NaN for scripts that do not have it).
-    pub const ZONE: usize = 38;
+    pub const ZONE: usize = 45;
     /// Properties watched.
     pub const COUNT: usize = ZONE + 1;
 }
@@ -371,6 +378,15 @@ const WATCH: [&str; at::COUNT] = {
     w[at::PI] = "velocities/pi-rad_sec";
     w[at::QI] = "velocities/qi-rad_sec";
     w[at::RI] = "velocities/ri-rad_sec";
+    // Velocity over the ground in the local NED frame (what a GPS/INS measures, at the CG).
+    w[at::V_NORTH] = "velocities/v-north-fps";
+    w[at::V_EAST] = "velocities/v-east-fps";
+    w[at::V_DOWN] = "velocities/v-down-fps";
+    w[at::FUEL] = "propulsion/total-fuel-lbs";
+    // Steady wind + turbulence + gusts, NED: truth only, for evaluating wind estimators.
+    w[at::WIND_NORTH] = "atmosphere/total-wind-north-fps";
+    w[at::WIND_EAST] = "atmosphere/total-wind-east-fps";
+    w[at::WIND_DOWN] = "atmosphere/total-wind-down-fps";
     w[at::ZONE] = "?maneuver/zone";
     let mut i = 0;
     while i < at::COUNT {
@@ -382,6 +398,7 @@ const WATCH: [&str; at::COUNT] = {
 
 pub const FT_TO_M: f64 = 0.3048;
 const SLUG_TO_KG: f64 = 14.593_902_937;
+pub const LB_TO_KG: f64 = 0.453_592_37;
 const PSF_TO_PA: f64 = 47.880_258_98;
 const G0_FPS2: f64 = 32.174_048_56;
 /// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (F-16: about 20° each way); the model has no deg property.
@@ -468,6 +485,13 @@ fn truth_of(r: &[f64]) -> Truth {
         mass_kg: r[at::MASS] * SLUG_TO_KG,
         lat_deg: r[at::LAT],
         lon_deg: r[at::LON],
+        v_north_mps: r[at::V_NORTH] * FT_TO_M,
+        v_east_mps: r[at::V_EAST] * FT_TO_M,
+        v_down_mps: r[at::V_DOWN] * FT_TO_M,
+        fuel_kg: r[at::FUEL] * LB_TO_KG,
+        wind_north_mps: r[at::WIND_NORTH] * FT_TO_M,
+        wind_east_mps: r[at::WIND_EAST] * FT_TO_M,
+        wind_down_mps: r[at::WIND_DOWN] * FT_TO_M,
     }
 }
 
@@ -493,6 +517,14 @@ fn sensor_input(r: &[f64]) -> SensorInput {
         flaperon_deg: r[at::FLAPERON] * FLAPERON_DEG_PER_NORM,
         speedbrake_deg: r[at::SPEEDBRAKE],
         throttle_norm: r[at::THROTTLE],
+        euler_rad: [r[at::PHI], r[at::THETA], r[at::PSI]],
+        omega_earth_rps: [r[at::P], r[at::Q], r[at::R]],
+        v_ned_mps: [
+            r[at::V_NORTH] * FT_TO_M,
+            r[at::V_EAST] * FT_TO_M,
+            r[at::V_DOWN] * FT_TO_M,
+        ],
+        fuel_kg: r[at::FUEL] * LB_TO_KG,
     }
 }
 

@@ -1,7 +1,10 @@
-//! Sensor error models: IMU (LN-200 class), GPS, control-surface position sensors.
+//! Sensor error models: IMU (LN-200 class), GPS, control-surface position sensors, and for the EGI
+//! suite an embedded GPS/INS (attitude, NED velocity) and the fuel quantity gauge.
 //!
-//! Fed with truth at every 120 Hz JSBSim step; returns the 16 sensed channels (SI, degrees for
-//! surfaces) in [`estimator_core::Channel`] order. The IMU path is: truth at the IMU location
+//! Fed with truth at every 120 Hz JSBSim step; returns the sensed channels of every suite (SI,
+//! degrees for surfaces) in [`estimator_core::Channel`] order. The Table 1 channels draw from the
+//! flight's ChaCha12 stream exactly as before the EGI suite existed; the EGI and fuel models draw
+//! from stream [`EGI_STREAM`] of the same seed, so adding them changed no Table 1 value. The IMU path is: truth at the IMU location
 //! (rates relative to inertial space, specific force moved from the CG), through the triad's
 //! per-flight scale-factor and misalignment matrix (I + S + M); then per axis turn-on bias,
 //! Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv quantization
@@ -13,7 +16,7 @@ use std::collections::VecDeque;
 use std::path::Path;
 
 use estimator_core::{CHANNELS, Channel};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -23,6 +26,9 @@ use crate::plant::SIM_HZ;
 const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
 const G0: f64 = 9.80665;
+
+/// ChaCha stream of the EGI and fuel models (stream 0, the default, drives the Table 1 sensors).
+pub const EGI_STREAM: u64 = 1;
 
 /// Errors of one inertial sensor type, the same σ for its three axes (units of the sensor: rad/s or
 /// m/s²).
@@ -150,6 +156,91 @@ impl Default for SurfaceConfig {
     }
 }
 
+/// The embedded GPS/INS (EGI) outputs: attitude and velocity over the ground, each a first-order
+/// Gauss-Markov error (the slowly varying error of a GPS-aided inertial solution) plus white noise,
+/// `latency_s` old, refreshed at its output rate and held in between. Sources: `docs/sensors.md`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EgiConfig {
+    /// Roll and pitch: Gauss-Markov 1σ, degrees, and its correlation time, s.
+    pub attitude_gm_sigma_deg: f64,
+    pub attitude_gm_tau_s: f64,
+    /// Roll and pitch white noise 1σ, degrees.
+    pub attitude_noise_sigma_deg: f64,
+    /// True heading: Gauss-Markov 1σ (degrees), correlation time (s), white noise 1σ (degrees).
+    pub heading_gm_sigma_deg: f64,
+    pub heading_gm_tau_s: f64,
+    pub heading_noise_sigma_deg: f64,
+    /// Velocity north, east and down (each): Gauss-Markov 1σ (m/s), correlation time (s), white
+    /// noise 1σ (m/s).
+    pub velocity_gm_sigma_mps: f64,
+    pub velocity_gm_tau_s: f64,
+    pub velocity_noise_sigma_mps: f64,
+    /// Output rates, Hz (held between outputs).
+    pub attitude_hz: f64,
+    pub heading_hz: f64,
+    pub velocity_hz: f64,
+    /// Age of an output when delivered, s.
+    pub latency_s: f64,
+}
+
+impl Default for EgiConfig {
+    fn default() -> Self {
+        EgiConfig {
+            attitude_gm_sigma_deg: 0.03,
+            attitude_gm_tau_s: 300.0,
+            attitude_noise_sigma_deg: 0.005,
+            heading_gm_sigma_deg: 0.08,
+            heading_gm_tau_s: 600.0,
+            heading_noise_sigma_deg: 0.01,
+            velocity_gm_sigma_mps: 0.03,
+            velocity_gm_tau_s: 100.0,
+            velocity_noise_sigma_mps: 0.01,
+            attitude_hz: 50.0,
+            heading_hz: 25.0,
+            velocity_hz: 20.0,
+            latency_s: 0.02,
+        }
+    }
+}
+
+/// The fuel quantity gauging system: per-flight bias (fraction of full scale) and scale-factor error
+/// (fraction of the reading), a slowly varying error (probe wetting, slosh), quantized, refreshed at
+/// `update_hz`. Sources: `docs/sensors.md`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FuelConfig {
+    /// Full-scale quantity the gauge's %-of-full-scale errors refer to, kg.
+    pub full_scale_kg: f64,
+    /// 1σ of the per-flight bias, fraction of full scale.
+    pub bias_sigma_fs: f64,
+    /// 1σ of the per-flight scale-factor error, fraction of the reading.
+    pub scale_factor_sigma: f64,
+    /// Gauss-Markov 1σ (fraction of full scale) and correlation time (s).
+    pub gm_sigma_fs: f64,
+    pub gm_tau_s: f64,
+    /// Output resolution, kg (0 = none).
+    pub quantum_kg: f64,
+    /// Output rate, Hz.
+    pub update_hz: f64,
+}
+
+impl Default for FuelConfig {
+    fn default() -> Self {
+        FuelConfig {
+            // The JSBSim F-16's two internal tanks, 2 × 3486 lb (f16.xml); the generator fills only these.
+            full_scale_kg: 2.0 * 3486.0 * crate::plant::LB_TO_KG,
+            bias_sigma_fs: 0.01,
+            scale_factor_sigma: 0.01,
+            gm_sigma_fs: 0.003,
+            gm_tau_s: 10.0,
+            // 10 lb
+            quantum_kg: 10.0 * crate::plant::LB_TO_KG,
+            update_hz: 1.0,
+        }
+    }
+}
+
 /// All sensor parameters (`--sensors FILE.toml`; missing sections/fields take the defaults).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -157,6 +248,8 @@ pub struct SensorConfig {
     pub imu: ImuConfig,
     pub gps: GpsConfig,
     pub surfaces: SurfaceConfig,
+    pub egi: EgiConfig,
+    pub fuel: FuelConfig,
 }
 
 /// Why a sensor configuration cannot be used.
@@ -253,7 +346,23 @@ impl SensorConfig {
             ),
             ("gps.update_hz", self.gps.update_hz),
         ];
-        for (field, value) in nonneg {
+        let e = &self.egi;
+        let f = &self.fuel;
+        let nonneg_egi: [(&'static str, f64); 12] = [
+            ("egi.attitude_gm_sigma_deg", e.attitude_gm_sigma_deg),
+            ("egi.attitude_noise_sigma_deg", e.attitude_noise_sigma_deg),
+            ("egi.heading_gm_sigma_deg", e.heading_gm_sigma_deg),
+            ("egi.heading_noise_sigma_deg", e.heading_noise_sigma_deg),
+            ("egi.velocity_gm_sigma_mps", e.velocity_gm_sigma_mps),
+            ("egi.velocity_noise_sigma_mps", e.velocity_noise_sigma_mps),
+            ("egi.latency_s", e.latency_s),
+            ("fuel.bias_sigma_fs", f.bias_sigma_fs),
+            ("fuel.scale_factor_sigma", f.scale_factor_sigma),
+            ("fuel.gm_sigma_fs", f.gm_sigma_fs),
+            ("fuel.quantum_kg", f.quantum_kg),
+            ("fuel.full_scale_kg", f.full_scale_kg),
+        ];
+        for (field, value) in nonneg.into_iter().chain(nonneg_egi) {
             if !value.is_finite() || value < 0.0 {
                 return Err(SensorConfigError::Invalid {
                     field,
@@ -274,7 +383,17 @@ impl SensorConfig {
             ("gps.alt_bias_tau_s", self.gps.alt_bias_tau_s),
             ("gps.update_hz", self.gps.update_hz),
         ];
-        for (field, value) in positive {
+        let positive_egi: [(&'static str, f64); 8] = [
+            ("egi.attitude_gm_tau_s", e.attitude_gm_tau_s),
+            ("egi.heading_gm_tau_s", e.heading_gm_tau_s),
+            ("egi.velocity_gm_tau_s", e.velocity_gm_tau_s),
+            ("egi.attitude_hz", e.attitude_hz),
+            ("egi.heading_hz", e.heading_hz),
+            ("egi.velocity_hz", e.velocity_hz),
+            ("fuel.gm_tau_s", f.gm_tau_s),
+            ("fuel.update_hz", f.update_hz),
+        ];
+        for (field, value) in positive.into_iter().chain(positive_egi) {
             if !(value.is_finite() && value > 0.0) {
                 return Err(SensorConfigError::Invalid {
                     field,
@@ -290,12 +409,21 @@ impl SensorConfig {
                 why: "must be below 60 Hz (half the 120 Hz simulation rate)",
             });
         }
-        if self.gps.update_hz > SIM_HZ as f64 {
-            return Err(SensorConfigError::Invalid {
-                field: "gps.update_hz",
-                value: self.gps.update_hz,
-                why: "cannot exceed the 120 Hz simulation rate",
-            });
+        let rates = [
+            ("gps.update_hz", self.gps.update_hz),
+            ("egi.attitude_hz", e.attitude_hz),
+            ("egi.heading_hz", e.heading_hz),
+            ("egi.velocity_hz", e.velocity_hz),
+            ("fuel.update_hz", f.update_hz),
+        ];
+        for (field, value) in rates {
+            if value > SIM_HZ as f64 {
+                return Err(SensorConfigError::Invalid {
+                    field,
+                    value,
+                    why: "cannot exceed the 120 Hz simulation rate",
+                });
+            }
         }
         if self.imu.lever_arm_m.iter().any(|v| !v.is_finite()) {
             return Err(SensorConfigError::Invalid {
@@ -329,6 +457,15 @@ pub struct SensorInput {
     pub flaperon_deg: f64,
     pub speedbrake_deg: f64,
     pub throttle_norm: f64,
+    /// Euler angles φ, θ, ψ (3-2-1, body to local NED), rad; ψ in [0, 2π).
+    pub euler_rad: [f64; 3],
+    /// Body rates relative to the Earth, rad/s (`velocities/{p,q,r}-rad_sec`): what moves the EGI's
+    /// lever arm relative to the ground.
+    pub omega_earth_rps: [f64; 3],
+    /// Velocity of the CG over the ground, local NED, m/s.
+    pub v_ned_mps: [f64; 3],
+    /// Fuel on board, kg.
+    pub fuel_kg: f64,
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -525,6 +662,136 @@ fn quantize(v: f64, q: f64) -> f64 {
     if q > 0.0 { (v / q).round() * q } else { v }
 }
 
+/// Body → local NED direction cosine matrix of the 3-2-1 Euler angles φ, θ, ψ.
+fn body_to_ned(euler: [f64; 3]) -> [[f64; 3]; 3] {
+    let (sf, cf) = euler[0].sin_cos();
+    let (st, ct) = euler[1].sin_cos();
+    let (sp, cp) = euler[2].sin_cos();
+    [
+        [ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp],
+        [ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp],
+        [-st, sf * ct, cf * ct],
+    ]
+}
+
+/// `a` wrapped to [lo, lo + 2π).
+fn wrap(a: f64, lo: f64) -> f64 {
+    lo + (a - lo).rem_euclid(std::f64::consts::TAU)
+}
+
+/// Steps of the 120 Hz simulation between outputs at `hz` (at least 1).
+fn every_steps(hz: f64) -> u64 {
+    ((SIM_HZ as f64 / hz).round() as u64).max(1)
+}
+
+/// The EGI and the fuel gauge of one flight (the EGI suite's channels beyond Table 1).
+struct EgiModel {
+    cfg: EgiConfig,
+    fuel_cfg: FuelConfig,
+    rng: ChaCha12Rng,
+    /// Gauss-Markov errors: roll, pitch, heading (rad), velocity N, E, D (m/s).
+    gm: [GaussMarkov; 6],
+    /// Truth (φ, θ, ψ, v_N, v_E, v_D at the EGI) of the last `delay_steps + 1` steps.
+    delay: VecDeque<[f64; 6]>,
+    delay_steps: usize,
+    /// Outputs, held between updates: roll, pitch, heading, v_N, v_E, v_D.
+    held: [f64; 6],
+    fuel_bias_kg: f64,
+    fuel_scale: f64,
+    fuel_gm: GaussMarkov,
+    fuel_held: f64,
+    lever_arm_m: [f64; 3],
+    /// Per-flight output phase of attitude, heading, velocity and fuel, in 120 Hz steps: the EGI's
+    /// and the gauge's clocks are not synchronised with the 20 Hz frames.
+    phase: [u64; 4],
+}
+
+impl EgiModel {
+    fn new(cfg: &SensorConfig, seed: u64) -> Self {
+        let mut rng = ChaCha12Rng::seed_from_u64(seed);
+        rng.set_stream(EGI_STREAM);
+        let e = &cfg.egi;
+        let f = &cfg.fuel;
+        let att = (e.attitude_gm_sigma_deg.to_radians(), e.attitude_gm_tau_s);
+        let hdg = (e.heading_gm_sigma_deg.to_radians(), e.heading_gm_tau_s);
+        let vel = (e.velocity_gm_sigma_mps, e.velocity_gm_tau_s);
+        let gm = [att, att, hdg, vel, vel, vel].map(|(s, t)| GaussMarkov::new(s, t, &mut rng));
+        let b: f64 = StandardNormal.sample(&mut rng);
+        let k: f64 = StandardNormal.sample(&mut rng);
+        let fuel_gm = GaussMarkov::new(f.gm_sigma_fs * f.full_scale_kg, f.gm_tau_s, &mut rng);
+        let phase = [e.attitude_hz, e.heading_hz, e.velocity_hz, f.update_hz]
+            .map(|hz| rng.random_range(0..every_steps(hz)));
+        EgiModel {
+            phase,
+            gm,
+            delay: VecDeque::new(),
+            delay_steps: (e.latency_s * SIM_HZ as f64).round() as usize,
+            held: [f64::NAN; 6],
+            fuel_bias_kg: f.bias_sigma_fs * f.full_scale_kg * b,
+            fuel_scale: f.scale_factor_sigma * k,
+            fuel_gm,
+            fuel_held: f64::NAN,
+            // The EGI's IMU is the IMU of the Table 1 suite: its velocity is that point's.
+            lever_arm_m: cfg.imu.lever_arm_m,
+            cfg: e.clone(),
+            fuel_cfg: f.clone(),
+            rng,
+        }
+    }
+
+    /// One 120 Hz step (`step` counts from 0): writes the EGI channels and the fuel quantity.
+    fn step(&mut self, step: u64, t: &SensorInput, out: &mut [f64; CHANNELS]) {
+        // Velocity of the EGI (at the IMU) over the ground: v_cg + C_bn (ω × r).
+        let c = body_to_ned(t.euler_rad);
+        let w = cross(t.omega_earth_rps, self.lever_arm_m);
+        let mut v = t.v_ned_mps;
+        for (vi, row) in v.iter_mut().zip(&c) {
+            *vi += row[0] * w[0] + row[1] * w[1] + row[2] * w[2];
+        }
+        let [phi, theta, psi] = t.euler_rad;
+        self.delay.push_back([phi, theta, psi, v[0], v[1], v[2]]);
+        while self.delay.len() > self.delay_steps + 1 {
+            self.delay.pop_front();
+        }
+        let truth = self.delay.front().copied().unwrap_or_default();
+        // The slow errors evolve every step whatever the output rate.
+        let mut err = [0.0; 6];
+        for (e, g) in err.iter_mut().zip(self.gm.iter_mut()) {
+            *e = g.step(&mut self.rng);
+        }
+        let e = &self.cfg;
+        let groups = [
+            (0..2, e.attitude_hz, e.attitude_noise_sigma_deg.to_radians()),
+            (2..3, e.heading_hz, e.heading_noise_sigma_deg.to_radians()),
+            (3..6, e.velocity_hz, e.velocity_noise_sigma_mps),
+        ];
+        // The first step always updates, so no output is ever NaN.
+        for ((range, hz, sigma), phase) in groups.into_iter().zip(self.phase) {
+            if step == 0 || (step + phase).is_multiple_of(every_steps(hz)) {
+                for k in range {
+                    let n: f64 = StandardNormal.sample(&mut self.rng);
+                    self.held[k] = truth[k] + err[k] + sigma * n;
+                }
+            }
+        }
+        let held = self.held;
+        out[Channel::Roll.index()] = wrap(held[0], -std::f64::consts::PI);
+        out[Channel::Pitch.index()] = held[1];
+        out[Channel::Heading.index()] = wrap(held[2], 0.0);
+        out[Channel::VelNorth.index()] = held[3];
+        out[Channel::VelEast.index()] = held[4];
+        out[Channel::VelDown.index()] = held[5];
+
+        let f = &self.fuel_cfg;
+        let slow = self.fuel_gm.step(&mut self.rng);
+        if step == 0 || (step + self.phase[3]).is_multiple_of(every_steps(f.update_hz)) {
+            let reading = t.fuel_kg * (1.0 + self.fuel_scale) + self.fuel_bias_kg + slow;
+            self.fuel_held = quantize(reading.max(0.0), f.quantum_kg);
+        }
+        out[Channel::Fuel.index()] = self.fuel_held;
+    }
+}
+
 /// The stateful sensor suite of one flight.
 pub struct SensorModel {
     cfg: SensorConfig,
@@ -540,6 +807,7 @@ pub struct SensorModel {
     gps_every_steps: u64,
     gps_held: (f64, f64),
     steps: u64,
+    egi: EgiModel,
 }
 
 impl SensorModel {
@@ -567,6 +835,7 @@ impl SensorModel {
             gps_every_steps: ((SIM_HZ as f64 / cfg.gps.update_hz).round() as u64).max(1),
             gps_held: (f64::NAN, f64::NAN),
             steps: 0,
+            egi: EgiModel::new(cfg, seed),
             cfg: cfg.clone(),
             rng,
         }
@@ -638,9 +907,9 @@ impl SensorModel {
         (gyro, accel)
     }
 
-    /// One 120 Hz step: the 16 sensed channels at this instant.
+    /// One 120 Hz step: the sensed channels of every suite at this instant.
     pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
-        let mut out = [0.0; CHANNELS];
+        let mut out = [f64::NAN; CHANNELS];
         let (gyro_raw, accel_raw) = self.imu_raw(t);
         for k in 0..3 {
             out[Channel::GyroP.index() + k] = self.gyro[k].filter(gyro_raw[k]);
@@ -688,6 +957,8 @@ impl SensorModel {
             t.throttle_norm + s.throttle_noise_sigma * n,
             s.throttle_quantum,
         );
+        // Last, and from its own stream: nothing above depends on it.
+        self.egi.step(self.steps, t, &mut out);
         self.steps += 1;
         out
     }
@@ -740,6 +1011,121 @@ mod tests {
         draw_triad_errors(&e, &mut rng);
         let next_b: f64 = StandardNormal.sample(&mut rng);
         assert_eq!(next_a, next_b);
+    }
+
+    fn cruise() -> SensorInput {
+        SensorInput {
+            omega_rps: [0.01, 0.02, 0.0],
+            f_cg_mps2: [0.1, 0.0, -9.8],
+            gps_speed_mps: 200.0,
+            alt_msl_m: 3000.0,
+            euler_rad: [0.1, 0.05, 6.2],
+            v_ned_mps: [150.0, 130.0, -2.0],
+            fuel_kg: 1000.0,
+            ..SensorInput::default()
+        }
+    }
+
+    #[test]
+    fn egi_and_fuel_models_leave_the_table1_channels_alone() {
+        let mut other = SensorConfig::default();
+        other.egi.velocity_noise_sigma_mps = 3.0;
+        other.egi.latency_s = 0.5;
+        other.egi.attitude_hz = 7.0;
+        other.fuel.update_hz = 10.0;
+        let mut a = SensorModel::new(&SensorConfig::default(), 5);
+        let mut b = SensorModel::new(&other, 5);
+        let mut egi_differs = false;
+        for _ in 0..2400 {
+            let (x, y) = (a.step(&cruise()), b.step(&cruise()));
+            assert_eq!(x[..TABLE1], y[..TABLE1]);
+            egi_differs |= x[TABLE1..] != y[TABLE1..];
+        }
+        assert!(egi_differs);
+    }
+    const TABLE1: usize = estimator_core::channels::TABLE1_CHANNELS;
+
+    #[test]
+    fn egi_errors_have_their_configured_size_and_angles_wrap() {
+        let egi = EgiConfig {
+            attitude_gm_sigma_deg: 0.04,
+            attitude_gm_tau_s: 0.5,
+            attitude_noise_sigma_deg: 0.03,
+            heading_gm_sigma_deg: 0.0,
+            heading_noise_sigma_deg: 0.1,
+            velocity_gm_sigma_mps: 0.03,
+            velocity_gm_tau_s: 0.5,
+            velocity_noise_sigma_mps: 0.04,
+            attitude_hz: 120.0,
+            heading_hz: 120.0,
+            velocity_hz: 120.0,
+            latency_s: 0.0,
+            ..EgiConfig::default()
+        };
+        let mut cfg = SensorConfig {
+            egi,
+            ..SensorConfig::default()
+        };
+        cfg.imu.lever_arm_m = [0.0; 3];
+        let mut truth = cruise();
+        // Roll just below π and heading just below 2π: the errors push them across.
+        truth.euler_rad = [
+            std::f64::consts::PI - 1e-4,
+            0.05,
+            std::f64::consts::TAU - 1e-4,
+        ];
+        let mut m = SensorModel::new(&cfg, 11);
+        let n = 120_000;
+        let (mut roll, mut vel) = (Vec::new(), Vec::new());
+        for _ in 0..n {
+            let o = m.step(&truth);
+            let r = o[Channel::Roll.index()];
+            let h = o[Channel::Heading.index()];
+            assert!(
+                r > -std::f64::consts::PI && r <= std::f64::consts::PI,
+                "{r}"
+            );
+            assert!((0.0..std::f64::consts::TAU).contains(&h), "{h}");
+            roll.push(wrap(r - truth.euler_rad[0], -std::f64::consts::PI));
+            vel.push(o[Channel::VelEast.index()] - truth.v_ned_mps[1]);
+        }
+        let sd = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt()
+        };
+        let want_roll = 0.05f64.to_radians(); // √(0.04² + 0.03²)
+        assert!((sd(&roll) / want_roll - 1.0).abs() < 0.1, "{}", sd(&roll));
+        assert!((sd(&vel) / 0.05 - 1.0).abs() < 0.1, "{}", sd(&vel));
+    }
+
+    #[test]
+    fn egi_velocity_is_the_imu_point_velocity_and_outputs_are_held() {
+        // Pitching up at 1 rad/s with the EGI 2 m ahead of the CG: it moves 2 m/s up (v_D = -2).
+        let mut cfg = SensorConfig::default();
+        cfg.egi.velocity_gm_sigma_mps = 0.0;
+        cfg.egi.velocity_noise_sigma_mps = 0.0;
+        cfg.egi.latency_s = 0.0;
+        cfg.imu.lever_arm_m = [2.0, 0.0, 0.0];
+        let truth = SensorInput {
+            euler_rad: [0.0, 0.0, 0.0],
+            omega_earth_rps: [0.0, 1.0, 0.0],
+            v_ned_mps: [200.0, 0.0, 0.0],
+            ..cruise()
+        };
+        let mut m = SensorModel::new(&cfg, 3);
+        let o = m.step(&truth);
+        assert!((o[Channel::VelDown.index()] + 2.0).abs() < 1e-12);
+        assert!((o[Channel::VelNorth.index()] - 200.0).abs() < 1e-12);
+        // Fuel: refreshed at 1 Hz, in 10 lb counts, near the truth.
+        let mut seen = std::collections::BTreeSet::new();
+        for _ in 0..600 {
+            let f = m.step(&truth)[Channel::Fuel.index()];
+            let counts = f / cfg.fuel.quantum_kg;
+            assert!((counts - counts.round()).abs() < 1e-9);
+            assert!((f - 1000.0).abs() < 200.0, "{f}");
+            seen.insert(f.to_bits());
+        }
+        assert!(seen.len() <= 6, "{} distinct readings in 5 s", seen.len());
     }
 
     #[test]

@@ -50,7 +50,22 @@ fn ci_preset_writes_a_consistent_dataset() {
     let shares: f64 = report.train.alpha_band_share.iter().sum();
     assert!((shares - 1.0).abs() < 1e-9);
 
-    // A dataset of the previous format (no lat/lon columns) is refused with what to do.
+    assert_eq!(back.suites(), estimator_core::Suite::ALL);
+    assert!(back.carries(estimator_core::Suite::Egi));
+
+    // A format-3 manifest (no `suites` field) reads as a Table 1 dataset.
+    let mut v3 = serde_json::to_value(&back).unwrap();
+    v3["format"] = 3.into();
+    v3.as_object_mut().unwrap().remove("suites");
+    std::fs::write(dir.join("manifest.json"), v3.to_string()).unwrap();
+    let m3 = Manifest::read(&dir).unwrap();
+    assert_eq!(m3.suites(), [estimator_core::Suite::Table1]);
+    assert!(!m3.carries(estimator_core::Suite::Egi));
+    v3["suites"] = serde_json::json!(["table1", "egi"]);
+    std::fs::write(dir.join("manifest.json"), v3.to_string()).unwrap();
+    assert!(Manifest::read(&dir).is_err(), "format 3 cannot carry egi");
+
+    // A dataset of an older format (no lat/lon columns) is refused with what to do.
     let old = Manifest { format: 1, ..back };
     old.write(&dir).unwrap();
     let err = Manifest::read(&dir).unwrap_err().to_string();

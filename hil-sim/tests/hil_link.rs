@@ -32,7 +32,7 @@ fn frame(seq: u16) -> SensorFrame {
 
 fn encode(f: &SensorFrame) -> Vec<u8> {
     let mut out = [0u8; MAX_FRAME];
-    let n = f.encode(&mut out).unwrap();
+    let n = f.encode(estimator_core::Suite::Egi, &mut out).unwrap();
     out[..n].to_vec()
 }
 

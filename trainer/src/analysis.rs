@@ -181,6 +181,7 @@ mod tests {
             FeatureValues {
                 raw,
                 low_speed: false,
+                low_ground_speed: false,
                 short_lags: 0,
             }
         };

@@ -3,7 +3,7 @@
 use crate::model::{FloatLayer, float_forward};
 use crate::prep::{Angle, Prep, fixed_point, fp_value};
 use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
-use estimator_core::{Channel, Feature, FeatureValues, History, SensorFrame};
+use estimator_core::{Channel, Feature, FeatureValues, History, SensorFrame, Suite};
 use std::fmt::Write;
 
 /// One quantized layer: `weights[o][i]` int8, bias in accumulator units, requant per output.
@@ -398,7 +398,19 @@ pub struct Vector {
     pub beta: RefOut,
 }
 
-pub const VECTOR_COLUMNS: &str = "reset seq time_ms valid raw0..raw15 w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped";
+/// The columns of a vector line for `suite`: its channels only (16 for Table 1, as every vector file
+/// before the EGI suite, so a Table 1 model's vectors do not change; 23 for EGI).
+pub fn vector_columns(suite: Suite) -> String {
+    format!(
+        "reset seq time_ms valid raw0..raw{} w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped",
+        suite_width(suite) - 1
+    )
+}
+
+/// Number of channels a vector line of `suite` carries.
+fn suite_width(suite: Suite) -> usize {
+    suite.channels().count_ones() as usize
+}
 
 /// Vectors for `frames` (`(reset, frame)`: a reset starts a new sequence with an empty history),
 /// computed by the integer reference on the features `estimator-core` derives.
@@ -423,17 +435,18 @@ pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[(bool, SensorFrame)]
 }
 
 /// Text format: `#` comment lines, then one line per vector of whitespace-separated integers
-/// ([`VECTOR_COLUMNS`]): 4 + 16 + 6 = 26 numbers.
-pub fn format_vectors(vs: &[Vector], header: &str) -> String {
+/// ([`vector_columns`]): 4 + 16 + 6 = 26 numbers for a Table 1 model, 4 + 23 + 6 = 33 for an EGI
+/// one. Frames are written as a sender of `suite` delivers them ([`SensorFrame::restricted_to`]).
+pub fn format_vectors(vs: &[Vector], suite: Suite, header: &str) -> String {
     let mut out = String::new();
     for line in header.lines() {
         let _ = writeln!(out, "# {line}");
     }
-    let _ = writeln!(out, "# columns: {VECTOR_COLUMNS}");
+    let _ = writeln!(out, "# columns: {}", vector_columns(suite));
     for v in vs {
-        let f = &v.frame;
+        let f = v.frame.restricted_to(suite);
         let _ = write!(out, "{} {} {} {}", v.reset as u8, f.seq, f.time_ms, f.valid);
-        for r in &f.raw {
+        for r in f.raw.iter().take(suite_width(suite)) {
             let _ = write!(out, " {r}");
         }
         let _ = writeln!(
@@ -461,7 +474,8 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             .split_whitespace()
             .map(|t| t.parse().ok())
             .collect::<Option<_>>()?;
-        if n.len() != 26 {
+        let width = n.len().checked_sub(4 + 6)?;
+        if !Suite::ALL.iter().any(|s| suite_width(*s) == width) {
             return None;
         }
         let reset = n[0] == 1;
@@ -469,10 +483,10 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
         let mut frame = SensorFrame {
             seq: n[0] as u16,
             time_ms: n[1] as u32,
-            valid: n[2] as u16,
+            valid: u32::try_from(n[2]).ok()?,
             ..SensorFrame::default()
         };
-        for (r, v) in frame.raw.iter_mut().zip(&n[3..19]) {
+        for (r, v) in frame.raw.iter_mut().zip(&n[3..3 + width]) {
             *r = *v as i32;
         }
         let ro = |k: usize| RefOut {
@@ -483,8 +497,8 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
         out.push(Vector {
             reset,
             frame,
-            alpha: ro(19),
-            beta: ro(22),
+            alpha: ro(3 + width),
+            beta: ro(6 + width),
         });
     }
     Some(out)

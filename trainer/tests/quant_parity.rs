@@ -19,7 +19,7 @@ fn frames(n: usize) -> Vec<SensorFrame> {
     (0..n)
         .map(|i| {
             let t = i as f64 * 0.05;
-            let mut si = [0.0; 16];
+            let mut si = [0.0; estimator_core::CHANNELS];
             si[Channel::AccelZ.index()] = -9.81 * (1.0 + 0.8 * (0.7 * t).sin());
             si[Channel::Elevator.index()] = 5.0 * (0.31 * t).cos();
             si[Channel::GpsSpeed.index()] = 200.0 + 60.0 * (0.13 * t).sin();
@@ -197,6 +197,22 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
         .map(|(i, f)| (i % 20 == 0, *f))
         .collect();
     let vs = vectors(&q, &q, &seq);
-    let text = format_vectors(&vs, "test\nheader");
+    let text = format_vectors(&vs, estimator_core::Suite::Egi, "test\nheader");
     assert_eq!(parse_vectors(&text).unwrap(), vs);
+    // A Table 1 file carries the Table 1 channels only (26 numbers a line, as before the EGI
+    // suite): the frames come back as a Table 1 sender delivers them.
+    let text = format_vectors(&vs, estimator_core::Suite::Table1, "t1");
+    let back = parse_vectors(&text).unwrap();
+    assert!(
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .all(|l| l.split_whitespace().count() == 26)
+    );
+    for (b, v) in back.iter().zip(&vs) {
+        assert_eq!(
+            b.frame,
+            v.frame.restricted_to(estimator_core::Suite::Table1)
+        );
+        assert_eq!((b.alpha, b.beta), (v.alpha, v.beta));
+    }
 }

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! on the wire:  COBS( body | crc32 ) 0x00
-//! body:         header (8 bytes) | payload (sensor: 50 bytes, estimate: 39 bytes)
+//! body:         header (8 bytes) | payload (sensor: 50 bytes, sensor-egi: 78 bytes, estimate: 39 bytes)
 //! header:       version u8 | kind u8 | seq u16 | time_ms u32          (all little-endian)
 //! crc32:        CRC-32/ISO-HDLC of the body, little-endian
 //! ```
@@ -22,12 +22,17 @@
 //! |---|---|
 //! | 1 | first format: sensor payload 50 bytes, estimate payload 35 bytes |
 //! | 2 | estimate frames carry `rx_overruns` (payload 39 bytes); sensor frames unchanged |
+//! | 3 | sensor suites: kind 3 `SensorEgi` (the 50-byte sensor payload + EGI attitude, velocity, fuel and their validity: 78 bytes) next to kind 1 `Sensor` (the Table 1 suite, layout unchanged); estimate frames unchanged |
+//!
+//! A receiver of version 3 takes both sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
+//! a kind-1 frame decodes with the EGI channels marked invalid. Frames of version 2 (same kind-1 and
+//! estimate layouts, but no kind 3) are refused as `Error::Version(2)`, like any other version.
 
 pub mod estimate;
 pub mod sensor;
 
 /// Wire format version carried in every header (the table in the module docs).
-pub const VERSION: u8 = 2;
+pub const VERSION: u8 = 3;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0;
 /// Header length.
@@ -35,7 +40,7 @@ pub const HEADER_LEN: usize = 8;
 /// CRC length.
 pub const CRC_LEN: usize = 4;
 /// Longest body (header + payload) of any frame kind.
-pub const MAX_BODY: usize = HEADER_LEN + sensor::PAYLOAD_LEN;
+pub const MAX_BODY: usize = HEADER_LEN + sensor::EGI_PAYLOAD_LEN;
 /// Longest encoded frame including the delimiter.
 pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_BODY + CRC_LEN) + 1;
 
@@ -92,8 +97,11 @@ impl core::fmt::Display for Error {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum Kind {
+    /// A sensor frame of the Table 1 suite ([`crate::Suite::Table1`]).
     Sensor = 1,
     Estimate = 2,
+    /// A sensor frame of the EGI suite ([`crate::Suite::Egi`]).
+    SensorEgi = 3,
 }
 
 /// The header fields common to every frame.
@@ -261,7 +269,7 @@ impl<const N: usize> Accumulator<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::channels::{ALL_VALID, CHANNELS, SensorFrame};
+    use crate::channels::{ALL_VALID, CHANNELS, SensorFrame, Suite};
     use proptest::prelude::*;
 
     fn frame(seq: u16) -> SensorFrame {
@@ -270,6 +278,7 @@ mod tests {
             *r = (i as i32 - 8) * 1000 + (seq % 1000) as i32;
         }
         raw[crate::Channel::Throttle.index()] = 5000;
+        raw[crate::Channel::Fuel.index()] = 31_000;
         SensorFrame {
             seq,
             time_ms: seq as u32 * 50,
@@ -279,40 +288,78 @@ mod tests {
     }
 
     #[test]
-    fn sensor_frame_round_trips_through_the_stream() {
-        let mut acc = Accumulator::<MAX_FRAME>::new();
-        let mut got = 0;
-        for seq in [0u16, 1, 255, 256, 65535] {
-            let mut wire = [0u8; MAX_FRAME];
-            let n = frame(seq).encode(&mut wire).unwrap();
-            assert!(!wire[..n - 1].contains(&0));
-            for b in &wire[..n] {
-                if let Some(r) = acc.push(*b) {
-                    assert_eq!(SensorFrame::parse(r.unwrap()).unwrap(), frame(seq));
-                    got += 1;
+    fn sensor_frames_of_both_suites_round_trip_through_the_stream() {
+        for suite in Suite::ALL {
+            let mut acc = Accumulator::<MAX_FRAME>::new();
+            let mut got = 0;
+            for seq in [0u16, 1, 255, 256, 65535] {
+                let mut wire = [0u8; MAX_FRAME];
+                let n = frame(seq).encode(suite, &mut wire).unwrap();
+                assert!(!wire[..n - 1].contains(&0));
+                for b in &wire[..n] {
+                    if let Some(r) = acc.push(*b) {
+                        assert_eq!(
+                            SensorFrame::parse(r.unwrap()).unwrap(),
+                            frame(seq).restricted_to(suite)
+                        );
+                        got += 1;
+                    }
                 }
             }
+            assert_eq!(got, 5);
         }
-        assert_eq!(got, 5);
     }
 
     #[test]
     fn every_single_bit_flip_is_rejected() {
-        let mut wire = [0u8; MAX_FRAME];
-        let n = frame(42).encode(&mut wire).unwrap();
-        for bit in 0..(n - 1) * 8 {
-            let mut w = wire;
-            w[bit / 8] ^= 1 << (bit % 8);
+        for suite in Suite::ALL {
+            let mut wire = [0u8; MAX_FRAME];
+            let n = frame(42).encode(suite, &mut wire).unwrap();
+            for bit in 0..(n - 1) * 8 {
+                let mut w = wire;
+                w[bit / 8] ^= 1 << (bit % 8);
+                let mut acc = Accumulator::<MAX_FRAME>::new();
+                let mut accepted = 0;
+                for b in &w[..n] {
+                    if let Some(Ok(body)) = acc.push(*b)
+                        && SensorFrame::parse(body).is_ok()
+                    {
+                        accepted += 1;
+                    }
+                }
+                assert_eq!(
+                    accepted, 0,
+                    "{suite:?}: bit {bit} flipped and still accepted"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_version_2_frame_is_refused_naming_its_version() {
+        // Version 2 had the kind-1 layout of today: the same bytes with version 2 in the header,
+        // CRC and COBS intact, are refused as version 2, never read as a sensor frame.
+        for suite in Suite::ALL {
+            let mut body = [0u8; MAX_BODY];
+            let n = frame(7)
+                .emit_body(suite, &mut body)
+                .expect("a sensor body fits MAX_BODY");
+            body[field::VERSION] = 2;
+            let mut wire = [0u8; MAX_FRAME];
+            let len = encode(&body[..n], &mut wire).unwrap();
             let mut acc = Accumulator::<MAX_FRAME>::new();
-            let mut accepted = 0;
-            for b in &w[..n] {
-                if let Some(Ok(body)) = acc.push(*b)
-                    && SensorFrame::parse(body).is_ok()
-                {
-                    accepted += 1;
+            let mut results = std::vec::Vec::new();
+            for b in &wire[..len] {
+                if let Some(r) = acc.push(*b) {
+                    results.push(r.and_then(SensorFrame::parse));
                 }
             }
-            assert_eq!(accepted, 0, "bit {bit} flipped and still accepted");
+            assert_eq!(results, [Err(Error::Version(2))]);
+            let text = std::format!("{}", Error::Version(2));
+            assert!(
+                text.contains("version 2") && text.contains("version 3"),
+                "{text}"
+            );
         }
     }
 
@@ -321,7 +368,7 @@ mod tests {
         let mut acc = Accumulator::<MAX_FRAME>::new();
         let garbage = [0x13u8; 500];
         let mut wire = [0u8; MAX_FRAME];
-        let n = frame(9).encode(&mut wire).unwrap();
+        let n = frame(9).encode(Suite::Egi, &mut wire).unwrap();
         let mut results = std::vec::Vec::new();
         for b in garbage.iter().chain(&[0u8]).chain(&wire[..n]) {
             if let Some(r) = acc.push(*b) {

@@ -4,7 +4,8 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
-use estimator_core::{CHANNELS, Channel};
+use estimator_core::channels::TABLE1_CHANNELS;
+use estimator_core::{CHANNELS, Channel, Suite};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -29,10 +30,20 @@ pub const TRUTH_COLUMNS: [&str; TRUTH_COUNT] = [
     "mass_kg",
     "lat_deg",
     "lon_deg",
+    "v_north_mps",
+    "v_east_mps",
+    "v_down_mps",
+    "fuel_true_kg",
+    "wind_north_mps",
+    "wind_east_mps",
+    "wind_down_mps",
 ];
 
 /// Number of truth columns.
-pub const TRUTH_COUNT: usize = 19;
+pub const TRUTH_COUNT: usize = 26;
+
+/// Truth columns added by format 4 (NaN when reading a format-3 flight).
+const TRUTH_SINCE_FORMAT_4: usize = 7;
 
 /// Truth straight from JSBSim at a sample instant.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -58,6 +69,16 @@ pub struct Truth {
     pub lat_deg: f64,
     /// Longitude, degrees east.
     pub lon_deg: f64,
+    /// Velocity over the ground, local NED frame, at the CG, m/s.
+    pub v_north_mps: f64,
+    pub v_east_mps: f64,
+    pub v_down_mps: f64,
+    /// Fuel on board (all tanks), kg.
+    pub fuel_kg: f64,
+    /// Total wind (steady + turbulence + gusts) the aircraft flies in, NED, m/s: air data, truth only.
+    pub wind_north_mps: f64,
+    pub wind_east_mps: f64,
+    pub wind_down_mps: f64,
 }
 
 impl Truth {
@@ -83,6 +104,13 @@ impl Truth {
             self.mass_kg,
             self.lat_deg,
             self.lon_deg,
+            self.v_north_mps,
+            self.v_east_mps,
+            self.v_down_mps,
+            self.fuel_kg,
+            self.wind_north_mps,
+            self.wind_east_mps,
+            self.wind_down_mps,
         ]
     }
 
@@ -108,6 +136,13 @@ impl Truth {
             mass_kg: a[16],
             lat_deg: a[17],
             lon_deg: a[18],
+            v_north_mps: a[19],
+            v_east_mps: a[20],
+            v_down_mps: a[21],
+            fuel_kg: a[22],
+            wind_north_mps: a[23],
+            wind_east_mps: a[24],
+            wind_down_mps: a[25],
         }
     }
 }
@@ -117,7 +152,8 @@ impl Truth {
 pub struct Sample {
     pub time_s: f64,
     pub truth: Truth,
-    /// The 16 sensed channels in [`Channel`] order and SI units (degrees for surfaces).
+    /// The sensed channels in [`Channel`] order and SI units (degrees for surfaces); NaN for a
+    /// channel the dataset does not carry.
     pub sensed: [f64; CHANNELS],
 }
 
@@ -216,12 +252,20 @@ pub enum DatasetError {
     Manifest { path: PathBuf, message: String },
 }
 
-/// All CSV column names in file order.
+/// All CSV column names in file order: time, truth, then one sensed column per channel of every
+/// suite.
 pub fn columns() -> Vec<&'static str> {
     let mut c = vec!["time_s"];
     c.extend_from_slice(&TRUTH_COLUMNS);
     c.extend(Channel::ALL.iter().map(|c| c.name()));
     c
+}
+
+/// Columns a flight CSV of format 3 lacks (the format-4 truth columns and the EGI sensed columns):
+/// read as NaN when all of them are absent.
+fn since_format_4(column: usize) -> bool {
+    let truth = 1 + TRUTH_COUNT - TRUTH_SINCE_FORMAT_4..1 + TRUTH_COUNT;
+    truth.contains(&column) || column >= 1 + TRUTH_COUNT + TABLE1_CHANNELS
 }
 
 impl Flight {
@@ -264,7 +308,9 @@ impl Flight {
     }
 
     /// Reads a flight CSV (columns found by name; extra columns are ignored). The name is the file stem;
-    /// `cut` is not stored in the CSV (it is in the manifest).
+    /// `cut` is not stored in the CSV (it is in the manifest). A format-3 flight (no EGI sensed
+    /// columns, none of the format-4 truth columns) reads them as NaN: the EGI channels are then
+    /// absent (invalid) in its frames. Some but not all of those columns is an error.
     pub fn read_csv(path: &Path) -> Result<Flight, DatasetError> {
         let f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
             action: "open",
@@ -286,16 +332,25 @@ impl Flight {
                     column: name.to_string(),
                 })
         };
-        let idx: Vec<usize> = columns()
+        let all = columns();
+        let format3 = (0..all.len())
+            .filter(|k| since_format_4(*k))
+            .all(|k| header.iter().all(|h| h != all[k]));
+        let idx: Vec<Option<usize>> = all
             .iter()
-            .map(|c| find(c))
+            .enumerate()
+            .map(|(k, c)| match find(c) {
+                Err(_) if format3 && since_format_4(k) => Ok(None),
+                r => r.map(Some),
+            })
             .collect::<Result<_, _>>()?;
         let mut samples = Vec::new();
         for rec in rd.records() {
             let rec = rec.map_err(csv_err)?;
             let line = rec.position().map(|p| p.line()).unwrap_or(0);
-            let mut vals = [0.0f64; 1 + TRUTH_COUNT + CHANNELS];
-            for (k, (&i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
+            let mut vals = [f64::NAN; 1 + TRUTH_COUNT + CHANNELS];
+            for (k, (i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
+                let Some(i) = *i else { continue };
                 let s = rec.get(i).unwrap_or("");
                 *v = s
                     .trim()
@@ -360,6 +415,10 @@ pub struct FlightEntry {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
     pub format: u32,
+    /// The sensor suites whose channels every flight carries (`estimator_core::Suite` names). A
+    /// format-3 manifest has no such field: it carries `table1` only.
+    #[serde(default = "table1_only")]
+    pub suites: Vec<String>,
     pub preset: String,
     pub jsbsim_version: String,
     pub git_rev: String,
@@ -371,10 +430,33 @@ pub struct Manifest {
 }
 
 impl Manifest {
-    /// 3: time on JSBSim's own clock, IMU with Earth rate, scale factor and misalignment, zone
-    /// times per flight (2: time as whole steps / 120 Hz, gyros blind to the Earth's rotation;
-    /// 1 had no position).
-    pub const FORMAT: u32 = 3;
+    /// 4: the sensor suites: EGI sensed columns (attitude, NED velocity, fuel) and truth NED
+    /// velocity, fuel and wind, `suites` in the manifest (3: time on JSBSim's own clock, IMU with
+    /// Earth rate, scale factor and misalignment, zone times per flight; 2: time as whole steps /
+    /// 120 Hz, gyros blind to the Earth's rotation; 1 had no position). Format 3 is still read, as a
+    /// Table 1 dataset: its Table 1 columns mean what they mean in format 4.
+    pub const FORMAT: u32 = 4;
+
+    /// The oldest format this build reads.
+    pub const OLDEST_READ: u32 = 3;
+
+    /// The suites a dataset written by this build carries.
+    pub fn written_suites() -> Vec<String> {
+        Suite::ALL.iter().map(|s| s.name().to_string()).collect()
+    }
+
+    /// [`Manifest::suites`] as suites.
+    pub fn suites(&self) -> Vec<Suite> {
+        self.suites
+            .iter()
+            .filter_map(|n| Suite::from_name(n))
+            .collect()
+    }
+
+    /// Whether every flight carries `suite`'s channels.
+    pub fn carries(&self, suite: Suite) -> bool {
+        self.suites().contains(&suite)
+    }
 
     pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
         let path = dir.join("manifest.json");
@@ -402,19 +484,39 @@ impl Manifest {
             path: path.clone(),
             message: e.to_string(),
         })?;
-        if m.format != Self::FORMAT {
+        if !(Self::OLDEST_READ..=Self::FORMAT).contains(&m.format) {
             return Err(DatasetError::Manifest {
                 path,
                 message: format!(
-                    "format {} (this build reads {}); regenerate the dataset with this build's \
-                     `hil-sim generate` (or `fly`)",
+                    "format {} (this build reads {} to {}); regenerate the dataset with this \
+                     build's `hil-sim generate` (or `fly`)",
                     m.format,
+                    Self::OLDEST_READ,
                     Self::FORMAT
+                ),
+            });
+        }
+        if let Some(bad) = m.suites.iter().find(|n| Suite::from_name(n).is_none()) {
+            return Err(DatasetError::Manifest {
+                path,
+                message: format!("unknown sensor suite `{bad}` (this build knows table1, egi)"),
+            });
+        }
+        if m.format < 4 && m.suites != table1_only() {
+            return Err(DatasetError::Manifest {
+                path,
+                message: format!(
+                    "format {} carries table1 only, not {:?}",
+                    m.format, m.suites
                 ),
             });
         }
         Ok(m)
     }
+}
+
+fn table1_only() -> Vec<String> {
+    vec![Suite::Table1.name().to_string()]
 }
 
 pub mod bench;
@@ -530,6 +632,9 @@ mod tests {
         s.truth.mass_kg = 9876.54321;
         s.sensed[3] = -1e-7;
         s.sensed[15] = 0.123456789012345;
+        s.sensed[Channel::Heading.index()] = 5.4321;
+        s.sensed[Channel::Fuel.index()] = 1234.5;
+        s.truth.wind_down_mps = -0.25;
         let f = Flight {
             name: "t".into(),
             samples: vec![s, s],
@@ -542,6 +647,48 @@ mod tests {
         f.write_csv(&p).unwrap();
         let g = Flight::read_csv(&p).unwrap();
         assert_eq!(f, g);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn column_names_are_unique() {
+        let c = columns();
+        let set: std::collections::BTreeSet<&str> = c.iter().copied().collect();
+        assert_eq!(set.len(), c.len());
+    }
+
+    #[test]
+    fn a_format_3_flight_reads_with_the_egi_channels_absent() {
+        // The format-3 columns: time, the first 19 truth columns, the 16 Table 1 channels.
+        let cols = columns();
+        let keep: Vec<usize> = (0..cols.len()).filter(|k| !since_format_4(*k)).collect();
+        assert_eq!(keep.len(), 1 + 19 + TABLE1_CHANNELS);
+        let row: Vec<String> = keep
+            .iter()
+            .map(|k| format!("{}", *k as f64 * 0.5))
+            .collect();
+        let header: Vec<&str> = keep.iter().map(|k| cols[*k]).collect();
+        let text = format!("{}\n{}\n", header.join(","), row.join(","));
+        let dir = std::env::temp_dir().join(format!("hil-ds3-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("old.csv");
+        std::fs::write(&p, text).unwrap();
+        let g = Flight::read_csv(&p).unwrap();
+        let s = &g.samples[0];
+        assert_eq!(
+            s.sensed[Channel::Throttle.index()],
+            (1 + TRUTH_COUNT + 15) as f64 * 0.5
+        );
+        assert!(s.sensed[TABLE1_CHANNELS..].iter().all(|v| v.is_nan()));
+        assert!(s.truth.fuel_kg.is_nan() && s.truth.wind_north_mps.is_nan());
+        assert_eq!(s.truth.lon_deg, 19.0 * 0.5);
+        // Half of the new columns is not a format-3 file: refused, naming the missing column.
+        let mut header = header.clone();
+        header.push("fuel_true_kg");
+        let text = format!("{}\n{},1\n", header.join(","), row.join(","));
+        std::fs::write(&p, text).unwrap();
+        let err = Flight::read_csv(&p).unwrap_err().to_string();
+        assert!(err.contains("missing column"), "{err}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }
@@ -673,6 +820,7 @@ pub fn generate(
     }
     let manifest = Manifest {
         format: Manifest::FORMAT,
+        suites: Manifest::written_suites(),
         preset: preset.name().to_string(),
         jsbsim_version: version.into_inner().unwrap_or_default(),
         git_rev: git_rev(),

@@ -58,6 +58,10 @@ pub struct RunArgs {
     /// As fast as the firmware answers: the default, kept so that older commands still parse.
     #[arg(long, hide = true, conflicts_with = "realtime")]
     pub fast: bool,
+    /// Sensor suite sent, i.e. the sensor frame kind: table1 (the paper's inputs, wire kind 1) or
+    /// egi (Table 1 + EGI attitude, velocity and fuel, wire kind 3). The firmware takes both.
+    #[arg(long, default_value = "table1", value_parser = parse_suite)]
+    pub suite: estimator_core::Suite,
     /// Print exactly one JSON summary object on stdout (messages go to stderr).
     #[arg(long)]
     pub json: bool,
@@ -194,6 +198,17 @@ pub fn write_outputs(dir: &Path, o: &RunOutcome, s: &score::Summary) -> Result<W
     Ok(w)
 }
 
+/// A `--suite` value: a [`estimator_core::Suite`] name.
+pub fn parse_suite(s: &str) -> Result<estimator_core::Suite, String> {
+    estimator_core::Suite::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = estimator_core::Suite::ALL
+            .iter()
+            .map(|s| s.name())
+            .collect();
+        format!("unknown sensor suite `{s}` (known: {})", names.join(", "))
+    })
+}
+
 /// The whole `hil-sim run`.
 pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     let cfg = RunConfig {
@@ -201,6 +216,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         seed: a.seed,
         fast: !a.realtime,
         reply_timeout: Duration::from_millis(a.reply_timeout_ms),
+        suite: a.suite,
         ..RunConfig::default()
     };
     if a.source.script.is_some() {

@@ -18,9 +18,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use estimator_core::SensorFrame;
 use estimator_core::wire::estimate::EstimateFrame;
 use estimator_core::wire::{Accumulator, MAX_FRAME};
+use estimator_core::{SensorFrame, Suite};
 
 use crate::link::{Link, LinkConfig, LinkStats};
 pub use target::{InProcess, Qemu, Serial, Target};
@@ -65,6 +65,10 @@ pub struct RunConfig {
     /// is lost with it when the altered frame lost its delimiter); also how long to wait for late
     /// replies after the last frame.
     pub altered_grace: Duration,
+    /// The sensor suite sent, i.e. the frame kind: as `Table1` the frames carry the paper's inputs
+    /// only (the EGI channels are not sent, so the byte stream, and what the link does to it, is
+    /// the same as before the EGI suite existed).
+    pub suite: Suite,
 }
 
 impl Default for RunConfig {
@@ -75,6 +79,7 @@ impl Default for RunConfig {
             fast: true,
             reply_timeout: Duration::from_secs(10),
             altered_grace: Duration::from_millis(50),
+            suite: Suite::Table1,
         }
     }
 }
@@ -291,7 +296,7 @@ pub fn run_with_progress(
 
     for (i, s) in samples.iter().enumerate() {
         let t = i as f64 * PERIOD_S;
-        let n = s.frame.encode(&mut wire).unwrap_or(0);
+        let n = s.frame.encode(cfg.suite, &mut wire).unwrap_or(0);
         let d = link.up.transmit(t, wire.get(..n).unwrap_or(&[]));
         if cfg.fast {
             target.send(&d.bytes)?;
