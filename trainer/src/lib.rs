@@ -8,6 +8,7 @@ pub mod data;
 pub mod error;
 pub mod export;
 pub mod features;
+pub mod filter_eval;
 pub mod metrics;
 pub mod model;
 pub mod pipeline;

@@ -2,7 +2,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use hil_sim::dataset::machine;
 use std::path::{Path, PathBuf};
-use trainer::data::{Dataset, PAPER_TRAIN_ROWS};
+use trainer::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::FeatureSet;
 use trainer::metrics::FlightMetrics;
@@ -125,6 +125,24 @@ enum Cmd {
         /// Where the measured figures go (JSON; `trainer report --out DIR` includes DIR/bench_epoch.json).
         #[arg(long, default_value = "docs/results/bench_epoch.json")]
         out: PathBuf,
+    },
+    /// Score the model-based air-data filter (estimator_core::filter, EGI suite) on a dataset's
+    /// flights, frame by frame as the firmware runs it.
+    EvalFilter {
+        #[arg(long)]
+        data: PathBuf,
+        /// Which flights: `test` (the manifest's test flights), `train` or `val` (for tuning: never
+        /// tune on `test`).
+        #[arg(long, default_value = "test")]
+        split: String,
+        /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
+        /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
+        /// mean_wind_psd_h, lift_scale_psd).
+        #[arg(long, default_value = "")]
+        tune: String,
+        /// Print exactly one JSON object.
+        #[arg(long)]
+        json: bool,
     },
     /// Evaluate the compiled-in model (Estimator::shipped) on the test flights.
     Eval {
@@ -272,6 +290,83 @@ fn cmd_eval(data: &Path, json: bool) -> Result<()> {
         print_metrics("int8", &e.beta);
         for (n, h, o) in &e.flagged {
             println!("  {n}: {h} frames not usable (held/no estimate), {o} out of envelope");
+        }
+    }
+    Ok(())
+}
+
+/// `F16_CONFIG` with the `--tune` overrides.
+fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
+    let mut c = estimator_core::filter::F16_CONFIG;
+    for kv in tune.split(',').filter(|s| !s.is_empty()) {
+        let (k, v) = kv
+            .split_once('=')
+            .with_context(|| format!("--tune: `{kv}` is not key=value"))?;
+        let v: f32 = v
+            .parse()
+            .with_context(|| format!("--tune: `{v}` is not a number"))?;
+        match k {
+            "gust_sigma" => c.gust_sigma = v,
+            "gust_tau_s" => c.gust_tau_s = v,
+            "accel_sigma_y" => c.accel_sigma[0] = v,
+            "accel_sigma_z" => c.accel_sigma[1] = v,
+            "accel_delay_s" => c.accel_delay_s = v,
+            "gate" => c.gate = v,
+            "mean_wind_psd_h" => {
+                c.mean_wind_psd[0] = v;
+                c.mean_wind_psd[1] = v;
+            }
+            "lift_scale_psd" => c.lift_scale_psd = v,
+            other => bail!("--tune: unknown key `{other}` (see trainer eval-filter --help)"),
+        }
+    }
+    Ok(c)
+}
+
+fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<()> {
+    use trainer::filter_eval::eval_filter;
+    let role = match split {
+        "test" => Role::Test,
+        "train" => Role::Train,
+        "val" => Role::Val,
+        other => bail!("--split must be test, train or val, not `{other}`"),
+    };
+    let ds = load(data, 0.15)?;
+    let cfg = filter_config(tune)?;
+    let e = eval_filter(&ds, role, cfg);
+    if json {
+        let v = serde_json::json!({
+            "model": "filter (estimator_core::filter::F16_CONFIG, f32)",
+            "tune": tune,
+            "suite": "egi",
+            "split": split,
+            "dataset": data.display().to_string(),
+            "manifest_sha256": ds.manifest_sha256,
+            "alpha": e.alpha, "beta": e.beta,
+            "alpha_trusted": e.alpha_trusted, "beta_trusted": e.beta_trusted,
+            "flags": e.flags,
+        });
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        println!("model-based filter, {split} flights, every frame:");
+        println!("α (deg):");
+        print_metrics("filter", &e.alpha);
+        println!("β (deg):");
+        print_metrics("filter", &e.beta);
+        println!("frames with no flag raised:");
+        print_metrics("α trusted", &e.alpha_trusted);
+        print_metrics("β trusted", &e.beta_trusted);
+        for s in &e.flags {
+            println!(
+                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°",
+                s.flight,
+                100.0 * s.no_input,
+                100.0 * s.gated,
+                100.0 * s.low_confidence,
+                s.restarted,
+                s.mean_sigma_alpha_deg,
+                s.mean_sigma_beta_deg
+            );
         }
     }
     Ok(())
@@ -613,6 +708,12 @@ fn main() -> Result<()> {
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
         Cmd::Eval { data, json } => cmd_eval(data, *json),
+        Cmd::EvalFilter {
+            data,
+            split,
+            tune,
+            json,
+        } => cmd_eval_filter(data, split, tune, *json),
         Cmd::Report {
             args,
             seeds,

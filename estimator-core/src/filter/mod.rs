@@ -37,6 +37,7 @@
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 use crate::aero::{self, AirState, F16, Surfaces};
+use crate::channels::{Channel, SensorFrame};
 
 /// Number of states.
 pub const STATES: usize = 7;
@@ -97,8 +98,9 @@ pub struct Config {
 }
 
 /// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
-/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The noise figures are
-/// tuned on the training flights of the `paper` preset (`docs/filter.md`).
+/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
+/// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
+/// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 pub const F16_CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],
     mean_wind_sigma0: [15.0, 15.0, 1.0],
@@ -106,11 +108,11 @@ pub const F16_CONFIG: Config = Config {
     gust_sigma: 2.0,
     lift_scale_psd: 1e-6,
     lift_scale_sigma0: 0.05,
-    accel_sigma: [0.3, 0.5],
+    accel_sigma: [0.8, 1.5],
     gate: 25.0,
     gate_run: 20,
     lever_arm_m: [0.5, 0.0, 0.2],
-    accel_delay_s: 0.0417,
+    accel_delay_s: 0.03,
     empty_mass_kg: (17_400.0 + 230.0) * 0.453_592_37,
     max_sigma_rad: 0.0175,
     max_wind_var: 400.0,
@@ -143,7 +145,73 @@ pub struct Input {
     pub fuel_kg: f32,
 }
 
+/// The channels [`Input::from_frame`] reads: the `egi` suite less the throttle and the LEF actuator
+/// (the aero model reads the scheduled LEF, computed from α and Mach).
+pub const NEEDED: [Channel; 20] = [
+    Channel::GyroP,
+    Channel::GyroQ,
+    Channel::GyroR,
+    Channel::AccelX,
+    Channel::AccelY,
+    Channel::AccelZ,
+    Channel::GpsAlt,
+    Channel::Elevator,
+    Channel::Aileron,
+    Channel::Rudder,
+    Channel::Flaperon,
+    Channel::Tef,
+    Channel::Speedbrake,
+    Channel::Roll,
+    Channel::Pitch,
+    Channel::Heading,
+    Channel::VelNorth,
+    Channel::VelEast,
+    Channel::VelDown,
+    Channel::Fuel,
+];
+
 impl Input {
+    /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
+    /// which is the IMU point's, moved to the centre of gravity (`v_cg = v_imu − C_nb (ω × r)`).
+    /// `None` if a [`NEEDED`] channel is not valid (a `table1` frame has no EGI channels).
+    pub fn from_frame(f: &SensorFrame, dt_s: f32, lever_arm_m: [f32; 3]) -> Option<Input> {
+        if !NEEDED.iter().all(|c| f.is_valid(*c)) {
+            return None;
+        }
+        // Channel values are below 2^24 in magnitude for any flight value, so the f32 conversion
+        // is exact; the product with the LSB rounds once.
+        let si = |c: Channel| f.get(c) as f32 * c.lsb() as f32;
+        let euler = [si(Channel::Roll), si(Channel::Pitch), si(Channel::Heading)];
+        let gyro = [si(Channel::GyroP), si(Channel::GyroQ), si(Channel::GyroR)];
+        let w = Vector3::from(gyro);
+        let lever = w.cross(&Vector3::from(lever_arm_m));
+        let v_imu = Vector3::new(
+            si(Channel::VelNorth),
+            si(Channel::VelEast),
+            si(Channel::VelDown),
+        );
+        let v_cg = v_imu - c_bn(euler).transpose() * lever;
+        Some(Input {
+            dt_s,
+            euler_rad: euler,
+            vel_ned_mps: [v_cg.x, v_cg.y, v_cg.z],
+            alt_m: si(Channel::GpsAlt),
+            gyro_rps: gyro,
+            accel_mps2: [
+                si(Channel::AccelX),
+                si(Channel::AccelY),
+                si(Channel::AccelZ),
+            ],
+            elevator_deg: si(Channel::Elevator),
+            aileron_deg: si(Channel::Aileron),
+            rudder_deg: si(Channel::Rudder),
+            flaperon_left_deg: si(Channel::Flaperon),
+            tef_deg: si(Channel::Tef),
+            speedbrake_deg: si(Channel::Speedbrake),
+            fuel_kg: si(Channel::Fuel),
+        })
+    }
+
     fn is_finite(&self) -> bool {
         let scalars = [
             self.dt_s,
@@ -488,6 +556,20 @@ impl AirDataFilter {
             .all(|v| *v >= 0.0 && *v <= self.cfg.max_wind_var);
         let k = self.lift_scale();
         var_ok && self.x.iter().all(|v| v.is_finite()) && (0.5..=1.5).contains(&k)
+    }
+
+    /// One step on a sensor frame; `dt_s` is the time since the previous frame.
+    pub fn step_frame(&mut self, f: &SensorFrame, dt_s: f32) -> Output {
+        match Input::from_frame(f, dt_s, self.cfg.lever_arm_m) {
+            Some(inp) => self.step(&inp, true),
+            None => self.step(
+                &Input {
+                    dt_s,
+                    ..Input::default()
+                },
+                false,
+            ),
+        }
     }
 
     /// One 20 Hz step. `inputs_valid` false (or any input not finite) runs the prediction only and
