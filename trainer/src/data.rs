@@ -1,7 +1,9 @@
 //! Datasets for training, read through `hil_sim::dataset` (the one reader of the format in
 //! docs/architecture.md), and the exact estimator input contract: every row becomes the frame the link
-//! delivers (`hil_sim::frames::sample_to_frame`, i.e. `SensorFrame::from_si` of the 16 sensed SI
-//! columns), then `FeatureValues::compute(&frame, &history)` through one `History` per flight.
+//! delivers (`hil_sim::frames::sample_to_frame`, i.e. `SensorFrame::from_si` of the sensed SI
+//! columns of every suite the dataset carries), then `FeatureValues::compute(&frame, &history)`
+//! through one `History` per flight. A Table 1 model reads the Table 1 channels only, so it sees the
+//! same values whether the dataset also carries the EGI suite or not.
 use crate::error::{Error, Result};
 use estimator_core::{FeatureValues, History, SensorFrame};
 use hil_sim::dataset::{Manifest, Split, Truth, sha256_file};
@@ -87,6 +89,8 @@ pub struct Dataset {
     /// SHA-256 of manifest.json (which carries each flight's own SHA-256).
     pub manifest_sha256: String,
     pub preset: String,
+    /// The sensor suites every flight carries (manifest `suites`).
+    pub suites: Vec<estimator_core::Suite>,
     pub flights: Vec<Flight>,
 }
 
@@ -139,8 +143,21 @@ impl Dataset {
         Ok(Dataset {
             dir: dir.to_path_buf(),
             manifest_sha256,
-            preset: manifest.preset,
+            preset: manifest.preset.clone(),
+            suites: manifest.suites(),
             flights,
+        })
+    }
+
+    /// Refuses a dataset that does not carry `suite`'s channels.
+    pub fn require(&self, suite: estimator_core::Suite) -> Result<()> {
+        if self.suites.contains(&suite) {
+            return Ok(());
+        }
+        Err(Error::DatasetSuite {
+            dir: self.dir.clone(),
+            carries: self.suites.iter().map(|s| s.name().to_string()).collect(),
+            suite: suite.name(),
         })
     }
 

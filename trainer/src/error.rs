@@ -21,6 +21,28 @@ pub enum Error {
         "`{0}` is air data and can never be a model input (it is what the model estimates, or derived from it)"
     )]
     Leakage(String),
+    /// A feature the run's sensor suite does not deliver.
+    #[error(
+        "feature `{feature}` needs the `{needs}` sensor suite, but this run uses `{suite}` \
+         (pass --suite {needs}, or choose features of the {suite} suite)"
+    )]
+    SuiteFeature {
+        feature: String,
+        needs: &'static str,
+        suite: &'static str,
+    },
+    /// A dataset that does not carry the run's sensor suite.
+    #[error(
+        "dataset {dir} carries the sensor suites {carries:?}, not `{suite}` (regenerate it with this \
+         build's `hil-sim generate`, which writes every suite)"
+    )]
+    DatasetSuite {
+        dir: PathBuf,
+        carries: Vec<String>,
+        suite: &'static str,
+    },
+    #[error("unknown sensor suite `{0}` (known: table1, egi)")]
+    UnknownSuite(String),
     #[error("model file {path}: {msg}")]
     Model { path: PathBuf, msg: String },
     #[error("{0}")]

@@ -26,6 +26,7 @@ pub fn provenance(
     seed: u64,
     command: &str,
     feature_set: &str,
+    suite: Suite,
     alpha: &Trained,
     beta: &Trained,
 ) -> String {
@@ -55,7 +56,11 @@ pub fn provenance(
         ds.flights(Role::Test).count(),
         ds.rows(Role::Test)
     );
-    let _ = writeln!(s, "seed: {seed}; features: {feature_set}");
+    let _ = writeln!(
+        s,
+        "seed: {seed}; features: {feature_set}; sensor suite: {}",
+        suite.name()
+    );
     let _ = writeln!(s, "command: {command}");
     let _ = writeln!(s, "git: {}", git_rev());
     for t in [alpha, beta] {

@@ -1,7 +1,8 @@
-//! Input feature sets and the leakage guard: air data can never become a model input.
+//! Input feature sets, the sensor-suite guard (a model of a suite only reads what that suite
+//! delivers) and the leakage guard: air data can never become a model input.
 use crate::error::{Error, Result};
 use crate::prep::Angle;
-use estimator_core::{Channel, Feature, Lag};
+use estimator_core::{Channel, Feature, Lag, Suite};
 
 /// Dataset truth columns straight from the simulator: air data (what the model estimates, or derived
 /// from it) and the other truth values. None of them can ever be a model input. The list is the
@@ -87,6 +88,32 @@ pub const DYNAMICS_BETA_EXTRA: [Feature; 3] = [
     Feature::FzOverRhoV2,
 ];
 
+/// What the `egi-dynamics` set adds to `dynamics` for α: the EGI quantities that do not depend on
+/// which way the aircraft or the wind points (roll, pitch, climb rate, fuel), the ground velocity in
+/// body axes and the kinematic angle of attack. Heading and the north/east velocities enter only
+/// through the body-axis features: on their own they would let a model learn the training flights'
+/// wind directions (random per flight), which no test flight shares.
+pub const EGI_ALPHA: [Feature; 7] = [
+    Feature::AlphaKin,
+    Feature::UGround,
+    Feature::WGround,
+    Feature::Sensor(Channel::Pitch),
+    Feature::Sensor(Channel::Roll),
+    Feature::Sensor(Channel::VelDown),
+    Feature::Sensor(Channel::Fuel),
+];
+
+/// The same for β: the kinematic sideslip, the lateral ground velocity, roll and pitch (gravity's
+/// side component), and fuel.
+pub const EGI_BETA: [Feature; 6] = [
+    Feature::BetaKin,
+    Feature::VGround,
+    Feature::UGround,
+    Feature::Sensor(Channel::Roll),
+    Feature::Sensor(Channel::Pitch),
+    Feature::Sensor(Channel::Fuel),
+];
+
 fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
     channels
         .iter()
@@ -94,7 +121,8 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 }
 
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
-/// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features), or explicit
+/// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
+/// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FeatureSet {
@@ -103,7 +131,39 @@ pub struct FeatureSet {
     pub beta: Vec<Feature>,
 }
 
+/// The sensor suite of a `--suite` argument.
+pub fn parse_suite(name: &str) -> Result<Suite> {
+    Suite::from_name(name.trim()).ok_or_else(|| Error::UnknownSuite(name.to_string()))
+}
+
 impl FeatureSet {
+    /// The smallest sensor suite that delivers every feature of both angles.
+    pub fn suite(&self) -> Suite {
+        let sources = self
+            .alpha
+            .iter()
+            .chain(&self.beta)
+            .fold(0, |m, f| m | f.sources());
+        Suite::covering(sources).unwrap_or(Suite::Egi)
+    }
+
+    /// Refuses, naming the first one, a feature that `suite`'s frames do not deliver.
+    pub fn check_suite(&self, suite: Suite) -> Result<()> {
+        match self
+            .alpha
+            .iter()
+            .chain(&self.beta)
+            .find(|f| f.sources() & !suite.channels() != 0)
+        {
+            Some(f) => Err(Error::SuiteFeature {
+                feature: f.name().to_string(),
+                needs: f.suite().name(),
+                suite: suite.name(),
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The inputs of `angle`'s cascade.
     pub fn for_angle(&self, angle: Angle) -> &[Feature] {
         match angle {
@@ -141,6 +201,14 @@ impl FeatureSet {
                     .chain(deltas(&DYNAMICS_BETA_DELTAS))
                     .collect(),
             }),
+            "egi-dynamics" => {
+                let d = FeatureSet::parse("dynamics")?;
+                Ok(FeatureSet {
+                    name: "egi-dynamics".into(),
+                    alpha: d.alpha.into_iter().chain(EGI_ALPHA).collect(),
+                    beta: d.beta.into_iter().chain(EGI_BETA).collect(),
+                })
+            }
             custom => {
                 let mut alpha = None;
                 let mut beta = None;
@@ -148,7 +216,8 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, or alpha=a,b;beta=c,d".into(),
+                            "feature sets: table1, physics, dynamics, egi-dynamics, or alpha=a,b;beta=c,d"
+                                .into(),
                         )
                     })?;
                     let list = v
@@ -194,7 +263,7 @@ mod tests {
             assert_ne!(f.sources(), 0);
             assert_eq!(f.sources() & !estimator_core::channels::ALL_VALID, 0);
         }
-        for set in ["table1", "physics", "dynamics"] {
+        for set in ["table1", "physics", "dynamics", "egi-dynamics"] {
             let s = FeatureSet::parse(set).unwrap();
             for f in s.alpha.iter().chain(&s.beta) {
                 assert!(!AIR_DATA_COLUMNS.contains(&f.name()));
@@ -219,6 +288,41 @@ mod tests {
             FeatureSet::parse("beta=rudder_deg,qbar_pa"),
             Err(Error::Leakage(c)) if c == "qbar_pa"
         ));
+    }
+
+    #[test]
+    fn a_table1_run_cannot_select_egi_features() {
+        for set in ["table1", "physics", "dynamics"] {
+            let s = FeatureSet::parse(set).unwrap();
+            assert_eq!(s.suite(), Suite::Table1, "{set}");
+            s.check_suite(Suite::Table1).unwrap();
+            s.check_suite(Suite::Egi).unwrap();
+        }
+        let e = FeatureSet::parse("egi-dynamics").unwrap();
+        assert_eq!(e.suite(), Suite::Egi);
+        e.check_suite(Suite::Egi).unwrap();
+        assert!(matches!(
+            e.check_suite(Suite::Table1),
+            Err(Error::SuiteFeature {
+                needs: "egi",
+                suite: "table1",
+                ..
+            })
+        ));
+        let custom = FeatureSet::parse("alpha=elevator_deg,alpha_kin_rad").unwrap();
+        let err = custom.check_suite(Suite::Table1).unwrap_err().to_string();
+        assert!(
+            err.contains("alpha_kin_rad") && err.contains("--suite egi"),
+            "{err}"
+        );
+        let fuel = FeatureSet::parse("beta=fuel_qty_kg").unwrap();
+        assert!(fuel.check_suite(Suite::Table1).is_err());
+        // egi-dynamics is dynamics plus the EGI features, nothing of dynamics dropped.
+        let d = FeatureSet::parse("dynamics").unwrap();
+        assert_eq!(e.alpha[..d.alpha.len()], d.alpha[..]);
+        assert_eq!(e.beta[..d.beta.len()], d.beta[..]);
+        assert_eq!(parse_suite("egi").unwrap(), Suite::Egi);
+        assert!(matches!(parse_suite("adc"), Err(Error::UnknownSuite(_))));
     }
 
     #[test]

@@ -1,10 +1,11 @@
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use estimator_core::Suite;
 use hil_sim::dataset::machine;
 use std::path::{Path, PathBuf};
 use trainer::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
-use trainer::features::FeatureSet;
+use trainer::features::{FeatureSet, parse_suite};
 use trainer::metrics::FlightMetrics;
 use trainer::model::TrainConfig;
 use trainer::pipeline::{Size, eval_shipped, train_angle};
@@ -35,10 +36,18 @@ struct TrainArgs {
     #[arg(long, default_value_t = 1e-3)]
     lr: f64,
     /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
-    /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs), or
-    /// "alpha=a,b,...;beta=c,d,..." with names of estimator_core::Feature.
+    /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
+    /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
+    /// axes and the kinematic α/β; needs --suite egi), or "alpha=a,b,...;beta=c,d,..." with names
+    /// of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,
+    /// Sensor suite the models may read: table1 (the paper's inputs, the default: every command
+    /// keeps the meaning it had before the suites) or egi (Table 1 + the embedded GPS/INS attitude
+    /// and velocity and the fuel quantity; needs a dataset of format 4). A feature of a suite the
+    /// run does not have is refused with the suite it needs.
+    #[arg(long, default_value = "table1")]
+    suite: String,
     /// Fraction of training flights held out (by flight) for validation.
     #[arg(long, default_value_t = 0.15)]
     val_fraction: f64,
@@ -148,6 +157,10 @@ enum Cmd {
     Eval {
         #[arg(long)]
         data: PathBuf,
+        /// Sensor suite of the frames the model is stepped with (table1 or egi): as a sender of that
+        /// suite delivers them. A model that reads a channel the suite lacks is refused.
+        #[arg(long, default_value = "table1")]
+        suite: String,
         /// Print exactly one JSON object.
         #[arg(long)]
         json: bool,
@@ -174,9 +187,18 @@ impl TrainArgs {
         }
     }
 
-    /// The dataset, split by flight, with at least one validation flight.
-    fn dataset(&self) -> Result<Dataset> {
+    /// The sensor suite and the feature set, checked against each other.
+    fn suite_features(&self) -> Result<(Suite, FeatureSet)> {
+        let suite = parse_suite(&self.suite)?;
+        let fs = FeatureSet::parse(&self.features)?;
+        fs.check_suite(suite)?;
+        Ok((suite, fs))
+    }
+
+    /// The dataset, split by flight, with at least one validation flight, carrying `suite`.
+    fn dataset(&self, suite: Suite) -> Result<Dataset> {
         let ds = load(&self.data, self.val_fraction)?;
+        ds.require(suite)?;
         if ds.rows(trainer::data::Role::Val) == 0 {
             bail!("no validation flight: the dataset needs at least two training flights");
         }
@@ -215,11 +237,12 @@ fn cmd_train(
     no_export: bool,
 ) -> Result<()> {
     let size = args.size()?;
-    let fs = FeatureSet::parse(&args.features)?;
-    let ds = args.dataset()?;
+    let (suite, fs) = args.suite_features()?;
+    let ds = args.dataset(suite)?;
     eprintln!(
-        "dataset {}: train {} rows, val {} rows, test {} rows",
+        "dataset {} (sensor suite {}): train {} rows, val {} rows, test {} rows",
         args.data.display(),
+        suite.name(),
         ds.rows(trainer::data::Role::Train),
         ds.rows(trainer::data::Role::Val),
         ds.rows(trainer::data::Role::Test)
@@ -242,9 +265,10 @@ fn cmd_train(
         );
     }
     let command = command_line();
-    let prov = provenance(&ds, args.seed, &command, &fs.name, &alpha, &beta);
+    let prov = provenance(&ds, args.seed, &command, &fs.name, suite, &alpha, &beta);
     let summary = serde_json::json!({
-        "seed": args.seed, "config": size.name(), "features": fs.name, "epochs": epochs,
+        "seed": args.seed, "config": size.name(), "features": fs.name, "suite": suite.name(),
+        "epochs": epochs,
         "alpha": {"float": alpha.float_test, "int8": alpha.int_test, "curves": alpha.curves},
         "beta": {"float": beta.float_test, "int8": beta.int_test, "curves": beta.curves},
         "provenance": prov,
@@ -264,17 +288,30 @@ fn cmd_train(
     Ok(())
 }
 
-fn cmd_eval(data: &Path, json: bool) -> Result<()> {
+fn cmd_eval(data: &Path, suite: &str, json: bool) -> Result<()> {
+    let suite = parse_suite(suite)?;
     let ds = load(data, 0.15)?;
-    let Some(prov) = trainer::pipeline::shipped_provenance() else {
+    ds.require(suite)?;
+    let (Some(prov), Some(needs)) = (
+        trainer::pipeline::shipped_provenance(),
+        trainer::pipeline::shipped_suite(),
+    ) else {
         bail!(
             "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
         );
     };
-    let e = eval_shipped(&ds);
+    if needs.channels() & !suite.channels() != 0 {
+        bail!(
+            "the compiled-in model reads the `{}` sensor suite; pass --suite {}",
+            needs.name(),
+            needs.name()
+        );
+    }
+    let e = eval_shipped(&ds, suite);
     if json {
         let v = serde_json::json!({
             "model": "shipped (Estimator::shipped, int8)",
+            "suite": suite.name(),
             "dataset": data.display().to_string(),
             "manifest_sha256": ds.manifest_sha256,
             "alpha": e.alpha, "beta": e.beta,
@@ -284,6 +321,7 @@ fn cmd_eval(data: &Path, json: bool) -> Result<()> {
         println!("{}", serde_json::to_string(&v)?);
     } else {
         println!("compiled-in model:\n{prov}");
+        println!("sensor suite of the frames: {}", suite.name());
         println!("α (deg):");
         print_metrics("int8", &e.alpha);
         println!("β (deg):");
@@ -375,8 +413,8 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
 fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     use trainer::baselines::{Baseline, run_baseline};
     let size = args.size()?;
-    let fs = FeatureSet::parse(&args.features)?;
-    let ds = args.dataset()?;
+    let (suite, fs) = args.suite_features()?;
+    let ds = args.dataset(suite)?;
     for angle in [Angle::Alpha, Angle::Beta] {
         let feats = fs.for_angle(angle);
         for kind in [Baseline::Linear, Baseline::GradientBoosting, Baseline::Mlp] {
@@ -413,12 +451,16 @@ fn cmd_report(
     if seeds.is_empty() {
         bail!("--seeds needs at least one seed");
     }
-    let features = FeatureSet::parse(&args.features)?;
+    let (suite, features) = args.suite_features()?;
     let ablation = match ablation {
         "none" => None,
-        a => Some(FeatureSet::parse(a)?),
+        a => {
+            let a = FeatureSet::parse(a)?;
+            a.check_suite(suite)?;
+            Some(a)
+        }
     };
-    let ds = args.dataset()?;
+    let ds = args.dataset(suite)?;
     let epochs = args.epochs(size);
     let cfg = ReportConfig {
         seeds,
@@ -429,6 +471,7 @@ fn cmd_report(
         gb_rows,
         features,
         ablation: ablation.clone(),
+        suite,
     };
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let report = run(
@@ -518,7 +561,7 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
         md,
         "## Spearman rank correlation with the air data\n\n{n_rows} rows evenly sampled from the \
          training and validation flights (never the test flights). Every candidate of \
-         `estimator_core::Feature::ALL` (16 sensed channels + derived features, SI values as the models \
+         `estimator_core::Feature::ALL` (sensed channels of every suite + derived features, SI values as the models \
          see them); the air-data columns are targets only: the feature parser refuses them as inputs \
          (`trainer::features::parse_feature`, test `air_data_can_never_become_an_input`). \
          Full matrix (features and targets among themselves): `features_spearman.csv`, heatmap below.\n"
@@ -707,7 +750,7 @@ fn main() -> Result<()> {
             vectors_out,
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
-        Cmd::Eval { data, json } => cmd_eval(data, *json),
+        Cmd::Eval { data, suite, json } => cmd_eval(data, suite, *json),
         Cmd::EvalFilter {
             data,
             split,

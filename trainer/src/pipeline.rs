@@ -4,7 +4,7 @@ use crate::metrics::FlightMetrics;
 use crate::model::{Cascade, Curves, FloatLayer, TrainConfig, predict_all, train};
 use crate::prep::{Angle, Prep};
 use crate::quant::{QCascade, quantize_cascade};
-use estimator_core::{Estimator, Feature};
+use estimator_core::{Estimator, Feature, Suite};
 
 /// Network sizes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -156,8 +156,10 @@ pub struct ShippedEval {
 }
 
 /// Steps a fresh `Estimator::shipped()` through every test flight, frame by frame, exactly as the
-/// firmware would (including held values on invalid or stuck channels).
-pub fn eval_shipped(ds: &Dataset) -> ShippedEval {
+/// firmware would (including held values on invalid or stuck channels), with the frames a sender of
+/// `suite` delivers (`SensorFrame::restricted_to`): a model reading a channel the suite lacks is
+/// held as `INVALID_INPUT`, as on target.
+pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
     let mut a = Vec::new();
     let mut b = Vec::new();
     let mut flagged = Vec::new();
@@ -166,7 +168,7 @@ pub fn eval_shipped(ds: &Dataset) -> ShippedEval {
         let (mut pa, mut pb) = (Vec::new(), Vec::new());
         let (mut held, mut env) = (0usize, 0usize);
         for f in &fl.frames {
-            let e = est.step(f);
+            let e = est.step(&f.restricted_to(suite));
             if !e.flags.is_usable() {
                 held += 1;
             }
@@ -189,6 +191,21 @@ pub fn eval_shipped(ds: &Dataset) -> ShippedEval {
         beta: FlightMetrics::of(&b),
         flagged,
         provenance: shipped_provenance(),
+    }
+}
+
+/// The smallest sensor suite the compiled-in model reads, if this build has one.
+pub fn shipped_suite() -> Option<Suite> {
+    #[cfg(trainer_has_model)]
+    {
+        use estimator_core::AngleNet;
+        let sources =
+            estimator_core::model::ALPHA.sources() | estimator_core::model::BETA.sources();
+        Some(Suite::covering(sources).unwrap_or(Suite::Egi))
+    }
+    #[cfg(not(trainer_has_model))]
+    {
+        None
     }
 }
 

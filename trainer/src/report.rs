@@ -25,6 +25,8 @@ pub struct ReportConfig {
     pub features: FeatureSet,
     /// Feature set of the ablation (None: no ablation).
     pub ablation: Option<FeatureSet>,
+    /// The sensor suite the models may read (both feature sets are checked against it).
+    pub suite: estimator_core::Suite,
 }
 
 /// Test metrics of one model for one angle (`int8` only for the deployed cascade).
@@ -84,6 +86,8 @@ pub struct Report {
     pub epochs: usize,
     pub seeds: Vec<u64>,
     pub features: String,
+    /// Sensor suite of the run (`table1` or `egi`).
+    pub suite: String,
     pub split: Split,
     pub entries: Vec<Entry>,
 }
@@ -213,6 +217,7 @@ pub fn run(
         epochs: cfg.epochs,
         seeds: cfg.seeds.clone(),
         features: fs.name.clone(),
+        suite: cfg.suite.name().into(),
         split: Split::of(ds),
         entries,
     })
@@ -379,15 +384,16 @@ impl Report {
         let _ = writeln!(
             s,
             "Dataset `{}` (preset {}, manifest sha256 `{}`), configuration **{}**, {} epochs, \
-             seeds {:?}, features `{}`. Every model is trained on the same training flights and \
-             scored on the same test flights; errors in degrees.\n",
+             seeds {:?}, features `{}`, sensor suite `{}`. Every model is trained on the same \
+             training flights and scored on the same test flights; errors in degrees.\n",
             self.dataset,
             self.preset,
             self.manifest_sha256,
             self.config,
             self.epochs,
             self.seeds,
-            self.features
+            self.features,
+            self.suite
         );
         let _ = writeln!(s, "Command: `{command}`  \nMachine: {machine}\n");
         let _ = writeln!(s, "## Split (by flight)\n");
@@ -661,6 +667,7 @@ mod tests {
             epochs: 1,
             seeds: vec![1, 2],
             features: "table1".into(),
+            suite: "table1".into(),
             split: Split {
                 train: vec![("a".into(), 5)],
                 val: vec![("b".into(), 5)],
