@@ -417,7 +417,7 @@ impl FeatureValues {
 
     /// Computes all features of `frame`, the deltas against `history` (the frames before it). Invalid
     /// channels are read as they are; the estimator decides what an invalid source means before it
-    /// uses a value.
+    /// uses a value. (The EGI kinematic features are 0 unless all six of their sources are valid.)
     pub fn compute(frame: &SensorFrame, history: &History) -> FeatureValues {
         let mut raw = [0i32; FEATURE_COUNT];
         for (r, v) in raw.iter_mut().zip(frame.raw.iter()) {
@@ -499,9 +499,9 @@ struct Kinematics {
 impl Kinematics {
     /// `f32` arithmetic only (see the module docs): every operation is an IEEE-754 basic operation
     /// or a pure-Rust `libm` function, evaluated in the order written, so the result is the same bit
-    /// pattern on every target. Every value stays finite: the inputs are i32 (|v| < 2^31 mm/s,
-    /// angles read modulo nothing, sin/cos of any finite f32 are in [−1, 1]), the products and sums
-    /// stay below 2^34, and `atan2f(0, 0)` is 0.
+    /// pattern on every target. Every value stays finite for any raw input: the velocities are i32
+    /// (|v| < 2^31 mm/s), sin/cos of any finite f32 lie in [−1, 1], so |u|, |v|, |w| < 2^33 and their
+    /// squares < 2^68, far below f32's 2^128; `atan2f(0, 0)` is 0.
     fn of(frame: &SensorFrame) -> Kinematics {
         let angle = |c: Channel| frame.get(c) as f32 * 1e-6;
         let (sf, cf) = (

@@ -4,7 +4,9 @@
 //! Fed with truth at every 120 Hz JSBSim step; returns the sensed channels of every suite (SI,
 //! degrees for surfaces) in [`estimator_core::Channel`] order. The Table 1 channels draw from the
 //! flight's ChaCha12 stream exactly as before the EGI suite existed; the EGI and fuel models draw
-//! from stream [`EGI_STREAM`] of the same seed, so adding them changed no Table 1 value. The IMU path is: truth at the IMU location
+//! from stream [`EGI_STREAM`] of the same seed, so adding them changed no Table 1 value.
+//!
+//! The IMU path is: truth at the IMU location
 //! (rates relative to inertial space, specific force moved from the CG), through the triad's
 //! per-flight scale-factor and misalignment matrix (I + S + M); then per axis turn-on bias,
 //! Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv quantization
