@@ -16,7 +16,7 @@
 //! the step panic or return anything but the integers described here.
 
 use crate::channels::{CHANNELS, Channel, SensorFrame};
-use crate::features::{Feature, FeatureValues, History, VELOCITY_SOURCES};
+use crate::features::{Feature, FeatureState, FeatureValues, VELOCITY_SOURCES};
 use crate::nn::{Aligned, Layer};
 use crate::normalize::{Envelope, Norm};
 
@@ -247,7 +247,8 @@ pub struct Estimator<'m> {
     repeats: [u16; CHANNELS],
     last_alpha: Option<(i32, i32)>,
     last_beta: Option<(i32, i32)>,
-    history: History,
+    /// Past frames for the deltas, and the air-data filter when a model reads its outputs.
+    state: FeatureState,
 }
 
 impl<'m> Estimator<'m> {
@@ -256,13 +257,16 @@ impl<'m> Estimator<'m> {
     }
 
     fn with(alpha: Option<&'m dyn AngleNet>, beta: Option<&'m dyn AngleNet>) -> Self {
+        let needs_filter = |m: Option<&'m dyn AngleNet>| {
+            m.is_some_and(|n| n.features().iter().any(|f| f.needs_filter()))
+        };
         Estimator {
             alpha: alpha.map(Model::new),
             beta: beta.map(Model::new),
             repeats: [0; CHANNELS],
             last_alpha: None,
             last_beta: None,
-            history: History::new(),
+            state: FeatureState::new(needs_filter(alpha) || needs_filter(beta)),
         }
     }
 
@@ -293,7 +297,11 @@ impl<'m> Estimator<'m> {
     /// the history's newest (0s before the first).
     fn update_stuck(&mut self, frame: &SensorFrame) -> u32 {
         let mut stuck = 0u32;
-        let previous = self.history.newest().map_or(&[0; CHANNELS], |p| &p.raw);
+        let previous = self
+            .state
+            .history()
+            .newest()
+            .map_or(&[0; CHANNELS], |p| &p.raw);
         for (((c, raw), last), n) in Channel::ALL
             .iter()
             .zip(&frame.raw)
@@ -324,8 +332,7 @@ impl<'m> Estimator<'m> {
             e.flags.0 = Flags::NO_MODEL | Flags::NO_ESTIMATE;
             return e;
         };
-        let values = FeatureValues::compute(frame, &self.history);
-        self.history.push(frame);
+        let values = self.state.next(frame);
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
             let invalid = m.sources & !frame.valid != 0;

@@ -45,8 +45,14 @@ const DERIVED: usize = 5;
 /// Number of EGI kinematic features, after the Table 1 derived ones.
 const EGI_DERIVED: usize = 5;
 
+/// Number of air-data filter outputs offered as features, after the EGI kinematic ones.
+const FILTER_DERIVED: usize = 6;
+
+/// First filter feature.
+const FILTERED: usize = CHANNELS + DERIVED + EGI_DERIVED;
+
 /// First delta feature.
-const DELTAS: usize = CHANNELS + DERIVED + EGI_DERIVED;
+const DELTAS: usize = FILTERED + FILTER_DERIVED;
 
 /// Number of candidate features: sensed channels, derived features, and a delta per Table 1 channel
 /// and lag.
@@ -145,6 +151,18 @@ pub enum Feature {
     AlphaKin,
     /// Wind-free kinematic sideslip `asin(v_g / |V_g|)`, µrad.
     BetaKin,
+    /// The model-based filter's ([`crate::filter`]) angle of attack, µrad.
+    FilterAlpha,
+    /// The filter's sideslip, µrad.
+    FilterBeta,
+    /// The filter's 1σ of α, µrad.
+    FilterSigmaAlpha,
+    /// The filter's 1σ of β, µrad.
+    FilterSigmaBeta,
+    /// The filter's true airspeed, mm/s.
+    FilterAirspeed,
+    /// The filter's lift scale, 1e-4.
+    FilterLiftScale,
     /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
 }
@@ -177,6 +195,12 @@ impl Feature {
         all[CHANNELS + DERIVED + 2] = Feature::WGround;
         all[CHANNELS + DERIVED + 3] = Feature::AlphaKin;
         all[CHANNELS + DERIVED + 4] = Feature::BetaKin;
+        all[FILTERED] = Feature::FilterAlpha;
+        all[FILTERED + 1] = Feature::FilterBeta;
+        all[FILTERED + 2] = Feature::FilterSigmaAlpha;
+        all[FILTERED + 3] = Feature::FilterSigmaBeta;
+        all[FILTERED + 4] = Feature::FilterAirspeed;
+        all[FILTERED + 5] = Feature::FilterLiftScale;
         let mut c = 0;
         while c < TABLE1_CHANNELS {
             let mut l = 0;
@@ -206,6 +230,12 @@ impl Feature {
             Feature::WGround => CHANNELS + DERIVED + 2,
             Feature::AlphaKin => CHANNELS + DERIVED + 3,
             Feature::BetaKin => CHANNELS + DERIVED + 4,
+            Feature::FilterAlpha => FILTERED,
+            Feature::FilterBeta => FILTERED + 1,
+            Feature::FilterSigmaAlpha => FILTERED + 2,
+            Feature::FilterSigmaBeta => FILTERED + 3,
+            Feature::FilterAirspeed => FILTERED + 4,
+            Feature::FilterLiftScale => FILTERED + 5,
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
         }
     }
@@ -223,6 +253,12 @@ impl Feature {
             Feature::WGround => "w_ground_mps",
             Feature::AlphaKin => "alpha_kin_rad",
             Feature::BetaKin => "beta_kin_rad",
+            Feature::FilterAlpha => "filter_alpha_rad",
+            Feature::FilterBeta => "filter_beta_rad",
+            Feature::FilterSigmaAlpha => "filter_sigma_alpha_rad",
+            Feature::FilterSigmaBeta => "filter_sigma_beta_rad",
+            Feature::FilterAirspeed => "filter_airspeed_mps",
+            Feature::FilterLiftScale => "filter_lift_scale",
             Feature::Delta(c, l) => c.delta_name(l),
         }
     }
@@ -236,6 +272,12 @@ impl Feature {
             Feature::RhoV2 => 1.0,
             Feature::UGround | Feature::VGround | Feature::WGround => 1e-3,
             Feature::AlphaKin | Feature::BetaKin => 1e-6,
+            Feature::FilterAlpha
+            | Feature::FilterBeta
+            | Feature::FilterSigmaAlpha
+            | Feature::FilterSigmaBeta => 1e-6,
+            Feature::FilterAirspeed => 1e-3,
+            Feature::FilterLiftScale => 1e-4,
         }
     }
 
@@ -263,7 +305,26 @@ impl Feature {
             | Feature::WGround
             | Feature::AlphaKin
             | Feature::BetaKin => KINEMATIC_SOURCES,
+            Feature::FilterAlpha
+            | Feature::FilterBeta
+            | Feature::FilterSigmaAlpha
+            | Feature::FilterSigmaBeta
+            | Feature::FilterAirspeed
+            | Feature::FilterLiftScale => crate::filter::NEEDED_MASK,
         }
+    }
+
+    /// Whether this feature is an output of the air-data filter (which then has to run each step).
+    pub const fn needs_filter(self) -> bool {
+        matches!(
+            self,
+            Feature::FilterAlpha
+                | Feature::FilterBeta
+                | Feature::FilterSigmaAlpha
+                | Feature::FilterSigmaBeta
+                | Feature::FilterAirspeed
+                | Feature::FilterLiftScale
+        )
     }
 
     /// Lags this feature reads from the history (bit per [`Lag`]).
@@ -290,6 +351,48 @@ pub struct FeatureValues {
     /// Bit per [`Lag`]: for some channel the frame exactly that lag back was missing (see the module
     /// docs), so the delta was rate-scaled from another frame or set to 0.
     pub short_lags: u8,
+}
+
+/// Everything a model's features need from past frames: the history for the deltas and, when a
+/// model reads filter outputs, the air-data filter itself. One instance per estimator (and per
+/// flight in the trainer), fed every frame in order: the single place features are made.
+#[derive(Clone, Debug)]
+pub struct FeatureState {
+    history: History,
+    filter: Option<crate::filter::AirDataFilter>,
+    last_ms: Option<u32>,
+}
+
+impl FeatureState {
+    /// `with_filter`: run the air-data filter (needed when a model reads a filter feature).
+    pub fn new(with_filter: bool) -> Self {
+        FeatureState {
+            history: History::new(),
+            filter: with_filter
+                .then(|| crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG)),
+            last_ms: None,
+        }
+    }
+
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// The features of `frame` (deltas against the frames before it), then remembers it. The filter
+    /// steps with the time since the previous frame (50 ms for the first).
+    pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
+        let mut values = FeatureValues::compute(frame, &self.history);
+        if let Some(filter) = self.filter.as_mut() {
+            let dt_ms = self
+                .last_ms
+                .map_or(FRAME_PERIOD_MS, |p| frame.time_ms.wrapping_sub(p));
+            let out = filter.step_frame(frame, dt_ms as f32 / 1000.0);
+            values.set_filter(&out);
+        }
+        self.last_ms = Some(frame.time_ms);
+        self.history.push(frame);
+        values
+    }
 }
 
 /// The last [`HISTORY_FRAMES`] sensor frames, newest last, for the delta features. Fixed size, no heap.
@@ -413,6 +516,24 @@ impl History {
 impl FeatureValues {
     pub fn get(&self, f: Feature) -> i32 {
         self.raw.get(f.index()).copied().unwrap_or(0)
+    }
+
+    /// Writes the air-data filter's outputs into their features (rounded to the feature's LSB;
+    /// the filter never returns a non-finite value, and `as` saturates).
+    pub fn set_filter(&mut self, out: &crate::filter::Output) {
+        let q = |f: Feature, v: f32| (f, libm::roundf(v / f.lsb() as f32) as i32);
+        for (f, v) in [
+            q(Feature::FilterAlpha, out.alpha_rad),
+            q(Feature::FilterBeta, out.beta_rad),
+            q(Feature::FilterSigmaAlpha, out.sigma_alpha_rad),
+            q(Feature::FilterSigmaBeta, out.sigma_beta_rad),
+            q(Feature::FilterAirspeed, out.airspeed_mps),
+            q(Feature::FilterLiftScale, out.lift_scale),
+        ] {
+            if let Some(r) = self.raw.get_mut(f.index()) {
+                *r = v;
+            }
+        }
     }
 
     /// Computes all features of `frame`, the deltas against `history` (the frames before it). Invalid
@@ -665,6 +786,49 @@ mod tests {
         si[Channel::VelDown.index()] = v_ned[2];
         si[Channel::GpsSpeed.index()] = 200.0;
         SensorFrame::from_si(0, 0, &si)
+    }
+
+    /// A steady egi frame at `t_ms`: level flight east at 200 m/s, 3000 m, 1 g, fuel 1000 kg.
+    fn steady_egi(t_ms: u32) -> SensorFrame {
+        let mut si = [0.0; CHANNELS];
+        si[Channel::Pitch.index()] = 3f64.to_radians();
+        si[Channel::Heading.index()] = 90f64.to_radians();
+        si[Channel::VelEast.index()] = 200.0;
+        si[Channel::GpsSpeed.index()] = 200.0;
+        si[Channel::GpsAlt.index()] = 3000.0;
+        si[Channel::AccelZ.index()] = -9.81;
+        si[Channel::Fuel.index()] = 1000.0;
+        SensorFrame::from_si((t_ms / FRAME_PERIOD_MS) as u16, t_ms, &si)
+    }
+
+    #[test]
+    fn feature_state_runs_the_filter_only_when_asked_and_only_on_egi_frames() {
+        let mut with = FeatureState::new(true);
+        let mut without = FeatureState::new(false);
+        let mut table1 = FeatureState::new(true);
+        for k in 0..40u32 {
+            let f = steady_egi(k * FRAME_PERIOD_MS);
+            let a = with.next(&f);
+            let b = without.next(&f);
+            let c = table1.next(&f.restricted_to(Suite::Table1));
+            // Everything but the filter features is the same with and without the filter.
+            for feat in Feature::ALL {
+                if !feat.needs_filter() {
+                    assert_eq!(a.get(feat), b.get(feat), "{}", feat.name());
+                } else {
+                    assert_eq!(b.get(feat), 0);
+                    assert_eq!(c.get(feat), 0, "no EGI input, no filter output");
+                }
+            }
+            if k > 0 {
+                // The filter ran: outputs of a plausible size (this made-up frame need not agree
+                // with the aero model, so the filter may put some of it into wind).
+                let alpha = a.get(Feature::FilterAlpha) as f64 * 1e-6;
+                assert!((alpha - 3f64.to_radians()).abs() < 0.1, "α {alpha}");
+                assert!((a.get(Feature::FilterAirspeed) - 200_000).abs() < 60_000);
+                assert!(a.get(Feature::FilterLiftScale) > 5_000);
+            }
+        }
     }
 
     #[test]

@@ -43,4 +43,4 @@ pub mod wire;
 
 pub use channels::{CHANNELS, Channel, SensorFrame, Suite};
 pub use estimator::{AngleNet, CascadeNet, Estimate, Estimator, Flags};
-pub use features::{FEATURE_COUNT, Feature, FeatureValues, History, Lag};
+pub use features::{FEATURE_COUNT, Feature, FeatureState, FeatureValues, History, Lag};

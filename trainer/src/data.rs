@@ -5,7 +5,7 @@
 //! through one `History` per flight. A Table 1 model reads the Table 1 channels only, so it sees the
 //! same values whether the dataset also carries the EGI suite or not.
 use crate::error::{Error, Result};
-use estimator_core::{FeatureValues, History, SensorFrame};
+use estimator_core::{FeatureState, FeatureValues, SensorFrame};
 use hil_sim::dataset::{Manifest, Split, Truth, sha256_file};
 use std::path::{Path, PathBuf};
 
@@ -203,11 +203,12 @@ pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
         features: Vec::with_capacity(csv.samples.len()),
         truth: Default::default(),
     };
-    // The estimator's own history: features at frame i see frames 0..i, as in flight.
-    let mut history = History::new();
+    // The estimator's own feature state: features at frame i see frames 0..i, as in flight, and the
+    // air-data filter runs over the flight in order (its outputs are candidate features; on a
+    // table1 flight it has no input and they stay 0).
+    let mut state = FeatureState::new(true);
     for (frame, sample) in hil_sim::frames::flight_frames(&csv).zip(&csv.samples) {
-        fl.features.push(FeatureValues::compute(&frame, &history));
-        history.push(&frame);
+        fl.features.push(state.next(&frame));
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);
         for t in Target::ALL {

@@ -114,6 +114,18 @@ pub const EGI_BETA: [Feature; 6] = [
     Feature::Sensor(Channel::Fuel),
 ];
 
+/// What the `egi-hybrid` set adds to `egi-dynamics`: the model-based air-data filter's estimates
+/// (`estimator_core::filter`: α, β and their 1σ, air speed, lift scale). The network learns where to
+/// trust the filter (slow, high-α flight, where lift tells α) and where its own inputs do better.
+pub const FILTER_FEATURES: [Feature; 6] = [
+    Feature::FilterAlpha,
+    Feature::FilterBeta,
+    Feature::FilterSigmaAlpha,
+    Feature::FilterSigmaBeta,
+    Feature::FilterAirspeed,
+    Feature::FilterLiftScale,
+];
+
 fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
     channels
         .iter()
@@ -122,7 +134,8 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
 /// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
-/// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), or explicit
+/// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
+/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FeatureSet {
@@ -209,6 +222,14 @@ impl FeatureSet {
                     beta: d.beta.into_iter().chain(EGI_BETA).collect(),
                 })
             }
+            "egi-hybrid" => {
+                let d = FeatureSet::parse("egi-dynamics")?;
+                Ok(FeatureSet {
+                    name: "egi-hybrid".into(),
+                    alpha: d.alpha.into_iter().chain(FILTER_FEATURES).collect(),
+                    beta: d.beta.into_iter().chain(FILTER_FEATURES).collect(),
+                })
+            }
             custom => {
                 let mut alpha = None;
                 let mut beta = None;
@@ -216,7 +237,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;

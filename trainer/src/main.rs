@@ -38,7 +38,9 @@ struct TrainArgs {
     /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
     /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
     /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
-    /// axes and the kinematic α/β; needs --suite egi), or "alpha=a,b,...;beta=c,d,..." with names
+    /// axes and the kinematic α/β; needs --suite egi), egi-hybrid (egi-dynamics + the model-based
+    /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), or
+    /// "alpha=a,b,...;beta=c,d,..." with names
     /// of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,

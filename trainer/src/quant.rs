@@ -3,7 +3,7 @@
 use crate::model::{FloatLayer, float_forward};
 use crate::prep::{Angle, Prep, fixed_point, fp_value};
 use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
-use estimator_core::{Channel, Feature, FeatureValues, History, SensorFrame, Suite};
+use estimator_core::{Channel, Feature, FeatureState, FeatureValues, SensorFrame, Suite};
 use std::fmt::Write;
 
 /// One quantized layer: `weights[o][i]` int8, bias in accumulator units, requant per output.
@@ -415,15 +415,14 @@ fn suite_width(suite: Suite) -> usize {
 /// Vectors for `frames` (`(reset, frame)`: a reset starts a new sequence with an empty history),
 /// computed by the integer reference on the features `estimator-core` derives.
 pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[(bool, SensorFrame)]) -> Vec<Vector> {
-    let mut history = History::new();
+    let mut state = FeatureState::new(true);
     frames
         .iter()
         .map(|(reset, f)| {
             if *reset {
-                history.clear();
+                state = FeatureState::new(true);
             }
-            let v = FeatureValues::compute(f, &history);
-            history.push(f);
+            let v = state.next(f);
             Vector {
                 reset: *reset,
                 frame: *f,

@@ -170,6 +170,23 @@ pub const NEEDED: [Channel; 20] = [
     Channel::Fuel,
 ];
 
+/// [`NEEDED`] as a channel bit mask.
+pub const NEEDED_MASK: u32 = {
+    let mut m = 0;
+    let mut i = 0;
+    while i < NEEDED.len() {
+        // Const evaluation: an out-of-bounds index is a compile error.
+        #[allow(clippy::indexing_slicing)]
+        let c = NEEDED[i];
+        m |= c.bit();
+        #[allow(clippy::arithmetic_side_effects)]
+        {
+            i += 1;
+        }
+    }
+    m
+};
+
 impl Input {
     /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
     /// which is the IMU point's, moved to the centre of gravity (`v_cg = v_imu − C_nb (ω × r)`).
