@@ -282,6 +282,15 @@ impl<'m> Estimator<'m> {
         }
     }
 
+    /// The smallest sensor suite whose frames carry everything the models read (`None` without a
+    /// model): what a sender must deliver to this estimator.
+    pub fn suite(&self) -> Option<crate::Suite> {
+        let (Some(a), Some(b)) = (self.alpha, self.beta) else {
+            return None;
+        };
+        crate::Suite::covering(a.sources | b.sources)
+    }
+
     /// Multiply-accumulates per step.
     pub fn macs(&self) -> usize {
         let macs = |m: Option<Model>| m.map_or(0, |m| m.net.macs());

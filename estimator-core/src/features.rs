@@ -353,6 +353,10 @@ pub struct FeatureValues {
     pub short_lags: u8,
 }
 
+/// A gap between frames longer than this (ms) restarts the air-data filter: its wind and
+/// covariance would be extrapolated over more than a second without a measurement.
+pub const FILTER_RESTART_GAP_MS: u32 = 1_000;
+
 /// Everything a model's features need from past frames: the history for the deltas and, when a
 /// model reads filter outputs, the air-data filter itself. One instance per estimator (and per
 /// flight in the trainer), fed every frame in order: the single place features are made.
@@ -383,9 +387,16 @@ impl FeatureState {
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
         let mut values = FeatureValues::compute(frame, &self.history);
         if let Some(filter) = self.filter.as_mut() {
-            let dt_ms = self
-                .last_ms
-                .map_or(FRAME_PERIOD_MS, |p| frame.time_ms.wrapping_sub(p));
+            // After a gap longer than FILTER_RESTART_GAP_MS (no frames: link down, sender
+            // restarted) the filter starts again, exactly as a fresh one would.
+            let dt_ms = match self.last_ms.map(|p| frame.time_ms.wrapping_sub(p)) {
+                Some(gap) if gap <= FILTER_RESTART_GAP_MS => gap,
+                Some(_) => {
+                    *filter = crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG);
+                    FRAME_PERIOD_MS
+                }
+                None => FRAME_PERIOD_MS,
+            };
             let out = filter.step_frame(frame, dt_ms as f32 / 1000.0);
             values.set_filter(&out);
         }

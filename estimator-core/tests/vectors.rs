@@ -14,7 +14,7 @@
 #[cfg(estimator_weights)]
 use estimator_core::AngleNet;
 use estimator_core::channels::TABLE1_CHANNELS;
-use estimator_core::{CHANNELS, Estimator, FeatureValues, Flags, History, SensorFrame};
+use estimator_core::{CHANNELS, Estimator, FeatureState, Flags, SensorFrame};
 
 const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
 
@@ -30,7 +30,9 @@ fn compiled_in_model_matches_the_trainer_vectors() {
     let mut checked = 0;
     // Lines are runs of consecutive frames; `reset` starts one on an empty history (and a fresh
     // estimator, so its own history matches).
-    let mut history = History::new();
+    // The features as the trainer's integer reference made them: one FeatureState per run (delta
+    // history and the air-data filter).
+    let mut state = FeatureState::new(true);
     let mut est = Estimator::shipped();
     for line in text
         .lines()
@@ -47,7 +49,7 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             "malformed vector line: {line}"
         );
         if v[0] == 1 {
-            history.clear();
+            state = FeatureState::new(true);
             est.reset();
         }
         let v = &v[1..];
@@ -59,8 +61,7 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             raw,
             valid: v[2] as u32,
         };
-        let values = FeatureValues::compute(&frame, &history);
-        history.push(&frame);
+        let values = state.next(&frame);
         let e = est.step(&frame);
         let o = &v[3 + n..];
         let want_alpha = (o[0] as i32, o[1] as i32, o[2] != 0);

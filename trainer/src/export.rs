@@ -157,7 +157,7 @@ pub fn write_model(
          weights_sha256 {hash}\n\
          Expected outputs computed by the trainer's independent i64 reference (trainer/src/quant.rs).\n\
          Lines are sequences of consecutive frames; reset = 1 starts a sequence with an empty History.\n\
-         For each line: frame = SensorFrame {{ seq, time_ms, raw, valid }}; values = FeatureValues::compute(&frame, &history); history.push(&frame);\n\
+         For each line: frame = SensorFrame {{ seq, time_ms, raw, valid }}; values = state.next(&frame) with one estimator_core::FeatureState::new(true) per run (delta history and air-data filter);\n\
          ALPHA.run(&values) == (w_aero_mms, alpha_mdeg, alpha_clamped) and BETA.run(&values) == (v_aero_mms, beta_mdeg, beta_clamped).",
         weights_out.display()
     );

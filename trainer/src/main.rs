@@ -160,9 +160,10 @@ enum Cmd {
         #[arg(long)]
         data: PathBuf,
         /// Sensor suite of the frames the model is stepped with (table1 or egi): as a sender of that
-        /// suite delivers them. A model that reads a channel the suite lacks is refused.
-        #[arg(long, default_value = "table1")]
-        suite: String,
+        /// suite delivers them. A model that reads a channel the suite lacks is refused. Default: the
+        /// suite the compiled-in model reads.
+        #[arg(long)]
+        suite: Option<String>,
         /// Print exactly one JSON object.
         #[arg(long)]
         json: bool,
@@ -290,8 +291,11 @@ fn cmd_train(
     Ok(())
 }
 
-fn cmd_eval(data: &Path, suite: &str, json: bool) -> Result<()> {
-    let suite = parse_suite(suite)?;
+fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
+    let suite = match suite {
+        Some(s) => parse_suite(s)?,
+        None => trainer::pipeline::shipped_suite().unwrap_or(estimator_core::Suite::Table1),
+    };
     let ds = load(data, 0.15)?;
     ds.require(suite)?;
     let (Some(prov), Some(needs)) = (
@@ -317,6 +321,7 @@ fn cmd_eval(data: &Path, suite: &str, json: bool) -> Result<()> {
             "dataset": data.display().to_string(),
             "manifest_sha256": ds.manifest_sha256,
             "alpha": e.alpha, "beta": e.beta,
+            "regimes": e.regimes,
             "flagged": e.flagged.iter().map(|(n, h, o)| serde_json::json!({"flight": n, "not_usable": h, "out_of_envelope": o})).collect::<Vec<_>>(),
             "provenance": prov,
         });
@@ -328,6 +333,20 @@ fn cmd_eval(data: &Path, suite: &str, json: bool) -> Result<()> {
         print_metrics("int8", &e.alpha);
         println!("β (deg):");
         print_metrics("int8", &e.beta);
+        let r = &e.regimes;
+        for (name, m) in [
+            ("α, true α < 5°", r.alpha_below_5),
+            ("α, true α 5–15°", r.alpha_5_15),
+            ("α, true α 15–25°", r.alpha_15_25),
+            ("α, true α ≥ 25°", r.alpha_above_25),
+            ("β, true |β| < 2°", r.beta_abs_below_2),
+            ("β, true |β| ≥ 2°", r.beta_abs_above_2),
+        ] {
+            println!(
+                "  {name:<18} MAE {:6.3}  p95 {:6.3}  max {:6.3}  (n={})",
+                m.mae, m.p95, m.max, m.n
+            );
+        }
         for (n, h, o) in &e.flagged {
             println!("  {n}: {h} frames not usable (held/no estimate), {o} out of envelope");
         }
@@ -752,7 +771,7 @@ fn main() -> Result<()> {
             vectors_out,
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
-        Cmd::Eval { data, suite, json } => cmd_eval(data, suite, *json),
+        Cmd::Eval { data, suite, json } => cmd_eval(data, suite.as_deref(), *json),
         Cmd::EvalFilter {
             data,
             split,

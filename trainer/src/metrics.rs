@@ -54,6 +54,45 @@ impl FlightMetrics {
     }
 }
 
+/// Error by flight regime, over every flight's frames: α in the bands below 5°, 5–15°, 15–25° and
+/// above 25° of true α, and |β| below and above 2° of true |β|. Each regime's metrics are for the
+/// angle named by its key.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Regimes {
+    pub alpha_below_5: Metrics,
+    pub alpha_5_15: Metrics,
+    pub alpha_15_25: Metrics,
+    pub alpha_above_25: Metrics,
+    pub beta_abs_below_2: Metrics,
+    pub beta_abs_above_2: Metrics,
+}
+
+impl Regimes {
+    /// `alpha`, `beta`: (name, predictions, truth) per flight, in degrees.
+    pub fn of(
+        alpha: &[(String, Vec<f64>, Vec<f64>)],
+        beta: &[(String, Vec<f64>, Vec<f64>)],
+    ) -> Regimes {
+        let pick = |flights: &[(String, Vec<f64>, Vec<f64>)], keep: &dyn Fn(f64) -> bool| {
+            let (p, t): (Vec<f64>, Vec<f64>) = flights
+                .iter()
+                .flat_map(|(_, p, t)| p.iter().zip(t))
+                .filter(|(_, t)| keep(**t))
+                .map(|(p, t)| (*p, *t))
+                .unzip();
+            Metrics::of(&p, &t)
+        };
+        Regimes {
+            alpha_below_5: pick(alpha, &|t| t < 5.0),
+            alpha_5_15: pick(alpha, &|t| (5.0..15.0).contains(&t)),
+            alpha_15_25: pick(alpha, &|t| (15.0..25.0).contains(&t)),
+            alpha_above_25: pick(alpha, &|t| t >= 25.0),
+            beta_abs_below_2: pick(beta, &|t| t.abs() < 2.0),
+            beta_abs_above_2: pick(beta, &|t| t.abs() >= 2.0),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

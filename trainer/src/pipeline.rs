@@ -150,6 +150,8 @@ pub fn evaluate(
 pub struct ShippedEval {
     pub alpha: FlightMetrics,
     pub beta: FlightMetrics,
+    /// The same errors by flight regime (true α band, true |β| band).
+    pub regimes: crate::metrics::Regimes,
     /// Frames whose estimate was held, out of envelope, or missing, per flight.
     pub flagged: Vec<(String, usize, usize)>,
     pub provenance: Option<&'static str>,
@@ -189,6 +191,7 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
     ShippedEval {
         alpha: FlightMetrics::of(&a),
         beta: FlightMetrics::of(&b),
+        regimes: crate::metrics::Regimes::of(&a, &b),
         flagged,
         provenance: shipped_provenance(),
     }

@@ -60,8 +60,9 @@ pub struct RunArgs {
     pub fast: bool,
     /// Sensor suite sent, i.e. the sensor frame kind: table1 (the paper's inputs, wire kind 1) or
     /// egi (Table 1 + EGI attitude, velocity and fuel, wire kind 3). The firmware takes both.
-    #[arg(long, default_value = "table1", value_parser = parse_suite)]
-    pub suite: estimator_core::Suite,
+    /// Default: the suite the compiled-in (shipped) estimator reads.
+    #[arg(long, value_parser = parse_suite)]
+    pub suite: Option<estimator_core::Suite>,
     /// Print exactly one JSON summary object on stdout (messages go to stderr).
     #[arg(long)]
     pub json: bool,
@@ -216,7 +217,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         seed: a.seed,
         fast: !a.realtime,
         reply_timeout: Duration::from_millis(a.reply_timeout_ms),
-        suite: a.suite,
+        suite: a.suite.unwrap_or_else(super::shipped_suite),
         ..RunConfig::default()
     };
     if a.source.script.is_some() {

@@ -51,6 +51,14 @@ pub enum RunError {
     Output(PathBuf, String),
 }
 
+/// The suite the compiled-in estimator reads (table1 for a build without a model): what a run
+/// sends unless told otherwise.
+pub fn shipped_suite() -> Suite {
+    estimator_core::Estimator::shipped()
+        .suite()
+        .unwrap_or(Suite::Table1)
+}
+
 /// How to run.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
@@ -65,7 +73,7 @@ pub struct RunConfig {
     /// is lost with it when the altered frame lost its delimiter); also how long to wait for late
     /// replies after the last frame.
     pub altered_grace: Duration,
-    /// The sensor suite sent, i.e. the frame kind: as `Table1` the frames carry the paper's inputs
+    /// The sensor suite sent (default: the shipped estimator's), i.e. the frame kind: as `Table1` the frames carry the paper's inputs
     /// only (the EGI channels are not sent, so the byte stream, and what the link does to it, is
     /// the same as before the EGI suite existed).
     pub suite: Suite,
@@ -79,7 +87,7 @@ impl Default for RunConfig {
             fast: true,
             reply_timeout: Duration::from_secs(10),
             altered_grace: Duration::from_millis(50),
-            suite: Suite::Table1,
+            suite: shipped_suite(),
         }
     }
 }
