@@ -201,8 +201,9 @@ mod tests {
         }
     }
 
+    /// The frame as a sender of the shipped model's suite delivers it.
     fn wire(seq: u16) -> Vec<u8> {
-        wire_of(Suite::Table1, seq)
+        wire_of(Estimator::shipped().suite().unwrap_or(Suite::Table1), seq)
     }
 
     fn wire_of(suite: Suite, seq: u16) -> Vec<u8> {

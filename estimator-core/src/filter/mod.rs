@@ -37,7 +37,7 @@
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 use crate::aero::{self, AirState, F16, Surfaces};
-use crate::channels::{Channel, SensorFrame};
+use crate::channels::{Channel, SensorFrame, Suite};
 
 /// Number of states.
 pub const STATES: usize = 7;
@@ -145,54 +145,18 @@ pub struct Input {
     pub fuel_kg: f32,
 }
 
-/// The channels [`Input::from_frame`] reads: the `egi` suite less the throttle and the LEF actuator
-/// (the aero model reads the scheduled LEF, computed from α and Mach).
-pub const NEEDED: [Channel; 20] = [
-    Channel::GyroP,
-    Channel::GyroQ,
-    Channel::GyroR,
-    Channel::AccelX,
-    Channel::AccelY,
-    Channel::AccelZ,
-    Channel::GpsAlt,
-    Channel::Elevator,
-    Channel::Aileron,
-    Channel::Rudder,
-    Channel::Flaperon,
-    Channel::Tef,
-    Channel::Speedbrake,
-    Channel::Roll,
-    Channel::Pitch,
-    Channel::Heading,
-    Channel::VelNorth,
-    Channel::VelEast,
-    Channel::VelDown,
-    Channel::Fuel,
-];
-
-/// [`NEEDED`] as a channel bit mask.
-pub const NEEDED_MASK: u32 = {
-    let mut m = 0;
-    let mut i = 0;
-    while i < NEEDED.len() {
-        // Const evaluation: an out-of-bounds index is a compile error.
-        #[allow(clippy::indexing_slicing)]
-        let c = NEEDED[i];
-        m |= c.bit();
-        #[allow(clippy::arithmetic_side_effects)]
-        {
-            i += 1;
-        }
-    }
-    m
-};
+/// The channels [`Input::from_frame`] reads, as a bit mask: the `egi` suite less GPS speed (the
+/// EGI velocity vector replaces it), the LEF actuator (the aero model reads the scheduled LEF,
+/// computed from α and Mach) and the throttle (thrust is not modelled).
+pub const NEEDED_MASK: u32 = Suite::Egi.channels()
+    & !(Channel::GpsSpeed.bit() | Channel::Lef.bit() | Channel::Throttle.bit());
 
 impl Input {
     /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
     /// which is the IMU point's, moved to the centre of gravity (`v_cg = v_imu − C_nb (ω × r)`).
-    /// `None` if a [`NEEDED`] channel is not valid (a `table1` frame has no EGI channels).
+    /// `None` if a [`NEEDED_MASK`] channel is not valid (a `table1` frame has no EGI channels).
     pub fn from_frame(f: &SensorFrame, dt_s: f32, lever_arm_m: [f32; 3]) -> Option<Input> {
-        if !NEEDED.iter().all(|c| f.is_valid(*c)) {
+        if f.valid & NEEDED_MASK != NEEDED_MASK {
             return None;
         }
         // Channel values are below 2^24 in magnitude for any flight value, so the f32 conversion
