@@ -147,6 +147,17 @@ impl Channel {
         }
     }
 
+    /// The sensor's measuring range, raw units: an IMU output at or beyond it is clipped by the
+    /// sensor, not measured ([`crate::health`]). LN-200 class: ±1000 °/s (17.453 293 rad/s) and
+    /// ±40 g (392.266 m/s²); `docs/sensors.md`. `None` for channels without a clipping range.
+    pub const fn full_scale(self) -> Option<i32> {
+        match self {
+            Channel::GyroP | Channel::GyroQ | Channel::GyroR => Some(17_453_293),
+            Channel::AccelX | Channel::AccelY | Channel::AccelZ => Some(39_226_600),
+            _ => None,
+        }
+    }
+
     /// Channels whose noise makes an unchanged value over many frames a sign of a stuck sensor: the
     /// IMU, GPS and EGI outputs (not the surfaces, the throttle or the coarse, slow fuel gauge).
     pub const fn is_noisy(self) -> bool {

@@ -4,7 +4,9 @@
 //! | input | result |
 //! |---|---|
 //! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
-//! | a noisy channel (IMU, GPS) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR`, held as above |
+//! | a noisy channel (IMU, GPS, EGI) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR` on that frame, held as above, until it changes ([`crate::health`]) |
+//! | an IMU channel a model uses is at its full scale (the sensor clipped) | `SATURATED` on that frame, held as above |
+//! | the air-data filter a model reads restarted or keeps failing its innovation gate | `FILTER_DIVERGED`, estimate computed |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | GPS speed below [`crate::features::MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
 //! | EGI ground speed below [`crate::features::MIN_SPEED_MMS`], for a model reading the EGI velocity | kinematic angles are noise: `OUT_OF_ENVELOPE` |
@@ -15,13 +17,13 @@
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
 //! the step panic or return anything but the integers described here.
 
-use crate::channels::{CHANNELS, Channel, SensorFrame};
+use crate::channels::{Channel, SensorFrame};
 use crate::features::{Feature, FeatureState, FeatureValues, VELOCITY_SOURCES};
+use crate::filter;
 use crate::nn::{Aligned, Layer};
 use crate::normalize::{Envelope, Norm};
 
-/// Frames with an unchanged noisy channel before it counts as stuck (1 s at 20 Hz).
-pub const STUCK_FRAMES: u16 = 20;
+pub use crate::health::STUCK_FRAMES;
 
 /// Estimate flags (bit set).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -48,6 +50,14 @@ impl Flags {
     /// over the exact lag (the first second after a start or reset, lost frames, a channel invalid in
     /// the lagged frame): the estimate is computed but may be less accurate.
     pub const HISTORY_SHORT: u16 = 1 << 7;
+    /// An IMU channel used by α or β is at its full scale ([`crate::Channel::full_scale`]): the
+    /// sensor clipped. Held as for `INVALID_INPUT`.
+    pub const SATURATED: u16 = 1 << 8;
+    /// A computed angle reads the air-data filter's outputs and the filter is diverging: it
+    /// restarted this step (covariance blow-up, non-finite arithmetic) or its innovations have
+    /// failed the gate for [`crate::filter::Config::gate_run`] steps in a row. The estimate is
+    /// computed but its filter features are not what training saw.
+    pub const FILTER_DIVERGED: u16 = 1 << 9;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -228,6 +238,7 @@ struct Model<'m> {
     net: &'m dyn AngleNet,
     sources: u32,
     lags: u8,
+    reads_filter: bool,
 }
 
 impl<'m> Model<'m> {
@@ -236,6 +247,7 @@ impl<'m> Model<'m> {
             net,
             sources: net.sources(),
             lags: net.lags(),
+            reads_filter: net.features().iter().any(|f| f.needs_filter()),
         }
     }
 }
@@ -244,7 +256,6 @@ impl<'m> Model<'m> {
 pub struct Estimator<'m> {
     alpha: Option<Model<'m>>,
     beta: Option<Model<'m>>,
-    repeats: [u16; CHANNELS],
     last_alpha: Option<(i32, i32)>,
     last_beta: Option<(i32, i32)>,
     /// Past frames for the deltas, and the air-data filter when a model reads its outputs.
@@ -257,13 +268,11 @@ impl<'m> Estimator<'m> {
     }
 
     fn with(alpha: Option<&'m dyn AngleNet>, beta: Option<&'m dyn AngleNet>) -> Self {
-        let needs_filter = |m: Option<&'m dyn AngleNet>| {
-            m.is_some_and(|n| n.features().iter().any(|f| f.needs_filter()))
-        };
+        let (alpha, beta) = (alpha.map(Model::new), beta.map(Model::new));
+        let needs_filter = |m: Option<Model>| m.is_some_and(|m| m.reads_filter);
         Estimator {
-            alpha: alpha.map(Model::new),
-            beta: beta.map(Model::new),
-            repeats: [0; CHANNELS],
+            alpha,
+            beta,
             last_alpha: None,
             last_beta: None,
             state: FeatureState::new(needs_filter(alpha) || needs_filter(beta)),
@@ -302,36 +311,7 @@ impl<'m> Estimator<'m> {
         *self = Self::with(self.alpha.map(|m| m.net), self.beta.map(|m| m.net));
     }
 
-    /// Bit per channel: noisy channels unchanged for [`STUCK_FRAMES`] frames. The previous frame is
-    /// the history's newest (0s before the first).
-    fn update_stuck(&mut self, frame: &SensorFrame) -> u32 {
-        let mut stuck = 0u32;
-        let previous = self
-            .state
-            .history()
-            .newest()
-            .map_or(&[0; CHANNELS], |p| &p.raw);
-        for (((c, raw), last), n) in Channel::ALL
-            .iter()
-            .zip(&frame.raw)
-            .zip(previous)
-            .zip(self.repeats.iter_mut())
-        {
-            if !c.is_noisy() {
-                continue;
-            }
-            // The repeat count saturates, and so must the comparison: `n + 1` wrapped to 0 once the
-            // count reached u16::MAX (55 minutes of one value), clearing STUCK_SENSOR for good.
-            *n = if raw == last { n.saturating_add(1) } else { 0 };
-            if n.saturating_add(1) >= STUCK_FRAMES {
-                stuck |= c.bit();
-            }
-        }
-        stuck
-    }
-
     pub fn step(&mut self, frame: &SensorFrame) -> Estimate {
-        let stuck = self.update_stuck(frame);
         let mut e = Estimate {
             seq: frame.seq,
             time_ms: frame.time_ms,
@@ -342,17 +322,23 @@ impl<'m> Estimator<'m> {
             return e;
         };
         let values = self.state.next(frame);
+        let health = values.health;
+        let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
             let invalid = m.sources & !frame.valid != 0;
-            let is_stuck = m.sources & stuck != 0;
+            let is_stuck = m.sources & health.stuck != 0;
+            let saturated = m.sources & health.saturated != 0;
             if invalid {
                 flags |= Flags::INVALID_INPUT;
             }
             if is_stuck {
                 flags |= Flags::STUCK_SENSOR;
             }
-            if invalid || is_stuck {
+            if saturated {
+                flags |= Flags::SATURATED;
+            }
+            if invalid || is_stuck || saturated {
                 flags |= held_flag;
                 return match *last {
                     Some(v) => v,
@@ -368,6 +354,9 @@ impl<'m> Estimator<'m> {
             }
             if m.lags & values.short_lags != 0 {
                 flags |= Flags::HISTORY_SHORT;
+            }
+            if m.reads_filter && diverged {
+                flags |= Flags::FILTER_DIVERGED;
             }
             *last = Some((mid, out));
             (mid, out)

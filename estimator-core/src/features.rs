@@ -351,6 +351,11 @@ pub struct FeatureValues {
     /// Bit per [`Lag`]: for some channel the frame exactly that lag back was missing (see the module
     /// docs), so the delta was rate-scaled from another frame or set to 0.
     pub short_lags: u8,
+    /// Stuck and saturated channels of this frame ([`crate::health`]); [`FeatureState::next`]
+    /// computed the features as if those channels' valid bits were clear.
+    pub health: crate::health::Status,
+    /// The air-data filter's [`crate::filter::flags`] this step (0 without a filter).
+    pub filter_flags: u8,
 }
 
 /// A gap between frames longer than this (ms) restarts the air-data filter: its wind and
@@ -363,7 +368,16 @@ pub const FILTER_RESTART_GAP_MS: u32 = 1_000;
 #[derive(Clone, Debug)]
 pub struct FeatureState {
     history: History,
+    health: crate::health::Health,
     filter: Option<crate::filter::AirDataFilter>,
+    /// The filter as it was at two earlier frames (frame count, time, filter), taken every
+    /// [`STUCK_FRAMES`] frames: a channel the filter reads is found stuck only [`STUCK_FRAMES`]
+    /// frames after it froze, and the filter has digested the frozen values by then. It goes back
+    /// to the newest copy from before the freeze and predicts forward (see [`FeatureState::next`]).
+    checkpoints: [Option<(u32, u32, crate::filter::AirDataFilter)>; 2],
+    /// Frames seen, and the stuck channels of the previous frame.
+    frames: u32,
+    stuck_before: u32,
     last_ms: Option<u32>,
 }
 
@@ -372,6 +386,10 @@ impl FeatureState {
     pub fn new(with_filter: bool) -> Self {
         FeatureState {
             history: History::new(),
+            health: crate::health::Health::new(),
+            checkpoints: [None, None],
+            frames: 0,
+            stuck_before: 0,
             filter: with_filter
                 .then(|| crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG)),
             last_ms: None,
@@ -383,23 +401,67 @@ impl FeatureState {
     }
 
     /// The features of `frame` (deltas against the frames before it), then remembers it. The filter
-    /// steps with the time since the previous frame (50 ms for the first).
+    /// steps with the time since the previous frame (50 ms for the first). Stuck or saturated
+    /// channels ([`crate::health`]) count as invalid everywhere from here on: in the features, in
+    /// the filter and in the history.
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
+        let health = self.health.check(frame, self.history.newest());
+        let frame = &SensorFrame {
+            valid: health.usable(frame),
+            ..*frame
+        };
         let mut values = FeatureValues::compute(frame, &self.history);
+        let newly_stuck = health.stuck & !self.stuck_before & crate::filter::NEEDED_MASK != 0;
+        self.stuck_before = health.stuck;
+        values.health = health;
         if let Some(filter) = self.filter.as_mut() {
             // After a gap longer than FILTER_RESTART_GAP_MS (no frames: link down, sender
             // restarted) the filter starts again, exactly as a fresh one would.
-            let dt_ms = match self.last_ms.map(|p| frame.time_ms.wrapping_sub(p)) {
+            let mut dt_ms = match self.last_ms.map(|p| frame.time_ms.wrapping_sub(p)) {
                 Some(gap) if gap <= FILTER_RESTART_GAP_MS => gap,
                 Some(_) => {
                     *filter = crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG);
+                    self.checkpoints = [None, None];
                     FRAME_PERIOD_MS
                 }
                 None => FRAME_PERIOD_MS,
             };
+            // A channel the filter reads has just been found stuck: it froze STUCK_FRAMES − 1
+            // frames ago. Back to the newest checkpoint from no later than that, and predict from
+            // there to now (this frame has the channel hidden, so the step is a prediction).
+            let froze_at = self
+                .frames
+                .wrapping_sub(u32::from(crate::health::STUCK_FRAMES).saturating_sub(1));
+            if newly_stuck
+                && let Some((_, at_ms, saved)) = self
+                    .checkpoints
+                    .iter()
+                    .flatten()
+                    .filter(|(n, _, _)| {
+                        self.frames.wrapping_sub(*n) >= self.frames.wrapping_sub(froze_at)
+                    })
+                    .max_by_key(|(n, _, _)| *n)
+            {
+                *filter = saved.clone();
+                dt_ms = frame.time_ms.wrapping_sub(*at_ms);
+                // The filter predicts at most a second per step.
+                while dt_ms > 1_000 {
+                    filter.step_frame(&SensorFrame::default(), 1.0);
+                    dt_ms = dt_ms.saturating_sub(1_000);
+                }
+            }
             let out = filter.step_frame(frame, dt_ms as f32 / 1000.0);
             values.set_filter(&out);
+            values.filter_flags = out.flags;
+            if self
+                .frames
+                .is_multiple_of(u32::from(crate::health::STUCK_FRAMES))
+            {
+                let [_, newer] = core::mem::take(&mut self.checkpoints);
+                self.checkpoints = [newer, Some((self.frames, frame.time_ms, filter.clone()))];
+            }
         }
+        self.frames = self.frames.wrapping_add(1);
         self.last_ms = Some(frame.time_ms);
         self.history.push(frame);
         values
@@ -615,6 +677,8 @@ impl FeatureValues {
             low_speed,
             low_ground_speed,
             short_lags,
+            health: crate::health::Status::default(),
+            filter_flags: 0,
         }
     }
 }

@@ -36,6 +36,7 @@ pub mod channels;
 pub mod estimator;
 pub mod features;
 pub mod filter;
+pub mod health;
 pub mod model;
 pub mod nn;
 pub mod normalize;

@@ -177,6 +177,30 @@ fn a_stuck_gyro_is_detected_after_stuck_frames_and_recovers() {
     assert!(!out.flags.has(Flags::STUCK_SENSOR));
 }
 
+#[test]
+fn a_gyro_at_full_scale_holds_beta_on_that_frame_and_releases_it_on_the_next() {
+    let (a, b) = nets();
+    let mut e = Estimator::new(&a, &b);
+    let good = e.step(&frame(0));
+    for fs in [17_453_293, -17_453_293, i32::MAX] {
+        let mut f = frame(1);
+        f.raw[Channel::GyroP.index()] = fs;
+        let out = e.step(&f);
+        assert!(out.flags.has(Flags::SATURATED | Flags::BETA_HELD), "{fs}");
+        assert!(
+            !out.flags.has(Flags::ALPHA_HELD | Flags::INVALID_INPUT),
+            "{fs}"
+        );
+        assert_eq!(out.beta_mdeg, good.beta_mdeg);
+    }
+    let mut f = frame(2);
+    f.raw[Channel::GyroP.index()] = 17_453_292;
+    assert_eq!(
+        e.step(&f).flags.0 & (Flags::SATURATED | Flags::BETA_HELD),
+        0
+    );
+}
+
 /// The repeat count saturates at u16::MAX (55 minutes at 20 Hz); the sensor must stay stuck past
 /// it. (The flight image once wrapped `count + 1` to 0 there and cleared the flag for good.)
 #[test]

@@ -4,6 +4,7 @@
 //! (firmware, through [`runner`]) → [`score`]. [`dataset`] stores flights on disk.
 
 pub mod dataset;
+pub mod faults;
 pub mod font;
 pub mod frames;
 pub mod link;

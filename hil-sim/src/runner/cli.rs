@@ -96,6 +96,13 @@ pub struct RunArgs {
     pub burst_rate: Option<f64>,
     #[arg(long)]
     pub burst_len: Option<u32>,
+    /// A scripted sensor fault, KIND[:CHANNEL]@START+DURATION in seconds: gps-loss@300+30,
+    /// dead:accel_y_mps2@100+10 (sent invalid), stuck:gyro_r_rps@100+10 (frozen, sent valid),
+    /// saturated:accel_z_mps2@100+0.5 (at the IMU's full scale). Repeatable. The summary then scores
+    /// each: flag latency, and seconds until the estimate is back on the fault-free run's (the
+    /// compiled-in estimator on the same flight, in-process).
+    #[arg(long = "fault")]
+    pub faults: Vec<crate::faults::Fault>,
     /// Fast mode: how long to wait for the reply to a frame the link left intact, ms.
     #[arg(long, default_value_t = 10_000)]
     pub reply_timeout_ms: u64,
@@ -224,7 +231,24 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         eprintln!("flying the script in JSBSim ...");
     }
     let flight = flight(&a.source, a.seed, a.max_time_s)?;
-    let samples = samples_of(&flight);
+    let mut samples = samples_of(&flight);
+    let times: Vec<f64> = samples.iter().map(|s| s.time_s).collect();
+    // The fault-free reference: the compiled-in estimator on the clean frames as the firmware
+    // decodes them (before the faults go in).
+    let reference: Vec<estimator_core::Estimate> = if a.faults.is_empty() {
+        Vec::new()
+    } else {
+        let mut e = estimator_core::Estimator::shipped();
+        samples
+            .iter()
+            .map(|s| e.step(&s.frame.restricted_to(cfg.suite)))
+            .collect()
+    };
+    let mut frames: Vec<_> = samples.iter().map(|s| s.frame).collect();
+    crate::faults::apply(&a.faults, &mut frames, &times);
+    for (s, f) in samples.iter_mut().zip(frames) {
+        s.frame = f;
+    }
     let mut target = open_target(a)?;
     let bar = progress_bar(samples.len());
     let outcome = super::run_with_progress(target.as_mut(), &samples, &cfg, &mut |p| {
@@ -236,7 +260,15 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     })?;
     bar.finish_and_clear();
     drop(target);
-    let summary = score::summarize(&outcome);
+    let mut summary = score::summarize(&outcome);
+    if !a.faults.is_empty() {
+        let estimates: Vec<_> = outcome
+            .records
+            .iter()
+            .map(|r| r.reply.map(|f| f.estimate))
+            .collect();
+        summary.faults = score::faults::score(&a.faults, &estimates, &reference, &times);
+    }
     let w = write_outputs(&a.out, &outcome, &summary)?;
     if a.json {
         eprintln!(
@@ -352,6 +384,23 @@ fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
             us(s.step_ticks_max),
             us(s.step_ticks_median),
             SILICON_SYSCLK_HZ / 1_000_000
+        );
+    }
+    for f in &s.faults {
+        let opt = |v: Option<String>| v.unwrap_or_else(|| "never".to_string());
+        let _ = writeln!(
+            t,
+            "  {:<16} {}: flagged after {} frames{}; back {} after the sensor's return (max deviation {:.3}°)",
+            "fault",
+            f.fault,
+            opt(f.flag_latency_frames.map(|v| v.to_string())),
+            if f.flagged_throughout {
+                ", throughout"
+            } else {
+                ", NOT throughout"
+            },
+            opt(f.back_after_s.map(|v| format!("{v:.2} s"))),
+            f.max_dev_after_return_deg
         );
     }
     let _ = writeln!(t, "  {:<16} {}", "plot", w.png.display());

@@ -71,6 +71,8 @@ pub struct Summary {
     pub wall_s: f64,
     pub uplink: LinkStats,
     pub downlink: LinkStats,
+    /// Scripted sensor faults (`--fault`) and how the estimator came through each (empty without).
+    pub faults: Vec<faults::FaultScore>,
 }
 
 /// α of a record: (truth, estimate), the estimate NaN when no reply came back.
@@ -156,6 +158,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         wall_s: o.wall_s,
         uplink: o.uplink,
         downlink: o.downlink,
+        faults: Vec::new(),
     }
 }
 
@@ -206,4 +209,5 @@ pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error>
     Ok(())
 }
 
+pub mod faults;
 pub mod plot;

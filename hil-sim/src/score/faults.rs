@@ -1,0 +1,196 @@
+//! How an estimator came through scripted sensor faults ([`crate::faults`]): how soon its flags said
+//! so, whether they kept saying so, and how soon after the sensor's return its estimate was back.
+//!
+//! "Back" is measured against a reference: the same estimator on the same flight without the fault.
+//! The estimate is back at the first frame from which, for [`SETTLED_FRAMES`] frames in a row, both
+//! angles are computed (not held) and within [`BACK_TOLERANCE_DEG`] of the reference.
+
+use estimator_core::health::STUCK_FRAMES;
+use estimator_core::{Estimate, Flags};
+use serde::Serialize;
+
+use crate::faults::{Fault, FaultKind};
+
+/// Flags that say an input is missing or wrong (the estimate is held or not computed).
+pub const FAULT_FLAGS: u16 = Flags::INVALID_INPUT
+    | Flags::STUCK_SENSOR
+    | Flags::SATURATED
+    | Flags::ALPHA_HELD
+    | Flags::BETA_HELD
+    | Flags::NO_ESTIMATE;
+
+/// Largest difference from the fault-free reference that counts as back, degrees (both angles).
+pub const BACK_TOLERANCE_DEG: f64 = 0.1;
+
+/// Frames in a row the estimate must stay back (1 s at 20 Hz).
+pub const SETTLED_FRAMES: usize = 20;
+
+/// One fault's figures.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FaultScore {
+    /// The fault as written on the command line.
+    pub fault: String,
+    /// Frame index at which the fault first shows in the data: its first frame, or for a stuck
+    /// channel the [`STUCK_FRAMES`]th identical value (a frozen value cannot be told apart sooner).
+    pub detectable_frame: Option<usize>,
+    /// Frames from `detectable_frame` to the first answered estimate carrying a [`FAULT_FLAGS`] bit
+    /// (0: flagged on that very frame). `None`: never flagged.
+    pub flag_latency_frames: Option<usize>,
+    /// Every answered estimate from `detectable_frame` to the fault's end carries a [`FAULT_FLAGS`] bit.
+    pub flagged_throughout: bool,
+    /// Index of the first frame after the fault (the sensor is back).
+    pub return_frame: Option<usize>,
+    /// Seconds from the sensor's return to the estimate being back (see the module docs). `None`:
+    /// not back before the flight (or the next fault) ended.
+    pub back_after_s: Option<f64>,
+    /// Largest α/β difference from the reference, degrees, over the answered estimates from the
+    /// return to the end of the flight (or the next fault).
+    pub max_dev_after_return_deg: f64,
+}
+
+/// Scores each fault: `estimates` the run with the faults, `reference` the same estimator on the
+/// fault-free flight, `times_s` each frame's flight time. `None` in `estimates`: no reply came back.
+/// Faults are scored in start order, each up to the next one's start.
+pub fn score(
+    faults: &[Fault],
+    estimates: &[Option<Estimate>],
+    reference: &[Estimate],
+    times_s: &[f64],
+) -> Vec<FaultScore> {
+    let mut ordered: Vec<&Fault> = faults.iter().collect();
+    ordered.sort_by(|a, b| a.start_s.total_cmp(&b.start_s));
+    let n = times_s.len().min(estimates.len()).min(reference.len());
+    ordered
+        .iter()
+        .enumerate()
+        .map(|(i, fault)| {
+            let first = times_s.iter().position(|&t| fault.active(t));
+            let detectable = first.map(|f| match fault.kind {
+                FaultKind::Stuck(_) => f + usize::from(STUCK_FRAMES) - 1,
+                _ => f,
+            });
+            let ret = first.map(|f| {
+                (f..n)
+                    .find(|&k| times_s.get(k).is_some_and(|&t| !fault.active(t)))
+                    .unwrap_or(n)
+            });
+            let end = ordered
+                .get(i + 1)
+                .and_then(|next| times_s.iter().position(|&t| next.active(t)))
+                .unwrap_or(n);
+            let flagged = |k: usize| {
+                estimates
+                    .get(k)
+                    .copied()
+                    .flatten()
+                    .map(|e| e.flags.0 & FAULT_FLAGS != 0)
+            };
+            let (latency, throughout) = match (detectable, ret) {
+                (Some(d), Some(r)) => (
+                    (d..r).find(|&k| flagged(k) == Some(true)).map(|k| k - d),
+                    (d..r).all(|k| flagged(k) != Some(false)),
+                ),
+                _ => (None, false),
+            };
+            let dev = |k: usize| -> Option<f64> {
+                let e = estimates.get(k).copied().flatten()?;
+                let r = reference.get(k)?;
+                Some(
+                    (e.alpha_deg() - r.alpha_deg())
+                        .abs()
+                        .max((e.beta_deg() - r.beta_deg()).abs()),
+                )
+            };
+            let back = |k: usize| {
+                estimates
+                    .get(k)
+                    .copied()
+                    .flatten()
+                    .is_some_and(|e| e.flags.is_usable())
+                    && dev(k).is_some_and(|d| d <= BACK_TOLERANCE_DEG)
+            };
+            let back_after_s = ret.and_then(|r| {
+                (r..end)
+                    .find(|&k| k + SETTLED_FRAMES <= end && (k..k + SETTLED_FRAMES).all(back))
+                    .and_then(|k| Some(times_s.get(k)? - times_s.get(r)?))
+            });
+            let max_dev = ret.map_or(0.0, |r| (r..end).filter_map(dev).fold(0.0, f64::max));
+            FaultScore {
+                fault: fault.to_string(),
+                detectable_frame: detectable,
+                flag_latency_frames: latency,
+                flagged_throughout: throughout,
+                return_frame: ret,
+                back_after_s,
+                max_dev_after_return_deg: max_dev,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn est(alpha_mdeg: i32, flags: u16) -> Estimate {
+        Estimate {
+            alpha_mdeg,
+            flags: Flags(flags),
+            ..Estimate::default()
+        }
+    }
+
+    #[test]
+    fn latency_throughout_and_back_time() {
+        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let fault: Fault = "dead:rudder_deg@1+2".parse().unwrap();
+        let reference = vec![est(1000, 0); 200];
+        // Flagged from frame 21 (one late), held to 60, then 0.3° off for 10 frames, then back.
+        let run: Vec<Option<Estimate>> = (0..200)
+            .map(|k| {
+                Some(match k {
+                    21..60 => est(900, Flags::INVALID_INPUT | Flags::BETA_HELD),
+                    60..70 => est(1300, 0),
+                    _ => est(1050, 0),
+                })
+            })
+            .collect();
+        let s = &score(&[fault], &run, &reference, &times)[0];
+        assert_eq!(s.detectable_frame, Some(20));
+        assert_eq!(s.flag_latency_frames, Some(1));
+        assert!(!s.flagged_throughout);
+        assert_eq!(s.return_frame, Some(60));
+        assert_eq!(s.back_after_s, Some(10.0 * 0.05));
+        assert!((s.max_dev_after_return_deg - 0.3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_stuck_channel_is_detectable_after_stuck_frames_and_lost_replies_do_not_count() {
+        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let fault: Fault = "stuck:gyro_r_rps@1+3".parse().unwrap();
+        let reference = vec![est(0, 0); 200];
+        let run: Vec<Option<Estimate>> = (0..200)
+            .map(|k| match k {
+                40 | 41 => None,
+                39..80 => Some(est(0, Flags::STUCK_SENSOR | Flags::BETA_HELD)),
+                _ => Some(est(0, 0)),
+            })
+            .collect();
+        let s = &score(&[fault], &run, &reference, &times)[0];
+        assert_eq!(s.detectable_frame, Some(20 + usize::from(STUCK_FRAMES) - 1));
+        assert_eq!(s.flag_latency_frames, Some(0));
+        assert!(s.flagged_throughout);
+        assert_eq!(s.back_after_s, Some(0.0));
+    }
+
+    #[test]
+    fn never_back_is_none() {
+        let times: Vec<f64> = (0..100).map(|k| k as f64 * 0.05).collect();
+        let fault: Fault = "gps-loss@1+1".parse().unwrap();
+        let reference = vec![est(0, 0); 100];
+        let run = vec![Some(est(500, 0)); 100];
+        let s = &score(&[fault], &run, &reference, &times)[0];
+        assert_eq!(s.flag_latency_frames, None);
+        assert_eq!(s.back_after_s, None);
+    }
+}
