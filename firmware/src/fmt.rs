@@ -1,6 +1,6 @@
-//! Logging shim: `defmt` on the Cortex-M4F, nothing on the host (the host tools report through the
-//! estimate frames instead). Arguments are still evaluated by reference on the host so both builds
-//! see the same uses and warnings.
+//! Logging shim: `defmt` on the Cortex-M4F; on the host, the `log` facade with target `"firmware"`
+//! (`hil-sim run --firmware-log` prints them). The format strings use only plain `{}` holes, which
+//! both read the same way.
 #![allow(unused_macros)]
 
 #[cfg(target_os = "none")]
@@ -14,9 +14,9 @@ macro_rules! warn {
 
 #[cfg(not(target_os = "none"))]
 macro_rules! info {
-    ($fmt:literal $(, $arg:expr)* $(,)?) => {{ $( let _ = &$arg; )* }};
+    ($($t:tt)*) => { ::log::info!(target: "firmware", $($t)*) };
 }
 #[cfg(not(target_os = "none"))]
 macro_rules! warn {
-    ($fmt:literal $(, $arg:expr)* $(,)?) => {{ $( let _ = &$arg; )* }};
+    ($($t:tt)*) => { ::log::warn!(target: "firmware", $($t)*) };
 }

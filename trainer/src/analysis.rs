@@ -183,6 +183,8 @@ mod tests {
                 low_speed: false,
                 low_ground_speed: false,
                 short_lags: 0,
+                health: Default::default(),
+                filter_flags: 0,
             }
         };
         let bg = vec![mk(1, 2, 3), mk(3, 0, -1)];

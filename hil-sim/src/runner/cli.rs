@@ -63,6 +63,10 @@ pub struct RunArgs {
     /// Default: the suite the compiled-in (shipped) estimator reads.
     #[arg(long, value_parser = parse_suite)]
     pub suite: Option<estimator_core::Suite>,
+    /// Print what the in-process firmware logs (`--firmware host`: rejected frames, deadline misses,
+    /// sequence restarts) on stderr, as `firmware WARN: ...`. QEMU and boards log over defmt instead.
+    #[arg(long)]
+    pub firmware_log: bool,
     /// Print exactly one JSON summary object on stdout (messages go to stderr).
     #[arg(long)]
     pub json: bool,
@@ -230,6 +234,9 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     if a.source.script.is_some() {
         eprintln!("flying the script in JSBSim ...");
     }
+    if a.firmware_log {
+        FirmwareLog::install();
+    }
     let flight = flight(&a.source, a.seed, a.max_time_s)?;
     let mut samples = samples_of(&flight);
     let times: Vec<f64> = samples.iter().map(|s| s.time_s).collect();
@@ -286,6 +293,30 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         print!("{}", table(&flight.name, &summary, &w));
     }
     Ok(summary)
+}
+
+/// Prints the in-process firmware's log lines (target "firmware") on stderr.
+struct FirmwareLog;
+
+impl FirmwareLog {
+    fn install() {
+        // A logger already set (a second run in one process) keeps printing: nothing to do.
+        if log::set_logger(&FirmwareLog).is_ok() {
+            log::set_max_level(log::LevelFilter::Info);
+        }
+    }
+}
+
+impl log::Log for FirmwareLog {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.target() == "firmware"
+    }
+    fn log(&self, r: &log::Record) {
+        if self.enabled(r.metadata()) {
+            eprintln!("firmware {}: {}", r.level(), r.args());
+        }
+    }
+    fn flush(&self) {}
 }
 
 /// Frames sent, ETA and the running scores on stderr; drawn only when stderr is a terminal.
