@@ -145,6 +145,12 @@ pub struct SurfaceConfig {
     pub quantum_deg: f64,
     pub throttle_noise_sigma: f64,
     pub throttle_quantum: f64,
+    /// Anti-alias low-pass (2nd-order Butterworth) on the surface positions before the 20 Hz
+    /// decimation, Hz; 0 = none (point samples). The IMU's cut-off by default, so surfaces and
+    /// accelerometers describe the same instants: the stock F-16 yaw damper drives the rudder
+    /// stop to stop within single 120 Hz steps in heavy turbulence, and point samples at 20 Hz
+    /// alias that chatter, whose side force the (filtered) accelerometers do see.
+    pub antialias_cutoff_hz: f64,
 }
 
 impl Default for SurfaceConfig {
@@ -154,6 +160,7 @@ impl Default for SurfaceConfig {
             quantum_deg: 0.05,
             throttle_noise_sigma: 0.0,
             throttle_quantum: 1.0 / 1024.0,
+            antialias_cutoff_hz: 6.0,
         }
     }
 }
@@ -404,12 +411,20 @@ impl SensorConfig {
                 });
             }
         }
-        if self.imu.antialias_cutoff_hz >= SIM_HZ as f64 / 2.0 {
-            return Err(SensorConfigError::Invalid {
-                field: "imu.antialias_cutoff_hz",
-                value: self.imu.antialias_cutoff_hz,
-                why: "must be below 60 Hz (half the 120 Hz simulation rate)",
-            });
+        for (field, value) in [
+            ("imu.antialias_cutoff_hz", self.imu.antialias_cutoff_hz),
+            (
+                "surfaces.antialias_cutoff_hz",
+                self.surfaces.antialias_cutoff_hz,
+            ),
+        ] {
+            if !(0.0..SIM_HZ as f64 / 2.0).contains(&value) {
+                return Err(SensorConfigError::Invalid {
+                    field,
+                    value,
+                    why: "must be 0 (none) or below 60 Hz (half the 120 Hz simulation rate)",
+                });
+            }
         }
         let rates = [
             ("gps.update_hz", self.gps.update_hz),
@@ -808,6 +823,8 @@ pub struct SensorModel {
     gps_delay_steps: usize,
     gps_every_steps: u64,
     gps_held: (f64, f64),
+    /// Anti-alias filters of the seven surface channels, in [`SensorModel::step`]'s order.
+    surface_aa: [Option<Biquad>; 7],
     steps: u64,
     egi: EgiModel,
 }
@@ -836,6 +853,7 @@ impl SensorModel {
             gps_delay_steps: (cfg.gps.latency_s * SIM_HZ as f64).round() as usize,
             gps_every_steps: ((SIM_HZ as f64 / cfg.gps.update_hz).round() as u64).max(1),
             gps_held: (f64::NAN, f64::NAN),
+            surface_aa: std::array::from_fn(|_| Biquad::lowpass(cfg.surfaces.antialias_cutoff_hz)),
             steps: 0,
             egi: EgiModel::new(cfg, seed),
             cfg: cfg.clone(),
@@ -950,7 +968,8 @@ impl SensorModel {
             (Channel::Flaperon, t.flaperon_deg),
             (Channel::Speedbrake, t.speedbrake_deg),
         ];
-        for (c, v) in surfaces {
+        for ((c, v), aa) in surfaces.into_iter().zip(self.surface_aa.iter_mut()) {
+            let v = aa.as_mut().map_or(v, |f| f.step(v));
             let n: f64 = StandardNormal.sample(&mut self.rng);
             out[c.index()] = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
         }
@@ -1148,5 +1167,64 @@ mod tests {
             }
         }
         assert!(peak < 0.03, "50 Hz gain {peak}");
+    }
+}
+
+#[cfg(test)]
+mod surface_tests {
+    use super::*;
+
+    /// The rudder banging stop to stop every 120 Hz step (the stock F-16 yaw damper in heavy
+    /// turbulence): point samples at 20 Hz read a stop; through the anti-alias filter the reading
+    /// is the mean position, as the side force the accelerometers sense.
+    #[test]
+    fn surface_chatter_is_filtered_before_the_20_hz_samples() {
+        let read = |cutoff_hz: f64| -> Vec<f64> {
+            let mut cfg = SensorConfig::default();
+            cfg.surfaces.noise_sigma_deg = 0.0;
+            cfg.surfaces.antialias_cutoff_hz = cutoff_hz;
+            let mut m = SensorModel::new(&cfg, 1);
+            (0..1200)
+                .map(|k| {
+                    let t = SensorInput {
+                        rudder_deg: if k % 2 == 0 { 30.0 } else { -30.0 },
+                        elevator_deg: 2.0,
+                        ..SensorInput::default()
+                    };
+                    m.step(&t)
+                })
+                .enumerate()
+                .filter(|(k, _)| k % 6 == 0 && *k > 240)
+                .map(|(_, o)| o[Channel::Rudder.index()])
+                .collect()
+        };
+        let filtered = read(6.0);
+        assert!(filtered.iter().all(|r| r.abs() <= 0.1), "{filtered:?}");
+        let sampled = read(0.0);
+        assert!(
+            sampled.iter().all(|r| (r.abs() - 30.0).abs() < 1e-9),
+            "{sampled:?}"
+        );
+        // A steady surface passes unchanged.
+        let mut cfg = SensorConfig::default();
+        cfg.surfaces.noise_sigma_deg = 0.0;
+        let mut m = SensorModel::new(&cfg, 1);
+        let t = SensorInput {
+            elevator_deg: 2.0,
+            ..SensorInput::default()
+        };
+        let o = (0..600).map(|_| m.step(&t)).last().unwrap();
+        assert!((o[Channel::Elevator.index()] - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_surface_cutoff_at_or_above_nyquist_is_refused() {
+        let mut cfg = SensorConfig::default();
+        cfg.surfaces.antialias_cutoff_hz = 60.0;
+        assert!(cfg.validate().is_err());
+        cfg.surfaces.antialias_cutoff_hz = -1.0;
+        assert!(cfg.validate().is_err());
+        cfg.surfaces.antialias_cutoff_hz = 0.0;
+        assert!(cfg.validate().is_ok());
     }
 }

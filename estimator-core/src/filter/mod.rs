@@ -20,8 +20,9 @@
 //! # Measurement (2)
 //! Body y and z specific force at the centre of gravity (IMU reading minus the lever-arm terms),
 //! compared with `k · q̄ · S · C_{Y,Z} / m`. The axial force is not used: thrust is not measured. The
-//! model is evaluated with the inputs of the instant the accelerometers represent (their
-//! anti-alias filter delays them by [`Config::accel_delay_s`]), interpolated between frames. The
+//! model is evaluated with the inputs of the instant the accelerometers represent: the surface
+//! positions pass the same anti-alias filter as the accelerometers, and the EGI attitude and
+//! velocity are interpolated [`Config::accel_delay_s`] back between frames. The
 //! Jacobian is a forward difference of the model in the body air velocity, chained through the
 //! attitude matrix. A normalised innovation above [`Config::gate`] is not used.
 //!
@@ -95,6 +96,8 @@ pub struct Config {
     pub max_wind_var: f32,
     /// [`flags::SLOW`] below this airspeed, m/s.
     pub min_airspeed_mps: f32,
+    /// Landing-gear position the force model assumes, 0 up … 1 down (no channel carries it).
+    pub gear_norm: f32,
 }
 
 /// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
@@ -117,6 +120,10 @@ pub const F16_CONFIG: Config = Config {
     max_sigma_rad: 0.0175,
     max_wind_var: 400.0,
     min_airspeed_mps: 30.0,
+    // JSBSim's F-16 starts with the gear down and neither the generated maneuver scripts nor the
+    // stock F-16 scripts retract it: every flight the plant flies is gear-down (CDgear 0.027,
+    // part of the body side force at sideslip).
+    gear_norm: 1.0,
 };
 
 /// One frame of what the filter reads, in SI units and radians.
@@ -214,7 +221,8 @@ impl Input {
             .all(|v| v.is_finite())
     }
 
-    /// `self` moved `back` (0…1) of the way toward `prev`; heading along the short arc.
+    /// `self`'s EGI attitude, velocity and altitude moved `back` (0…1) of the way toward `prev`
+    /// (heading along the short arc); the surfaces stay.
     fn toward(&self, prev: &Input, back: f32) -> Input {
         let l = |a: f32, b: f32| a + (b - a) * back;
         let l3 = |a: [f32; 3], b: [f32; 3]| [l(a[0], b[0]), l(a[1], b[1]), l(a[2], b[2])];
@@ -227,12 +235,8 @@ impl Input {
         ];
         out.vel_ned_mps = l3(self.vel_ned_mps, prev.vel_ned_mps);
         out.alt_m = l(self.alt_m, prev.alt_m);
-        out.elevator_deg = l(self.elevator_deg, prev.elevator_deg);
-        out.aileron_deg = l(self.aileron_deg, prev.aileron_deg);
-        out.rudder_deg = l(self.rudder_deg, prev.rudder_deg);
-        out.flaperon_left_deg = l(self.flaperon_left_deg, prev.flaperon_left_deg);
-        out.tef_deg = l(self.tef_deg, prev.tef_deg);
-        out.speedbrake_deg = l(self.speedbrake_deg, prev.speedbrake_deg);
+        // The surface positions come through the same anti-alias path as the accelerometers
+        // (docs/sensors.md): they already describe the accelerometers' instant.
         out
     }
 }
@@ -348,6 +352,7 @@ fn flaperon_right_deg(inp: &Input, mach: f32) -> f32 {
 
 /// Specific force at the CG per unit lift scale, body axes, for a body air velocity; `None` when the
 /// model cannot be evaluated there.
+#[allow(clippy::too_many_arguments)]
 fn model_force(
     vb: &Vector3<f32>,
     inp: &Input,
@@ -355,6 +360,7 @@ fn model_force(
     rho: f32,
     a_sound: f32,
     mass_kg: f32,
+    gear_norm: f32,
 ) -> Option<Vector3<f32>> {
     let v = vb.norm();
     if v.is_nan() || v <= 1.0 {
@@ -381,7 +387,7 @@ fn model_force(
         flaperon_left_deg: inp.flaperon_left_deg,
         flaperon_right_deg: flaperon_right_deg(inp, mach),
         speedbrake_deg: inp.speedbrake_deg,
-        gear_norm: 0.0,
+        gear_norm,
     };
     let c = F16.coefficients(&air, &s);
     if !c.valid {
@@ -479,7 +485,7 @@ impl AirDataFilter {
 
         let cbn = c_bn(u.euler_rad);
         let vb = cbn * (Vector3::from(u.vel_ned_mps) - self.wind());
-        let f0 = model_force(&vb, &u, inp.gyro_rps, rho, a_sound, mass)?;
+        let f0 = model_force(&vb, &u, inp.gyro_rps, rho, a_sound, mass, c.gear_norm)?;
         let k = self.lift_scale();
         // d f / d v_body by forward differences, then d h / d wind = −k · (df/dvb) · C_bn.
         const D: f32 = 0.01;
@@ -489,7 +495,7 @@ impl AirDataFilter {
             if let Some(e) = vj.get_mut(j) {
                 *e += D;
             }
-            let fj = model_force(&vj, &u, inp.gyro_rps, rho, a_sound, mass)?;
+            let fj = model_force(&vj, &u, inp.gyro_rps, rho, a_sound, mass, c.gear_norm)?;
             dfdvb.set_column(j, &((fj - f0) / D));
         }
         let dhdw = -(dfdvb * cbn) * k;

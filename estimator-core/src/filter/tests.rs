@@ -51,7 +51,7 @@ impl World {
         };
         let (rho, a) = isa(inp.alt_m);
         let mass = cfg.empty_mass_kg + inp.fuel_kg;
-        let f = model_force(&vb, &inp, inp.gyro_rps, rho, a, mass).unwrap() * self.k;
+        let f = model_force(&vb, &inp, inp.gyro_rps, rho, a, mass, cfg.gear_norm).unwrap() * self.k;
         inp.accel_mps2 = [f.x, f.y, f.z];
         (inp, Truth { alpha, beta })
     }
