@@ -1,4 +1,4 @@
-//! Scripted dropout flights (issue 14): the first 100 s of the stock test flight, flown in JSBSim
+//! Scripted dropout flights (issue 14): the first 150 s of the stock test flight, flown in JSBSim
 //! with the sensor models, then each sensor fault of `hil_sim::faults` on its own. For the shipped
 //! estimator (the hybrid: network + air-data filter) and for the air-data filter alone:
 //! * the flags say so on the frame the fault first shows in the data (the 20th identical value
@@ -32,13 +32,13 @@ const BACK_WITHIN_S: f64 = 5.0;
 /// The faults, one per run: GPS lost for 30 s, a dead and a stuck channel of each kind the models
 /// read, and a shock that clips the normal accelerometer.
 const FAULTS: [&str; 7] = [
-    "gps-loss@20+30",
-    "dead:accel_y_mps2@30+10",
-    "stuck:gyro_r_rps@30+10",
-    "stuck:accel_z_mps2@30+10",
-    "dead:egi_v_north_mps@30+10",
-    "stuck:egi_pitch_rad@30+10",
-    "saturated:accel_z_mps2@30+0.5",
+    "gps-loss@60+30",
+    "dead:accel_y_mps2@60+10",
+    "stuck:gyro_r_rps@60+10",
+    "stuck:accel_z_mps2@60+10",
+    "dead:egi_v_north_mps@60+10",
+    "stuck:egi_pitch_rad@60+10",
+    "saturated:accel_z_mps2@60+0.5",
 ];
 
 struct Flight {
@@ -55,7 +55,7 @@ fn flight() -> &'static Flight {
             dataset: None,
             script: Some(script),
         };
-        let f = hil_sim::runner::cli::flight(&source, 1, Some(100.0)).expect("fly the test flight");
+        let f = hil_sim::runner::cli::flight(&source, 1, Some(150.0)).expect("fly the test flight");
         let samples = hil_sim::runner::samples_of(&f);
         Flight {
             frames: samples
@@ -80,7 +80,8 @@ fn hybrid(frames: &[SensorFrame]) -> Vec<Estimate> {
 }
 
 /// The filter alone, as an estimate: its α/β, and its flags mapped to the estimator's (no input:
-/// invalid and held; the channel health that hid the input: stuck / saturated).
+/// invalid and held; altitude coasted: invalid; the channel health that hid the input: stuck /
+/// saturated).
 fn filter_alone(frames: &[SensorFrame]) -> Vec<Estimate> {
     let mut state = FeatureState::new(true);
     frames
@@ -92,6 +93,10 @@ fn filter_alone(frames: &[SensorFrame]) -> Vec<Estimate> {
             let mut flags = 0;
             if v.filter_flags & filter_flags::NO_INPUT != 0 {
                 flags |= Flags::INVALID_INPUT | Flags::ALPHA_HELD | Flags::BETA_HELD;
+            }
+            // GPS altitude missing, bridged by the EGI's vertical velocity: computed, flagged.
+            if v.filter_flags & filter_flags::ALT_COASTED != 0 {
+                flags |= Flags::INVALID_INPUT;
             }
             if v.health.stuck & NEEDED_MASK != 0 {
                 flags |= Flags::STUCK_SENSOR;

@@ -63,6 +63,9 @@ pub mod flags {
     pub const LOW_CONFIDENCE: u8 = 1 << 3;
     /// Airspeed below [`super::Config::min_airspeed_mps`]: α and β are not defined well enough.
     pub const SLOW: u8 = 1 << 4;
+    /// GPS altitude missing: the altitude (for air density and Mach) is the last GPS altitude
+    /// carried on by the EGI's vertical velocity, for at most [`super::MAX_ALT_COAST_S`].
+    pub const ALT_COASTED: u8 = 1 << 5;
 }
 
 /// Tuning and installation constants.
@@ -270,7 +273,14 @@ pub struct AirDataFilter {
     prev: Option<Input>,
     gated_run: u16,
     last: Output,
+    /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
+    alt: Option<(f32, f32)>,
 }
+
+/// Longest GPS altitude outage the filter bridges with the EGI's vertical velocity, s. The EGI's
+/// velocity error (0.05 m/s class, docs/sensors.md) makes that a few metres, nothing for the air
+/// density; beyond it the filter stops (no input) rather than trust an old altitude.
+pub const MAX_ALT_COAST_S: f32 = 120.0;
 
 fn wrap_pi(a: f32) -> f32 {
     let two_pi = 2.0 * core::f32::consts::PI;
@@ -406,6 +416,7 @@ impl AirDataFilter {
             p: Mat7::zeros(),
             prev: None,
             gated_run: 0,
+            alt: None,
             last: Output::default(),
         };
         f.restart();
@@ -546,17 +557,55 @@ impl AirDataFilter {
     }
 
     /// One step on a sensor frame; `dt_s` is the time since the previous frame.
+    ///
+    /// Without a valid GPS altitude, but with everything else, the altitude is carried on from the
+    /// last step's by the EGI's vertical velocity for up to [`MAX_ALT_COAST_S`], and the output
+    /// says [`flags::ALT_COASTED`].
     pub fn step_frame(&mut self, f: &SensorFrame, dt_s: f32) -> Output {
-        match Input::from_frame(f, dt_s, self.cfg.lever_arm_m) {
-            Some(inp) => self.step(&inp, true),
-            None => self.step(
-                &Input {
-                    dt_s,
-                    ..Input::default()
-                },
-                false,
-            ),
+        let alt_bit = Channel::GpsAlt.bit();
+        let mut frame = *f;
+        let mut coasted = false;
+        if f.valid & alt_bit == 0
+            && (f.valid | alt_bit) & NEEDED_MASK == NEEDED_MASK
+            && let Some((alt, since)) = self.alt
+        {
+            let dt = if dt_s.is_finite() { dt_s.max(0.0) } else { 0.0 };
+            let since = since + dt;
+            let v_down = f.get(Channel::VelDown) as f32 * Channel::VelDown.lsb() as f32;
+            let alt = alt - v_down * dt;
+            let raw = libm::roundf(alt / Channel::GpsAlt.lsb() as f32);
+            if since <= MAX_ALT_COAST_S && raw.is_finite() && libm::fabsf(raw) < 2.0e9 {
+                if let Some(r) = frame.raw.get_mut(Channel::GpsAlt.index()) {
+                    *r = raw as i32;
+                }
+                frame.valid |= alt_bit;
+                coasted = true;
+                self.alt = Some((alt, since));
+            }
         }
+        let mut out = match Input::from_frame(&frame, dt_s, self.cfg.lever_arm_m) {
+            Some(inp) => {
+                if !coasted {
+                    self.alt = Some((inp.alt_m, 0.0));
+                }
+                self.step(&inp, true)
+            }
+            None => {
+                self.alt = None;
+                self.step(
+                    &Input {
+                        dt_s,
+                        ..Input::default()
+                    },
+                    false,
+                )
+            }
+        };
+        if coasted {
+            out.flags |= flags::ALT_COASTED;
+            self.last.flags = out.flags;
+        }
+        out
     }
 
     /// One 20 Hz step. `inputs_valid` false (or any input not finite) runs the prediction only and

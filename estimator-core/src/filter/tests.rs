@@ -228,3 +228,66 @@ proptest! {
         }
     }
 }
+
+/// A frame of level flight at 200 m/s north, 3000 m, in integer channel units: enough for the
+/// filter to run (what it estimates does not matter here).
+fn level_frame(k: u32, alt_valid: bool) -> SensorFrame {
+    let mut f = SensorFrame {
+        seq: k as u16,
+        time_ms: k * 50,
+        valid: crate::channels::ALL_VALID,
+        ..SensorFrame::default()
+    };
+    let mut set = |c: Channel, si: f64| {
+        f.raw[c.index()] = (si / c.lsb()).round() as i32;
+    };
+    set(Channel::VelNorth, 200.0);
+    set(Channel::VelDown, -5.0);
+    set(Channel::GpsAlt, 3000.0);
+    set(Channel::GpsSpeed, 200.0);
+    set(Channel::AccelZ, -9.81);
+    set(Channel::Pitch, 0.05);
+    set(Channel::Elevator, -2.0);
+    set(Channel::Fuel, 2000.0);
+    if !alt_valid {
+        f.valid &= !Channel::GpsAlt.bit();
+    }
+    f
+}
+
+#[test]
+fn a_gps_altitude_outage_is_bridged_for_max_alt_coast_s_then_the_filter_stops() {
+    let mut f = AirDataFilter::new(F16_CONFIG);
+    for k in 0..100 {
+        let out = f.step_frame(&level_frame(k, true), 0.05);
+        assert_eq!(out.flags & (flags::ALT_COASTED | flags::NO_INPUT), 0);
+    }
+    // Climbing at 5 m/s: the coasted altitude follows the EGI's vertical velocity.
+    // (The last step at the limit may fall either side of it by the f32 sum of 0.05 s steps.)
+    let coast_steps = (MAX_ALT_COAST_S / 0.05) as u32 - 1;
+    for k in 100..100 + coast_steps {
+        let out = f.step_frame(&level_frame(k, false), 0.05);
+        assert!(out.flags & flags::ALT_COASTED != 0, "step {k}");
+        assert_eq!(out.flags & flags::NO_INPUT, 0, "step {k}");
+        assert!(out.alpha_rad.is_finite() && out.beta_rad.is_finite());
+    }
+    let (alt, since) = f.alt.unwrap();
+    assert!(
+        (alt - (3000.0 + 5.0 * MAX_ALT_COAST_S)).abs() < 1.0,
+        "{alt}"
+    );
+    assert!((since - (MAX_ALT_COAST_S - 0.05)).abs() < 0.01, "{since}");
+    // Past the limit: no input, and no coasting until a GPS altitude comes back.
+    f.step_frame(&level_frame(100 + coast_steps, false), 0.05);
+    for k in 101 + coast_steps..110 + coast_steps {
+        let out = f.step_frame(&level_frame(k, false), 0.05);
+        assert!(out.flags & flags::NO_INPUT != 0, "step {k}");
+        assert_eq!(out.flags & flags::ALT_COASTED, 0, "step {k}");
+    }
+    let out = f.step_frame(&level_frame(5000, true), 0.05);
+    assert_eq!(out.flags & (flags::ALT_COASTED | flags::NO_INPUT), 0);
+    // Another channel missing as well: nothing to coast with.
+    let mut g = level_frame(5001, false);
+    g.valid &= !Channel::VelDown.bit();
+    assert!(f.step_frame(&g, 0.05).flags & flags::NO_INPUT != 0);
+}
