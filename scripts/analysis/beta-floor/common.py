@@ -1,0 +1,239 @@
+"""Shared helpers for the β error analysis (analysis only; nothing here is used by the project).
+
+Computes nothing by itself: dataset I/O (with an .npz cache in $WORK/cache), ISA, the F-16 side and
+drag coefficients parsed from estimator-core/src/aero/f16_tables.rs, the memoryless β inversion of
+the lateral force, the IMU's anti-alias filter at 120 Hz, MAE and a zero-phase band split.
+
+Data: $DATA (hil-sim generate --preset large --seed 1; default <repo>/out/data/large-egi), the
+shipped estimator's per-frame answers in $WORK/run-<flight>/estimates.csv (run_all.sh). See paths.py.
+"""
+import csv
+import json
+import os
+import re
+
+import numpy as np
+
+from paths import DATA, HERE, REPO, WORK  # noqa: F401 (re-exported)
+FT = 0.3048
+G0 = 9.80665
+S_M2 = 300.0 * FT * FT
+B_M = 30.0 * FT
+C_M = 11.32 * FT
+EMPTY_KG = (17_400.0 + 230.0) * 0.45359237
+LEVER = np.array([0.5, 0.0, 0.2])
+
+
+def manifest():
+    with open(os.path.join(DATA, "manifest.json")) as f:
+        return json.load(f)
+
+
+def flights(split=None):
+    m = manifest()
+    return [fl for fl in m["flights"] if split is None or fl["split"] == split]
+
+
+def load_csv(path):
+    with open(path) as f:
+        r = csv.reader(f)
+        head = next(r)
+        rows = np.array([[float(x) if x != "" else np.nan for x in row] for row in r])
+    return {h: rows[:, i] for i, h in enumerate(head)}
+
+
+_cache = {}
+
+
+def load_flight(name):
+    """Dataset columns of flight `name` as a dict of numpy arrays."""
+    if name in _cache:
+        return _cache[name]
+    path = os.path.join(DATA, name + ".csv")
+    npz = os.path.join(WORK, "cache", name + ".npz")
+    if os.path.exists(npz) and os.path.getmtime(npz) > os.path.getmtime(path):
+        d = dict(np.load(npz))
+    else:
+        d = load_csv(path)
+        os.makedirs(os.path.dirname(npz), exist_ok=True)
+        np.savez(npz, **d)
+    _cache[name] = d
+    return d
+
+
+def load_estimates(name):
+    path = os.path.join(WORK, "run-" + name, "estimates.csv")
+    with open(path) as f:
+        r = csv.DictReader(f)
+        rows = list(r)
+    e = {
+        "seq": np.array([int(x["seq"]) for x in rows]),
+        "time_s": np.array([float(x["time_s"]) for x in rows]),
+        "received": np.array([int(x["received"]) for x in rows]),
+        "beta_true_deg": np.array([float(x["beta_true_deg"]) for x in rows]),
+        "alpha_true_deg": np.array([float(x["alpha_true_deg"]) for x in rows]),
+    }
+    def num(k, scale):
+        return np.array([float(x[k]) * scale if x[k] != "" else np.nan for x in rows])
+    e["alpha_deg"] = num("alpha_mdeg", 1e-3)
+    e["beta_deg"] = num("beta_mdeg", 1e-3)
+    e["v_aero_mps"] = num("v_aero_mms", 1e-3)
+    e["w_aero_mps"] = num("w_aero_mms", 1e-3)
+    e["flags"] = np.array([int(x["flags"]) if x["flags"] != "" else -1 for x in rows])
+    return e
+
+
+# ---------------------------------------------------------------------------------------------
+# ISA, as estimator_core::filter::isa (geometric altitude → density, speed of sound)
+def isa(alt_m):
+    alt_m = np.asarray(alt_m, dtype=float)
+    R_E, T0, P0, L, R, g = 6_356_766.0, 288.15, 101_325.0, -0.0065, 287.05287, 9.80665
+    h = R_E * alt_m / (R_E + alt_m)
+    t11 = T0 + L * 11_000.0
+    expo = -g / (L * R)
+    hc = np.minimum(h, 11_000.0)
+    t = T0 + L * hc
+    p = P0 * (t / T0) ** expo * np.exp(-g * np.maximum(h - 11_000.0, 0.0) / (R * t11))
+    return p / (R * t), np.sqrt(1.4 * R * t)
+
+
+# ---------------------------------------------------------------------------------------------
+# The F-16 side and drag coefficients, parsed from estimator-core/src/aero/f16_tables.rs (read
+# only). JSBSim FGTable semantics: 1-D linear between breakpoints, end values held; 2-D: row first.
+_TABLES = None
+
+
+def _parse_tables():
+    global _TABLES
+    if _TABLES is not None:
+        return _TABLES
+    src = open(os.path.join(REPO, "estimator-core", "src", "aero", "f16_tables.rs")).read()
+    t = {}
+    for m in re.finditer(r"pub static (\w+): Table1<\d+> = Table1 \{\s*key: Var::(\w+),\s*x: \[([^\]]*)\],\s*y: \[([^\]]*)\]", src):
+        x = np.array([float(v) for v in m.group(3).split(",") if v.strip()])
+        y = np.array([float(v) for v in m.group(4).split(",") if v.strip()])
+        t[m.group(1)] = (x, y)
+    for m in re.finditer(r"pub static (\w+): Table2<\d+, \d+> = Table2 \{\s*row: Var::(\w+),\s*col: Var::(\w+),\s*rows: \[([^\]]*)\],\s*cols: \[([^\]]*)\],\s*data: \[(.*?)\n    \],", src, re.S):
+        rows = np.array([float(v) for v in m.group(4).split(",") if v.strip()])
+        cols = np.array([float(v) for v in m.group(5).split(",") if v.strip()])
+        data = []
+        for line in m.group(6).strip().splitlines():
+            line = line.split("//")[0].strip().strip(",").strip("[]")
+            if line:
+                data.append([float(v) for v in line.split(",") if v.strip()])
+        t[m.group(1)] = (rows, cols, np.array(data))
+    _TABLES = t
+    return t
+
+
+def tab1(name, key):
+    x, y = _parse_tables()[name]
+    return np.interp(key, x, y)  # holds end values, linear inside: as FGTable
+
+
+def tab2(name, r, c):
+    rows, cols, data = _parse_tables()[name]
+    r = np.asarray(r, float)
+    c = np.asarray(c, float)
+    i = np.clip(np.searchsorted(rows, r, side="left"), 1, len(rows) - 1)
+    j = np.clip(np.searchsorted(cols, c, side="left"), 1, len(cols) - 1)
+    rf = np.clip((r - rows[i - 1]) / (rows[i] - rows[i - 1]), 0, 1)
+    cf = np.clip((c - cols[j - 1]) / (cols[j] - cols[j - 1]), 0, 1)
+    lo = data[i - 1, j - 1] + cf * (data[i - 1, j] - data[i - 1, j - 1])
+    hi = data[i, j - 1] + cf * (data[i, j] - data[i, j - 1])
+    return lo + rf * (hi - lo)
+
+
+def side_parts(alpha_rad, mach, aileron_rad, rudder_rad, p_rps, r_rps, tas_mps):
+    """CY (wind axes) = slope·β + rest: returns (slope per rad, rest)."""
+    bi2vel = B_M / (2.0 * tas_mps)
+    slope = -1.146 + tab1("CYB_M", mach)
+    rest = (-0.0226 * aileron_rad + 0.086 * rudder_rad
+            + bi2vel * p_rps * tab1("CYP", alpha_rad) + bi2vel * r_rps * tab1("CYR", alpha_rad))
+    return slope, rest
+
+
+def lef_schedule_rad(alpha_rad, mach):
+    return np.where(alpha_rad > 0.2618, 0.436, np.where(alpha_rad > 0.0873, 0.262,
+                    np.where(mach > 0.9, -0.0349, 0.0)))
+
+
+def drag_coef(alpha_rad, mach, elevator_rad, lef_rad, speedbrake_rad, flap_mix_rad, q_rps, tas_mps):
+    ci2vel = C_M / (2.0 * tas_mps)
+    return (tab2("CDDH", alpha_rad, elevator_rad) + tab1("CDMACH", mach)
+            + lef_rad * tab1("CDDLEF", alpha_rad) + flap_mix_rad * 0.08
+            + speedbrake_rad * tab1("CDDSB", alpha_rad)
+            + q_rps * ci2vel * tab1("CDQ", alpha_rad)
+            + q_rps * ci2vel * lef_rad * tab1("CDQ_DLEF", alpha_rad))
+
+
+def beta_from_cy_body(cy_body, alpha_rad, mach, aileron_rad, rudder_rad, p_rps, r_rps, tas_mps, cd):
+    """Solve CY_body = Y(β)·cosβ − D·sinβ for β (Newton, 3 iterations; D held)."""
+    slope, rest = side_parts(alpha_rad, mach, aileron_rad, rudder_rad, p_rps, r_rps, tas_mps)
+    b = (cy_body - rest) / (slope - cd)
+    for _ in range(3):
+        y = slope * b + rest
+        f = y * np.cos(b) - cd * np.sin(b) - cy_body
+        df = slope * np.cos(b) - y * np.sin(b) - cd * np.cos(b)
+        b = b - f / df
+    return b
+
+
+# ---------------------------------------------------------------------------------------------
+# The IMU's anti-alias path (hil_sim::sensors): 3 ms first-order lag then 2nd-order Butterworth
+# at 6 Hz, both at 120 Hz. Applied to a 120 Hz signal.
+def imu_filter_120(x, lag_tau=0.003, fc=6.0):
+    dt = 1.0 / 120.0
+    a = 1.0 - np.exp(-dt / lag_tau)
+    y = np.empty_like(x)
+    s = x[0]
+    for i, v in enumerate(x):
+        s = s + a * (v - s)
+        y[i] = s
+    k = np.tan(np.pi * fc * dt)
+    q = 1 / np.sqrt(2)
+    norm = 1 / (1 + k / q + k * k)
+    b0 = k * k * norm
+    b = [b0, 2 * b0, b0]
+    aa = [2 * (k * k - 1) * norm, (1 - k / q + k * k) * norm]
+    out = np.empty_like(y)
+    x1 = x2 = y1 = y2 = y[0]
+    for i, v in enumerate(y):
+        o = b[0] * v + b[1] * x1 + b[2] * x2 - aa[0] * y1 - aa[1] * y2
+        x2, x1 = x1, v
+        y2, y1 = y1, o
+        out[i] = o
+    return out
+
+
+def upsample_120(t20, x20):
+    """Linear interpolation of a 20 Hz series onto the 120 Hz grid (6 steps per frame)."""
+    t120 = np.arange(t20[0] - 5 / 120.0, t20[-1] + 1e-9, 1 / 120.0)
+    return t120, np.interp(t120, t20, x20)
+
+
+def mae(x):
+    x = np.asarray(x)
+    x = x[np.isfinite(x)]
+    return float(np.mean(np.abs(x))) if len(x) else float("nan")
+
+
+def butter_lowpass_zero_phase(x, fc, fs=20.0):
+    """Zero-phase 2nd-order Butterworth (forward-backward), for splitting an error into bands."""
+    k = np.tan(np.pi * fc / fs)
+    q = 1 / np.sqrt(2)
+    norm = 1 / (1 + k / q + k * k)
+    b0 = k * k * norm
+    b = [b0, 2 * b0, b0]
+    a = [2 * (k * k - 1) * norm, (1 - k / q + k * k) * norm]
+
+    def run(v):
+        out = np.empty_like(v)
+        x1 = x2 = y1 = y2 = v[0]
+        for i, s in enumerate(v):
+            o = b[0] * s + b[1] * x1 + b[2] * x2 - a[0] * y1 - a[1] * y2
+            x2, x1 = x1, s
+            y2, y1 = y1, o
+            out[i] = o
+        return out
+    return run(run(x)[::-1])[::-1]

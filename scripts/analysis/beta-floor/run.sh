@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# The whole β-floor analysis (docs/results/beta-floor.md) in its original order:
+#   data       hil-sim generate --preset large --seed 1 into $DATA, if $DATA has no manifest.json
+#   estimates  run_all.sh: the shipped hybrid on all 68 flights → $WORK/run-<flight>/
+#   replay     replay120.py: 120 Hz JSBSim internals of the 4 test + 16 aggressive training flights
+#   tables     a_where … j_matched → $WORK/out/*.md
+#   cf         cf_run.sh, cf_run2.sh: counterfactual re-flights (severity, EGI, anti-alias) → $WORK/cf/
+#   filter     filter_tune.sh + filter_summary.py: the filter alone on the training split
+# usage: scripts/analysis/beta-floor/run.sh [step ...]      (no step: all, in the order above)
+# Environment (see env.sh): DATA, WORK, HIL_SIM, TRAINER, PY; COPY_BINS=1 first copies hil-sim and
+# trainer to $WORK/bin and uses the copies, so a rebuild in target/ cannot change them mid-run.
+# Needs release builds of hil-sim and trainer from the same checkout (this script does not build)
+# and the project's .venv (scripts/bootstrap: jsbsim, which brings numpy; nothing else is needed).
+# The figures in docs/results/beta-floor.md were measured at git 04512c2, whose dataset had point-
+# sampled surfaces; on a later checkout the same commands measure the current sensor model.
+set -euo pipefail
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+. "$HERE/env.sh"
+say() { printf '\n--> %s\n' "$*" >&2; }
+die() { printf 'beta-floor: ERROR: %s\n' "$*" >&2; exit 1; }
+
+steps=("$@")
+[ ${#steps[@]} -gt 0 ] || steps=(data estimates replay tables cf filter)
+for s in "${steps[@]}"; do
+  case "$s" in data|estimates|replay|tables|cf|filter) ;; *) die "unknown step '$s'" ;; esac
+done
+want() { local s; for s in "${steps[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
+
+[ -x "$PY" ] || die "no Python at $PY; run scripts/bootstrap (or set PY)"
+mkdir -p "$WORK/out"
+if [ "${COPY_BINS:-0}" = 1 ]; then
+  mkdir -p "$WORK/bin"
+  cp -p "$HIL_SIM" "$TRAINER" "$WORK/bin/"
+  HIL_SIM="$WORK/bin/hil-sim"; TRAINER="$WORK/bin/trainer"
+  export HIL_SIM TRAINER
+fi
+if want data || want estimates || want cf; then
+  [ -x "$HIL_SIM" ] || die "no hil-sim at $HIL_SIM; cargo build --release -p hil-sim (or set HIL_SIM)"
+fi
+if want filter; then
+  [ -x "$TRAINER" ] || die "no trainer at $TRAINER; cargo build --release -p trainer (or set TRAINER)"
+fi
+say "DATA=$DATA  WORK=$WORK  HIL_SIM=$HIL_SIM  PY=$PY"
+
+if want data; then
+  if [ -f "$DATA/manifest.json" ]; then
+    say "data: $DATA exists, kept"
+  else
+    say "data: hil-sim generate --preset large --seed 1 --out $DATA"
+    (cd "$REPO" && nice -n 19 "$HIL_SIM" generate --preset large --seed 1 --out "$DATA")
+  fi
+fi
+[ -f "$DATA/manifest.json" ] || die "no dataset at $DATA (run the 'data' step or set DATA)"
+
+if want estimates; then
+  say "estimates: the shipped estimator on every flight → $WORK/run-*"
+  "$HERE/run_all.sh"
+fi
+
+if want replay; then
+  say "replay: 120 Hz JSBSim internals → $WORK/replay"
+  nice -n 19 "$PY" "$HERE/replay120.py" test_gentle_00 test_high-alpha_01 test_climb-descent_02 test_aggressive_03 \
+    train_aggressive_{00..15}
+fi
+
+if want tables; then
+  for t in a_where b_timescale c_physics d_turb f_floor g_by_flight h_residual i_sensor_floor j_matched; do
+    say "tables: $t.py → $WORK/out/$t.md"
+    nice -n 19 "$PY" "$HERE/$t.py" > "$WORK/out/$t.md"
+  done
+fi
+
+if want cf; then
+  say "cf: counterfactual re-flights → $WORK/cf (summary: $WORK/out/cf_run.log)"
+  { "$HERE/cf_run.sh"; "$HERE/cf_run2.sh"; } | tee "$WORK/out/cf_run.log"
+fi
+
+if want filter; then
+  say "filter: trainer eval-filter --split train, one constant at a time → $WORK/filter"
+  "$HERE/filter_tune.sh"
+  "$PY" "$HERE/filter_summary.py" > "$WORK/out/filter_tune.md"
+fi
+say "done: tables in $WORK/out"
