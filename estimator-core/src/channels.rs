@@ -247,16 +247,17 @@ macro_rules! channel_names {
                 }
             }
 
-            /// Name of `Feature::Delta(self, lag)`.
-            pub(crate) const fn delta_name(self, lag: crate::features::Lag) -> &'static str {
-                use crate::features::Lag;
+            /// Names of this channel's delta features over 1, 4, 10 and 20 frames, in the order of
+            /// the lags in `features` (which sits above this module and picks one; a test there
+            /// checks the suffixes against the lags' frame counts).
+            pub(crate) const fn delta_names(self) -> [&'static str; 4] {
                 match self {
-                    $(Channel::$v => match lag {
-                        Lag::F1 => concat!($c, "_d1"),
-                        Lag::F4 => concat!($c, "_d4"),
-                        Lag::F10 => concat!($c, "_d10"),
-                        Lag::F20 => concat!($c, "_d20"),
-                    },)*
+                    $(Channel::$v => [
+                        concat!($c, "_d1"),
+                        concat!($c, "_d4"),
+                        concat!($c, "_d10"),
+                        concat!($c, "_d20"),
+                    ],)*
                 }
             }
         }

@@ -259,7 +259,14 @@ impl Feature {
             Feature::FilterSigmaBeta => "filter_sigma_beta_rad",
             Feature::FilterAirspeed => "filter_airspeed_mps",
             Feature::FilterLiftScale => "filter_lift_scale",
-            Feature::Delta(c, l) => c.delta_name(l),
+            Feature::Delta(c, l) => match c.delta_names() {
+                [d1, d4, d10, d20] => match l {
+                    Lag::F1 => d1,
+                    Lag::F4 => d4,
+                    Lag::F10 => d10,
+                    Lag::F20 => d20,
+                },
+            },
         }
     }
 
