@@ -22,7 +22,7 @@ use estimator_core::wire::estimate::EstimateFrame;
 use estimator_core::wire::{Accumulator, MAX_FRAME};
 use estimator_core::{SensorFrame, Suite};
 
-use crate::link::{Link, LinkConfig, LinkStats};
+use crate::link::{Link, LinkConfig};
 pub use target::{InProcess, Qemu, Serial, Target};
 
 #[derive(Debug, thiserror::Error)]
@@ -93,32 +93,9 @@ impl Default for RunConfig {
 }
 
 /// Sample period of the flight and the estimator.
-pub const PERIOD_S: f64 = 1.0 / crate::plant::SAMPLE_HZ as f64;
-
-/// One sensor frame sent and what came back for it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameRecord {
-    pub seq: u16,
-    pub time_s: f64,
-    pub alpha_true_deg: f64,
-    pub beta_true_deg: f64,
-    /// The estimate frame that came back intact, if any.
-    pub reply: Option<EstimateFrame>,
-}
-
-/// Everything a run produced.
-#[derive(Clone, Debug, Default)]
-pub struct RunOutcome {
-    pub target: &'static str,
-    pub records: Vec<FrameRecord>,
-    pub uplink: LinkStats,
-    pub downlink: LinkStats,
-    /// Estimate frames hil-sim rejected (COBS, CRC, length, version, kind).
-    pub downlink_rejected: u32,
-    /// Intact estimate frames whose seq matched no frame sent.
-    pub unmatched_replies: u32,
-    pub wall_s: f64,
-}
+pub use crate::score::PERIOD_S;
+/// What a run produces, as the scoring reads it (defined with the scoring, below the runner).
+pub use crate::score::{FrameRecord, RunOutcome};
 
 /// A frame to send and the truth to score its estimate against.
 #[derive(Clone, Copy, Debug)]

@@ -8,7 +8,35 @@ use estimator_core::wire::estimate::TickSource;
 use serde::Serialize;
 
 use crate::link::LinkStats;
-use crate::runner::{FrameRecord, RunOutcome};
+use estimator_core::wire::estimate::EstimateFrame;
+
+/// Sample period of the flight and the estimator, s.
+pub const PERIOD_S: f64 = 1.0 / crate::plant::SAMPLE_HZ as f64;
+
+/// One sensor frame sent and what came back for it (what `runner` records and this module scores).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameRecord {
+    pub seq: u16,
+    pub time_s: f64,
+    pub alpha_true_deg: f64,
+    pub beta_true_deg: f64,
+    /// The estimate frame that came back intact, if any.
+    pub reply: Option<EstimateFrame>,
+}
+
+/// Everything a run produced.
+#[derive(Clone, Debug, Default)]
+pub struct RunOutcome {
+    pub target: &'static str,
+    pub records: Vec<FrameRecord>,
+    pub uplink: LinkStats,
+    pub downlink: LinkStats,
+    /// Estimate frames hil-sim rejected (COBS, CRC, length, version, kind).
+    pub downlink_rejected: u32,
+    /// Intact estimate frames whose seq matched no frame sent.
+    pub unmatched_replies: u32,
+    pub wall_s: f64,
+}
 
 /// Error statistics of one angle, degrees.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -154,7 +182,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         step_instructions_max: tmax.filter(|_| instr),
         step_instructions_median: tmed.filter(|_| instr),
         macs_per_step: estimator_core::Estimator::shipped().macs(),
-        flight_s: o.records.len() as f64 * crate::runner::PERIOD_S,
+        flight_s: o.records.len() as f64 * PERIOD_S,
         wall_s: o.wall_s,
         uplink: o.uplink,
         downlink: o.downlink,

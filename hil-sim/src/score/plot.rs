@@ -5,8 +5,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use super::FrameRecord;
 use super::{Summary, scorable};
-use crate::runner::FrameRecord;
 
 const TRUTH: RGBColor = RGBColor(31, 119, 180);
 const ESTIMATE: RGBColor = RGBColor(255, 127, 14);
