@@ -2,7 +2,7 @@
 
 use estimator_core::SensorFrame;
 
-use crate::dataset::{Flight, Sample};
+use crate::flight::{Flight, Sample};
 
 /// Milliseconds of a sample time, rounded (20 Hz times are multiples of 50 ms up to float noise).
 pub fn time_ms(time_s: f64) -> u32 {
@@ -32,7 +32,7 @@ pub fn flight_frames(flight: &Flight) -> impl Iterator<Item = SensorFrame> + '_ 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dataset::Truth;
+    use crate::flight::Truth;
     use estimator_core::{CHANNELS, Channel};
 
     #[test]

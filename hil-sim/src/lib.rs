@@ -5,6 +5,7 @@
 
 pub mod dataset;
 pub mod faults;
+pub mod flight;
 pub mod font;
 pub mod frames;
 pub mod link;

@@ -32,7 +32,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::plant::SIM_HZ;
+use crate::flight::SIM_HZ;
 
 /// The script's time step: exactly 1/[`SIM_HZ`], written as the shortest decimal that reads back
 /// as that double (JSBSim adds dt up each step; a truncated value such as 0.00833333333333 is
@@ -834,7 +834,7 @@ mod tests {
         assert_eq!((names.len(), seeds.len()), (68, 68));
         let tests = large
             .iter()
-            .filter(|f| f.split == crate::dataset::Split::Test);
+            .filter(|f| f.split == crate::flight::Split::Test);
         assert_eq!(tests.count(), 4);
     }
 
@@ -950,7 +950,7 @@ pub enum Preset {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlannedFlight {
     pub name: String,
-    pub split: crate::dataset::Split,
+    pub split: crate::flight::Split,
     pub profile: ProfileKind,
     pub seed: u64,
     pub duration_s: f64,
@@ -968,7 +968,7 @@ impl PlannedFlight {
     ) -> PlannedFlight {
         PlannedFlight {
             name: format!("train_{}_{k:02}", kind.name()),
-            split: crate::dataset::Split::Train,
+            split: crate::flight::Split::Train,
             profile: kind,
             seed: base_seed
                 .wrapping_mul(1000)
@@ -990,7 +990,7 @@ impl Preset {
     /// The flights of this preset for a base seed. Test flights take seeds from a separate range so
     /// no test flight repeats a training one.
     pub fn plan(self, base_seed: u64) -> Vec<PlannedFlight> {
-        use crate::dataset::Split;
+        use crate::flight::Split;
         // Paper: 4 training flights of 15–20 min per profile.
         const PAPER_PER_PROFILE: usize = 4;
         const PAPER_TRAIN_LEN: Range = (900.0, 1200.0);

@@ -12,19 +12,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 
-use crate::dataset::{Flight, Sample, Truth, Zone, ZoneTimes};
+pub use crate::flight::{FT_TO_M, LB_TO_KG, SAMPLE_HZ, SIM_HZ, STEPS_PER_SAMPLE};
+use crate::flight::{Flight, Sample, Truth, Zone, ZoneTimes};
 use crate::sensors::{SensorConfig, SensorInput, SensorModel};
 
-/// JSBSim integration rate. The stock F-16 FCS is tuned for it.
-pub const SIM_HZ: u32 = 120;
 /// How far a script's rate may be from [`SIM_HZ`] (relative) and still be flown: the stock scripts
 /// write `dt="0.00833333"` (120.000005 Hz), which the 120 Hz sensor models and the 6-step decimation
 /// treat as 120 Hz with a timing error of 5e-7; anything further is refused.
 pub const SIM_HZ_TOLERANCE: f64 = 1e-4;
-/// Dataset / frame rate.
-pub const SAMPLE_HZ: u32 = 20;
-/// 120 Hz steps per 20 Hz sample.
-pub const STEPS_PER_SAMPLE: u32 = SIM_HZ / SAMPLE_HZ;
 /// Below this height above ground an airborne flight counts as having hit the ground.
 pub const GROUND_CUT_AGL_FT: f64 = 10.0;
 /// A flight counts as airborne once it has been this high above the ground.
@@ -396,9 +391,7 @@ const WATCH: [&str; at::COUNT] = {
     w
 };
 
-pub const FT_TO_M: f64 = 0.3048;
 const SLUG_TO_KG: f64 = 14.593_902_937;
-pub const LB_TO_KG: f64 = 0.453_592_37;
 const PSF_TO_PA: f64 = 47.880_258_98;
 const G0_FPS2: f64 = 32.174_048_56;
 /// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (F-16: about 20° each way); the model has no deg property.

@@ -23,7 +23,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::plant::SIM_HZ;
+use crate::flight::SIM_HZ;
 
 const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
@@ -95,7 +95,7 @@ impl Default for ImuConfig {
                 in_run_bias_tau_s: 60.0,
                 noise_density: 50e-6 * G0,
                 // 2^-14 ft/s per Δv count
-                quantum: 2f64.powi(-14) * crate::plant::FT_TO_M,
+                quantum: 2f64.powi(-14) * crate::flight::FT_TO_M,
                 scale_factor_sigma: 300e-6,
                 misalignment_sigma_rad: 200e-6,
             },
@@ -238,13 +238,13 @@ impl Default for FuelConfig {
     fn default() -> Self {
         FuelConfig {
             // The JSBSim F-16's two internal tanks, 2 × 3486 lb (f16.xml); the generator fills only these.
-            full_scale_kg: 2.0 * 3486.0 * crate::plant::LB_TO_KG,
+            full_scale_kg: 2.0 * 3486.0 * crate::flight::LB_TO_KG,
             bias_sigma_fs: 0.01,
             scale_factor_sigma: 0.01,
             gm_sigma_fs: 0.003,
             gm_tau_s: 10.0,
             // 10 lb
-            quantum_kg: 10.0 * crate::plant::LB_TO_KG,
+            quantum_kg: 10.0 * crate::flight::LB_TO_KG,
             update_hz: 1.0,
         }
     }

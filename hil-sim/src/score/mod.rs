@@ -11,7 +11,7 @@ use crate::link::LinkStats;
 use estimator_core::wire::estimate::EstimateFrame;
 
 /// Sample period of the flight and the estimator, s.
-pub const PERIOD_S: f64 = 1.0 / crate::plant::SAMPLE_HZ as f64;
+pub const PERIOD_S: f64 = 1.0 / crate::flight::SAMPLE_HZ as f64;
 
 /// One sensor frame sent and what came back for it (what `runner` records and this module scores).
 #[derive(Clone, Copy, Debug, PartialEq)]
