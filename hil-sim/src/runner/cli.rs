@@ -206,19 +206,26 @@ pub fn write_outputs(dir: &Path, o: &RunOutcome, s: &score::Summary) -> Result<W
     score::write_csv(&w.csv, &o.records).map_err(|e| out(&w.csv, e.to_string()))?;
     let text = serde_json::to_string_pretty(s).map_err(|e| out(&w.json, e.to_string()))?;
     std::fs::write(&w.json, text).map_err(|e| out(&w.json, e.to_string()))?;
-    score::plot::write_png(&w.png, &o.records, s).map_err(|e| out(&w.png, e))?;
+    score::plot::write_png(&w.png, &o.records, s).map_err(|e| out(&w.png, e.to_string()))?;
     Ok(w)
 }
 
+/// A `--suite` value that names no suite.
+#[derive(Debug, thiserror::Error)]
+#[error("unknown sensor suite `{0}` (known: {known})", known = suite_names())]
+pub struct UnknownSuite(String);
+
+fn suite_names() -> String {
+    let names: Vec<&str> = estimator_core::Suite::ALL
+        .iter()
+        .map(|s| s.name())
+        .collect();
+    names.join(", ")
+}
+
 /// A `--suite` value: a [`estimator_core::Suite`] name.
-pub fn parse_suite(s: &str) -> Result<estimator_core::Suite, String> {
-    estimator_core::Suite::from_name(s).ok_or_else(|| {
-        let names: Vec<&str> = estimator_core::Suite::ALL
-            .iter()
-            .map(|s| s.name())
-            .collect();
-        format!("unknown sensor suite `{s}` (known: {})", names.join(", "))
-    })
+pub fn parse_suite(s: &str) -> Result<estimator_core::Suite, UnknownSuite> {
+    estimator_core::Suite::from_name(s).ok_or_else(|| UnknownSuite(s.to_string()))
 }
 
 /// The whole `hil-sim run`.

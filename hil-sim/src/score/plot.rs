@@ -45,11 +45,20 @@ fn range(points: &[&Points]) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Writes the plot. Errors come back as text (plotters' error types are backend-generic).
-pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<(), String> {
+/// Why the plot could not be drawn (plotters' error types are backend-generic: their text is kept).
+#[derive(Debug, thiserror::Error)]
+#[error("drawing the plot: {0}")]
+pub struct PlotError(String);
+
+fn plot_err(e: impl std::fmt::Display) -> PlotError {
+    PlotError(e.to_string())
+}
+
+/// Writes the plot.
+pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<(), PlotError> {
     crate::font::register();
     let root = BitMapBackend::new(path, (1400, 1000)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    root.fill(&WHITE).map_err(plot_err)?;
     let fmt = |v: Option<f64>| v.map_or("n/a".to_string(), |v| format!("{v:.3}"));
     let caption = format!(
         "firmware {} | sent {} scored {} lost {} | rejected {} | deadline misses {} | link: {} B lost, {} bits flipped, {} bursts | α MAE {}° β MAE {}°",
@@ -72,7 +81,7 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
             (10, 12),
             ("sans-serif", 16).into_font(),
         ))
-        .map_err(|e| e.to_string())?;
+        .map_err(plot_err)?;
     let panels = body.split_evenly((3, 1));
     let t_end = records.last().map_or(1.0, |r| r.time_s.max(1e-3));
     let alpha = series(records, super::alpha_deg);
@@ -99,18 +108,18 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
             .x_label_area_size(35)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..t_end, lo..hi)
-            .map_err(|e| e.to_string())?;
+            .map_err(plot_err)?;
         chart
             .configure_mesh()
             .x_desc("flight time (s)")
             .y_desc(*label)
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(plot_err)?;
         for (name, pts, color) in lines {
             let c = *color;
             chart
                 .draw_series(LineSeries::new(pts.iter().copied(), c.stroke_width(1)))
-                .map_err(|e| e.to_string())?
+                .map_err(plot_err)?
                 .label(*name)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], c));
         }
@@ -119,7 +128,7 @@ pub fn write_png(path: &Path, records: &[FrameRecord], s: &Summary) -> Result<()
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(plot_err)?;
     }
-    root.present().map_err(|e| e.to_string())
+    root.present().map_err(plot_err)
 }
