@@ -5,8 +5,8 @@
 //!     cargo run --release -p hil-sim --example beta_probe
 
 use anyhow::Result;
+use hil_sim::fly::{self, FlyConfig};
 use hil_sim::maneuver::{self, Profile, ProfileKind};
-use hil_sim::plant::{self, FlyConfig};
 
 fn main() -> Result<()> {
     let dir = std::env::temp_dir().join("hil-beta-probe");
@@ -52,7 +52,7 @@ fn main() -> Result<()> {
         p.init_vc_kts = vc.unwrap_or(p.init_vc_kts);
         let name = format!("probe_{}", kind.name());
         let script = maneuver::generate(&p, 7, &name, 300.0)?.write(&dir)?;
-        let f = plant::fly_script(&script, &FlyConfig::default())?;
+        let f = fly::fly_script(&script, &FlyConfig::default())?;
         let n = f.samples.len().max(1) as f64;
         let share = |lim: f64| {
             f.samples

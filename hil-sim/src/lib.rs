@@ -6,6 +6,7 @@
 pub mod dataset;
 pub mod faults;
 pub mod flight;
+pub mod fly;
 pub mod font;
 pub mod frames;
 pub mod link;

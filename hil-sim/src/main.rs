@@ -41,7 +41,7 @@ fn main() -> Result<()> {
 mod hil_sim_cli {
     use super::*;
     use hil_sim::dataset::{self, Manifest, Split};
-    use hil_sim::plant::{self, FlyConfig};
+    use hil_sim::fly::{self, FlyConfig};
     use hil_sim::sensors::SensorConfig;
 
     #[derive(clap::Args)]
@@ -72,9 +72,9 @@ mod hil_sim_cli {
             name: None,
         };
         let started = std::time::Instant::now();
-        let mut bridge = plant::Plant::spawn()?;
+        let mut bridge = hil_sim::plant::Plant::spawn()?;
         let version = bridge.jsbsim_version().to_string();
-        let flight = plant::fly_script_with(&mut bridge, &a.script, &cfg)?;
+        let flight = fly::fly_script_with(&mut bridge, &a.script, &cfg)?;
         drop(bridge);
         std::fs::create_dir_all(&a.out)
             .with_context(|| format!("cannot create dataset directory {}", a.out.display()))?;

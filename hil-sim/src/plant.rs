@@ -12,9 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 
+use crate::flight::Truth;
 pub use crate::flight::{FT_TO_M, LB_TO_KG, SAMPLE_HZ, SIM_HZ, STEPS_PER_SAMPLE};
-use crate::flight::{Flight, Sample, Truth, Zone, ZoneTimes};
-use crate::sensors::{SensorConfig, SensorInput, SensorModel};
 
 /// How far a script's rate may be from [`SIM_HZ`] (relative) and still be flown: the stock scripts
 /// write `dt="0.00833333"` (120.000005 Hz), which the 120 Hz sensor models and the 6-step decimation
@@ -23,7 +22,7 @@ pub const SIM_HZ_TOLERANCE: f64 = 1e-4;
 /// Below this height above ground an airborne flight counts as having hit the ground.
 pub const GROUND_CUT_AGL_FT: f64 = 10.0;
 /// A flight counts as airborne once it has been this high above the ground.
-const AIRBORNE_AGL_FT: f64 = 50.0;
+pub(crate) const AIRBORNE_AGL_FT: f64 = 50.0;
 
 const BRIDGE_SOURCE: &str = include_str!("../bridge/jsbsim_bridge.py");
 
@@ -278,7 +277,7 @@ impl Drop for Plant {
 }
 
 /// Positions of the [`WATCH`] properties in a step row.
-mod at {
+pub(crate) mod at {
     pub const TIME: usize = 0;
     pub const ALPHA: usize = 1;
     pub const BETA: usize = 2;
@@ -332,7 +331,7 @@ mod at {
 
 /// Properties read after every step, each written next to its position in [`at`]; a position
 /// left without a name fails the build.
-const WATCH: [&str; at::COUNT] = {
+pub(crate) const WATCH: [&str; at::COUNT] = {
     let mut w = [""; at::COUNT];
     w[at::TIME] = "simulation/sim-time-sec";
     w[at::ALPHA] = "aero/alpha-deg";
@@ -391,25 +390,13 @@ const WATCH: [&str; at::COUNT] = {
     w
 };
 
-const SLUG_TO_KG: f64 = 14.593_902_937;
-const PSF_TO_PA: f64 = 47.880_258_98;
-const G0_FPS2: f64 = 32.174_048_56;
+pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
+pub(crate) const PSF_TO_PA: f64 = 47.880_258_98;
+pub(crate) const G0_FPS2: f64 = 32.174_048_56;
 /// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (F-16: about 20° each way); the model has no deg property.
 pub const FLAPERON_DEG_PER_NORM: f64 = 20.0;
 /// `fcs/tef-control` = 1 is 20° of trailing-edge flap.
 pub const TEF_DEG_PER_UNIT: f64 = 20.0;
-
-/// Settings of one flight.
-#[derive(Clone, Debug, Default)]
-pub struct FlyConfig {
-    /// Seed of the sensor error models.
-    pub seed: u64,
-    pub sensors: SensorConfig,
-    /// Stop after this much simulated time even if the script goes on.
-    pub max_time_s: Option<f64>,
-    /// Name stored with the flight (default: the script file stem).
-    pub name: Option<String>,
-}
 
 /// What `<use aircraft=… initialize=…/>` of a runscript says.
 #[derive(Debug, PartialEq)]
@@ -456,7 +443,7 @@ pub fn script_use(path: &Path) -> Result<ScriptUse, PlantError> {
 }
 
 /// Truth at one step, in dataset units.
-fn truth_of(r: &[f64]) -> Truth {
+pub(crate) fn truth_of(r: &[f64]) -> Truth {
     Truth {
         alpha_deg: r[at::ALPHA],
         beta_deg: r[at::BETA],
@@ -486,48 +473,6 @@ fn truth_of(r: &[f64]) -> Truth {
         wind_east_mps: r[at::WIND_EAST] * FT_TO_M,
         wind_down_mps: r[at::WIND_DOWN] * FT_TO_M,
     }
-}
-
-/// What the sensors see at one step, in SI (surfaces in degrees).
-fn sensor_input(r: &[f64]) -> SensorInput {
-    let m = r[at::MASS];
-    SensorInput {
-        omega_rps: [r[at::PI], r[at::QI], r[at::RI]],
-        omega_dot_rps2: [r[at::PDOT], r[at::QDOT], r[at::RDOT]],
-        // Specific force at the CG: total non-gravity force over mass (not accelerations/N*, which lag a step).
-        f_cg_mps2: [
-            r[at::FBX] / m * FT_TO_M,
-            r[at::FBY] / m * FT_TO_M,
-            r[at::FBZ] / m * FT_TO_M,
-        ],
-        gps_speed_mps: r[at::GPS_SPEED] * FT_TO_M,
-        alt_msl_m: r[at::H_SL] * FT_TO_M,
-        elevator_deg: r[at::ELEVATOR],
-        aileron_deg: r[at::AILERON].to_degrees(),
-        rudder_deg: r[at::RUDDER],
-        lef_deg: r[at::LEF],
-        tef_deg: r[at::TEF] * TEF_DEG_PER_UNIT,
-        flaperon_deg: r[at::FLAPERON] * FLAPERON_DEG_PER_NORM,
-        speedbrake_deg: r[at::SPEEDBRAKE],
-        throttle_norm: r[at::THROTTLE],
-        euler_rad: [r[at::PHI], r[at::THETA], r[at::PSI]],
-        omega_earth_rps: [r[at::P], r[at::Q], r[at::R]],
-        v_ned_mps: [
-            r[at::V_NORTH] * FT_TO_M,
-            r[at::V_EAST] * FT_TO_M,
-            r[at::V_DOWN] * FT_TO_M,
-        ],
-        fuel_kg: r[at::FUEL] * LB_TO_KG,
-    }
-}
-
-/// Flies a JSBSim runscript (aircraft `f16`) to its end (or `cfg.max_time_s`) at 120 Hz and returns
-/// the 20 Hz flight. The initialize file is taken from beside the script when it is there, else
-/// JSBSim looks in the aircraft folder (where the stock `reset*` files live). A flight that hits the
-/// ground or goes NaN is cut there and says so in [`Flight::cut`].
-pub fn fly_script(script: &Path, cfg: &FlyConfig) -> Result<Flight, PlantError> {
-    let mut plant = Plant::spawn()?;
-    fly_script_with(&mut plant, script, cfg)
 }
 
 /// A runscript loaded into the bridge.
@@ -578,77 +523,6 @@ pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<Loaded, Plant
         });
     }
     Ok(Loaded { path: script, dt_s })
-}
-
-/// [`fly_script`] on an already started bridge (one process per flight keeps flights independent;
-/// callers that want that start a fresh [`Plant`] each time).
-pub fn fly_script_with(
-    plant: &mut Plant,
-    script: &Path,
-    cfg: &FlyConfig,
-) -> Result<Flight, PlantError> {
-    let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
-    plant.watch(&WATCH)?;
-
-    let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
-    let name = cfg.name.clone().unwrap_or_else(|| {
-        script
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "flight".into())
-    });
-    let mut flight = Flight {
-        name,
-        samples: Vec::new(),
-        cut: None,
-        zones: None,
-    };
-    let mut step_count: u64 = 0;
-    let mut zone_steps: Option<[u64; 3]> = None;
-    let mut airborne = false;
-    'outer: loop {
-        let rows = plant.step(SIM_HZ * 5)?;
-        let ended = rows.len() < (SIM_HZ * 5) as usize;
-        for r in &rows {
-            step_count += 1;
-            let t = r[at::TIME];
-            if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
-                break 'outer;
-            }
-            // The optional zone column (last) is NaN for scripts without a generator state.
-            if r[..at::ZONE].iter().any(|v| !v.is_finite()) {
-                flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
-                break 'outer;
-            }
-            airborne |= r[at::H_AGL] > AIRBORNE_AGL_FT;
-            if airborne && r[at::H_AGL] < GROUND_CUT_AGL_FT {
-                flight.cut = Some(format!(
-                    "ground contact at t={t:.3} s (h-agl {:.1} ft)",
-                    r[at::H_AGL]
-                ));
-                break 'outer;
-            }
-            if let Some(zone) = Zone::from_value(r[at::ZONE]) {
-                let n = zone_steps.get_or_insert([0; 3]);
-                n[zone.index()] += 1;
-            }
-            let si = sensors.step(&sensor_input(r));
-            if step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE)) {
-                flight.samples.push(Sample {
-                    // JSBSim's own clock (its summed dt, e.g. 0.049999999999999996 after 6 steps):
-                    // the instants a stock run reports, so truth can be compared sample by sample.
-                    time_s: t,
-                    truth: truth_of(r),
-                    sensed: si,
-                });
-            }
-        }
-        if ended {
-            break;
-        }
-    }
-    flight.zones = zone_steps.map(|n| ZoneTimes::from_steps(n, dt_s));
-    Ok(flight)
 }
 
 #[cfg(test)]

@@ -4,8 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use hil_sim::dataset::Flight;
+use hil_sim::fly::{self, FlyConfig};
 use hil_sim::maneuver::{self, Profile, ProfileKind};
-use hil_sim::plant::{self, FlyConfig, Plant, PlantError};
+use hil_sim::plant::{self, Plant, PlantError};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -40,7 +41,7 @@ fn first_6_s_of_the_test_flight() -> (PathBuf, Flight) {
         max_time_s: Some(6.0),
         ..FlyConfig::default()
     };
-    let flight = plant::fly_script(&script, &cfg).unwrap();
+    let flight = fly::fly_script(&script, &cfg).unwrap();
     (script, flight)
 }
 
@@ -113,7 +114,7 @@ fn stock_runway_script_runs() {
         max_time_s: Some(3.0),
         ..FlyConfig::default()
     };
-    let f = plant::fly_script(&stock_script("f16_test.xml"), &cfg).unwrap();
+    let f = fly::fly_script(&stock_script("f16_test.xml"), &cfg).unwrap();
     assert_eq!(f.samples.len(), 60);
     assert!(f.cut.is_none());
 }
@@ -124,14 +125,14 @@ fn bad_scripts_give_the_right_errors() {
         max_time_s: Some(1.0),
         ..FlyConfig::default()
     };
-    let missing = plant::fly_script(Path::new("/no/such/script.xml"), &cfg).unwrap_err();
+    let missing = fly::fly_script(Path::new("/no/such/script.xml"), &cfg).unwrap_err();
     assert!(
         matches!(missing, PlantError::ScriptUnreadable { .. }),
         "{missing}"
     );
     assert!(missing.to_string().contains("/no/such/script.xml"));
 
-    let c172 = plant::fly_script(&stock_script("c1721.xml"), &cfg).unwrap_err();
+    let c172 = fly::fly_script(&stock_script("c1721.xml"), &cfg).unwrap_err();
     assert!(
         matches!(&c172, PlantError::WrongAircraft { aircraft, .. } if aircraft == "c172x" || aircraft.starts_with("c172")),
         "{c172}"
@@ -144,7 +145,7 @@ fn bad_scripts_give_the_right_errors() {
         "<?xml version=\"1.0\"?>\n<runscript name=\"x\">\n<use aircraft=\"f16\" initialize=\"reset00\"/>\n<run start=\"0\" end=\"1\" dt=\"0.00833\">\n<event><condition> simulation/sim-time-sec ge 0 </condition></run>\n</runscript>\n",
     )
     .unwrap();
-    let e = plant::fly_script(&broken, &cfg).unwrap_err();
+    let e = fly::fly_script(&broken, &cfg).unwrap_err();
     assert!(
         matches!(&e, PlantError::ScriptRejected { message, .. } if message.contains("invalid XML")),
         "{e}"
@@ -158,7 +159,7 @@ fn bad_scripts_give_the_right_errors() {
         "<?xml version=\"1.0\"?>\n<runscript name=\"x\">\n<use aircraft=\"f16\" initialize=\"reset00\"/>\n<run start=\"0\" end=\"1\" dt=\"0.01\">\n</run>\n</runscript>\n",
     )
     .unwrap();
-    let e = plant::fly_script(&slow, &cfg).unwrap_err();
+    let e = fly::fly_script(&slow, &cfg).unwrap_err();
     assert!(
         matches!(&e, PlantError::UnsupportedRate { dt_s, .. } if *dt_s == 0.01),
         "{e}"
@@ -167,7 +168,7 @@ fn bad_scripts_give_the_right_errors() {
 
     let not_script = d.join("init.xml");
     std::fs::write(&not_script, "<initialize name=\"x\"/>").unwrap();
-    let e = plant::fly_script(&not_script, &cfg).unwrap_err();
+    let e = fly::fly_script(&not_script, &cfg).unwrap_err();
     assert!(matches!(e, PlantError::NotAScript { .. }), "{e}");
     std::fs::remove_dir_all(&d).ok();
 }
@@ -186,7 +187,7 @@ fn ground_contact_cuts_the_flight() {
         "<?xml version=\"1.0\"?>\n<runscript name=\"dive\">\n<use aircraft=\"f16\" initialize=\"dive_init\"/>\n<run start=\"0\" end=\"30\" dt=\"0.00833333\">\n</run>\n</runscript>\n",
     )
     .unwrap();
-    let f = plant::fly_script(&d.join("dive.xml"), &FlyConfig::default()).unwrap();
+    let f = fly::fly_script(&d.join("dive.xml"), &FlyConfig::default()).unwrap();
     let cut = f.cut.clone().expect("the dive must be cut");
     assert!(cut.contains("ground contact"), "{cut}");
     assert!(f.duration_s() < 10.0);
@@ -205,7 +206,7 @@ fn same_seed_identical_csv_bytes() {
             max_time_s: Some(25.0),
             ..FlyConfig::default()
         };
-        let f = plant::fly_script(&script, &cfg).unwrap();
+        let f = fly::fly_script(&script, &cfg).unwrap();
         let p = d.join(name);
         f.write_csv(&p).unwrap();
         (f, std::fs::read(&p).unwrap())
@@ -230,7 +231,7 @@ fn saved_generated_maneuver_reproduces_the_flight() {
         seed: 3,
         ..FlyConfig::default()
     };
-    let first = plant::fly_script(&script, &cfg).unwrap();
+    let first = fly::fly_script(&script, &cfg).unwrap();
     first.write_csv(&d.join("agg.csv")).unwrap();
     let stored = Flight::read_csv(&d.join("agg.csv")).unwrap();
 
@@ -238,7 +239,7 @@ fn saved_generated_maneuver_reproduces_the_flight() {
     let d2 = tmp("gen2");
     std::fs::copy(&script, d2.join("agg.xml")).unwrap();
     std::fs::copy(d.join("agg_init.xml"), d2.join("agg_init.xml")).unwrap();
-    let again = plant::fly_script(&d2.join("agg.xml"), &cfg).unwrap();
+    let again = fly::fly_script(&d2.join("agg.xml"), &cfg).unwrap();
     assert_eq!(stored.samples.len(), 800);
     assert_eq!(stored.samples, again.samples);
     // It really maneuvers: the targets and sticks move α and bank.

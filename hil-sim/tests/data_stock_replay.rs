@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 
 use hil_sim::dataset::{self, Flight};
+use hil_sim::fly::{self, FlyConfig};
 use hil_sim::maneuver::{self, Preset};
-use hil_sim::plant::{self, FlyConfig};
 use hil_sim::sensors::SensorConfig;
 
 const TOLERANCE_DEG: f64 = 1e-9;
@@ -109,7 +109,7 @@ fn project_test_flight_is_what_stock_jsbsim_flies() {
     let script = root().join("flights/f16_test_flight.xml");
     let xml = std::fs::read_to_string(&script).unwrap();
     assert!(xml.contains("dt=\"0.008333333333333333\""));
-    let flight = plant::fly_script(&script, &FlyConfig::default()).unwrap();
+    let flight = fly::fly_script(&script, &FlyConfig::default()).unwrap();
     assert!(flight.cut.is_none(), "{:?}", flight.cut);
     let stock = stock_run(
         &script,
@@ -133,7 +133,7 @@ fn package_f16_test_script_is_what_stock_jsbsim_flies() {
         .find(|p| p.is_file())
         .expect("the jsbsim package's scripts/f16_test.xml; run scripts/bootstrap");
     let dir = tmp("f16-test");
-    let flight = plant::fly_script(&script, &FlyConfig::default()).unwrap();
+    let flight = fly::fly_script(&script, &FlyConfig::default()).unwrap();
     // Its initialize file (reset00) is in the aircraft folder, where stock JSBSim looks.
     let stock = stock_run(&script, None, &dir.join("stock.tsv"));
     let n = assert_same_truth("f16_test.xml", &flight, &stock);

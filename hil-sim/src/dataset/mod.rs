@@ -536,7 +536,7 @@ pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
 }
 
 /// Generates a dataset: writes each planned maneuver ([`crate::maneuver::files`]) into `out`,
-/// flies it through [`crate::plant::fly_script_with`] (the same path as `hil-sim fly --script`) on
+/// flies it through [`crate::fly::fly_script_with`] (the same path as `hil-sim fly --script`) on
 /// `workers` threads, and writes the CSVs and `manifest.json`. Flights are written in plan order
 /// whatever order the workers finish in, so the manifest is deterministic. A flight JSBSim cannot
 /// trim is re-drawn with [`redraw_seed`] (up to [`TRIM_RETRIES`] times; the seed flown is the one
@@ -549,8 +549,8 @@ pub fn generate(
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Manifest, GenerateError> {
+    use crate::fly::FlyConfig;
     use crate::maneuver::{self, Profile};
-    use crate::plant::FlyConfig;
     std::fs::create_dir_all(out).map_err(|source| DatasetError::Io {
         action: "create",
         path: out.to_path_buf(),
@@ -575,7 +575,7 @@ pub fn generate(
                     max_time_s: None,
                     name: Some(f.name.clone()),
                 };
-                match crate::plant::fly_script_with(&mut plant, &script, &cfg) {
+                match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
                     Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
                     r => break Ok(write_flight(out, &r?, f.split, f.profile.name(), seed)?),
                 }

@@ -143,9 +143,9 @@ impl RunArgs {
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
     let mut f = match (&source.dataset, &source.script) {
         (Some(csv), _) => Flight::read_csv(csv)?,
-        (None, Some(script)) => crate::plant::fly_script(
+        (None, Some(script)) => crate::fly::fly_script(
             script,
-            &crate::plant::FlyConfig {
+            &crate::fly::FlyConfig {
                 seed,
                 max_time_s,
                 ..Default::default()
