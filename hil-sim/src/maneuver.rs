@@ -333,37 +333,23 @@ fn clamp(lo: f64, hi: f64, inner: &str) -> String {
     format!("<max><value>{lo}</value><min><value>{hi}</value>{inner}</min></max>")
 }
 
-/// Generates the flight `name` (used for its file names) of `duration_s` seconds.
-pub fn generate(
-    profile: &Profile,
-    seed: u64,
-    name: &str,
-    duration_s: f64,
-) -> Result<Maneuver, ManeuverError> {
-    if name.is_empty()
-        || !name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-    {
-        return Err(ManeuverError::BadName(name.to_string()));
-    }
-    if !(1.0..=7200.0).contains(&duration_s) {
-        return Err(ManeuverError::BadDuration(duration_s));
-    }
-    let p = profile;
-    let mut rng = ChaCha12Rng::seed_from_u64(seed);
-    let init_name = format!("{name}_init");
-    let alt = draw(&mut rng, p.init_alt_ft);
-    let vc = draw(&mut rng, p.init_vc_kts);
-    let psi = draw(&mut rng, (0.0, 360.0));
-    let lat = draw(&mut rng, (-50.0, 60.0));
-    let lon = draw(&mut rng, (-170.0, 170.0));
+/// The initialisation file: an airborne start at a random place, altitude, speed and heading.
+fn init_file(p: &Profile, rng: &mut ChaCha12Rng, seed: u64, name: &str, init_name: &str) -> String {
+    let alt = draw(rng, p.init_alt_ft);
+    let vc = draw(rng, p.init_vc_kts);
+    let psi = draw(rng, (0.0, 360.0));
+    let lat = draw(rng, (-50.0, 60.0));
+    let lon = draw(rng, (-170.0, 170.0));
     // Latitude/longitude before vc: JSBSim re-derives the speed when position changes afterwards.
-    let init_xml = format!(
+    format!(
         "<?xml version=\"1.0\"?>\n<!-- hil-sim maneuver {name}: airborne start (profile {}, seed {seed}). -->\n<initialize name=\"{init_name}\">\n  <latitude unit=\"DEG\"> {lat:.4} </latitude>\n  <longitude unit=\"DEG\"> {lon:.4} </longitude>\n  <altitude unit=\"FT\"> {alt:.1} </altitude>\n  <vc unit=\"KTS\"> {vc:.1} </vc>\n  <psi unit=\"DEG\"> {psi:.1} </psi>\n  <phi unit=\"DEG\"> 0.0 </phi>\n  <gamma unit=\"DEG\"> 0.0 </gamma>\n  <running> -1 </running>\n</initialize>\n",
         p.kind.name()
-    );
+    )
+}
 
+/// The runscript's head: the comment that says how to run it, `<use>`, `<run>` and the maneuver
+/// properties with their initial values.
+fn script_head(p: &Profile, seed: u64, name: &str, init_name: &str, duration_s: f64) -> String {
     let mut s = String::new();
     // No "--" inside an XML comment: the C++ command line's options are named, not spelled.
     let _ = write!(
@@ -395,17 +381,22 @@ pub fn generate(
         let _ = writeln!(s, "    <property value=\"{v}\"> {prop} </property>");
     }
 
-    let fuel = draw(&mut rng, p.fuel_per_tank_lbs);
-    let throttle0 = draw(&mut rng, p.throttle);
+    s
+}
+
+/// Fuel in both internal tanks (frozen) and JSBSim's trim at the start.
+fn fuel_and_trim(s: &mut String, fuel: f64) {
     let _ = write!(
         s,
         "    <event name=\"fuel and trim\">\n      <condition> simulation/sim-time-sec ge 0.0 </condition>\n      <set name=\"propulsion/tank[0]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/tank[1]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/fuel_freeze\" value=\"1\"/>\n      <set name=\"simulation/do_simple_trim\" value=\"1\"/>\n    </event>\n"
     );
+}
 
-    // Wind: Dryden turbulence (repeatable through its own seed), steady wind, gusts below.
+/// Milspec turbulence (its own repeatable seed) and a steady wind, set at 0.5 s.
+fn wind(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng) {
     let sev = rng.random_range(p.turb_severity.0..=p.turb_severity.1.max(p.turb_severity.0));
-    let wind = draw(&mut rng, p.steady_wind_fps);
-    let wdir = draw(&mut rng, (0.0, std::f64::consts::TAU));
+    let wind = draw(rng, p.steady_wind_fps);
+    let wdir = draw(rng, (0.0, std::f64::consts::TAU));
     let turb_seed = rng.random_range(1..1_000_000u32);
     let _ = write!(
         s,
@@ -415,11 +406,15 @@ pub fn generate(
         wind * wdir.cos(),
         wind * wdir.sin(),
     );
+}
 
+/// The zone logic (Karali et al. 2023, Fig. 3), evaluated every step in this order: three 0/1
+/// conditions, then the zone state machine (it reads its own value of the previous step), then the
+/// zones' pitch targets and the load-factor protection.
+fn zone_laws(s: &mut String, p: &Profile) {
     // Zone logic, evaluated every step in this order (the command tables go just before it): three
     // 0/1 conditions, then the zone state machine (it reads its own value of the previous step),
     // then the laws, each blending the three zones' commands by the zone flags.
-    let laws_at = s.len();
     // The low-altitude limit looks 8 s ahead along the sink rate: fast dives overshot a plain
     // height limit.
     let trigger = format!(
@@ -433,7 +428,7 @@ pub fn generate(
         p.min_alpha_deg
     );
     law(
-        &mut s,
+        s,
         "zone: Danger Zone trigger (low with sink look-ahead, ceiling, bank, pitch, slow, alpha)",
         "maneuver/trigger",
         &format!("          {trigger}\n"),
@@ -450,7 +445,7 @@ pub fn generate(
         CALM_ALPHA_DEG.0,
     );
     law(
-        &mut s,
+        s,
         "zone: Danger over (sink stopped, wings near level, alpha normal, pitch not steep, speed margin)",
         "maneuver/hazard-over",
         &format!("          {hazard_over}\n"),
@@ -464,7 +459,7 @@ pub fn generate(
         CALM_ALPHA_DEG.0,
     );
     law(
-        &mut s,
+        s,
         "zone: back well inside the Flight Zone (safe altitude band, recovered speed)",
         "maneuver/recovered",
         &format!("          {recovered}\n"),
@@ -472,7 +467,7 @@ pub fn generate(
     let zone = |v: f64| format!("<value>{v}</value>");
     let is_zone = |v: f64| format!("<eq><property>maneuver/zone</property><value>{v}</value></eq>");
     law(
-        &mut s,
+        s,
         "zone: 0 Flight, 1 Danger, 2 Re-climb (the trigger sends any zone to Danger)",
         "maneuver/zone",
         &format!(
@@ -485,20 +480,20 @@ pub fn generate(
         ),
     );
     law(
-        &mut s,
+        s,
         "zone flag: in the Danger Zone",
         "maneuver/danger",
         &format!("          {}\n", is_zone(ZONE_DANGER)),
     );
     law(
-        &mut s,
+        s,
         "zone flag: in the Re-climb Zone",
         "maneuver/reclimb",
         &format!("          {}\n", is_zone(ZONE_RECLIMB)),
     );
     let mid_alt = (p.min_agl_ft + 4_000.0).max((p.init_alt_ft.0 + p.init_alt_ft.1) / 2.0);
     law(
-        &mut s,
+        s,
         "Danger Zone pitch target: toward a safe altitude, nose down while slow",
         "maneuver/theta-recover-deg",
         &format!(
@@ -517,7 +512,7 @@ pub fn generate(
     // crossed with the climb still going, level inside it; lower the nose while close to the slow
     // limit (power is up, so the speed comes back).
     law(
-        &mut s,
+        s,
         "Re-climb Zone pitch target: climb back into the safe altitude band, level inside it",
         "maneuver/theta-reclimb-deg",
         &format!(
@@ -535,13 +530,13 @@ pub fn generate(
         ),
     );
     law(
-        &mut s,
+        s,
         "load factor from the total non-gravity force",
         "maneuver/nz-g",
         "          <quotient><product><value>-1</value><property>forces/fbz-total-lbs</property></product><property>inertia/weight-lbs</property></quotient>\n",
     );
     law(
-        &mut s,
+        s,
         "g protection: push when above the band, pull when below (the FCS has no g-limiter)",
         "maneuver/g-protect",
         &format!(
@@ -549,6 +544,11 @@ pub fn generate(
             p.max_nz_g, p.min_nz_g
         ),
     );
+}
+
+/// The control laws: each surface and the throttle blend the three zones' commands by the zone
+/// flags.
+fn control_laws(s: &mut String, p: &Profile) {
     // α mode: at low speed the F-16 stick roughly commands α (full aft ≈ the ~28° limiter), so a
     // feed-forward of the target plus a proportional correction holds it.
     let flight_elev = "<sum><property>maneuver/pitch-stick</property><product><difference><value>1</value><property>maneuver/alpha-mode</property></difference><value>0.04</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-target-deg</property></difference></product><product><property>maneuver/alpha-mode</property><sum><product><value>-0.036</value><property>maneuver/alpha-target-deg</property></product><product><value>0.1</value><difference><property>aero/alpha-deg</property><property>maneuver/alpha-target-deg</property></difference></product></sum></product></sum>";
@@ -565,7 +565,7 @@ pub fn generate(
         )
     };
     law(
-        &mut s,
+        s,
         "elevator: Flight Zone targets + stick, Danger recovery or Re-climb attitude; then g protection",
         "fcs/elevator-cmd-norm",
         &format!(
@@ -588,7 +588,7 @@ pub fn generate(
     let wings_level =
         "<product><value>-0.03</value><property>attitude/phi-deg</property></product>";
     law(
-        &mut s,
+        s,
         "aileron: bank target + stick, or wings level",
         "fcs/aileron-cmd-norm",
         &format!(
@@ -597,7 +597,7 @@ pub fn generate(
         ),
     );
     law(
-        &mut s,
+        s,
         "rudder: random in the Flight Zone only",
         "fcs/rudder-cmd-norm",
         &format!(
@@ -615,7 +615,7 @@ pub fn generate(
     );
     // Re-climb: at least military power, afterburner as the speed falls toward the recovery speed.
     law(
-        &mut s,
+        s,
         "throttle: random, by airspeed in Danger, power up in Re-climb",
         "fcs/throttle-cmd-norm",
         &format!(
@@ -638,7 +638,7 @@ pub fn generate(
         ),
     );
     law(
-        &mut s,
+        s,
         "speedbrake: random in the Flight Zone only",
         "fcs/speedbrake-cmd-norm",
         &format!(
@@ -650,21 +650,28 @@ pub fn generate(
             )
         ),
     );
+}
 
+/// First time a random command may change, s.
+const COMMANDS_START_S: f64 = 8.0;
+
+/// The random commands, each channel its own sequence of held values, as one table of sim time per
+/// channel.
+fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0: f64) -> String {
     // Random commands, each channel its own sequence of held values. Each sequence is one table of
     // sim time (one continuous event), not one event per change: JSBSim evaluates every pending
     // event's condition every step, and thousands of timed events made long flights ~10x slower.
-    let start = 8.0;
+    let start = COMMANDS_START_S;
     let mut mode = Vec::new();
     let (mut theta_t, mut alpha_t, mut bank_t) = (Vec::new(), Vec::new(), Vec::new());
     let mut t = start;
     while t < duration_s {
-        let hold = draw(&mut rng, p.target_hold_s);
+        let hold = draw(rng, p.target_hold_s);
         let alpha_mode = rng.random_bool(p.alpha_mode_share.clamp(0.0, 1.0));
         mode.push((t, if alpha_mode { 1.0 } else { 0.0 }, hold));
-        theta_t.push((t, draw(&mut rng, p.theta_target_deg), hold));
-        alpha_t.push((t, draw(&mut rng, p.alpha_target_deg), hold));
-        bank_t.push((t, signed(&mut rng, p.bank_target_deg), hold));
+        theta_t.push((t, draw(rng, p.theta_target_deg), hold));
+        alpha_t.push((t, draw(rng, p.alpha_target_deg), hold));
+        bank_t.push((t, signed(rng, p.bank_target_deg), hold));
         t += hold;
     }
     let mut tables = String::new();
@@ -693,11 +700,11 @@ pub fn generate(
                        hold: Range,
                        tc: f64,
                        value: &mut dyn FnMut(&mut ChaCha12Rng) -> f64| {
-        let mut t = start + draw(&mut rng, (0.0, hold.1));
+        let mut t = start + draw(rng, (0.0, hold.1));
         let mut seq = Vec::new();
         while t < duration_s {
-            let h = draw(&mut rng, hold);
-            seq.push((t, value(&mut rng), h));
+            let h = draw(rng, hold);
+            seq.push((t, value(rng), h));
             t += h;
         }
         tables.push_str(&schedule(prop, initial, &seq, tc));
@@ -739,18 +746,21 @@ pub fn generate(
     channel("maneuver/speedbrake", 0.0, (15.0, 60.0), 0.0, &mut |r| {
         if r.random_bool(sb) { 1.0 } else { 0.0 }
     });
-    s.insert_str(laws_at, &tables);
+    tables
+}
 
-    // 1-cosine gusts in random directions.
-    let mut t = start + draw(&mut rng, p.gust_interval_s);
+/// 1-cosine gusts in random directions, each a timed event.
+fn gusts(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64) {
+    let start = COMMANDS_START_S;
+    let mut t = start + draw(rng, p.gust_interval_s);
     while t < duration_s {
-        let mag = draw(&mut rng, p.gust_fps);
-        let az = draw(&mut rng, (0.0, std::f64::consts::TAU));
-        let el = draw(&mut rng, (-0.5, 0.5));
-        let ramp = draw(&mut rng, (0.5, 3.0));
-        let steady = draw(&mut rng, (0.0, 5.0));
+        let mag = draw(rng, p.gust_fps);
+        let az = draw(rng, (0.0, std::f64::consts::TAU));
+        let el = draw(rng, (-0.5, 0.5));
+        let ramp = draw(rng, (0.5, 3.0));
+        let steady = draw(rng, (0.0, 5.0));
         timed(
-            &mut s,
+            s,
             t,
             &[
                 ("atmosphere/cosine-gust/startup-duration-sec", ramp),
@@ -770,8 +780,45 @@ pub fn generate(
                 ("atmosphere/cosine-gust/start", 1.0),
             ],
         );
-        t += draw(&mut rng, p.gust_interval_s);
+        t += draw(rng, p.gust_interval_s);
     }
+}
+
+/// Generates the flight `name` (used for its file names) of `duration_s` seconds. The random draws
+/// happen in a fixed order (initial state, fuel and throttle, wind, commands, gusts), so a seed
+/// always gives the same files.
+pub fn generate(
+    profile: &Profile,
+    seed: u64,
+    name: &str,
+    duration_s: f64,
+) -> Result<Maneuver, ManeuverError> {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(ManeuverError::BadName(name.to_string()));
+    }
+    if !(1.0..=7200.0).contains(&duration_s) {
+        return Err(ManeuverError::BadDuration(duration_s));
+    }
+    let p = profile;
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    let init_name = format!("{name}_init");
+    let init_xml = init_file(p, &mut rng, seed, name, &init_name);
+    let mut s = script_head(p, seed, name, &init_name, duration_s);
+    let fuel = draw(&mut rng, p.fuel_per_tank_lbs);
+    let throttle0 = draw(&mut rng, p.throttle);
+    fuel_and_trim(&mut s, fuel);
+    wind(&mut s, p, &mut rng);
+    // The command tables go before the laws that read them (JSBSim runs the events in file order).
+    let mut laws = String::new();
+    zone_laws(&mut laws, p);
+    control_laws(&mut laws, p);
+    s.push_str(&command_tables(p, &mut rng, duration_s, throttle0));
+    s.push_str(&laws);
+    gusts(&mut s, p, &mut rng, duration_s);
     s.push_str("  </run>\n</runscript>\n");
     Ok(Maneuver {
         name: name.to_string(),
