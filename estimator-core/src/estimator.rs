@@ -7,6 +7,7 @@
 //! | a noisy channel (IMU, GPS, EGI) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR` on that frame, held as above, until it changes ([`crate::health`]) |
 //! | an IMU channel a model uses is at its full scale (the sensor clipped) | `SATURATED` on that frame, held as above |
 //! | the air-data filter a model reads restarted or keeps failing its innovation gate | `FILTER_DIVERGED`, estimate computed |
+//! | GPS speed or altitude invalid (no fix) while the EGI velocity is valid | both filled from the EGI (altitude for at most 120 s): `GPS_SUBSTITUTED`, estimate computed |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | GPS speed below [`crate::features::MIN_SPEED_MMS`] | derived features saturate: `OUT_OF_ENVELOPE` |
 //! | EGI ground speed below [`crate::features::MIN_SPEED_MMS`], for a model reading the EGI velocity | kinematic angles are noise: `OUT_OF_ENVELOPE` |
@@ -58,6 +59,10 @@ impl Flags {
     /// failed the gate for [`crate::filter::Config::gate_run`] steps in a row. The estimate is
     /// computed but its filter features are not what training saw.
     pub const FILTER_DIVERGED: u16 = 1 << 9;
+    /// A computed angle reads GPS speed or altitude and the GPS had none: they came from the EGI
+    /// (ground speed from its velocity, altitude coasted on its vertical velocity, at most
+    /// [`crate::features::GPS_COAST_MAX_MS`]). The estimate is computed, from substitutes.
+    pub const GPS_SUBSTITUTED: u16 = 1 << 10;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -326,8 +331,9 @@ impl<'m> Estimator<'m> {
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
-            let invalid = m.sources & !frame.valid != 0;
-            let is_stuck = m.sources & health.stuck != 0;
+            // A channel the GPS lacked but the EGI filled in is usable (and flagged below).
+            let invalid = m.sources & !(frame.valid | values.substituted) != 0;
+            let is_stuck = m.sources & health.stuck & !values.substituted != 0;
             let saturated = m.sources & health.saturated != 0;
             if invalid {
                 flags |= Flags::INVALID_INPUT;
@@ -357,6 +363,9 @@ impl<'m> Estimator<'m> {
             }
             if m.reads_filter && diverged {
                 flags |= Flags::FILTER_DIVERGED;
+            }
+            if m.sources & values.substituted != 0 {
+                flags |= Flags::GPS_SUBSTITUTED;
             }
             *last = Some((mid, out));
             (mid, out)

@@ -363,7 +363,14 @@ pub struct FeatureValues {
     pub health: crate::health::Status,
     /// The air-data filter's [`crate::filter::flags`] this step (0 without a filter).
     pub filter_flags: u8,
+    /// Channels [`FeatureState::next`] filled in from other sensors because the GPS had none
+    /// ([`GPS_COAST_MAX_MS`]): GPS speed from the EGI velocity, GPS altitude coasted on it.
+    pub substituted: u32,
 }
+
+/// Longest GPS outage over which [`FeatureState::next`] carries the last GPS altitude on by the
+/// EGI's vertical velocity, ms (the filter's own bridge is as long: `filter::MAX_ALT_COAST_S`).
+pub const GPS_COAST_MAX_MS: u32 = 120_000;
 
 /// A gap between frames longer than this (ms) restarts the air-data filter: its wind and
 /// covariance would be extrapolated over more than a second without a measurement.
@@ -385,6 +392,8 @@ pub struct FeatureState {
     /// Frames seen, and the stuck channels of the previous frame.
     frames: u32,
     stuck_before: u32,
+    /// The last GPS (or coasted) altitude, µm, and ms coasted since the last GPS one.
+    gps_alt: Option<(i64, u32)>,
     last_ms: Option<u32>,
 }
 
@@ -397,6 +406,7 @@ impl FeatureState {
             checkpoints: [None, None],
             frames: 0,
             stuck_before: 0,
+            gps_alt: None,
             filter: with_filter
                 .then(|| crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG)),
             last_ms: None,
@@ -407,17 +417,80 @@ impl FeatureState {
         &self.history
     }
 
+    /// Fills GPS speed and altitude from the EGI velocity when the GPS has none (see
+    /// [`FeatureState::next`]); returns the channels filled. Integer arithmetic only.
+    fn substitute_gps(&mut self, f: &mut SensorFrame, dt_ms: u32) -> u32 {
+        let (speed, alt) = (Channel::GpsSpeed, Channel::GpsAlt);
+        let vel = Channel::VelNorth.bit() | Channel::VelEast.bit() | Channel::VelDown.bit();
+        let vel_ok = f.valid & vel == vel;
+        let set = |f: &mut SensorFrame, c: Channel, v: i32| {
+            if let Some(r) = f.raw.get_mut(c.index()) {
+                *r = v;
+            }
+            f.valid |= c.bit();
+        };
+        let mut filled = 0;
+        if f.is_valid(alt) {
+            // cm → µm.
+            self.gps_alt = Some((i64::from(f.get(alt)).saturating_mul(10_000), 0));
+        } else if let (true, Some((alt_um, since_ms))) = (vel_ok, self.gps_alt) {
+            let since_ms = since_ms.saturating_add(dt_ms);
+            // mm/s × ms = µm, down positive.
+            let alt_um = alt_um.saturating_sub(
+                i64::from(f.get(Channel::VelDown)).saturating_mul(i64::from(dt_ms)),
+            );
+            let raw = alt_um / 10_000;
+            if since_ms <= GPS_COAST_MAX_MS
+                && let Ok(raw) = i32::try_from(raw)
+            {
+                self.gps_alt = Some((alt_um, since_ms));
+                set(f, alt, raw);
+                filled |= alt.bit();
+            } else {
+                self.gps_alt = None;
+            }
+        } else {
+            self.gps_alt = None;
+        }
+        if !f.is_valid(speed) && vel_ok {
+            let sq = |c: Channel| {
+                let v = i64::from(f.get(c)).unsigned_abs();
+                v.saturating_mul(v)
+            };
+            let ground = sq(Channel::VelNorth)
+                .saturating_add(sq(Channel::VelEast))
+                .saturating_add(sq(Channel::VelDown))
+                .isqrt();
+            if let Ok(v) = i32::try_from(ground) {
+                set(f, speed, v);
+                filled |= speed.bit();
+            }
+        }
+        filled
+    }
+
     /// The features of `frame` (deltas against the frames before it), then remembers it. The filter
     /// steps with the time since the previous frame (50 ms for the first). Stuck or saturated
     /// channels ([`crate::health`]) count as invalid everywhere from here on: in the features, in
     /// the filter and in the history.
+    ///
+    /// Without a GPS fix (GPS speed or altitude invalid) but with the EGI velocity, the GPS speed is
+    /// the EGI's ground speed `|(v_N, v_E, v_D)|` (what the GPS speed channel measures) and the GPS
+    /// altitude the last one carried on by `v_D`, for up to [`GPS_COAST_MAX_MS`]; those channels
+    /// are then valid and listed in [`FeatureValues::substituted`].
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
         let health = self.health.check(frame, self.history.newest());
-        let frame = &SensorFrame {
+        let mut frame = SensorFrame {
             valid: health.usable(frame),
             ..*frame
         };
+        let dt_frame_ms = self
+            .last_ms
+            .map_or(FRAME_PERIOD_MS, |p| frame.time_ms.wrapping_sub(p));
+        let substituted = self.substitute_gps(&mut frame, dt_frame_ms);
+        let frame = &frame;
         let mut values = FeatureValues::compute(frame, &self.history);
+        values.substituted = substituted;
         let newly_stuck = health.stuck & !self.stuck_before & crate::filter::NEEDED_MASK != 0;
         self.stuck_before = health.stuck;
         values.health = health;
@@ -686,6 +759,7 @@ impl FeatureValues {
             short_lags,
             health: crate::health::Status::default(),
             filter_flags: 0,
+            substituted: 0,
         }
     }
 }
@@ -800,6 +874,66 @@ pub fn isa(alt_cm: i32) -> (i32, i32) {
 
 #[cfg(test)]
 mod tests {
+
+    /// An EGI frame at `k × 50 ms`: climbing at 5 m/s, ground speed 3-4-0 × 50 m/s + the climb.
+    fn gps_frame(k: u32, gps: bool) -> SensorFrame {
+        let mut f = SensorFrame {
+            seq: k as u16,
+            time_ms: k * 50,
+            valid: crate::channels::ALL_VALID,
+            ..SensorFrame::default()
+        };
+        // One LSB of noise, so the health check does not find the EGI stuck.
+        let wiggle = (k % 2) as i32;
+        f.raw[Channel::VelNorth.index()] = 150_000 + wiggle;
+        f.raw[Channel::VelEast.index()] = 200_000 - wiggle;
+        f.raw[Channel::VelDown.index()] = -5_000 - 2 * wiggle;
+        f.raw[Channel::GpsSpeed.index()] = 250_050 + wiggle;
+        f.raw[Channel::GpsAlt.index()] = 300_000 + 25 * k as i32;
+        if !gps {
+            f.valid &= !(Channel::GpsSpeed.bit() | Channel::GpsAlt.bit());
+            f.raw[Channel::GpsSpeed.index()] = 0;
+            f.raw[Channel::GpsAlt.index()] = 0;
+        }
+        f
+    }
+
+    #[test]
+    fn without_a_gps_fix_the_egi_fills_speed_and_altitude_for_at_most_gps_coast_max_ms() {
+        let mut st = FeatureState::new(false);
+        for k in 0..20 {
+            assert_eq!(st.next(&gps_frame(k, true)).substituted, 0);
+        }
+        // Last fix: 3000 m + 19 × 25 cm, then carried on by v_D (µm: mm/s × ms).
+        let mut alt_um = i64::from(300_000 + 25 * 19) * 10_000;
+        let coast_frames = GPS_COAST_MAX_MS / FRAME_PERIOD_MS;
+        for k in 20..20 + coast_frames {
+            let f = gps_frame(k, false);
+            let v = st.next(&f);
+            let both = Channel::GpsSpeed.bit() | Channel::GpsAlt.bit();
+            assert_eq!(v.substituted, both, "frame {k}");
+            let (n, e, d) = (
+                i64::from(f.get(Channel::VelNorth)),
+                i64::from(f.get(Channel::VelEast)),
+                i64::from(f.get(Channel::VelDown)),
+            );
+            let ground = ((n * n + e * e + d * d) as f64).sqrt().floor() as i32;
+            assert_eq!(v.get(Feature::Sensor(Channel::GpsSpeed)), ground);
+            alt_um -= d * 50;
+            assert_eq!(
+                v.get(Feature::Sensor(Channel::GpsAlt)),
+                (alt_um / 10_000) as i32,
+                "frame {k}"
+            );
+        }
+        // Past the limit: the altitude is no longer filled (the speed still is: it is measured).
+        let v = st.next(&gps_frame(20 + coast_frames, false));
+        assert_eq!(v.substituted, Channel::GpsSpeed.bit());
+        // A Table 1 frame (no EGI): nothing to fill from.
+        let mut t1 = gps_frame(0, false);
+        t1.valid &= crate::Suite::Table1.channels();
+        assert_eq!(FeatureState::new(false).next(&t1).substituted, 0);
+    }
     use super::*;
 
     #[test]

@@ -185,6 +185,7 @@ mod tests {
                 short_lags: 0,
                 health: Default::default(),
                 filter_flags: 0,
+                substituted: 0,
             }
         };
         let bg = vec![mk(1, 2, 3), mk(3, 0, -1)];

@@ -11,13 +11,15 @@ use serde::Serialize;
 
 use crate::faults::{Fault, FaultKind};
 
-/// Flags that say an input is missing or wrong (the estimate is held or not computed).
+/// Flags that say an input is missing or wrong (the estimate is held, not computed, or computed
+/// from substitutes).
 pub const FAULT_FLAGS: u16 = Flags::INVALID_INPUT
     | Flags::STUCK_SENSOR
     | Flags::SATURATED
     | Flags::ALPHA_HELD
     | Flags::BETA_HELD
-    | Flags::NO_ESTIMATE;
+    | Flags::NO_ESTIMATE
+    | Flags::GPS_SUBSTITUTED;
 
 /// Largest difference from the fault-free reference that counts as back, degrees (both angles).
 pub const BACK_TOLERANCE_DEG: f64 = 0.1;
