@@ -331,10 +331,11 @@ impl<'m> Estimator<'m> {
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
-            // A channel the GPS lacked but the EGI filled in is usable (and flagged below).
-            let invalid = m.sources & !(frame.valid | values.substituted) != 0;
-            let is_stuck = m.sources & health.stuck & !values.substituted != 0;
-            let saturated = m.sources & health.saturated != 0;
+            // Sources the features could not use (a channel the EGI filled in is usable): why.
+            let bad = m.sources & !values.usable;
+            let invalid = bad & !frame.valid != 0;
+            let is_stuck = bad & health.stuck != 0;
+            let saturated = bad & health.saturated != 0;
             if invalid {
                 flags |= Flags::INVALID_INPUT;
             }
@@ -344,7 +345,7 @@ impl<'m> Estimator<'m> {
             if saturated {
                 flags |= Flags::SATURATED;
             }
-            if invalid || is_stuck || saturated {
+            if bad != 0 {
                 flags |= held_flag;
                 return match *last {
                     Some(v) => v,

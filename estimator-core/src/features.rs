@@ -366,6 +366,9 @@ pub struct FeatureValues {
     /// Channels [`FeatureState::next`] filled in from other sensors because the GPS had none
     /// ([`GPS_COAST_MAX_MS`]): GPS speed from the EGI velocity, GPS altitude coasted on it.
     pub substituted: u32,
+    /// The channels the features were computed from: valid, neither stuck nor saturated, or
+    /// substituted. A model whose sources are not all in it is held ([`crate::Estimator::step`]).
+    pub usable: u32,
 }
 
 /// Longest GPS outage over which [`FeatureState::next`] carries the last GPS altitude on by the
@@ -421,8 +424,7 @@ impl FeatureState {
     /// [`FeatureState::next`]); returns the channels filled. Integer arithmetic only.
     fn substitute_gps(&mut self, f: &mut SensorFrame, dt_ms: u32) -> u32 {
         let (speed, alt) = (Channel::GpsSpeed, Channel::GpsAlt);
-        let vel = Channel::VelNorth.bit() | Channel::VelEast.bit() | Channel::VelDown.bit();
-        let vel_ok = f.valid & vel == vel;
+        let vel_ok = f.valid & VELOCITY_SOURCES == VELOCITY_SOURCES;
         let set = |f: &mut SensorFrame, c: Channel, v: i32| {
             if let Some(r) = f.raw.get_mut(c.index()) {
                 *r = v;
@@ -484,20 +486,19 @@ impl FeatureState {
             valid: health.usable(frame),
             ..*frame
         };
-        let dt_frame_ms = self
-            .last_ms
-            .map_or(FRAME_PERIOD_MS, |p| frame.time_ms.wrapping_sub(p));
-        let substituted = self.substitute_gps(&mut frame, dt_frame_ms);
+        let gap_ms = self.last_ms.map(|p| frame.time_ms.wrapping_sub(p));
+        let substituted = self.substitute_gps(&mut frame, gap_ms.unwrap_or(FRAME_PERIOD_MS));
         let frame = &frame;
         let mut values = FeatureValues::compute(frame, &self.history);
         values.substituted = substituted;
+        values.usable = frame.valid;
         let newly_stuck = health.stuck & !self.stuck_before & crate::filter::NEEDED_MASK != 0;
         self.stuck_before = health.stuck;
         values.health = health;
         if let Some(filter) = self.filter.as_mut() {
             // After a gap longer than FILTER_RESTART_GAP_MS (no frames: link down, sender
             // restarted) the filter starts again, exactly as a fresh one would.
-            let mut dt_ms = match self.last_ms.map(|p| frame.time_ms.wrapping_sub(p)) {
+            let mut dt_ms = match gap_ms {
                 Some(gap) if gap <= FILTER_RESTART_GAP_MS => gap,
                 Some(_) => {
                     *filter = crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG);
@@ -760,6 +761,7 @@ impl FeatureValues {
             health: crate::health::Status::default(),
             filter_flags: 0,
             substituted: 0,
+            usable: frame.valid,
         }
     }
 }

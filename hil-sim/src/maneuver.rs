@@ -813,11 +813,9 @@ pub fn generate(
     fuel_and_trim(&mut s, fuel);
     wind(&mut s, p, &mut rng);
     // The command tables go before the laws that read them (JSBSim runs the events in file order).
-    let mut laws = String::new();
-    zone_laws(&mut laws, p);
-    control_laws(&mut laws, p);
     s.push_str(&command_tables(p, &mut rng, duration_s, throttle0));
-    s.push_str(&laws);
+    zone_laws(&mut s, p);
+    control_laws(&mut s, p);
     gusts(&mut s, p, &mut rng, duration_s);
     s.push_str("  </run>\n</runscript>\n");
     Ok(Maneuver {

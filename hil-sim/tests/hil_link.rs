@@ -270,6 +270,8 @@ fn realtime_paces_every_byte_at_the_link_baud() {
             ..LinkConfig::default()
         },
         fast: false,
+        // `encode` above counts EGI frames: send those, whatever suite the shipped model reads.
+        suite: estimator_core::Suite::Egi,
         ..RunConfig::default()
     };
     let started = std::time::Instant::now();

@@ -186,6 +186,7 @@ mod tests {
                 health: Default::default(),
                 filter_flags: 0,
                 substituted: 0,
+                usable: 0,
             }
         };
         let bg = vec![mk(1, 2, 3), mk(3, 0, -1)];
