@@ -10,7 +10,8 @@ use estimator_core::Estimator;
 use estimator_core::wire::MAX_FRAME;
 use estimator_core::wire::estimate::TickSource;
 use firmware::rcc::{self, Mmio, Outcome};
-use firmware::{App, ByteQueue, Clock, Config};
+use firmware::transport::MAILBOX_WORDS;
+use firmware::{App, ByteQueue, Clock, Config, Transport};
 use panic_probe as _;
 
 const BAUD: u32 = 115_200;
@@ -141,6 +142,61 @@ fn init_step_clock(mut core: cortex_m::Peripherals) -> BoardClock {
     BoardClock::Instructions
 }
 
+/// Sleeps for good: nothing left to serve.
+fn halt() -> ! {
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+/// Reads and clears the host's opt-in word (see `firmware::transport`).
+fn take_transport() -> Transport {
+    let [low, high] = MAILBOX_WORDS.map(|a| a as usize);
+    let t = Transport::from_mailbox(rd(low), rd(high));
+    wr(low, 0);
+    wr(high, 0);
+    t
+}
+
+/// Feeds received bytes to the application, handing each estimate frame to `send`.
+fn feed(app: &mut App<'_, BoardClock>, bytes: &[u8], send: &mut impl FnMut(&[u8])) {
+    let mut out = [0u8; MAX_FRAME];
+    for b in bytes {
+        if let Some(len) = app.push(*b, &mut out) {
+            send(out.get(..len).unwrap_or(&[]));
+        }
+    }
+}
+
+/// The semihosting path: whole reads from QEMU's stdin, whole writes to its stdout. Only entered
+/// when the host opted in, so every `BKPT 0xAB` here has a host to answer it.
+fn serve_semihost(mut app: App<'_, BoardClock>) -> ! {
+    use cortex_m_semihosting::{hio, nr, syscall};
+    // SAFETY: OPEN takes a NUL-terminated name, its mode and the name's length without the NUL.
+    let rx = unsafe { syscall!(OPEN, c":tt".as_ptr(), nr::open::R, 3) };
+    let tx = hio::hstdout();
+    let (false, Ok(mut tx)) = (rx == usize::MAX, tx) else {
+        defmt::error!("semihosting console did not open; halting");
+        halt()
+    };
+    let mut send = |bytes: &[u8]| {
+        // A failed write is a host that has gone away; the next read ends the loop.
+        let _ = tx.write_all(bytes);
+    };
+    send(&[estimator_core::wire::DELIMITER]);
+    let mut buf = [0u8; 256];
+    loop {
+        // SAFETY: READ writes at most `buf.len()` bytes into `buf`; it returns how many it did NOT read.
+        let left = unsafe { syscall!(READ, rx, buf.as_mut_ptr(), buf.len()) };
+        let n = buf.len().saturating_sub(left);
+        if n == 0 {
+            defmt::info!("semihosting console closed; halting");
+            halt()
+        }
+        feed(&mut app, buf.get(..n).unwrap_or(&[]), &mut send);
+    }
+}
+
 fn send(bytes: &[u8]) {
     for b in bytes {
         while rd(reg::USART1_SR) & reg::SR_TXE == 0 {}
@@ -169,21 +225,33 @@ fn main() -> ! {
     }
     init_clocks_and_pins();
     let clock = init_step_clock(core);
-    defmt::info!("estimator firmware up; step clock {}", clock.source());
-    init_usart(clocks.pclk2_hz);
-    // SAFETY: unmasking can break a critical section that relies on this interrupt being masked;
-    // there is none: the handler only pushes to the lock-free `RX` and reads USART1.
-    unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
-
-    let mut app = App::new(
+    let transport = take_transport();
+    defmt::info!(
+        "estimator firmware up; step clock {}, link {}",
+        clock.source(),
+        transport
+    );
+    let app = App::new(
         Estimator::shipped(),
         clock,
         Config::fifty_ms_at(clocks.sysclk_hz),
     );
+    if transport == Transport::Semihost {
+        serve_semihost(app);
+    }
+    serve_usart(app, clocks.pclk2_hz)
+}
+
+/// The USART1 path: bytes from the receive interrupt's queue, replies by polling TXE.
+fn serve_usart(mut app: App<'_, BoardClock>, pclk2_hz: u32) -> ! {
+    init_usart(pclk2_hz);
+    // SAFETY: unmasking can break a critical section that relies on this interrupt being masked;
+    // there is none: the handler only pushes to the lock-free `RX` and reads USART1.
+    unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
+
     // A lone delimiter says "ready": receivers skip empty frames, and hil-sim waits for it before
     // sending (bytes that reach USART1 before UE/RE are set are dropped).
     send(&[estimator_core::wire::DELIMITER]);
-    let mut out = [0u8; MAX_FRAME];
     let mut batch = [0u8; 64];
     loop {
         let n = batch
@@ -201,11 +269,7 @@ fn main() -> ! {
             continue;
         }
         app.set_rx_overruns(RX.overruns());
-        for b in batch.iter().take(n) {
-            if let Some(len) = app.push(*b, &mut out) {
-                send(out.get(..len).unwrap_or(&[]));
-            }
-        }
+        feed(&mut app, batch.get(..n).unwrap_or(&[]), &mut send);
     }
 }
 

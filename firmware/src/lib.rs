@@ -5,7 +5,8 @@
 //! step per valid sensor frame, link and deadline counters) → encoded estimate frames out.
 //!
 //! Everything here is `no_std`, heap-free and tested on the host; the Cortex-M4F board layer
-//! (`src/main.rs`) only moves bytes between USART1 and this library and reads a [`Clock`].
+//! (`src/main.rs`) only moves bytes between USART1 (or, in QEMU when the host opts in, semihosting:
+//! [`transport`]) and this library and reads a [`Clock`].
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
 // The flight-code lints (no unwrap/expect/panic/indexing, no unchecked arithmetic) come from
@@ -28,7 +29,9 @@ pub mod app;
 pub mod clock;
 pub mod queue;
 pub mod rcc;
+pub mod transport;
 
 pub use app::{App, Config, Stats};
 pub use clock::{Clock, NoClock};
 pub use queue::ByteQueue;
+pub use transport::Transport;

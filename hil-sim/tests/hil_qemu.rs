@@ -4,7 +4,7 @@
 
 use estimator_core::{CHANNELS, Channel, SensorFrame};
 use hil_sim::runner::target::default_elf;
-use hil_sim::runner::{self, InProcess, Qemu, RunConfig, Sample};
+use hil_sim::runner::{self, InProcess, Qemu, QemuLink, RunConfig, Sample};
 
 fn samples(n: u16) -> Vec<Sample> {
     (0..n)
@@ -33,18 +33,30 @@ fn samples(n: u16) -> Vec<Sample> {
         .collect()
 }
 
+/// Both QEMU links (semihosting, the fast default; USART1, the board's path) against the host, and
+/// against each other including the per-step instruction counts: same image, same bytes.
 #[test]
-fn qemu_estimates_equal_host_bit_for_bit() {
+fn qemu_estimates_equal_host_bit_for_bit_on_both_links() {
     let s = samples(200);
     let cfg = RunConfig::default();
     let host = runner::run(&mut InProcess::new(), &s, &cfg).unwrap();
-    let mut q = Qemu::start("qemu-system-arm", &default_elf()).unwrap();
-    let qemu = runner::run(&mut q, &s, &cfg).unwrap();
-    assert_eq!(host.records.len(), qemu.records.len());
-    for (h, q) in host.records.iter().zip(&qemu.records) {
-        let (h, q) = (h.reply.unwrap(), q.reply.unwrap());
-        assert_eq!(h.estimate, q.estimate, "seq {}", h.estimate.seq);
-        assert_eq!(q.health.deadline_misses, 0);
-        assert!(q.health.step_ticks > 0);
+    let mut ticks = Vec::new();
+    for link in [QemuLink::Semihost, QemuLink::Usart] {
+        let mut q = Qemu::start("qemu-system-arm", &default_elf(), link).unwrap();
+        let qemu = runner::run(&mut q, &s, &cfg).unwrap();
+        assert_eq!(host.records.len(), qemu.records.len());
+        for (h, q) in host.records.iter().zip(&qemu.records) {
+            let (h, q) = (h.reply.unwrap(), q.reply.unwrap());
+            assert_eq!(h.estimate, q.estimate, "{link:?}: seq {}", h.estimate.seq);
+            assert_eq!(q.health.deadline_misses, 0, "{link:?}");
+            assert!(q.health.step_ticks > 0, "{link:?}");
+        }
+        ticks.push(
+            qemu.records
+                .iter()
+                .map(|r| r.reply.map(|f| f.health))
+                .collect::<Vec<_>>(),
+        );
     }
+    assert_eq!(ticks[0], ticks[1], "the two links' health fields differ");
 }

@@ -5,7 +5,7 @@
 
 use estimator_core::{Flags, SensorFrame};
 use hil_sim::runner::target::default_elf;
-use hil_sim::runner::{self, Qemu, RunConfig, Sample};
+use hil_sim::runner::{self, Qemu, QemuLink, RunConfig, Sample};
 use trainer::quant::{Vector, parse_vectors};
 
 /// The vector runs are streamed back to back into one firmware instance: a run starts more than
@@ -60,7 +60,7 @@ fn qemu_reproduces_the_trainer_vectors() {
             ));
         }
     }
-    let mut q = Qemu::start("qemu-system-arm", &default_elf()).unwrap();
+    let mut q = Qemu::start("qemu-system-arm", &default_elf(), QemuLink::Usart).unwrap();
     let out = runner::run(&mut q, &samples, &RunConfig::default()).unwrap();
     assert_eq!(out.records.len(), expected.len());
     for (r, want) in out.records.iter().zip(&expected) {

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::target::{InProcess, Qemu, Serial, Target, default_elf};
+use super::target::{InProcess, Qemu, QemuLink, Serial, Target, default_elf};
 use super::{RunConfig, RunError, RunOutcome, samples_of};
 use crate::dataset::Flight;
 use crate::link::LinkConfig;
@@ -44,6 +44,11 @@ pub struct RunArgs {
     /// QEMU binary.
     #[arg(long, default_value = "qemu-system-arm")]
     pub qemu: String,
+    /// How bytes reach the image in QEMU: semihosting on QEMU's stdin/stdout, whole frames per call
+    /// (fast), or USART1 on a TCP socket, the board's own path (one byte per QEMU main-loop round
+    /// trip: the 20-minute flight takes minutes). The same bytes and estimates either way.
+    #[arg(long, value_enum, default_value = "semihost")]
+    pub qemu_link: QemuLink,
     /// Serial device of a flashed board.
     #[arg(long)]
     pub port: Option<PathBuf>,
@@ -173,7 +178,7 @@ pub fn open_target(a: &RunArgs) -> Result<Box<dyn Target>, RunError> {
         FirmwareKind::Host => Box::new(InProcess::new()),
         FirmwareKind::Qemu => {
             let elf = a.elf.clone().unwrap_or_else(default_elf);
-            Box::new(Qemu::start(&a.qemu, &elf)?)
+            Box::new(Qemu::start(&a.qemu, &elf, a.qemu_link)?)
         }
         FirmwareKind::Serial => {
             let port = a.port.clone().ok_or_else(|| {

@@ -23,7 +23,7 @@ use estimator_core::wire::{Accumulator, MAX_FRAME};
 use estimator_core::{SensorFrame, Suite};
 
 use crate::link::{Link, LinkConfig};
-pub use target::{InProcess, Qemu, Serial, Target};
+pub use target::{InProcess, Qemu, QemuLink, Serial, Target};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -31,8 +31,12 @@ pub enum RunError {
     NoElf(PathBuf),
     #[error("cannot start {0}: {1} (is it installed? apt-get install qemu-system-arm)")]
     Spawn(String, std::io::Error),
-    #[error("QEMU exited before accepting the serial connection ({0}): {1}")]
+    #[error("QEMU exited before the firmware was ready ({0}): {1}")]
     QemuExited(String, String),
+    #[error(
+        "QEMU started but the firmware never signalled ready: is {0} a current `cargo fw` image? Rebuild it with `cargo fw`; an image older than the semihosting link answers only with `--qemu-link usart`"
+    )]
+    NotReady(PathBuf),
     #[error("cannot {0}: {1}")]
     Io(String, std::io::Error),
     #[error("{0} closed while frames were still in flight")]

@@ -130,48 +130,97 @@ pub fn default_elf() -> PathBuf {
     root.join("target/thumbv7em-none-eabihf/firmware/firmware")
 }
 
-/// The flight image in QEMU's netduinoplus2, its USART1 on a local TCP socket, `-icount shift=0`
-/// so that TIM2 counts instructions. QEMU is killed when this is dropped.
+/// How hil-sim talks to the flight image in QEMU (`firmware::transport`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum QemuLink {
+    /// QEMU's stdin and stdout through Arm semihosting, whole frames per call (the fast path).
+    #[default]
+    Semihost,
+    /// USART1 on a local TCP socket, the path a board uses (one byte per QEMU main-loop round trip).
+    Usart,
+}
+
+/// The flight image in QEMU's netduinoplus2 with `-icount shift=0`, so that TIM2 counts
+/// instructions. QEMU is killed when this is dropped.
 ///
-/// The socket has `nodelay=on` (TCP_NODELAY on QEMU's side). QEMU's USART writes every byte the
-/// firmware puts in DR as its own `send`; with Nagle's algorithm on, the kernel holds the rest of an
-/// estimate frame until the first byte is acknowledged, and this side delays that ACK by up to
-/// 40 ms. That stall, once per frame, was nearly all of a run's wall time (a 30-s flight: 27.8 s
-/// with Nagle, 1.8 s without).
+/// [`QemuLink::Usart`]: USART1 on a local TCP socket with `nodelay=on` (TCP_NODELAY on QEMU's side).
+/// QEMU's USART writes every byte the firmware puts in DR as its own `send`; with Nagle's algorithm
+/// on, the kernel holds the rest of an estimate frame until the first byte is acknowledged, and this
+/// side delays that ACK by up to 40 ms. That stall, once per frame, was nearly all of a run's wall
+/// time (a 30-s flight: 27.8 s with Nagle, 1.8 s without). What remains is QEMU's USART model taking
+/// one byte per main-loop round trip.
+///
+/// [`QemuLink::Semihost`]: the same bytes over QEMU's stdin and stdout, the firmware reading and
+/// writing them with semihosting calls. The host opts the image in by writing
+/// `firmware::transport::SEMIHOST_MAGIC` into its mailbox with QEMU's generic loader; USART1 is then
+/// left unconnected (`-serial null`).
 pub struct Qemu {
     child: Child,
-    stream: TcpStream,
+    writer: Box<dyn Write + Send>,
     reader: Reader,
 }
 
 impl Qemu {
-    pub fn start(qemu: &str, elf: &Path) -> Result<Qemu, RunError> {
+    pub fn start(qemu: &str, elf: &Path, link: QemuLink) -> Result<Qemu, RunError> {
         if !elf.is_file() {
             return Err(RunError::NoElf(elf.to_path_buf()));
         }
+        let mut cmd = Command::new(qemu);
+        cmd.args([
+            "-M",
+            "netduinoplus2",
+            "-display",
+            "none",
+            "-monitor",
+            "none",
+        ])
+        .args(["-icount", "shift=0", "-kernel"])
+        .arg(elf)
+        .stderr(Stdio::piped());
+        let (child, writer, reader) = match link {
+            QemuLink::Usart => Self::spawn_usart(cmd)?,
+            QemuLink::Semihost => Self::spawn_semihost(cmd)?,
+        };
+        let mut q = Qemu {
+            child,
+            writer,
+            reader,
+        };
+        // The firmware sends one delimiter once its link is up; bytes sent before that are lost.
+        let mut ready = Vec::new();
+        let until = Instant::now() + Duration::from_secs(15);
+        while ready.is_empty() && Instant::now() < until {
+            if let Err(e) = q.recv(Duration::from_millis(100), &mut ready) {
+                return Err(q.exited().unwrap_or(e));
+            }
+        }
+        if ready.is_empty() {
+            return Err(q
+                .exited()
+                .unwrap_or_else(|| RunError::NotReady(elf.to_path_buf())));
+        }
+        Ok(q)
+    }
+
+    fn spawn_usart(mut cmd: Command) -> Result<(Child, Box<dyn Write + Send>, Reader), RunError> {
         let port = TcpListener::bind("127.0.0.1:0")
             .and_then(|l| l.local_addr())
             .map_err(|e| RunError::Io("find a free TCP port for QEMU".into(), e))?
             .port();
-        let mut child = Command::new(qemu)
-            .args(["-M", "netduinoplus2", "-nographic", "-monitor", "none"])
-            .args(["-icount", "shift=0", "-kernel"])
-            .arg(elf)
+        let mut child = cmd
             .arg("-serial")
             .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"))
             .stdin(Stdio::null())
             .stdout(Stdio::null())
-            .stderr(Stdio::piped())
             .spawn()
-            .map_err(|e| RunError::Spawn(qemu.to_string(), e))?;
+            .map_err(|e| RunError::Spawn(qemu_name(&cmd), e))?;
         let started = Instant::now();
         let stream = loop {
             if let Ok(Some(status)) = child.try_wait() {
-                let mut err = String::new();
-                if let Some(mut s) = child.stderr.take() {
-                    let _ = s.read_to_string(&mut err);
-                }
-                return Err(RunError::QemuExited(status.to_string(), err));
+                return Err(RunError::QemuExited(
+                    status.to_string(),
+                    stderr_of(&mut child),
+                ));
             }
             match TcpStream::connect(("127.0.0.1", port)) {
                 Ok(s) => break s,
@@ -191,29 +240,61 @@ impl Qemu {
         let read_half = stream
             .try_clone()
             .map_err(|e| RunError::Io("clone the QEMU socket".into(), e))?;
-        let mut q = Qemu {
-            child,
-            stream,
-            reader: Reader::spawn(read_half),
-        };
-        // The firmware sends one delimiter once USART1 is enabled; bytes sent before that are lost.
-        let mut ready = Vec::new();
-        let until = Instant::now() + Duration::from_secs(15);
-        while ready.is_empty() && Instant::now() < until {
-            q.recv(Duration::from_millis(100), &mut ready)?;
-        }
-        if ready.is_empty() {
-            return Err(RunError::Closed(
-                "QEMU started but the firmware never signalled ready (is the ELF a `cargo fw` image?)".into(),
-            ));
-        }
-        Ok(q)
+        Ok((child, Box::new(stream), Reader::spawn(read_half)))
     }
+
+    fn spawn_semihost(
+        mut cmd: Command,
+    ) -> Result<(Child, Box<dyn Write + Send>, Reader), RunError> {
+        use firmware::transport::{MAILBOX_ADDR, SEMIHOST_MAGIC};
+        let mut child = cmd
+            .args([
+                "-serial",
+                "null",
+                "-semihosting-config",
+                "enable=on,target=native",
+            ])
+            .arg("-device")
+            .arg(format!(
+                "loader,addr={MAILBOX_ADDR:#x},data={SEMIHOST_MAGIC:#x},data-len=8"
+            ))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .map_err(|e| RunError::Spawn(qemu_name(&cmd), e))?;
+        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+            let _ = child.kill();
+            return Err(RunError::Closed(
+                "QEMU's stdin or stdout was not piped".into(),
+            ));
+        };
+        Ok((child, Box::new(stdin), Reader::spawn(stdout)))
+    }
+
+    /// QEMU's exit status and stderr, if it has exited.
+    fn exited(&mut self) -> Option<RunError> {
+        let status = self.child.try_wait().ok().flatten()?;
+        Some(RunError::QemuExited(
+            status.to_string(),
+            stderr_of(&mut self.child),
+        ))
+    }
+}
+
+fn qemu_name(cmd: &Command) -> String {
+    cmd.get_program().to_string_lossy().into_owned()
+}
+
+fn stderr_of(child: &mut Child) -> String {
+    let mut err = String::new();
+    if let Some(mut s) = child.stderr.take() {
+        let _ = s.read_to_string(&mut err);
+    }
+    err
 }
 
 impl Drop for Qemu {
     fn drop(&mut self) {
-        let _ = self.stream.shutdown(std::net::Shutdown::Both);
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
@@ -224,8 +305,9 @@ impl Target for Qemu {
         "qemu"
     }
     fn send(&mut self, bytes: &[u8]) -> Result<(), RunError> {
-        self.stream
+        self.writer
             .write_all(bytes)
+            .and_then(|()| self.writer.flush())
             .map_err(|e| RunError::Io("write to QEMU's serial".into(), e))
     }
     fn recv(&mut self, timeout: Duration, out: &mut Vec<u8>) -> Result<(), RunError> {
