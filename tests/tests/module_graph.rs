@@ -3,8 +3,8 @@
 //! when its code (not its comments) names `crate::<other>`; a cycle is a strongly connected set of
 //! two or more modules.
 //!
-//! `KNOWN_CYCLES` lists the cycles not yet untangled. The test fails when a new one appears, and
-//! also when a listed one is gone: then take it off the list, so the list only ever shrinks.
+//! The trainer builds against hil-sim without its `sim` feature, so it can only name the modules that
+//! stay without it; `the_trainer_reads_datasets_not_the_simulator` says which ones, readably.
 
 // Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
 #![allow(
@@ -20,8 +20,6 @@ use std::path::{Path, PathBuf};
 
 /// Cycles still to untangle, as (crate, sorted module names). None left: hil-sim's data side
 /// (`dataset`/`maneuver`/`plant`/`sensors`) and `runner`/`score` were untangled in issue 17.
-const KNOWN_CYCLES: &[(&str, &[&str])] = &[];
-
 const CRATES: [&str; 4] = ["estimator-core", "firmware", "hil-sim", "trainer"];
 
 fn root() -> PathBuf {
@@ -221,23 +219,53 @@ fn the_architecture_doc_shows_this_module_graph() {
 }
 
 #[test]
-fn no_crate_has_an_import_cycle_beyond_the_known_ones() {
+fn no_crate_has_an_import_cycle() {
     let mut found = Vec::new();
     for krate in CRATES {
-        let g = graph(krate);
-        for c in cycles(&g) {
-            found.push((krate.to_string(), c));
+        for c in cycles(&graph(krate)) {
+            found.push((krate, c));
         }
     }
-    let known: Vec<(String, Vec<String>)> = KNOWN_CYCLES
+    assert!(found.is_empty(), "import cycles: {found:?}");
+}
+
+/// What the trainer may use of hil-sim: the modules built without the `sim` feature.
+const LEAN_HIL_SIM: [&str; 4] = ["dataset", "flight", "font", "frames"];
+
+#[test]
+fn the_trainer_reads_datasets_not_the_simulator() {
+    let mut used = BTreeSet::new();
+    let mut stack = vec![root().join("trainer/src")];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let text = std::fs::read_to_string(&p).unwrap();
+                for (k, _) in text.match_indices("hil_sim::") {
+                    let rest = &text[k + "hil_sim::".len()..];
+                    let name: String = rest
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    used.insert(name);
+                }
+            }
+        }
+    }
+    assert!(!used.is_empty(), "found no hil_sim:: path in trainer/src");
+    let beyond: Vec<_> = used
         .iter()
-        .map(|(k, c)| (k.to_string(), c.iter().map(|s| s.to_string()).collect()))
+        .filter(|m| !LEAN_HIL_SIM.contains(&m.as_str()))
         .collect();
-    let new: Vec<_> = found.iter().filter(|c| !known.contains(c)).collect();
-    let gone: Vec<_> = known.iter().filter(|c| !found.contains(c)).collect();
-    assert!(new.is_empty(), "new import cycles: {new:?}");
     assert!(
-        gone.is_empty(),
-        "cycles untangled: take them off KNOWN_CYCLES: {gone:?}"
+        beyond.is_empty(),
+        "the trainer names hil-sim modules that need the simulator: {beyond:?}"
+    );
+    let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    assert!(
+        manifest.contains("hil-sim = { path = \"hil-sim\", default-features = false }"),
+        "the workspace must depend on hil-sim without its default `sim` feature"
     );
 }

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 /// Training rows (train + validation flights) of the paper's experiment: 4 h of flight at the
 /// dataset's sample rate (288 000 at 20 Hz).
-pub const PAPER_TRAIN_ROWS: usize = 4 * 3600 * hil_sim::plant::SAMPLE_HZ as usize;
+pub const PAPER_TRAIN_ROWS: usize = 4 * 3600 * hil_sim::flight::SAMPLE_HZ as usize;
 
 /// Which part of the experiment a flight belongs to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

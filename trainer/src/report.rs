@@ -9,7 +9,7 @@ use crate::metrics::{FlightMetrics, Metrics};
 use crate::model::TrainConfig;
 use crate::pipeline::{Size, Trained, train_angle};
 use crate::prep::Angle;
-use hil_sim::plant::SAMPLE_HZ;
+use hil_sim::flight::SAMPLE_HZ;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::fmt::Write;
 

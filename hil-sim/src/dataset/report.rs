@@ -69,7 +69,7 @@ fn coverage(flights: &[&Flight]) -> Coverage {
         r.1 = r.1.max(v);
     };
     for f in flights {
-        c.duration_min += f.samples.len() as f64 / f64::from(crate::plant::SAMPLE_HZ) / 60.0;
+        c.duration_min += f.samples.len() as f64 / f64::from(crate::flight::SAMPLE_HZ) / 60.0;
         for s in &f.samples {
             let t = &s.truth;
             c.samples += 1;
@@ -113,7 +113,7 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
         .flat_map(|(f, _)| {
             f.samples
                 .iter()
-                .map(|s| s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0)
+                .map(|s| s.truth.alt_msl_m / crate::flight::FT_TO_M / 1000.0)
         })
         .fold(10.0f64, f64::max);
     let max_mach = flights
@@ -144,7 +144,7 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
                 Circle::new(
                     (
                         s.truth.mach,
-                        s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0,
+                        s.truth.alt_msl_m / crate::flight::FT_TO_M / 1000.0,
                     ),
                     1,
                     color.mix(0.4).filled(),
@@ -227,7 +227,7 @@ fn sample_flight(path: &Path, f: &Flight) -> Result<(), DatasetError> {
     type Get = fn(&super::Sample) -> f64;
     let series: [(&str, Get); 4] = [
         ("altitude, 1000 ft", |s| {
-            s.truth.alt_msl_m / crate::plant::FT_TO_M / 1000.0
+            s.truth.alt_msl_m / crate::flight::FT_TO_M / 1000.0
         }),
         ("Mach", |s| s.truth.mach),
         ("α, deg", |s| s.truth.alpha_deg),

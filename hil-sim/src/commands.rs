@@ -1,0 +1,256 @@
+//! The data-side commands of `hil-sim`: `fly` (one script → a one-flight dataset), `generate` (a
+//! planned dataset) and `bench` (generation against raw JSBSim stepping). `run` is
+//! [`crate::runner::cli`]. `main.rs` parses and dispatches; what the commands do and print is here,
+//! on top of every other module.
+
+use std::path::PathBuf;
+
+use crate::dataset::{self, Manifest, Split};
+use crate::error::{Error, Result};
+use crate::fly::{self, FlyConfig};
+use crate::sensors::SensorConfig;
+
+#[derive(clap::Args)]
+pub struct FlyArgs {
+    /// JSBSim runscript; its initialize file is taken from beside it, else from the aircraft folder.
+    #[arg(long)]
+    script: PathBuf,
+    /// Dataset directory to write (created).
+    #[arg(long, default_value = "datasets/fly")]
+    out: PathBuf,
+    /// Seed of the sensor error models.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Sensor model parameters (TOML; see docs/sensors.md). Defaults: LN-200-class IMU.
+    #[arg(long)]
+    sensors: Option<PathBuf>,
+    /// Stop after this many simulated seconds.
+    #[arg(long)]
+    max_time_s: Option<f64>,
+}
+
+pub fn fly(a: &FlyArgs) -> Result<()> {
+    let sensors = sensors_of(&a.sensors)?;
+    let cfg = FlyConfig {
+        seed: a.seed,
+        sensors: sensors.clone(),
+        max_time_s: a.max_time_s,
+        name: None,
+    };
+    let started = std::time::Instant::now();
+    let mut bridge = crate::plant::Plant::spawn()?;
+    let version = bridge.jsbsim_version().to_string();
+    let flight = fly::fly_script_with(&mut bridge, &a.script, &cfg)?;
+    drop(bridge);
+    std::fs::create_dir_all(&a.out).map_err(|source| Error::Io {
+        action: "create the dataset directory",
+        path: a.out.clone(),
+        source,
+    })?;
+    let entry = dataset::write_flight(&a.out, &flight, Split::Test, "script", a.seed)?;
+    let manifest = Manifest {
+        format: Manifest::FORMAT,
+        suites: Manifest::written_suites(),
+        preset: "fly".into(),
+        jsbsim_version: version,
+        git_rev: dataset::git_rev(),
+        config: serde_json::json!({
+            "script": a.script.display().to_string(),
+            "max_time_s": a.max_time_s,
+            "sensors": sensors,
+        }),
+        flights: vec![entry.clone()],
+        files: Default::default(),
+    };
+    let mpath = manifest.write(&a.out)?;
+    // The same pictures and dataset.md as `generate` writes (envelope, α/β histograms, time
+    // histories, 3-D path and ground track).
+    dataset::report::write_report(&a.out)?;
+    println!(
+        "flew {} for {:.1} s ({} samples at 20 Hz) in {:.1} s wall{}",
+        a.script.display(),
+        entry.duration_s,
+        entry.samples,
+        started.elapsed().as_secs_f64(),
+        match &entry.cut {
+            Some(c) => format!("; CUT: {c}"),
+            None => String::new(),
+        }
+    );
+    println!(
+        "wrote {} and {} (report: dataset.md, plots: *.png)",
+        a.out.join(&entry.file).display(),
+        mpath.display()
+    );
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct GenerateArgs {
+    /// `paper`: 16 training flights of 15–20 min + 4 test flights; `large`: paper + 48 more training
+    /// flights (≈ 19 h); `ci`: 5 flights of 3 min.
+    #[arg(long, value_enum)]
+    preset: crate::maneuver::Preset,
+    /// Dataset directory to write (created).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    flights: FlightsArgs,
+}
+
+/// What `generate` and `bench` share.
+#[derive(clap::Args)]
+pub struct FlightsArgs {
+    /// Base seed; flight and sensor seeds derive from it.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Sensor model parameters (TOML; see docs/sensors.md).
+    #[arg(long)]
+    sensors: Option<PathBuf>,
+    /// Parallel flights (one JSBSim bridge process each).
+    #[arg(long, default_value_t = 2)]
+    workers: usize,
+}
+
+fn sensors_of(path: &Option<PathBuf>) -> Result<SensorConfig> {
+    Ok(match path {
+        Some(p) => SensorConfig::load(p)?,
+        None => SensorConfig::default(),
+    })
+}
+
+fn flights_bar(n: usize) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(n as u64);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} flights {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+pub fn generate(a: &GenerateArgs) -> Result<()> {
+    let sensors = sensors_of(&a.flights.sensors)?;
+    let started = std::time::Instant::now();
+    let pb = flights_bar(a.preset.plan(a.flights.seed).len());
+    let m = dataset::generate(
+        a.preset,
+        a.flights.seed,
+        &a.out,
+        &sensors,
+        a.flights.workers,
+        Some(&pb),
+    )?;
+    pb.finish_and_clear();
+    let report = dataset::report::write_report(&a.out)?;
+    let samples: usize = m.flights.iter().map(|f| f.samples).sum();
+    let cut = m.flights.iter().filter(|f| f.cut.is_some()).count();
+    println!(
+        "generated {} flights ({} samples, {:.1} min of flight, {} cut) in {:.1} s wall",
+        m.flights.len(),
+        samples,
+        samples as f64 / f64::from(crate::flight::SAMPLE_HZ) / 60.0,
+        cut,
+        started.elapsed().as_secs_f64()
+    );
+    for f in m.flights.iter().filter(|f| f.cut.is_some()) {
+        println!("  {} cut: {}", f.name, f.cut.as_deref().unwrap_or(""));
+    }
+    let over15 = report.train.above_15_share();
+    println!(
+        "training: α {:.1}..{:.1}° ({:.1}% above 15°), β {:.1}..{:.1}°, Mach {:.2}..{:.2}",
+        report.train.alpha_deg.0,
+        report.train.alpha_deg.1,
+        over15 * 100.0,
+        report.train.beta_deg.0,
+        report.train.beta_deg.1,
+        report.train.mach.0,
+        report.train.mach.1
+    );
+    println!(
+        "wrote {} (report: dataset.md, plots: *.png)",
+        a.out.display()
+    );
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Preset to generate and raw-step (the issue's figure is for `paper`).
+    #[arg(long, value_enum, default_value = "paper")]
+    preset: crate::maneuver::Preset,
+    /// Scratch dataset directory (overwritten every repeat).
+    #[arg(long, default_value = "out/bench/generate")]
+    out: PathBuf,
+    /// The same `--workers` on both sides.
+    #[command(flatten)]
+    flights: FlightsArgs,
+    /// Runs of each side (alternating which goes first); the best of each is reported.
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
+    /// Print the summary as JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn bench(a: &BenchArgs) -> Result<()> {
+    let sensors = sensors_of(&a.flights.sensors)?;
+    let n = a.preset.plan(a.flights.seed).len();
+    // One tick per flight per side per repeat.
+    let pb = flights_bar(2 * a.repeats.max(1) * n);
+    let r = crate::dataset::bench::run(
+        a.preset,
+        a.flights.seed,
+        &a.out,
+        &sensors,
+        a.flights.workers,
+        a.repeats,
+        Some(&pb),
+    )?;
+    pb.finish_and_clear();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+        return Ok(());
+    }
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.2}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "preset {} seed {}: {} flights, {:.2} h of flight, {} JSBSim steps at 120 Hz, {} workers \
+         ({})",
+        r.preset, r.seed, r.flights, r.flight_hours, r.steps, r.workers, r.machine
+    );
+    println!(
+        "| side | runs, s | best, s | per 4 h of flight, s | µs per 120 Hz step |\n|---|---|---|---|---|"
+    );
+    println!(
+        "| raw JSBSim stepping | {} | {:.2} | {:.2} | {:.2} |",
+        list(&r.raw_s),
+        r.raw_best_s,
+        r.raw_per_4h_s,
+        r.raw_us_per_step
+    );
+    println!(
+        "| hil-sim generate (+ report {:.2} s) | {} | {:.2} | {:.2} | {:.2} |",
+        r.report_s,
+        list(&r.generate_s),
+        r.generate_total_best_s,
+        r.generate_per_4h_s,
+        r.generate_us_per_step
+    );
+    println!(
+        "generate costs {:.2}× raw stepping; 4 h of flight in {:.1} s (target ≤ 30 s on 2 cores){}",
+        r.overhead_ratio,
+        r.generate_per_4h_s,
+        if r.same_flights {
+            ""
+        } else {
+            "; WARNING: raw step counts differ from the recorded flights"
+        }
+    );
+    Ok(())
+}
