@@ -5,11 +5,13 @@
 //!
 //! Feature `sim` (default) builds the simulator, the sensor models, the link and the runner. Without
 //! it the crate is only the flight records ([`flight`]), the dataset format and provenance
-//! ([`dataset`]), sample → frame ([`frames`]) and the plot font: what the trainer depends on.
+//! ([`dataset`]), sample → frame ([`frames`]), scripted sensor faults on frames ([`faults`]) and
+//! the plot font: what the trainer depends on.
 
 // Flight records and the dataset on disk: what the trainer reads, with no simulator behind it.
 pub mod dataset;
 pub mod error;
+pub mod faults;
 pub mod flight;
 pub mod font;
 pub mod frames;
@@ -17,8 +19,6 @@ pub mod frames;
 // The simulator and the HIL runner (the `sim` feature, on by default; the trainer builds without it).
 #[cfg(feature = "sim")]
 pub mod commands;
-#[cfg(feature = "sim")]
-pub mod faults;
 #[cfg(feature = "sim")]
 pub mod fly;
 #[cfg(feature = "sim")]

@@ -101,6 +101,114 @@ impl ProfileKind {
 /// A closed interval to draw uniformly from.
 pub type Range = (f64, f64);
 
+/// Out-of-distribution test cases (issue 15): one condition outside what any training flight
+/// sees, on a flight whose maneuvers are otherwise drawn exactly as its in-distribution twin's (the
+/// same seed and the same random draws in the same order; only the case's value replaces the draw).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OodCase {
+    /// 15 % below the lightest trained mass (18,830 lb: empty 17,400 + pilot 230 + 2 × 600 lb of
+    /// fuel): 16,006 lb. Below the empty weight, so the pilot's point mass becomes a negative mass
+    /// at the empty CG (a lighter structure, CG and inertia barely moved) with 2 × 300 lb of fuel.
+    MassLow,
+    /// 15 % above the heaviest trained mass (23,630 lb: 2 × 3,000 lb of fuel): 27,175 lb, both
+    /// internal tanks full (2 × 3,486 lb) and the rest in the two external tanks.
+    MassHigh,
+    /// A steady wind of 25 m/s (trained: at most 40 ft/s = 12.2 m/s), from the drawn direction.
+    Wind25,
+    /// MIL-spec turbulence severity 7, one above the highest trained (6).
+    TurbulencePlus,
+    /// Every 1-cosine gust of the flight at 15 m/s (trained: 5-25 ft/s, at most 7.6 m/s).
+    Gust15,
+    /// The flight of the twin; its frames lose the GPS fix for 30 s (`gps-loss`, `crate::faults`).
+    GpsOutage,
+    /// The flight of the twin; its normal accelerometer (the strongest α cue) sticks for 10 s.
+    ImuStuck,
+}
+
+impl OodCase {
+    pub const ALL: [OodCase; 7] = [
+        OodCase::MassLow,
+        OodCase::MassHigh,
+        OodCase::Wind25,
+        OodCase::TurbulencePlus,
+        OodCase::Gust15,
+        OodCase::GpsOutage,
+        OodCase::ImuStuck,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            OodCase::MassLow => "mass-low",
+            OodCase::MassHigh => "mass-high",
+            OodCase::Wind25 => "wind-25",
+            OodCase::TurbulencePlus => "turbulence-plus",
+            OodCase::Gust15 => "gust-15",
+            OodCase::GpsOutage => "gps-outage",
+            OodCase::ImuStuck => "imu-stuck",
+        }
+    }
+
+    /// The sensor faults of the case, in `crate::faults` notation (applied to the frames).
+    pub fn faults(self) -> &'static [&'static str] {
+        match self {
+            OodCase::GpsOutage => &["gps-loss@120+30"],
+            OodCase::ImuStuck => &["stuck:accel_z_mps2@120+10"],
+            _ => &[],
+        }
+    }
+}
+
+/// Mass of an OOD case: fuel in the two internal and two external tanks, and the pilot's point
+/// mass (weight, x station) where it changes.
+struct MassOverride {
+    internal_lbs: f64,
+    external_lbs: f64,
+    pointmass: Option<(f64, f64)>,
+}
+
+/// The F-16 model's empty weight and CG station, and its pilot point mass (`aircraft/f16/f16.xml`).
+const EMPTY_WEIGHT_LBS: f64 = 17_400.0;
+const EMPTY_CG_X_IN: f64 = -193.0;
+const PILOT_LBS: f64 = 230.0;
+/// The training mass range: empty + pilot + 2 × (600 … 3,000) lb of fuel.
+const TRAINED_MASS_LBS: Range = (
+    EMPTY_WEIGHT_LBS + PILOT_LBS + 2.0 * 600.0,
+    EMPTY_WEIGHT_LBS + PILOT_LBS + 2.0 * 3_000.0,
+);
+const INTERNAL_TANK_CAPACITY_LBS: f64 = 3_486.0;
+const OOD_MASS_MARGIN: f64 = 0.15;
+const OOD_LOW_FUEL_PER_TANK_LBS: f64 = 300.0;
+const OOD_WIND_FPS: f64 = 25.0 / crate::flight::FT_TO_M;
+const OOD_TURBULENCE_SEVERITY: u32 = 7;
+const OOD_GUST_FPS: f64 = 15.0 / crate::flight::FT_TO_M;
+
+impl OodCase {
+    fn mass(self) -> Option<MassOverride> {
+        match self {
+            OodCase::MassLow => {
+                let target = TRAINED_MASS_LBS.0 * (1.0 - OOD_MASS_MARGIN);
+                let structure = target - 2.0 * OOD_LOW_FUEL_PER_TANK_LBS;
+                Some(MassOverride {
+                    internal_lbs: OOD_LOW_FUEL_PER_TANK_LBS,
+                    external_lbs: 0.0,
+                    pointmass: Some((structure - EMPTY_WEIGHT_LBS, EMPTY_CG_X_IN)),
+                })
+            }
+            OodCase::MassHigh => {
+                let target = TRAINED_MASS_LBS.1 * (1.0 + OOD_MASS_MARGIN);
+                let fuel = target - EMPTY_WEIGHT_LBS - PILOT_LBS;
+                Some(MassOverride {
+                    internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
+                    external_lbs: (fuel - 2.0 * INTERNAL_TANK_CAPACITY_LBS) / 2.0,
+                    pointmass: None,
+                })
+            }
+            _ => None,
+        }
+    }
+}
+
 /// Everything that shapes one family of random flights.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -384,18 +492,39 @@ fn script_head(p: &Profile, seed: u64, name: &str, init_name: &str, duration_s: 
     s
 }
 
-/// Fuel in both internal tanks (frozen) and JSBSim's trim at the start.
-fn fuel_and_trim(s: &mut String, fuel: f64) {
+/// Fuel in both internal tanks (frozen) and JSBSim's trim at the start; an OOD mass also fills the
+/// external tanks and moves or lightens the pilot's point mass, before the trim.
+fn fuel_and_trim(s: &mut String, fuel: f64, mass: Option<&MassOverride>) {
+    let internal = mass.map_or(fuel, |m| m.internal_lbs);
     let _ = write!(
         s,
-        "    <event name=\"fuel and trim\">\n      <condition> simulation/sim-time-sec ge 0.0 </condition>\n      <set name=\"propulsion/tank[0]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/tank[1]/contents-lbs\" value=\"{fuel:.1}\"/>\n      <set name=\"propulsion/fuel_freeze\" value=\"1\"/>\n      <set name=\"simulation/do_simple_trim\" value=\"1\"/>\n    </event>\n"
+        "    <event name=\"fuel and trim\">\n      <condition> simulation/sim-time-sec ge 0.0 </condition>\n      <set name=\"propulsion/tank[0]/contents-lbs\" value=\"{internal:.1}\"/>\n      <set name=\"propulsion/tank[1]/contents-lbs\" value=\"{internal:.1}\"/>\n"
     );
+    if let Some(m) = mass {
+        let _ = write!(
+            s,
+            "      <set name=\"propulsion/tank[2]/contents-lbs\" value=\"{0:.1}\"/>\n      <set name=\"propulsion/tank[3]/contents-lbs\" value=\"{0:.1}\"/>\n",
+            m.external_lbs
+        );
+        if let Some((w, x)) = m.pointmass {
+            let _ = write!(
+                s,
+                "      <set name=\"inertia/pointmass-weight-lbs[0]\" value=\"{w:.1}\"/>\n      <set name=\"inertia/pointmass-location-X-inches[0]\" value=\"{x:.1}\"/>\n"
+            );
+        }
+    }
+    s.push_str("      <set name=\"propulsion/fuel_freeze\" value=\"1\"/>\n      <set name=\"simulation/do_simple_trim\" value=\"1\"/>\n    </event>\n");
 }
 
 /// Milspec turbulence (its own repeatable seed) and a steady wind, set at 0.5 s.
-fn wind(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng) {
-    let sev = rng.random_range(p.turb_severity.0..=p.turb_severity.1.max(p.turb_severity.0));
-    let wind = draw(rng, p.steady_wind_fps);
+fn wind(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng, ood: Option<OodCase>) {
+    let mut sev = rng.random_range(p.turb_severity.0..=p.turb_severity.1.max(p.turb_severity.0));
+    let mut wind = draw(rng, p.steady_wind_fps);
+    match ood {
+        Some(OodCase::TurbulencePlus) => sev = OOD_TURBULENCE_SEVERITY,
+        Some(OodCase::Wind25) => wind = OOD_WIND_FPS,
+        _ => {}
+    }
     let wdir = draw(rng, (0.0, std::f64::consts::TAU));
     let turb_seed = rng.random_range(1..1_000_000u32);
     let _ = write!(
@@ -750,11 +879,22 @@ fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0
 }
 
 /// 1-cosine gusts in random directions, each a timed event.
-fn gusts(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64) {
+fn gusts(
+    s: &mut String,
+    p: &Profile,
+    rng: &mut ChaCha12Rng,
+    duration_s: f64,
+    ood: Option<OodCase>,
+) {
     let start = COMMANDS_START_S;
     let mut t = start + draw(rng, p.gust_interval_s);
     while t < duration_s {
-        let mag = draw(rng, p.gust_fps);
+        let drawn = draw(rng, p.gust_fps);
+        let mag = if ood == Some(OodCase::Gust15) {
+            OOD_GUST_FPS
+        } else {
+            drawn
+        };
         let az = draw(rng, (0.0, std::f64::consts::TAU));
         let el = draw(rng, (-0.5, 0.5));
         let ramp = draw(rng, (0.5, 3.0));
@@ -793,6 +933,18 @@ pub fn generate(
     name: &str,
     duration_s: f64,
 ) -> Result<Maneuver, ManeuverError> {
+    generate_case(profile, seed, name, duration_s, None)
+}
+
+/// [`generate`] with an out-of-distribution case: the same draws in the same order, the case's
+/// value in place of its draw (sensor-fault cases fly exactly the in-distribution script).
+pub fn generate_case(
+    profile: &Profile,
+    seed: u64,
+    name: &str,
+    duration_s: f64,
+    ood: Option<OodCase>,
+) -> Result<Maneuver, ManeuverError> {
     if name.is_empty()
         || !name
             .chars()
@@ -810,13 +962,14 @@ pub fn generate(
     let mut s = script_head(p, seed, name, &init_name, duration_s);
     let fuel = draw(&mut rng, p.fuel_per_tank_lbs);
     let throttle0 = draw(&mut rng, p.throttle);
-    fuel_and_trim(&mut s, fuel);
-    wind(&mut s, p, &mut rng);
+    let mass = ood.and_then(OodCase::mass);
+    fuel_and_trim(&mut s, fuel, mass.as_ref());
+    wind(&mut s, p, &mut rng, ood);
     // The command tables go before the laws that read them (JSBSim runs the events in file order).
     s.push_str(&command_tables(p, &mut rng, duration_s, throttle0));
     zone_laws(&mut s, p);
     control_laws(&mut s, p);
-    gusts(&mut s, p, &mut rng, duration_s);
+    gusts(&mut s, p, &mut rng, duration_s, ood);
     s.push_str("  </run>\n</runscript>\n");
     Ok(Maneuver {
         name: name.to_string(),
@@ -852,6 +1005,84 @@ impl Maneuver {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ood_plan_pairs_every_case_with_its_twin() {
+        let plan = Preset::Ood.plan(1);
+        assert_eq!(plan.len(), 2 * (1 + OodCase::ALL.len()));
+        for f in &plan {
+            assert_eq!(f.split, crate::flight::Split::Test);
+            let twin = plan
+                .iter()
+                .find(|t| t.ood.is_none() && t.profile == f.profile)
+                .unwrap();
+            assert_eq!(f.seed, twin.seed, "{}", f.name);
+            let case = f.ood.map_or("nominal", OodCase::name);
+            assert_eq!(f.name, format!("ood_{case}_{}", f.profile.name()));
+        }
+        // No other preset's seed: training seeds end below 400, test seeds are 500 + k.
+        let others: Vec<u64> = [Preset::Large, Preset::Ci]
+            .iter()
+            .flat_map(|p| p.plan(1))
+            .map(|f| f.seed)
+            .collect();
+        assert!(plan.iter().all(|f| !others.contains(&f.seed)));
+        // Other presets' manifests do not change: no `ood` key when there is no case.
+        let paper = serde_json::to_string(&Preset::Paper.plan(1)).unwrap();
+        assert!(!paper.contains("ood"));
+    }
+
+    #[test]
+    fn ood_cases_change_only_their_condition() {
+        let p = Profile::preset(ProfileKind::HighAlpha);
+        let nominal = generate_case(&p, 9, "x", 300.0, None).unwrap().script_xml;
+        // The script without the lines that set the case's condition.
+        let without = |text: &str, keys: &[&str]| -> Vec<String> {
+            text.lines()
+                .filter(|l| !keys.iter().any(|k| l.contains(k)))
+                .map(str::to_string)
+                .collect()
+        };
+        for case in OodCase::ALL {
+            let s = generate_case(&p, 9, "x", 300.0, Some(case))
+                .unwrap()
+                .script_xml;
+            let keys: &[&str] = match case {
+                OodCase::GpsOutage | OodCase::ImuStuck => &[],
+                OodCase::MassLow | OodCase::MassHigh => &["contents-lbs", "pointmass-"],
+                OodCase::Wind25 => &["wind-north-fps", "wind-east-fps"],
+                OodCase::TurbulencePlus => &["milspec/", "turb-type"],
+                OodCase::Gust15 => &["magnitude-ft_sec"],
+            };
+            assert_ne!(
+                case != OodCase::GpsOutage && case != OodCase::ImuStuck,
+                s == nominal
+            );
+            assert_eq!(without(&s, keys), without(&nominal, keys), "{case:?}");
+            match case {
+                OodCase::MassLow => {
+                    assert!(s.contains("pointmass-weight-lbs[0]\" value=\"-1994.5\""));
+                    assert!(s.contains("tank[0]/contents-lbs\" value=\"300.0\""));
+                }
+                OodCase::MassHigh => {
+                    assert!(s.contains("tank[1]/contents-lbs\" value=\"3486.0\""));
+                    assert!(s.contains("tank[3]/contents-lbs\" value=\"1286.2\""));
+                }
+                OodCase::TurbulencePlus => assert!(s.contains("milspec/severity\" value=\"7\"")),
+                OodCase::Gust15 => assert!(
+                    s.lines()
+                        .filter(|l| l.contains("magnitude-ft_sec"))
+                        .all(|l| l.contains("value=\"49.2126\""))
+                ),
+                _ => {}
+            }
+            assert!(
+                case.faults()
+                    .iter()
+                    .all(|f| f.parse::<crate::faults::Fault>().is_ok())
+            );
+        }
+    }
 
     #[test]
     fn same_seed_same_script_other_seed_other_script() {
@@ -989,6 +1220,10 @@ pub enum Preset {
     /// flights per profile: 64 training flights, about 19 h (18.8 h training + 0.4 h test). More flights, each with its own mass,
     /// wind and maneuvers, is what lets a model generalise to unseen flights.
     Large,
+    /// Out-of-distribution test flights, kept apart from every training preset: for the gentle and
+    /// the high-α profile, an in-distribution twin (`ood_nominal_<profile>`) and one flight per
+    /// [`OodCase`] (`ood_<case>_<profile>`) with the twin's seed, 6 min each (16 flights).
+    Ood,
 }
 
 /// One planned flight of a preset.
@@ -999,6 +1234,9 @@ pub struct PlannedFlight {
     pub profile: ProfileKind,
     pub seed: u64,
     pub duration_s: f64,
+    /// The out-of-distribution case (`ood` preset only; absent from other presets' manifests).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ood: Option<OodCase>,
 }
 
 impl PlannedFlight {
@@ -1019,6 +1257,7 @@ impl PlannedFlight {
                 .wrapping_mul(1000)
                 .wrapping_add((pi * 100 + k) as u64),
             duration_s: draw(rng, len).round(),
+            ood: None,
         }
     }
 }
@@ -1029,6 +1268,7 @@ impl Preset {
             Preset::Paper => "paper",
             Preset::Ci => "ci",
             Preset::Large => "large",
+            Preset::Ood => "ood",
         }
     }
 
@@ -1039,6 +1279,9 @@ impl Preset {
         // Paper: 4 training flights of 15–20 min per profile.
         const PAPER_PER_PROFILE: usize = 4;
         const PAPER_TRAIN_LEN: Range = (900.0, 1200.0);
+        if self == Preset::Ood {
+            return Self::ood_plan(base_seed);
+        }
         if self == Preset::Large {
             // Paper's plan untouched, then 12 more per profile from their own random stream.
             let mut out = Preset::Paper.plan(base_seed);
@@ -1065,8 +1308,8 @@ impl Preset {
             &[ProfileKind],
             Range,
         ) = match self {
-            // (Large returned above.)
-            Preset::Paper | Preset::Large => (
+            // (Large and Ood returned above.)
+            Preset::Paper | Preset::Large | Preset::Ood => (
                 PAPER_PER_PROFILE,
                 PAPER_TRAIN_LEN,
                 &ProfileKind::ALL,
@@ -1093,7 +1336,34 @@ impl Preset {
                 profile: *kind,
                 seed: base_seed.wrapping_mul(1000).wrapping_add(500 + k as u64),
                 duration_s: draw(&mut rng, test_len).round(),
+                ood: None,
             });
+        }
+        out
+    }
+
+    /// The `ood` preset: seeds `base × 1000 + 700 + profile number`, a range no other preset uses.
+    fn ood_plan(base_seed: u64) -> Vec<PlannedFlight> {
+        const OOD_PROFILES: [ProfileKind; 2] = [ProfileKind::Gentle, ProfileKind::HighAlpha];
+        const OOD_LEN_S: f64 = 360.0;
+        let mut out = Vec::new();
+        for (pi, kind) in OOD_PROFILES.iter().enumerate() {
+            let seed = base_seed.wrapping_mul(1000).wrapping_add(700 + pi as u64);
+            let cases = std::iter::once(None).chain(OodCase::ALL.iter().copied().map(Some));
+            for ood in cases {
+                out.push(PlannedFlight {
+                    name: format!(
+                        "ood_{}_{}",
+                        ood.map_or("nominal", OodCase::name),
+                        kind.name()
+                    ),
+                    split: crate::flight::Split::Test,
+                    profile: *kind,
+                    seed,
+                    duration_s: OOD_LEN_S,
+                    ood,
+                });
+            }
         }
         out
     }

@@ -253,3 +253,54 @@ fn saved_generated_maneuver_reproduces_the_flight() {
     std::fs::remove_dir_all(&d).ok();
     std::fs::remove_dir_all(&d2).ok();
 }
+
+/// The `ood` preset's conditions are what JSBSim flies: the mass cases' weights 15 % beyond the
+/// trained range (16,006 and 27,175 lb, from the tanks and point mass the script sets before the
+/// trim), the wind case's 25 m/s, and otherwise the twin's flight (the same initial state).
+#[test]
+fn ood_cases_fly_their_conditions() {
+    use hil_sim::maneuver::OodCase;
+    let d = tmp("ood");
+    let cfg = FlyConfig {
+        seed: 1,
+        max_time_s: Some(12.0),
+        ..FlyConfig::default()
+    };
+    let p = Profile::preset(ProfileKind::Gentle);
+    let fly_case = |case: Option<OodCase>, name: &str| {
+        let m = maneuver::generate_case(&p, 7, name, 60.0, case).unwrap();
+        fly::fly_script(&m.write(&d).unwrap(), &cfg).unwrap()
+    };
+    let lb = |kg: f64| kg / plant::LB_TO_KG;
+    let nominal = fly_case(None, "nominal");
+    let low = fly_case(Some(OodCase::MassLow), "low");
+    let high = fly_case(Some(OodCase::MassHigh), "high");
+    let wind = fly_case(Some(OodCase::Wind25), "wind");
+    let w = nominal.samples[0].truth.mass_kg;
+    assert!((lb(w) - 17_630.0) > 2.0 * 600.0 - 1.0 && (lb(w) - 17_630.0) < 2.0 * 3_000.0 + 1.0);
+    for s in &low.samples {
+        assert!(
+            (lb(s.truth.mass_kg) - 16_005.5).abs() < 1.0,
+            "{}",
+            lb(s.truth.mass_kg)
+        );
+    }
+    for s in &high.samples {
+        assert!(
+            (lb(s.truth.mass_kg) - 27_174.5).abs() < 1.0,
+            "{}",
+            lb(s.truth.mass_kg)
+        );
+    }
+    // The wind ramps in from 0.5 s with a 5-s time constant; at 12 s the truth (steady wind plus
+    // the twin's turbulence) is within 1 m/s of 25 m/s (trained: at most 12.2 m/s).
+    let last = wind.samples.last().unwrap().truth;
+    let speed = last.wind_north_mps.hypot(last.wind_east_mps);
+    assert!((speed - 25.0).abs() < 1.0, "wind {speed} m/s");
+    // Same initial state as the twin: the cases change conditions, not the draw.
+    assert_eq!(
+        nominal.samples[0].truth.alt_msl_m,
+        wind.samples[0].truth.alt_msl_m
+    );
+    std::fs::remove_dir_all(&d).ok();
+}

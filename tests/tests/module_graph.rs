@@ -230,7 +230,7 @@ fn no_crate_has_an_import_cycle() {
 }
 
 /// What the trainer may use of hil-sim: the modules built without the `sim` feature.
-const LEAN_HIL_SIM: [&str; 4] = ["dataset", "flight", "font", "frames"];
+const LEAN_HIL_SIM: [&str; 5] = ["dataset", "faults", "flight", "font", "frames"];
 
 #[test]
 fn the_trainer_reads_datasets_not_the_simulator() {

@@ -7,6 +7,7 @@
 use crate::error::{Error, Result};
 use estimator_core::{FeatureState, FeatureValues, SensorFrame};
 use hil_sim::dataset::{Manifest, Split, Truth, sha256_file};
+use hil_sim::faults::Fault;
 use std::path::{Path, PathBuf};
 
 /// Training rows (train + validation flights) of the paper's experiment: 4 h of flight at the
@@ -111,6 +112,21 @@ impl Dataset {
     /// Loads every flight of `dir/manifest.json`. `val_fraction` of the training flights (by flight,
     /// evenly spread) become validation flights.
     pub fn load(dir: &Path, val_fraction: f64) -> Result<Dataset> {
+        let ds = Dataset::load_any(dir, val_fraction)?;
+        for role in [Role::Train, Role::Test] {
+            if !ds.flights.iter().any(|f| f.role == role) {
+                return Err(Error::Split(
+                    dir.to_path_buf(),
+                    format!("no {role:?} flight in the manifest"),
+                ));
+            }
+        }
+        Ok(ds)
+    }
+
+    /// [`Dataset::load`] without requiring training flights: a test-only dataset such as the `ood`
+    /// preset's. A flight's manifest `faults` are applied to its frames before anything reads them.
+    pub fn load_any(dir: &Path, val_fraction: f64) -> Result<Dataset> {
         let manifest = Manifest::read(dir)?;
         let manifest_sha256 = sha256_file(&dir.join("manifest.json"))?;
         let train_names: Vec<&str> = manifest
@@ -130,15 +146,12 @@ impl Dataset {
                 Split::Train => Role::Train,
                 Split::Test => Role::Test,
             };
-            flights.push(load_flight(&dir.join(&mf.file), &mf.name, role)?);
-        }
-        for role in [Role::Train, Role::Test] {
-            if !flights.iter().any(|f| f.role == role) {
-                return Err(Error::Split(
-                    dir.to_path_buf(),
-                    format!("no {role:?} flight in the manifest"),
-                ));
-            }
+            let faults = mf
+                .faults
+                .iter()
+                .map(|f| f.parse::<Fault>())
+                .collect::<std::result::Result<Vec<_>, _>>()?;
+            flights.push(load_flight(&dir.join(&mf.file), &mf.name, role, &faults)?);
         }
         Ok(Dataset {
             dir: dir.to_path_buf(),
@@ -192,9 +205,13 @@ pub fn spread_rows<'a>(flights: &[&'a Flight], max_rows: usize) -> Vec<(&'a Flig
         .collect()
 }
 
-/// Reads one flight CSV and derives the estimator's inputs from it.
-pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
+/// Reads one flight CSV, applies `faults` to its frames (`hil_sim::faults`, none for a healthy
+/// flight) and derives the estimator's inputs from them.
+pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Result<Flight> {
     let csv = hil_sim::dataset::Flight::read_csv(path)?;
+    let mut frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
+    let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
+    hil_sim::faults::apply(faults, &mut frames, &times);
     let mut fl = Flight {
         name: name.to_string(),
         role,
@@ -207,7 +224,7 @@ pub fn load_flight(path: &Path, name: &str, role: Role) -> Result<Flight> {
     // air-data filter runs over the flight in order (its outputs are candidate features; on a
     // table1 flight it has no input and they stay 0).
     let mut state = FeatureState::new(true);
-    for (frame, sample) in hil_sim::frames::flight_frames(&csv).zip(&csv.samples) {
+    for (frame, sample) in frames.into_iter().zip(&csv.samples) {
         fl.features.push(state.next(&frame));
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);

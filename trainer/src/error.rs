@@ -15,6 +15,9 @@ pub enum Error {
     Dataset(#[from] hil_sim::dataset::DatasetError),
     #[error("dataset {0}: {1}")]
     Split(PathBuf, String),
+    /// A manifest fault the reader cannot parse.
+    #[error("{0} (in a dataset manifest's `faults`)")]
+    Fault(#[from] hil_sim::faults::FaultError),
     #[error("unknown feature `{0}` (known: {1})")]
     UnknownFeature(String, String),
     #[error(

@@ -11,6 +11,7 @@ pub mod features;
 pub mod filter_eval;
 pub mod metrics;
 pub mod model;
+pub mod ood;
 pub mod pipeline;
 pub mod plots;
 pub mod prep;

@@ -171,6 +171,84 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
     Ok(())
 }
 
+/// One panel of [`grouped_bar_panels`]: title, x label, rows (a label and one value per series).
+pub type BarPanel<'a> = (String, &'a str, Vec<(String, Vec<f64>)>);
+
+/// Panels of horizontal grouped bars side by side; a row's NaN value draws no bar. Rows are drawn
+/// top-down in the given order, with a legend of `series`.
+pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -> Result<()> {
+    hil_sim::font::register();
+    let rows = panels.iter().map(|p| p.2.len()).max().unwrap_or(0);
+    let h = 110 + 30 * rows as u32;
+    let root = BitMapBackend::new(path, (620 * panels.len() as u32, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr)?;
+    let k = series.len().max(1);
+    for ((title, xl, items), area) in panels.iter().zip(root.split_evenly((1, panels.len()))) {
+        let n = items.len();
+        let max = items
+            .iter()
+            .flat_map(|i| i.1.iter())
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max)
+            .max(1e-12);
+        let names: Vec<String> = items.iter().map(|i| i.0.clone()).collect();
+        let mut chart = ChartBuilder::on(&area)
+            .caption(title.as_str(), ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(190)
+            .build_cartesian_2d(0.0..max * 1.15, (0..n).into_segmented())
+            .map_err(perr)?;
+        chart
+            .configure_mesh()
+            .x_desc(*xl)
+            .x_label_formatter(&|v| fmt_tick(*v))
+            .y_labels(n)
+            .y_label_formatter(&|v| reversed_label(&names, v))
+            .draw()
+            .map_err(perr)?;
+        for (si, name) in series.iter().enumerate() {
+            let color = COLORS[si % COLORS.len()];
+            let bars = items.iter().enumerate().filter_map(|(i, (_, v))| {
+                let v = *v.get(si)?;
+                if !v.is_finite() {
+                    return None;
+                }
+                // Segment y spans [y, y + 1); series si takes its k-th slice, top to bottom.
+                let y = n - 1 - i;
+                let top = (k - si) as i32 * 24 / k as i32;
+                let bottom = (k - si - 1) as i32 * 24 / k as i32;
+                let mut r = Rectangle::new(
+                    [
+                        (0.0, SegmentValue::Exact(y)),
+                        (v, SegmentValue::Exact(y + 1)),
+                    ],
+                    color.filled(),
+                );
+                r.set_margin(3 + (24 - top) as u32, 3 + bottom as u32, 0, 0);
+                Some(r)
+            });
+            chart
+                .draw_series(bars)
+                .map_err(perr)?
+                .label(name.as_str())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled())
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()
+            .map_err(perr)?;
+    }
+    root.present().map_err(perr)?;
+    Ok(())
+}
+
 /// Label of a segmented axis drawn top-down: segment `i` from the bottom shows `names[n - 1 - i]`.
 fn reversed_label(names: &[String], v: &SegmentValue<usize>) -> String {
     match v {

@@ -95,8 +95,13 @@ pub fn generate(
             let mut attempt = 0;
             loop {
                 let seed = redraw_seed(f.seed, attempt);
-                let m =
-                    maneuver::generate(&Profile::preset(f.profile), seed, &f.name, f.duration_s)?;
+                let m = maneuver::generate_case(
+                    &Profile::preset(f.profile),
+                    seed,
+                    &f.name,
+                    f.duration_s,
+                    f.ood,
+                )?;
                 let script = m.write(out)?;
                 // A fresh bridge per attempt: a failed trim can leave one in any state.
                 let mut plant = crate::plant::Plant::spawn()?;
@@ -109,7 +114,16 @@ pub fn generate(
                 };
                 match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
                     Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
-                    r => break Ok(write_flight(out, &r?, f.split, f.profile.name(), seed)?),
+                    r => {
+                        let mut entry = write_flight(out, &r?, f.split, f.profile.name(), seed)?;
+                        entry.faults = f
+                            .ood
+                            .map_or(&[][..], |c| c.faults())
+                            .iter()
+                            .map(|s| s.to_string())
+                            .collect();
+                        break Ok(entry);
+                    }
                 }
             }
         })()

@@ -189,6 +189,10 @@ pub struct FlightEntry {
     /// Time in each maneuver-generator zone (absent for scripts without zone state).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub zones: Option<ZoneTimes>,
+    /// Sensor faults to apply to this flight's frames (`crate::faults` notation; `ood` preset).
+    /// The CSV holds what the healthy sensors measured; a reader applies these on the frames.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<String>,
 }
 
 /// `manifest.json`.
@@ -400,6 +404,7 @@ pub fn write_flight(
         sha256: sha256_file(&path)?,
         cut: flight.cut.clone(),
         zones: flight.zones,
+        faults: Vec::new(),
     })
 }
 

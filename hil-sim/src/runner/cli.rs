@@ -144,6 +144,27 @@ impl RunArgs {
     }
 }
 
+/// The faults `manifest.json` beside a dataset CSV lists for it (the `ood` preset's sensor-fault
+/// flights); none when there is no manifest or no entry for the file.
+fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
+    let Some(dir) = csv.parent() else {
+        return Ok(Vec::new());
+    };
+    if !dir.join("manifest.json").is_file() {
+        return Ok(Vec::new());
+    }
+    let m = crate::dataset::Manifest::read(dir)?;
+    let name = csv.file_name().map(|n| n.to_string_lossy().into_owned());
+    let Some(entry) = m.flights.iter().find(|f| Some(&f.file) == name.as_ref()) else {
+        return Ok(Vec::new());
+    };
+    entry
+        .faults
+        .iter()
+        .map(|f| f.parse().map_err(RunError::Fault))
+        .collect()
+}
+
 /// Loads or flies the flight.
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
     let mut f = match (&source.dataset, &source.script) {
@@ -250,11 +271,27 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         FirmwareLog::install();
     }
     let flight = flight(&a.source, a.seed, a.max_time_s)?;
+    let mut faults = a.faults.clone();
+    if let Some(csv) = &a.source.dataset {
+        let listed = manifest_faults(csv)?;
+        if !listed.is_empty() {
+            eprintln!(
+                "applying the faults the dataset's manifest lists for this flight: {}",
+                listed
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        faults.extend(listed);
+    }
+    let faults = &faults;
     let mut samples = samples_of(&flight);
     let times: Vec<f64> = samples.iter().map(|s| s.time_s).collect();
     // The fault-free reference: the compiled-in estimator on the clean frames as the firmware
     // decodes them (before the faults go in).
-    let reference: Vec<estimator_core::Estimate> = if a.faults.is_empty() {
+    let reference: Vec<estimator_core::Estimate> = if faults.is_empty() {
         Vec::new()
     } else {
         let mut e = estimator_core::Estimator::shipped();
@@ -264,7 +301,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
             .collect()
     };
     let mut frames: Vec<_> = samples.iter().map(|s| s.frame).collect();
-    crate::faults::apply(&a.faults, &mut frames, &times);
+    crate::faults::apply(faults, &mut frames, &times);
     for (s, f) in samples.iter_mut().zip(frames) {
         s.frame = f;
     }
@@ -280,13 +317,13 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     bar.finish_and_clear();
     drop(target);
     let mut summary = score::summarize(&outcome);
-    if !a.faults.is_empty() {
+    if !faults.is_empty() {
         let estimates: Vec<_> = outcome
             .records
             .iter()
             .map(|r| r.reply.map(|f| f.estimate))
             .collect();
-        summary.faults = score::faults::score(&a.faults, &estimates, &reference, &times);
+        summary.faults = score::faults::score(faults, &estimates, &reference, &times);
     }
     let w = write_outputs(&a.out, &outcome, &summary)?;
     if a.json {

@@ -51,6 +51,8 @@ pub enum RunError {
     Plant(#[from] crate::plant::PlantError),
     #[error("the flight has no samples")]
     EmptyFlight,
+    #[error("{0} (in the dataset manifest beside the CSV)")]
+    Fault(crate::faults::FaultError),
     #[error("cannot write {0}: {1}")]
     Output(PathBuf, String),
 }
