@@ -141,7 +141,7 @@ fn test_metrics(
         .flights(Role::Test)
         .map(|f| (f.name.clone(), pred(f), f.truth(angle.target()).to_vec()))
         .collect();
-    FlightMetrics::of(&fl)
+    FlightMetrics::of_banded(&fl, angle.bands())
 }
 
 /// Fits a baseline on the training flights and scores it on the test flights (degrees).

@@ -31,11 +31,44 @@ impl Metrics {
     }
 }
 
-/// Metrics per test flight and over all of them.
+/// Metrics per test flight and over all of them, and by regime band of the true angle.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct FlightMetrics {
     pub per_flight: Vec<(String, Metrics)>,
     pub overall: Metrics,
+    /// Over every flight's frames, by band of the true angle ([`BandSet`]); empty when not asked for.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bands: Vec<(String, Metrics)>,
+}
+
+/// The regime bands of an angle: α by its true value (below 5°, 5–15°, 15–25°, 25° and above), β by
+/// its true magnitude (below 2°, 2° and above).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BandSet {
+    Alpha,
+    Beta,
+}
+
+impl BandSet {
+    /// (label, lower bound inclusive, upper bound exclusive) of the banded value.
+    pub fn bands(self) -> &'static [(&'static str, f64, f64)] {
+        match self {
+            BandSet::Alpha => &[
+                ("α < 5°", f64::NEG_INFINITY, 5.0),
+                ("α 5–15°", 5.0, 15.0),
+                ("α 15–25°", 15.0, 25.0),
+                ("α ≥ 25°", 25.0, f64::INFINITY),
+            ],
+            BandSet::Beta => &[("|β| < 2°", 0.0, 2.0), ("|β| ≥ 2°", 2.0, f64::INFINITY)],
+        }
+    }
+
+    fn value(self, truth: f64) -> f64 {
+        match self {
+            BandSet::Alpha => truth,
+            BandSet::Beta => truth.abs(),
+        }
+    }
 }
 
 impl FlightMetrics {
@@ -50,7 +83,27 @@ impl FlightMetrics {
         FlightMetrics {
             per_flight,
             overall: Metrics::of(&p, &t),
+            bands: Vec::new(),
         }
+    }
+
+    /// [`FlightMetrics::of`] with the metrics per band of `set` over all flights.
+    pub fn of_banded(flights: &[(String, Vec<f64>, Vec<f64>)], set: BandSet) -> FlightMetrics {
+        let mut m = FlightMetrics::of(flights);
+        m.bands = set
+            .bands()
+            .iter()
+            .map(|&(label, lo, hi)| {
+                let (p, t): (Vec<f64>, Vec<f64>) = flights
+                    .iter()
+                    .flat_map(|(_, p, t)| p.iter().zip(t))
+                    .filter(|(_, t)| (lo..hi).contains(&set.value(**t)))
+                    .map(|(p, t)| (*p, *t))
+                    .unzip();
+                (label.to_string(), Metrics::of(&p, &t))
+            })
+            .collect();
+        m
     }
 }
 
@@ -96,6 +149,21 @@ impl Regimes {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bands_split_frames_by_the_true_angle() {
+        let truth = vec![1.0, 6.0, 16.0, 30.0, -3.0];
+        let pred = vec![2.0, 6.5, 17.0, 28.0, -3.0];
+        let m =
+            FlightMetrics::of_banded(&[("f".into(), pred.clone(), truth.clone())], BandSet::Alpha);
+        let n: Vec<usize> = m.bands.iter().map(|b| b.1.n).collect();
+        assert_eq!(n, vec![2, 1, 1, 1]);
+        assert!((m.bands[0].1.mae - 0.5).abs() < 1e-12);
+        assert_eq!(m.bands[3].1.mae, 2.0);
+        let b = FlightMetrics::of_banded(&[("f".into(), pred, truth)], BandSet::Beta);
+        let n: Vec<usize> = b.bands.iter().map(|b| b.1.n).collect();
+        assert_eq!(n, vec![1, 4], "|β| bands: only 1.0 is below 2");
+    }
 
     #[test]
     fn metrics_of_known_errors() {

@@ -143,7 +143,12 @@ pub fn evaluate(
         fl_i.push((fl.name.clone(), pi.clone(), truth.clone()));
         series.push((fl.name.clone(), truth, pf, pi));
     }
-    (FlightMetrics::of(&fl_f), FlightMetrics::of(&fl_i), series)
+    let bands = prep.angle.bands();
+    (
+        FlightMetrics::of_banded(&fl_f, bands),
+        FlightMetrics::of_banded(&fl_i, bands),
+        series,
+    )
 }
 
 /// Result of running the compiled-in model through `Estimator::shipped()` on the test flights.

@@ -66,6 +66,14 @@ pub enum Angle {
 }
 
 impl Angle {
+    /// The regime bands of this angle's error tables.
+    pub fn bands(self) -> crate::metrics::BandSet {
+        match self {
+            Angle::Alpha => crate::metrics::BandSet::Alpha,
+            Angle::Beta => crate::metrics::BandSet::Beta,
+        }
+    }
+
     pub fn target(self) -> Target {
         match self {
             Angle::Alpha => Target::AlphaDeg,

@@ -252,8 +252,39 @@ pub fn mean_metrics(ms: &[Metrics]) -> Metrics {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
     pub label: String,
+    /// The model family (`LINEAR`, `GB`, `MLP`, `CASCADE`).
+    pub model: &'static str,
     pub alpha: Metrics,
     pub beta: Metrics,
+    /// Per regime band of the true angle (overall rows only), averaged over seeds like the rest.
+    pub alpha_bands: Vec<(String, Metrics)>,
+    pub beta_bands: Vec<(String, Metrics)>,
+}
+
+/// The paper's Table 2 (test-set MAE, degrees, α and β) for a model family.
+pub fn paper_mae(model: &str) -> Option<(f64, f64)> {
+    match model {
+        LINEAR => Some((2.538, 0.486)),
+        GB => Some((1.178, 0.448)),
+        MLP => Some((0.897, 0.396)),
+        CASCADE => Some((0.534, 0.247)),
+        _ => None,
+    }
+}
+
+/// Band-wise [`mean_metrics`] of several band lists with the same labels.
+fn mean_bands(lists: &[&Vec<(String, Metrics)>]) -> Vec<(String, Metrics)> {
+    let Some(first) = lists.first() else {
+        return Vec::new();
+    };
+    first
+        .iter()
+        .enumerate()
+        .map(|(i, (label, _))| {
+            let ms: Vec<Metrics> = lists.iter().filter_map(|l| l.get(i).map(|b| b.1)).collect();
+            (label.clone(), mean_metrics(&ms))
+        })
+        .collect()
 }
 
 impl Report {
@@ -285,13 +316,23 @@ impl Report {
             (CASCADE, false),
             (CASCADE, true),
         ] {
+            let chosen = |a: Angle| -> Vec<&FlightMetrics> {
+                self.select(model, a, &self.features)
+                    .into_iter()
+                    .filter_map(|e| e.metrics(int8))
+                    .collect()
+            };
             let agg = |a: Angle| {
-                let ms: Vec<Metrics> = self
-                    .select(model, a, &self.features)
-                    .iter()
-                    .filter_map(|e| e.metrics(int8).map(of_flight))
-                    .collect();
+                let ms: Vec<Metrics> = chosen(a).into_iter().map(of_flight).collect();
                 (mean_metrics(&ms), ms.len())
+            };
+            let bands = |a: Angle| -> Vec<(String, Metrics)> {
+                if flight.is_some() {
+                    return Vec::new();
+                }
+                let lists: Vec<&Vec<(String, Metrics)>> =
+                    chosen(a).into_iter().map(|m| &m.bands).collect();
+                mean_bands(&lists)
             };
             let (a, na) = agg(Angle::Alpha);
             let (b, _) = agg(Angle::Beta);
@@ -301,7 +342,7 @@ impl Report {
             let seeds = if model == LINEAR || model == GB {
                 String::new()
             } else {
-                format!(", mean of {na} seeds")
+                format!(", mean of {na} seed{}", if na == 1 { "" } else { "s" })
             };
             let kind = match (model, int8) {
                 (CASCADE, true) => " (int8, deployed)",
@@ -310,8 +351,11 @@ impl Report {
             };
             rows.push(Row {
                 label: format!("{model}{kind}{seeds}"),
+                model,
                 alpha: a,
                 beta: b,
+                alpha_bands: bands(Angle::Alpha),
+                beta_bands: bands(Angle::Beta),
             });
         }
         rows
@@ -441,7 +485,52 @@ impl Report {
             "## Table 2: all test flights ({} flights, {n_test} frames)\n",
             self.split.test.len()
         );
-        table(&mut s, &self.rows(None));
+        let overall = self.rows(None);
+        table(&mut s, &overall);
+        let _ = writeln!(
+            s,
+            "### Beside the paper (Table 2 of Karali et al. 2023: MAE on its own test flights)\n"
+        );
+        s.push_str("| model | α MAE | paper α | β MAE | paper β |\n|---|---|---|---|---|\n");
+        for r in &overall {
+            let (pa, pb) = paper_mae(r.model).unwrap_or((f64::NAN, f64::NAN));
+            let _ = writeln!(
+                s,
+                "| {} | {:.3} | {pa:.3} | {:.3} | {pb:.3} |",
+                r.label, r.alpha.mae, r.beta.mae
+            );
+        }
+        s.push('\n');
+        if let Some(first) = overall.first().filter(|r| !r.alpha_bands.is_empty()) {
+            let _ = writeln!(
+                s,
+                "### By regime (all test flights; MAE, frames per band in the header)\n"
+            );
+            let head: Vec<String> = first
+                .alpha_bands
+                .iter()
+                .chain(&first.beta_bands)
+                .map(|(l, m)| format!("{} ({} frames)", l.replace('|', "\\|"), m.n))
+                .collect();
+            let _ = writeln!(s, "| model | {} |", head.join(" | "));
+            let _ = writeln!(s, "|---|{}", "---|".repeat(head.len()));
+            for r in &overall {
+                let cells: Vec<String> = r
+                    .alpha_bands
+                    .iter()
+                    .chain(&r.beta_bands)
+                    .map(|(_, m)| {
+                        if m.n == 0 {
+                            "–".to_string()
+                        } else {
+                            format!("{:.3}", m.mae)
+                        }
+                    })
+                    .collect();
+                let _ = writeln!(s, "| {} | {} |", r.label, cells.join(" | "));
+            }
+            s.push('\n');
+        }
         for (name, n) in &self.split.test {
             let _ = writeln!(s, "### Test flight `{name}` ({n} frames)\n");
             table(&mut s, &self.rows(Some(name)));
@@ -634,6 +723,16 @@ mod tests {
         FlightMetrics {
             per_flight: vec![(name.into(), m)],
             overall: m,
+            bands: vec![
+                ("low".into(), m),
+                (
+                    "high".into(),
+                    Metrics {
+                        mae: mae * 5.0,
+                        ..m
+                    },
+                ),
+            ],
         }
     }
 
@@ -687,7 +786,16 @@ mod tests {
         assert!((rows[3].alpha.mae - 0.2).abs() < 1e-12); // cascade float mean of 0.15, 0.25
         assert!((rows[4].beta.mae - 0.42).abs() < 1e-12); // cascade int8 β mean of 0.32, 0.52
         assert!((rows[4].beta.max - 1.68).abs() < 1e-12);
-        assert_eq!(r.rows(Some("t1")), rows);
+        // Regime bands average over seeds like the rest; per-flight rows carry none.
+        assert!((rows[2].alpha_bands[1].1.mae - 1.0).abs() < 1e-12); // MLP mean of 1.5, 0.5
+        assert_eq!(rows[2].alpha_bands[1].0, "high");
+        let t1 = r.rows(Some("t1"));
+        assert!(t1.iter().all(|row| row.alpha_bands.is_empty()));
+        assert!(
+            t1.iter()
+                .zip(&rows)
+                .all(|(a, b)| a.alpha == b.alpha && a.beta == b.beta && a.label == b.label)
+        );
         assert_eq!(r.rows(Some("nope"))[0].alpha.n, 0);
     }
 
@@ -703,6 +811,15 @@ mod tests {
         let md = r.markdown("cmd", "machine", None, None);
         assert!(md.contains("| Gradient boosting | 0.200 | 0.400 | 0.600 | 0.800 | 0.400 |"));
         assert!(md.contains("0.200 ± 0.100"));
+        // The paper's figures beside ours, and the regime table.
+        assert!(
+            md.contains("| Gradient boosting | 0.200 | 1.178 | 0.400 | 0.448 |"),
+            "{md}"
+        );
+        assert!(md.contains(
+            "| model | low (10 frames) | high (10 frames) | low (10 frames) | high (10 frames) |"
+        ));
+        assert!(md.contains("| Gradient boosting | 0.200 | 1.000 | 0.400 | 2.000 |"));
     }
 }
 
