@@ -214,11 +214,11 @@ impl QCascade {
         let out = ref_mlp(&self.part2, x);
         let angle = out.clamp(p.out_range.lo as i64, p.out_range.hi as i64);
         clamped |= angle != out;
-        let uses_speed = p
-            .features
-            .iter()
-            .any(|f| f.sources() & Channel::GpsSpeed.bit() != 0);
-        clamped |= v.low_speed && uses_speed;
+        // As `Estimator` does: a speed below the envelope's floor flags a model reading it, GPS
+        // speed or the EGI velocity (`FeatureValues::low_speed`, `low_ground_speed`).
+        let sources = p.features.iter().fold(0u32, |acc, f| acc | f.sources());
+        clamped |= v.low_speed && sources & Channel::GpsSpeed.bit() != 0;
+        clamped |= v.low_ground_speed && sources & estimator_core::features::VELOCITY_SOURCES != 0;
         RefOut {
             mid: mid as i32,
             angle: angle as i32,

@@ -190,6 +190,33 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
         "int8 vs float {max_err_mdeg} mdeg, sigma {}",
         prep.out_sigma
     );
+    // The speed-floor flags mark a frame clamped as `Estimator` does: low GPS speed for a model
+    // reading GPS speed, low ground speed (EGI velocity) for a model reading the EGI velocity.
+    let mut v = FeatureValues::compute(&fr[10], &History::new());
+    assert!(!q.reference(&v).clamped && !net.run(&v).2);
+    v.low_speed = true;
+    assert!(q.reference(&v).clamped && net.run(&v).2);
+    v.low_speed = false;
+    v.low_ground_speed = true;
+    assert!(
+        !q.reference(&v).clamped && !net.run(&v).2,
+        "no velocity input"
+    );
+    // The same network reading the EGI north velocity in its third input, with an envelope that
+    // cannot clamp it: only the flag can mark the frame.
+    let mut qv = q.clone();
+    qv.prep.features[2] = Feature::Sensor(Channel::VelNorth);
+    qv.prep.envelope[2] = Envelope::ANY;
+    let mut nv = core_net(&qv);
+    nv.features[2] = Feature::Sensor(Channel::VelNorth);
+    v.low_ground_speed = false;
+    assert!(!qv.reference(&v).clamped && !nv.run(&v).2);
+    v.low_ground_speed = true;
+    let (r, n) = (qv.reference(&v), nv.run(&v));
+    assert!(
+        r.clamped && n.2,
+        "a model reading the EGI velocity: reference {r:?}, core {n:?}"
+    );
     // Vectors round-trip through the text format.
     let seq: Vec<(bool, SensorFrame)> = fr[..50]
         .iter()
