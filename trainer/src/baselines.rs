@@ -132,16 +132,22 @@ impl Baseline {
     }
 }
 
-fn test_metrics(
-    ds: &Dataset,
-    angle: Angle,
-    mut pred: impl FnMut(&Flight) -> Vec<f64>,
-) -> FlightMetrics {
+/// A model's answers on the test flights (degrees, per flight in test order) and their metrics.
+#[derive(Debug, Clone, Default)]
+pub struct Scored {
+    pub metrics: FlightMetrics,
+    pub preds: Vec<(String, Vec<f64>)>,
+}
+
+fn test_metrics(ds: &Dataset, angle: Angle, mut pred: impl FnMut(&Flight) -> Vec<f64>) -> Scored {
     let fl: Vec<(String, Vec<f64>, Vec<f64>)> = ds
         .flights(Role::Test)
         .map(|f| (f.name.clone(), pred(f), f.truth(angle.target()).to_vec()))
         .collect();
-    FlightMetrics::of_banded(&fl, angle.bands())
+    Scored {
+        metrics: FlightMetrics::of_banded(&fl, angle.bands()),
+        preds: fl.into_iter().map(|(n, p, _)| (n, p)).collect(),
+    }
 }
 
 /// Fits a baseline on the training flights and scores it on the test flights (degrees).
@@ -153,7 +159,7 @@ pub fn run_baseline(
     hidden: &[usize],
     cfg: &TrainConfig,
     gb_rows: usize,
-) -> Result<FlightMetrics> {
+) -> Result<Scored> {
     let tr: Vec<&Flight> = ds.flights(Role::Train).collect();
     match kind {
         Baseline::Linear => {

@@ -70,6 +70,8 @@ pub struct Flight {
     pub features: Vec<FeatureValues>,
     /// Truth, indexed by `Target as usize`: α, β (deg), w, v (m/s).
     pub truth: [Vec<f64>; 4],
+    /// True dynamic pressure, Pa (truth only: for error-by-regime plots, never a model input).
+    pub qbar_pa: Vec<f64>,
 }
 
 impl Flight {
@@ -219,6 +221,7 @@ pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Res
         frames: Vec::with_capacity(csv.samples.len()),
         features: Vec::with_capacity(csv.samples.len()),
         truth: Default::default(),
+        qbar_pa: Vec::with_capacity(csv.samples.len()),
     };
     // The estimator's own feature state: features at frame i see frames 0..i, as in flight, and the
     // air-data filter runs over the flight in order (its outputs are candidate features; on a
@@ -228,6 +231,7 @@ pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Res
         fl.features.push(state.next(&frame));
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);
+        fl.qbar_pa.push(sample.truth.qbar_pa);
         for t in Target::ALL {
             fl.truth[t as usize].push(t.of(&sample.truth));
         }

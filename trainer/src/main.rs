@@ -499,7 +499,8 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
         for kind in [Baseline::Linear, Baseline::GradientBoosting, Baseline::Mlp] {
             let cfg = args.train_config(size, format!("{} mlp", angle.name()), false);
             let t0 = std::time::Instant::now();
-            let m = run_baseline(kind, &ds, angle, feats, size.hidden(angle), &cfg, gb_rows)?;
+            let m =
+                run_baseline(kind, &ds, angle, feats, size.hidden(angle), &cfg, gb_rows)?.metrics;
             println!(
                 "{} {}: ({:.1} s)",
                 angle.symbol(),
@@ -568,6 +569,7 @@ fn cmd_report(
         },
         |line| eprintln!("{line}"),
     )?;
+    report.pictures(&ds, out)?;
     if json {
         println!("{}", serde_json::to_string(&report)?);
     }

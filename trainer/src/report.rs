@@ -40,6 +40,11 @@ pub struct Entry {
     pub float: FlightMetrics,
     pub int8: Option<FlightMetrics>,
     pub seconds: f64,
+    /// Answers per test flight (degrees, test order), float and int8, for the pictures.
+    #[serde(skip)]
+    pub preds: Answers,
+    #[serde(skip)]
+    pub preds_int8: Option<Answers>,
 }
 
 impl Entry {
@@ -132,16 +137,18 @@ pub fn run(
             log(&format!(
                 "{} {name}: MAE {:.3} ({seconds:.1} s)",
                 angle.symbol(),
-                m.overall.mae
+                m.metrics.overall.mae
             ));
             entries.push(Entry {
                 model: name.into(),
                 angle,
                 features: fs.name.clone(),
                 seed: None,
-                float: m,
+                float: m.metrics,
                 int8: None,
                 seconds,
+                preds: m.preds,
+                preds_int8: None,
             });
         }
         for &seed in &cfg.seeds {
@@ -160,9 +167,11 @@ pub fn run(
                 angle,
                 features: fs.name.clone(),
                 seed: Some(seed),
-                float: m,
+                float: m.metrics,
                 int8: None,
                 seconds: t0.elapsed().as_secs_f64(),
+                preds: m.preds,
+                preds_int8: None,
             });
         }
     }
@@ -201,6 +210,17 @@ pub fn run(
                     float: t.float_test.clone(),
                     int8: Some(t.int_test.clone()),
                     seconds,
+                    preds: t
+                        .series
+                        .iter()
+                        .map(|x| (x.0.clone(), x.2.clone()))
+                        .collect(),
+                    preds_int8: Some(
+                        t.series
+                            .iter()
+                            .map(|x| (x.0.clone(), x.3.clone()))
+                            .collect(),
+                    ),
                 });
                 pair.push(t);
             }
@@ -221,6 +241,227 @@ pub fn run(
         split: Split::of(ds),
         entries,
     })
+}
+
+/// A model's answers per test flight (name, degrees), as kept in [`Entry::preds`].
+pub type Answers = Vec<(String, Vec<f64>)>;
+
+/// Bin edges of the error-by-regime pictures: true α in 2.5° steps, true dynamic pressure in 5 kPa.
+const ALPHA_BIN_DEG: f64 = 2.5;
+const QBAR_BIN_KPA: f64 = 5.0;
+
+/// Binned mean |error| of `pred` against `truth`, by `x` in bins of `width`: (bin centre, MAE,
+/// frames) for every bin that has frames.
+pub fn binned_mae(x: &[f64], pred: &[f64], truth: &[f64], width: f64) -> Vec<(f64, f64, usize)> {
+    let mut bins: std::collections::BTreeMap<i64, (f64, usize)> = Default::default();
+    for ((x, p), t) in x.iter().zip(pred).zip(truth) {
+        if !(x.is_finite() && p.is_finite() && t.is_finite()) {
+            continue;
+        }
+        let b = bins.entry((x / width).floor() as i64).or_default();
+        b.0 += (p - t).abs();
+        b.1 += 1;
+    }
+    bins.into_iter()
+        .map(|(k, (sum, n))| ((k as f64 + 0.5) * width, sum / n as f64, n))
+        .collect()
+}
+
+impl Report {
+    /// The rows drawn in the pictures: each model family's first seed (float), and the deployed
+    /// int8 cascade; (label, α answers, β answers) per test flight.
+    fn picture_rows(&self) -> Vec<(String, &Answers, &Answers)> {
+        let mut rows = Vec::new();
+        for (model, int8) in [
+            (LINEAR, false),
+            (GB, false),
+            (MLP, false),
+            (CASCADE, false),
+            (CASCADE, true),
+        ] {
+            let first = |a: Angle| {
+                self.select(model, a, &self.features)
+                    .into_iter()
+                    .min_by_key(|e| e.seed)
+                    .and_then(|e| {
+                        if int8 {
+                            e.preds_int8.as_ref()
+                        } else {
+                            Some(&e.preds)
+                        }
+                    })
+                    .filter(|p| !p.is_empty())
+            };
+            if let (Some(a), Some(b)) = (first(Angle::Alpha), first(Angle::Beta)) {
+                let kind = match (model, int8) {
+                    (CASCADE, true) => " int8",
+                    (CASCADE, false) => " float",
+                    _ => "",
+                };
+                rows.push((format!("{model}{kind}"), a, b));
+            }
+        }
+        rows
+    }
+
+    /// Writes the Table 2 pictures into `out` and returns their file names:
+    /// * `table2_estimates_alpha.png`, `table2_estimates_beta.png`: estimate and truth over the
+    ///   high-α test flight (else the first), one panel per row;
+    /// * `table2_error_by_alpha.png`, `table2_error_by_qbar.png`: MAE of α and β binned by true α
+    ///   and by true dynamic pressure, one line per row, and the test frames per bin.
+    pub fn pictures(&self, ds: &Dataset, out: &std::path::Path) -> Result<Vec<String>> {
+        use crate::data::Target;
+        use crate::plots::{Series, line_panels};
+        let rows = self.picture_rows();
+        let test: Vec<&crate::data::Flight> = ds.flights(Role::Test).collect();
+        let mut written = Vec::new();
+        if rows.is_empty() || test.is_empty() {
+            return Ok(written);
+        }
+        let k = test
+            .iter()
+            .position(|f| f.name.contains("high-alpha"))
+            .unwrap_or(0);
+        let fl = test[k];
+        for (angle, target, file) in [
+            (Angle::Alpha, Target::AlphaDeg, "table2_estimates_alpha.png"),
+            (Angle::Beta, Target::BetaDeg, "table2_estimates_beta.png"),
+        ] {
+            let truth: Vec<(f64, f64)> = fl
+                .time_s
+                .iter()
+                .zip(fl.truth(target))
+                .map(|(t, v)| (*t, *v))
+                .collect();
+            let est: Vec<Vec<(f64, f64)>> = rows
+                .iter()
+                .map(|(_, a, b)| {
+                    let p = if angle == Angle::Alpha { a } else { b };
+                    p.get(k)
+                        .map(|(_, v)| fl.time_s.iter().copied().zip(v.iter().copied()).collect())
+                        .unwrap_or_default()
+                })
+                .collect();
+            let panels: Vec<_> = rows
+                .iter()
+                .zip(&est)
+                .map(|((label, _, _), e)| {
+                    (
+                        format!("{label}: {}", fl.name),
+                        "time, s",
+                        if angle == Angle::Alpha {
+                            "α, deg"
+                        } else {
+                            "β, deg"
+                        },
+                        false,
+                        vec![
+                            Series {
+                                name: "truth".into(),
+                                points: &truth,
+                            },
+                            Series {
+                                name: "estimate".into(),
+                                points: e,
+                            },
+                        ],
+                    )
+                })
+                .collect();
+            line_panels(&out.join(file), &panels, 480, 380)?;
+            written.push(file.to_string());
+        }
+        // Error by regime over every test frame.
+        let concat = |f: &dyn Fn(&crate::data::Flight) -> &[f64]| -> Vec<f64> {
+            test.iter().flat_map(|fl| f(fl).iter().copied()).collect()
+        };
+        let ta = concat(&|f| f.truth(Target::AlphaDeg));
+        let tb = concat(&|f| f.truth(Target::BetaDeg));
+        let qbar_kpa: Vec<f64> = concat(&|f| &f.qbar_pa).iter().map(|q| q / 1000.0).collect();
+        let flat =
+            |p: &Answers| -> Vec<f64> { p.iter().flat_map(|(_, v)| v.iter().copied()).collect() };
+        for (xs, width, xl, file) in [
+            (
+                &ta,
+                ALPHA_BIN_DEG,
+                "true α, deg",
+                "table2_error_by_alpha.png",
+            ),
+            (
+                &qbar_kpa,
+                QBAR_BIN_KPA,
+                "true dynamic pressure, kPa",
+                "table2_error_by_qbar.png",
+            ),
+        ] {
+            let mae_a: Vec<Vec<(f64, f64)>> = rows
+                .iter()
+                .map(|(_, a, _)| {
+                    binned_mae(xs, &flat(a), &ta, width)
+                        .into_iter()
+                        .map(|(x, m, _)| (x, m))
+                        .collect()
+                })
+                .collect();
+            let mae_b: Vec<Vec<(f64, f64)>> = rows
+                .iter()
+                .map(|(_, _, b)| {
+                    binned_mae(xs, &flat(b), &tb, width)
+                        .into_iter()
+                        .map(|(x, m, _)| (x, m))
+                        .collect()
+                })
+                .collect();
+            let counts: Vec<(f64, f64)> = binned_mae(xs, &ta, &ta, width)
+                .into_iter()
+                .map(|(x, _, n)| (x, n as f64))
+                .collect();
+            fn series<'a>(labels: &[String], v: &'a [Vec<(f64, f64)>]) -> Vec<Series<'a>> {
+                labels
+                    .iter()
+                    .zip(v)
+                    .map(|(label, pts)| Series {
+                        name: label.clone(),
+                        points: pts,
+                    })
+                    .collect()
+            }
+            let labels: Vec<String> = rows.iter().map(|r| r.0.clone()).collect();
+            line_panels(
+                &out.join(file),
+                &[
+                    (
+                        "α MAE by bin".to_string(),
+                        xl,
+                        "α MAE, deg",
+                        true,
+                        series(&labels, &mae_a),
+                    ),
+                    (
+                        "β MAE by bin".to_string(),
+                        xl,
+                        "β MAE, deg",
+                        true,
+                        series(&labels, &mae_b),
+                    ),
+                    (
+                        "test frames per bin".to_string(),
+                        xl,
+                        "frames",
+                        true,
+                        vec![Series {
+                            name: "frames".into(),
+                            points: &counts,
+                        }],
+                    ),
+                ],
+                560,
+                420,
+            )?;
+            written.push(file.to_string());
+        }
+        Ok(written)
+    }
 }
 
 /// Mean and spread (half the max − min range) of values.
@@ -628,6 +869,16 @@ impl Report {
              ![α test time series](training_test_timeseries_alpha.png)\n\n\
              ![β test time series](training_test_timeseries_beta.png)\n",
         );
+        s.push_str(
+            "\nEvery row on the high-α test flight (first seed; one panel per row):\n\n\
+             ![α estimates per row](table2_estimates_alpha.png)\n\n\
+             ![β estimates per row](table2_estimates_beta.png)\n\n\
+             Error by regime over every test frame: MAE binned by true α (2.5° bins) and by true \
+             dynamic pressure (5 kPa bins), with the test frames per bin, so the thin corners of the \
+             envelope show:\n\n\
+             ![error by α](table2_error_by_alpha.png)\n\n\
+             ![error by dynamic pressure](table2_error_by_qbar.png)\n",
+        );
         if let Some(b) = bench {
             let _ = write!(
                 s,
@@ -745,6 +996,8 @@ mod tests {
             float: fm("t1", mae),
             int8: int8.map(|x| fm("t1", x)),
             seconds: 0.0,
+            preds: Vec::new(),
+            preds_int8: None,
         }
     }
 
@@ -797,6 +1050,15 @@ mod tests {
                 .all(|(a, b)| a.alpha == b.alpha && a.beta == b.beta && a.label == b.label)
         );
         assert_eq!(r.rows(Some("nope"))[0].alpha.n, 0);
+    }
+
+    #[test]
+    fn binned_mae_counts_and_averages_per_bin() {
+        let x = [0.1, 0.2, 2.6, -0.1, f64::NAN];
+        let p = [1.0, 3.0, 5.0, 0.0, 1.0];
+        let t = [0.0, 0.0, 4.0, 1.0, 0.0];
+        let b = binned_mae(&x, &p, &t, 2.5);
+        assert_eq!(b, vec![(-1.25, 1.0, 1), (1.25, 2.0, 2), (3.75, 1.0, 1)]);
     }
 
     #[test]
