@@ -97,6 +97,11 @@ pub struct GenerateArgs {
     out: PathBuf,
     #[command(flatten)]
     flights: FlightsArgs,
+    /// Fly only shard K of N (0 ≤ K < N: the flights at plan positions ≡ K mod N) into --out, which
+    /// the other shards may share, and leave a shard-K-of-N.json record; a re-run with a complete
+    /// record does nothing. `hil-sim merge --out DIR` then writes the dataset one machine would have.
+    #[arg(long)]
+    shard: Option<dataset::Shard>,
 }
 
 /// What `generate` and `bench` share.
@@ -134,6 +139,34 @@ fn flights_bar(n: usize) -> indicatif::ProgressBar {
 pub fn generate(a: &GenerateArgs) -> Result<()> {
     let sensors = sensors_of(&a.flights.sensors)?;
     let started = std::time::Instant::now();
+    if let Some(shard) = a.shard {
+        let pb = flights_bar(shard.of(&a.preset.plan(a.flights.seed)).len());
+        let outcome = dataset::generate_shard(
+            a.preset,
+            a.flights.seed,
+            &a.out,
+            &sensors,
+            a.flights.workers,
+            shard,
+            Some(&pb),
+        )?;
+        pb.finish_and_clear();
+        match outcome {
+            dataset::ShardOutcome::Flown(n) => println!(
+                "shard {shard}: flew {n} flights in {:.1} s wall; wrote {}",
+                started.elapsed().as_secs_f64(),
+                shard.record_path(&a.out).display()
+            ),
+            dataset::ShardOutcome::AlreadyComplete(n) => println!(
+                "shard {shard}: already complete ({n} flights, every CSV as recorded); nothing to do"
+            ),
+        }
+        println!(
+            "when every shard is done: hil-sim merge --out {}",
+            a.out.display()
+        );
+        return Ok(());
+    }
     let pb = flights_bar(a.preset.plan(a.flights.seed).len());
     let m = dataset::generate(
         a.preset,
@@ -144,11 +177,35 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
         Some(&pb),
     )?;
     pb.finish_and_clear();
-    let report = dataset::report::write_report(&a.out)?;
+    summarize(&m, &a.out, "generated", started)
+}
+
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// The dataset directory the shards wrote into (`generate --shard K/N --out DIR`).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// `hil-sim merge`: the shards' flights joined into the dataset one machine would have written.
+pub fn merge(a: &MergeArgs) -> Result<()> {
+    let started = std::time::Instant::now();
+    let m = dataset::merge(&a.out)?;
+    summarize(&m, &a.out, "merged", started)
+}
+
+/// Writes the dataset report and prints what `generate` and `merge` made.
+fn summarize(
+    m: &Manifest,
+    out: &std::path::Path,
+    verb: &str,
+    started: std::time::Instant,
+) -> Result<()> {
+    let report = dataset::report::write_report(out)?;
     let samples: usize = m.flights.iter().map(|f| f.samples).sum();
     let cut = m.flights.iter().filter(|f| f.cut.is_some()).count();
     println!(
-        "generated {} flights ({} samples, {:.1} min of flight, {} cut) in {:.1} s wall",
+        "{verb} {} flights ({} samples, {:.1} min of flight, {} cut) in {:.1} s wall",
         m.flights.len(),
         samples,
         samples as f64 / f64::from(crate::flight::SAMPLE_HZ) / 60.0,
@@ -173,10 +230,7 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
     } else {
         println!("test flights only (no training flights in this preset)");
     }
-    println!(
-        "wrote {} (report: dataset.md, plots: *.png)",
-        a.out.display()
-    );
+    println!("wrote {} (report: dataset.md, plots: *.png)", out.display());
     Ok(())
 }
 

@@ -1,6 +1,6 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use hil_sim::commands::{BenchArgs, FlyArgs, GenerateArgs};
+use hil_sim::commands::{BenchArgs, FlyArgs, GenerateArgs, MergeArgs};
 
 /// Flight simulation and hardware-in-the-loop runner for the synthetic air data estimator.
 #[derive(Parser)]
@@ -19,6 +19,9 @@ enum Cmd {
     Fly(FlyArgs),
     /// Generate a random-maneuver dataset (maneuver XML, CSV per flight, manifest, plots, report).
     Generate(GenerateArgs),
+    /// Join the shards of `generate --shard K/N` into the dataset one machine would have written
+    /// (checks that every shard is there once and that they belong together).
+    Merge(MergeArgs),
     /// Benchmark: wall time of `generate` against raw JSBSim stepping of the same flights, side by
     /// side on the same workers.
     Bench(BenchArgs),
@@ -29,6 +32,7 @@ fn main() -> Result<()> {
         Cmd::Run(a) => hil_sim::runner::cli::run(&a).map(|_| ())?,
         Cmd::Fly(a) => hil_sim::commands::fly(&a)?,
         Cmd::Generate(a) => hil_sim::commands::generate(&a)?,
+        Cmd::Merge(a) => hil_sim::commands::merge(&a)?,
         Cmd::Bench(a) => hil_sim::commands::bench(&a)?,
     }
     Ok(())

@@ -75,3 +75,75 @@ fn ci_preset_writes_a_consistent_dataset() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Every file of a dataset directory, by name, with its bytes.
+fn files_of(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// `generate --shard K/N` for every K, then `merge`, writes exactly the bytes of a one-machine
+/// `generate` (manifest, CSVs, maneuver files, report and plots); a finished shard is not flown
+/// again; an incomplete or mixed set of shards is refused with what to run.
+#[test]
+fn shards_merge_into_the_one_machine_dataset() {
+    use dataset::{GenerateError, Shard, ShardOutcome};
+    let root = std::env::temp_dir().join(format!("hil-data-shard-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let s = SensorConfig::default();
+    let one = root.join("one");
+    dataset::generate(Preset::Ci, 4, &one, &s, 2, None).unwrap();
+    dataset::report::write_report(&one).unwrap();
+
+    let sh = root.join("sharded");
+    let shard = |k: usize, n: usize| Shard { index: k, count: n };
+    // Shard 2/3 first: order does not matter. Five flights: shards of 2, 2 and 1.
+    for k in [2, 0] {
+        let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(k, 3), None).unwrap();
+        assert_eq!(r, ShardOutcome::Flown(if k == 2 { 1 } else { 2 }));
+    }
+    let e = dataset::merge(&sh).unwrap_err();
+    assert!(
+        matches!(&e, GenerateError::Shard(m) if m.contains("missing shards 1/3")),
+        "{e}"
+    );
+    let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(1, 3), None).unwrap();
+    assert_eq!(r, ShardOutcome::Flown(2));
+    // A re-run finds the record complete and flies nothing.
+    let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(1, 3), None).unwrap();
+    assert_eq!(r, ShardOutcome::AlreadyComplete(2));
+    // A shard recorded twice, or a record of another shard count, in the same directory is refused.
+    let stray = sh.join("shard-0-of-3-copy.json");
+    let text = std::fs::read_to_string(shard(0, 3).record_path(&sh)).unwrap();
+    std::fs::write(&stray, &text).unwrap();
+    let e = dataset::merge(&sh).unwrap_err();
+    assert!(
+        matches!(&e, GenerateError::Shard(m) if m.contains("appears twice")),
+        "{e}"
+    );
+    std::fs::write(&stray, text.replace("\"count\": 3", "\"count\": 2")).unwrap();
+    let e = dataset::merge(&sh).unwrap_err();
+    assert!(
+        matches!(&e, GenerateError::Shard(m) if m.contains("shard count")),
+        "{e}"
+    );
+    std::fs::remove_file(&stray).unwrap();
+
+    dataset::merge(&sh).unwrap();
+    dataset::report::write_report(&sh).unwrap();
+    let (a, b) = (files_of(&one), files_of(&sh));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (name, bytes) in &a {
+        assert!(bytes == &b[name], "{name} differs");
+    }
+    assert!(a.contains_key("manifest.json") && a.contains_key("dataset.md"));
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -3,7 +3,10 @@
 
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
+
 use super::{DatasetError, FlightEntry, Manifest, git_rev, sha256_file, write_flight};
+use crate::maneuver::PlannedFlight;
 
 /// Why `generate` failed.
 #[derive(Debug, thiserror::Error)]
@@ -14,6 +17,9 @@ pub enum GenerateError {
     Maneuver(#[from] crate::maneuver::ManeuverError),
     #[error(transparent)]
     Dataset(#[from] DatasetError),
+    /// Shard records that do not make one dataset, or cannot be written.
+    #[error("{0}")]
+    Shard(String),
     #[error("flight {name}: {source}")]
     Flight {
         name: String,
@@ -81,16 +87,36 @@ pub fn generate(
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Manifest, GenerateError> {
-    use crate::fly::FlyConfig;
-    use crate::maneuver::{self, Profile};
+    create_dir(out)?;
+    let plan = preset.plan(base_seed);
+    let (flights, version) = fly_plan(&plan, out, sensors, workers, progress)?;
+    let manifest = assemble(preset, base_seed, &plan, sensors, flights, version, out)?;
+    manifest.write(out)?;
+    Ok(manifest)
+}
+
+fn create_dir(out: &Path) -> Result<(), GenerateError> {
     std::fs::create_dir_all(out).map_err(|source| DatasetError::Io {
         action: "create",
         path: out.to_path_buf(),
         source,
     })?;
-    let plan = preset.plan(base_seed);
+    Ok(())
+}
+
+/// Flies `plan` (a preset's plan or a shard of it) into `out`: the flights' entries in `plan` order
+/// and the JSBSim version (empty for an empty plan).
+fn fly_plan(
+    plan: &[PlannedFlight],
+    out: &Path,
+    sensors: &crate::sensors::SensorConfig,
+    workers: usize,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<(Vec<FlightEntry>, String), GenerateError> {
+    use crate::fly::FlyConfig;
+    use crate::maneuver::{self, Profile};
     let version = std::sync::OnceLock::new();
-    let results = par_map(&plan, workers, progress, |f| {
+    let results = par_map(plan, workers, progress, |f| {
         (|| -> Result<FlightEntry, GenerateError> {
             let mut attempt = 0;
             loop {
@@ -133,8 +159,23 @@ pub fn generate(
         })
     });
     let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    Ok((flights, version.into_inner().unwrap_or_default()))
+}
+
+/// The manifest of a whole preset: its flights' entries in plan order, the maneuver files' hashes
+/// (read from `out`) and the generation config.
+fn assemble(
+    preset: crate::maneuver::Preset,
+    base_seed: u64,
+    plan: &[PlannedFlight],
+    sensors: &crate::sensors::SensorConfig,
+    flights: Vec<FlightEntry>,
+    jsbsim_version: String,
+    out: &Path,
+) -> Result<Manifest, GenerateError> {
+    use crate::maneuver::{self, Profile};
     let mut files = std::collections::BTreeMap::new();
-    for f in &plan {
+    for f in plan {
         let (script, init) = maneuver::files(out, &f.name);
         for p in [script, init] {
             let name = p
@@ -144,11 +185,11 @@ pub fn generate(
             files.insert(name, sha256_file(&p)?);
         }
     }
-    let manifest = Manifest {
+    Ok(Manifest {
         format: Manifest::FORMAT,
         suites: Manifest::written_suites(),
         preset: preset.name().to_string(),
-        jsbsim_version: version.into_inner().unwrap_or_default(),
+        jsbsim_version,
         git_rev: git_rev(),
         config: serde_json::json!({
             "seed": base_seed,
@@ -158,7 +199,270 @@ pub fn generate(
         }),
         flights,
         files,
+    })
+}
+
+/// Shard `index` of `count` (`--shard K/N`, `0 ≤ K < N`, as Slurm's `SLURM_ARRAY_TASK_ID` counts):
+/// the planned flights whose position in the plan is `K` modulo `N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Shard, String> {
+        let bad = || {
+            format!(
+                "`{s}`: write K/N with 0 ≤ K < N, e.g. 0/4 (Slurm: $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT)"
+            )
+        };
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count): (usize, usize) = (
+            k.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl Shard {
+    /// This shard's flights of `plan`, in plan order.
+    pub fn of(self, plan: &[PlannedFlight]) -> Vec<PlannedFlight> {
+        plan.iter()
+            .enumerate()
+            .filter(|(i, _)| i % self.count == self.index)
+            .map(|(_, f)| f.clone())
+            .collect()
+    }
+
+    /// The record a finished shard leaves in the dataset directory.
+    pub fn record_path(self, out: &Path) -> std::path::PathBuf {
+        out.join(format!("shard-{}-of-{}.json", self.index, self.count))
+    }
+}
+
+/// What a finished shard leaves beside its flights: enough for `merge` to check it belongs to the
+/// same dataset as the others and to build the one-machine manifest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardRecord {
+    pub preset: crate::maneuver::Preset,
+    pub seed: u64,
+    pub shard: Shard,
+    /// Compared as the typed config: its f32 fields do not survive a trip through a JSON value.
+    pub sensors: crate::sensors::SensorConfig,
+    pub jsbsim_version: String,
+    pub git_rev: String,
+    pub flights: Vec<FlightEntry>,
+}
+
+/// What [`generate_shard`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShardOutcome {
+    /// Flew its flights (this many).
+    Flown(usize),
+    /// Its record was already there and every CSV it lists still has the recorded hash.
+    AlreadyComplete(usize),
+}
+
+/// One shard of [`generate`]: flies this shard's share of the plan into `out` (which the other
+/// shards may share) and writes its [`ShardRecord`] last, so a record means a finished shard. A
+/// re-run finds a complete record for the same dataset and skips the work.
+pub fn generate_shard(
+    preset: crate::maneuver::Preset,
+    base_seed: u64,
+    out: &Path,
+    sensors: &crate::sensors::SensorConfig,
+    workers: usize,
+    shard: Shard,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<ShardOutcome, GenerateError> {
+    create_dir(out)?;
+    let path = shard.record_path(out);
+    if let Ok(text) = std::fs::read_to_string(&path)
+        && let Ok(r) = serde_json::from_str::<ShardRecord>(&text)
+    {
+        let same =
+            r.preset == preset && r.seed == base_seed && r.shard == shard && r.sensors == *sensors;
+        let intact = r
+            .flights
+            .iter()
+            .all(|f| sha256_file(&out.join(&f.file)).is_ok_and(|h| h == f.sha256));
+        if same && intact {
+            return Ok(ShardOutcome::AlreadyComplete(r.flights.len()));
+        }
+    }
+    let plan = shard.of(&preset.plan(base_seed));
+    let (flights, jsbsim_version) = fly_plan(&plan, out, sensors, workers, progress)?;
+    let n = flights.len();
+    let record = ShardRecord {
+        preset,
+        seed: base_seed,
+        shard,
+        sensors: sensors.clone(),
+        jsbsim_version,
+        git_rev: git_rev(),
+        flights,
     };
+    let text =
+        serde_json::to_string_pretty(&record).map_err(|e| GenerateError::Shard(e.to_string()))?;
+    // Written under a temporary name and renamed: a record is never seen half written.
+    let tmp = path.with_extension("json.tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, &path))
+        .map_err(|source| DatasetError::Io {
+            action: "write",
+            path: path.clone(),
+            source,
+        })?;
+    Ok(ShardOutcome::Flown(n))
+}
+
+/// Joins the shards in `out` into the dataset a one-machine [`generate`] writes: checks that the
+/// records are one complete set (every shard of the same N, each once, the same preset, seed,
+/// sensors, JSBSim and git revision; every planned flight exactly once), writes `manifest.json`
+/// and removes the records. The report (`dataset::report::write_report`) is the caller's, as after
+/// `generate`.
+pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
+    let entries = std::fs::read_dir(out).map_err(|source| DatasetError::Io {
+        action: "read",
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let mut records = Vec::new();
+    for e in entries.flatten() {
+        let p = e.path();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if name.starts_with("shard-") && name.ends_with(".json") {
+            let text = std::fs::read_to_string(&p).map_err(|source| DatasetError::Io {
+                action: "read",
+                path: p.clone(),
+                source,
+            })?;
+            let r: ShardRecord = serde_json::from_str(&text)
+                .map_err(|e| GenerateError::Shard(format!("{}: {e}", p.display())))?;
+            records.push((p, r));
+        }
+    }
+    let Some((_, first)) = records.first() else {
+        return Err(GenerateError::Shard(format!(
+            "no shard records (shard-K-of-N.json) in {}: run `hil-sim generate --shard K/N --out {}` for every K first",
+            out.display(),
+            out.display()
+        )));
+    };
+    let first = first.clone();
+    let n = first.shard.count;
+    let mut seen = vec![false; n];
+    for (p, r) in &records {
+        let differs = |what: &str| {
+            GenerateError::Shard(format!(
+                "{} differs from shard {} in its {what}: the shards are not one dataset",
+                p.display(),
+                first.shard
+            ))
+        };
+        if r.shard.count != n {
+            return Err(differs("shard count"));
+        }
+        if r.preset != first.preset || r.seed != first.seed {
+            return Err(differs("preset or seed"));
+        }
+        if r.sensors != first.sensors {
+            return Err(differs("sensor config"));
+        }
+        if r.git_rev != first.git_rev {
+            return Err(differs("git revision"));
+        }
+        if !r.jsbsim_version.is_empty()
+            && !first.jsbsim_version.is_empty()
+            && r.jsbsim_version != first.jsbsim_version
+        {
+            return Err(differs("JSBSim version"));
+        }
+        match seen.get_mut(r.shard.index) {
+            Some(s) if !*s => *s = true,
+            _ => {
+                return Err(GenerateError::Shard(format!(
+                    "shard {} appears twice in {}",
+                    r.shard,
+                    out.display()
+                )));
+            }
+        }
+    }
+    let missing: Vec<String> = seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !**s)
+        .map(|(k, _)| format!("{k}/{n}"))
+        .collect();
+    if !missing.is_empty() {
+        return Err(GenerateError::Shard(format!(
+            "missing shards {}: run `hil-sim generate --preset {} --seed {} --shard K/{n} --out {}` for each",
+            missing.join(", "),
+            first.preset.name(),
+            first.seed,
+            out.display()
+        )));
+    }
+    let sensors = first.sensors.clone();
+    let plan = first.preset.plan(first.seed);
+    let mut flights = Vec::with_capacity(plan.len());
+    for f in &plan {
+        let mut found = records
+            .iter()
+            .flat_map(|(_, r)| r.flights.iter())
+            .filter(|e| e.name == f.name);
+        let (Some(e), None) = (found.next(), found.next()) else {
+            return Err(GenerateError::Shard(format!(
+                "planned flight {} is not in exactly one shard record",
+                f.name
+            )));
+        };
+        flights.push(e.clone());
+    }
+    let listed: usize = records.iter().map(|(_, r)| r.flights.len()).sum();
+    if listed != plan.len() {
+        return Err(GenerateError::Shard(format!(
+            "the shard records list {listed} flights, the plan has {}",
+            plan.len()
+        )));
+    }
+    let version = records
+        .iter()
+        .map(|(_, r)| r.jsbsim_version.clone())
+        .find(|v| !v.is_empty())
+        .unwrap_or_default();
+    let manifest = assemble(
+        first.preset,
+        first.seed,
+        &plan,
+        &sensors,
+        flights,
+        version,
+        out,
+    )?;
     manifest.write(out)?;
+    for (p, _) in &records {
+        std::fs::remove_file(p).map_err(|source| DatasetError::Io {
+            action: "remove",
+            path: p.clone(),
+            source,
+        })?;
+    }
     Ok(manifest)
 }

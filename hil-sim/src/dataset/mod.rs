@@ -310,7 +310,10 @@ mod generator;
 pub mod report;
 
 #[cfg(feature = "sim")]
-pub use generator::{GenerateError, TRIM_RETRIES, generate, par_map, redraw_seed, sensor_seed};
+pub use generator::{
+    GenerateError, Shard, ShardOutcome, ShardRecord, TRIM_RETRIES, generate, generate_shard, merge,
+    par_map, redraw_seed, sensor_seed,
+};
 
 /// SHA-256 of a file, lowercase hex.
 pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {
