@@ -146,4 +146,13 @@ fn shards_merge_into_the_one_machine_dataset() {
     }
     assert!(a.contains_key("manifest.json") && a.contains_key("dataset.md"));
     let _ = std::fs::remove_dir_all(&root);
+    // The --shard text.
+    assert_eq!("2/4".parse::<Shard>().unwrap(), shard(2, 4));
+    for bad in ["4/4", "0/0", "1", "a/2", "-1/3"] {
+        assert_eq!(
+            bad.parse::<Shard>(),
+            Err(dataset::BadShard(bad.into())),
+            "{bad}"
+        );
+    }
 }

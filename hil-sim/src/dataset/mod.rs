@@ -311,8 +311,8 @@ pub mod report;
 
 #[cfg(feature = "sim")]
 pub use generator::{
-    GenerateError, Shard, ShardOutcome, ShardRecord, TRIM_RETRIES, generate, generate_shard, merge,
-    par_map, redraw_seed, sensor_seed,
+    BadShard, GenerateError, Shard, ShardOutcome, ShardRecord, TRIM_RETRIES, generate,
+    generate_shard, merge, par_map, redraw_seed, sensor_seed,
 };
 
 /// SHA-256 of a file, lowercase hex.
