@@ -15,6 +15,9 @@ pub enum Error {
     Dataset(#[from] hil_sim::dataset::DatasetError),
     #[error("dataset {0}: {1}")]
     Split(PathBuf, String),
+    /// Sweep results that cannot be read or do not belong to the grid.
+    #[error("sweep: {0}")]
+    Sweep(String),
     /// A manifest fault the reader cannot parse.
     #[error("{0} (in a dataset manifest's `faults`)")]
     Fault(#[from] hil_sim::faults::FaultError),

@@ -17,5 +17,6 @@ pub mod plots;
 pub mod prep;
 pub mod quant;
 pub mod report;
+pub mod sweep;
 
 pub use error::{Error, Result};

@@ -55,6 +55,53 @@ struct TrainArgs {
     val_fraction: f64,
 }
 
+/// The grid and training settings of `trainer sweep` (the same for every call of one sweep).
+#[derive(clap::Args, Clone)]
+struct SweepGrid {
+    /// Dataset directory.
+    #[arg(long)]
+    data: PathBuf,
+    /// Where the job results and sweep.md go (shared by every job).
+    #[arg(long)]
+    out: PathBuf,
+    /// Network sizes (repeat the flag for several): small, medium, paper.
+    #[arg(long = "size", default_value = "small")]
+    sizes: Vec<String>,
+    /// Feature sets (repeat the flag for several), as `trainer train --features`.
+    #[arg(long = "features", default_value = "table1")]
+    features: Vec<String>,
+    /// Sensor suites (repeat the flag for several): table1, egi.
+    #[arg(long = "suite", default_value = "table1")]
+    suites: Vec<String>,
+    /// Comma-separated seeds.
+    #[arg(long, default_value = "1")]
+    seeds: String,
+    /// Epochs (default: the size's).
+    #[arg(long)]
+    epochs: Option<usize>,
+    #[arg(long, default_value_t = 256)]
+    batch: usize,
+    #[arg(long, default_value_t = 1e-3)]
+    lr: f64,
+    #[arg(long, default_value_t = 0.15)]
+    val_fraction: f64,
+}
+
+/// Exactly one of these.
+#[derive(clap::Args, Clone)]
+#[group(required = true, multiple = false)]
+struct SweepAction {
+    /// Print the jobs (first line: `jobs: N`).
+    #[arg(long)]
+    list: bool,
+    /// Run job K (0 ≤ K < N; a Slurm array task passes $SLURM_ARRAY_TASK_ID).
+    #[arg(long)]
+    job: Option<usize>,
+    /// Gather the jobs' results into OUT/sweep.md.
+    #[arg(long)]
+    merge: bool,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Train both cascades, quantize, write weights.rs + test vectors + plots.
@@ -169,6 +216,16 @@ enum Cmd {
         /// Print exactly one JSON object on stdout (the files are written as well).
         #[arg(long)]
         json: bool,
+    },
+    /// Training sweep: a grid of sizes × feature sets × suites × seeds as numbered independent jobs.
+    /// `--list` prints them, `--job K` trains job K (both cascades) and leaves OUT/job-K.json,
+    /// `--merge` gathers them into OUT/sweep.md with the seed spread, naming every failed or missing
+    /// job (and exits non-zero if there is one). Every call takes the same grid arguments.
+    Sweep {
+        #[command(flatten)]
+        grid: SweepGrid,
+        #[command(flatten)]
+        action: SweepAction,
     },
     /// Evaluate the compiled-in model (Estimator::shipped) on the test flights.
     Eval {
@@ -397,6 +454,126 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
         }
     }
     Ok(c)
+}
+
+fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
+    use trainer::sweep::{Grid, JobResult, Scores, merge, write_result};
+    let seeds: Vec<u64> = g
+        .seeds
+        .split(',')
+        .map(|s| s.trim().parse::<u64>())
+        .collect::<std::result::Result<_, _>>()
+        .context("--seeds must be comma-separated integers, e.g. 1,2")?;
+    let grid = Grid {
+        sizes: g.sizes.clone(),
+        features: g.features.clone(),
+        suites: g.suites.clone(),
+        seeds,
+    };
+    let jobs = grid.jobs();
+    if action.list {
+        println!("jobs: {}", jobs.len());
+        for j in &jobs {
+            println!("{}: {} seed {}", j.index, j.config(), j.seed);
+        }
+        return Ok(());
+    }
+    if action.merge {
+        let m = merge(&grid, &g.out)?;
+        let path = g.out.join("sweep.md");
+        std::fs::write(&path, m.markdown(&command_line(), &machine()))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        println!(
+            "{} jobs: {} finished, {} failed, {} missing; wrote {}",
+            jobs.len(),
+            m.done.len(),
+            m.failed.len(),
+            m.missing.len(),
+            path.display()
+        );
+        if !m.failed.is_empty() || !m.missing.is_empty() {
+            bail!(
+                "{} of {} jobs failed or left no result; they are named in {}",
+                m.failed.len() + m.missing.len(),
+                jobs.len(),
+                path.display()
+            );
+        }
+        return Ok(());
+    }
+    let k = action.job.unwrap_or(0);
+    let job = jobs
+        .get(k)
+        .cloned()
+        .with_context(|| format!("--job {k}: the grid has jobs 0..{}", jobs.len()))?;
+    let t0 = std::time::Instant::now();
+    let run = || -> Result<Scores> {
+        let size = Size::parse(&job.size)
+            .with_context(|| format!("size `{}`: small, medium or paper", job.size))?;
+        let suite = parse_suite(&job.suite)?;
+        let fs = FeatureSet::parse(&job.features)?;
+        fs.check_suite(suite)?;
+        let ds = load(&g.data, g.val_fraction)?;
+        ds.require(suite)?;
+        let cfg = |angle: Angle| TrainConfig {
+            epochs: g.epochs.unwrap_or(size.default_epochs()),
+            batch: g.batch,
+            lr: g.lr,
+            seed: job.seed,
+            label: format!("job {k} {}", angle.name()),
+            progress: false,
+        };
+        let a = train_angle(
+            &ds,
+            Angle::Alpha,
+            fs.for_angle(Angle::Alpha),
+            size,
+            &cfg(Angle::Alpha),
+        );
+        let b = train_angle(
+            &ds,
+            Angle::Beta,
+            fs.for_angle(Angle::Beta),
+            size,
+            &cfg(Angle::Beta),
+        );
+        Ok(Scores {
+            alpha_float: a.float_test.overall,
+            alpha_int8: a.int_test.overall,
+            beta_float: b.float_test.overall,
+            beta_int8: b.int_test.overall,
+        })
+    };
+    let outcome = run();
+    let result = JobResult {
+        job: job.clone(),
+        scores: outcome.as_ref().ok().cloned(),
+        error: outcome.as_ref().err().map(|e| format!("{e:#}")),
+        seconds: t0.elapsed().as_secs_f64(),
+    };
+    let path = write_result(&g.out, &result)?;
+    match outcome {
+        Ok(s) => {
+            println!(
+                "job {k} ({}, seed {}): α {:.3}/{:.3}, β {:.3}/{:.3} (float/int8 MAE) in {:.1} s; wrote {}",
+                job.config(),
+                job.seed,
+                s.alpha_float.mae,
+                s.alpha_int8.mae,
+                s.beta_float.mae,
+                s.beta_int8.mae,
+                result.seconds,
+                path.display()
+            );
+            Ok(())
+        }
+        Err(e) => Err(e.context(format!(
+            "job {k} ({}, seed {}) failed; recorded in {}",
+            job.config(),
+            job.seed,
+            path.display()
+        ))),
+    }
 }
 
 fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
@@ -790,6 +967,7 @@ fn main() -> Result<()> {
             json,
         } => cmd_eval_filter(data, split, tune, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
+        Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
         Cmd::Report {
             args,
             seeds,

@@ -1,7 +1,7 @@
 //! Error metrics (degrees): MAE, RMSE, 95th percentile and maximum of |error|.
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
 pub struct Metrics {
     pub n: usize,
     pub mae: f64,
