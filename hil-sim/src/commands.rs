@@ -89,7 +89,8 @@ pub fn fly(a: &FlyArgs) -> Result<()> {
 pub struct GenerateArgs {
     /// `paper`: 16 training flights of 15–20 min + 4 test flights; `large`: paper + 48 more training
     /// flights (≈ 19 h); `ci`: 5 flights of 3 min; `ood`: 16 out-of-distribution test flights of
-    /// 6 min, kept apart from training (docs/results/ood.md).
+    /// 6 min, kept apart from training (docs/results/ood.md); `campaign`: any number of flight-hours
+    /// with chosen mass, wind and turbulence ranges (--hours, --fuel-lbs, --wind-mps, --turbulence).
     #[arg(long, value_enum)]
     preset: crate::maneuver::Preset,
     /// Dataset directory to write (created).
@@ -102,6 +103,102 @@ pub struct GenerateArgs {
     /// record does nothing. `hil-sim merge --out DIR` then writes the dataset one machine would have.
     #[arg(long)]
     shard: Option<dataset::Shard>,
+    #[command(flatten)]
+    campaign: CampaignArgs,
+}
+
+/// `--preset campaign` only: its size and the ranges every profile draws from (defaults: 100 h of
+/// 20-min flights over the training presets' ranges).
+#[derive(clap::Args)]
+pub struct CampaignArgs {
+    /// Flight-hours of the campaign.
+    #[arg(long)]
+    hours: Option<f64>,
+    /// Length of each flight, minutes.
+    #[arg(long)]
+    flight_min: Option<f64>,
+    /// Fuel per main tank, lb, `LO:HI` (mass: empty 17,400 + pilot 230 + 2 × fuel).
+    #[arg(long, value_parser = parse_range)]
+    fuel_lbs: Option<(f64, f64)>,
+    /// Steady wind speed, m/s, `LO:HI` (random direction).
+    #[arg(long, value_parser = parse_range)]
+    wind_mps: Option<(f64, f64)>,
+    /// MIL-spec turbulence severity, `LO:HI` in 0..7.
+    #[arg(long, value_parser = parse_severity)]
+    turbulence: Option<(u32, u32)>,
+}
+
+/// A `--fuel-lbs`/`--wind-mps` range that is not `LO:HI` with finite LO ≤ HI.
+#[derive(Debug, thiserror::Error)]
+#[error("`{0}`: write LO:HI with LO ≤ HI, e.g. 0:25")]
+pub struct BadRange(String);
+
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), BadRange> {
+    let bad = || BadRange(s.to_string());
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a.is_finite() && b.is_finite() && a <= b {
+        Ok((a, b))
+    } else {
+        Err(bad())
+    }
+}
+
+fn parse_severity(s: &str) -> std::result::Result<(u32, u32), BadRange> {
+    let (a, b) = parse_range(s)?;
+    if a < 0.0 || b > 7.0 || a.fract() != 0.0 || b.fract() != 0.0 {
+        return Err(BadRange(s.to_string()));
+    }
+    Ok((a as u32, b as u32))
+}
+
+impl GenerateArgs {
+    /// The plan: the preset and seed, and for a campaign its parameters. Campaign flags on another
+    /// preset are refused rather than ignored.
+    fn plan(&self) -> Result<crate::maneuver::Plan> {
+        use crate::maneuver::{Campaign, Plan, Preset};
+        let c = &self.campaign;
+        let any = c.hours.is_some()
+            || c.flight_min.is_some()
+            || c.fuel_lbs.is_some()
+            || c.wind_mps.is_some()
+            || c.turbulence.is_some();
+        let mut plan = Plan::new(self.preset, self.flights.seed);
+        if self.preset != Preset::Campaign {
+            if any {
+                return Err(Error::Usage(
+                    "--hours, --flight-min, --fuel-lbs, --wind-mps and --turbulence go with --preset campaign".into(),
+                ));
+            }
+            return Ok(plan);
+        }
+        let mut k = Campaign::default();
+        if let Some(h) = c.hours {
+            k.hours = h;
+        }
+        if let Some(m) = c.flight_min {
+            k.flight_min = m;
+        }
+        if let Some(r) = c.fuel_lbs {
+            k.ranges.fuel_per_tank_lbs = r;
+        }
+        if let Some((lo, hi)) = c.wind_mps {
+            k.ranges.steady_wind_fps = (lo / crate::flight::FT_TO_M, hi / crate::flight::FT_TO_M);
+        }
+        if let Some(t) = c.turbulence {
+            k.ranges.turb_severity = t;
+        }
+        if !(k.hours > 0.0 && k.flight_min >= 1.0 && k.flight_min <= 120.0) {
+            return Err(Error::Usage(
+                "--hours must be positive and --flight-min between 1 and 120".into(),
+            ));
+        }
+        plan.campaign = Some(k);
+        Ok(plan)
+    }
 }
 
 /// What `generate` and `bench` share.
@@ -139,17 +236,11 @@ fn flights_bar(n: usize) -> indicatif::ProgressBar {
 pub fn generate(a: &GenerateArgs) -> Result<()> {
     let sensors = sensors_of(&a.flights.sensors)?;
     let started = std::time::Instant::now();
+    let plan = a.plan()?;
     if let Some(shard) = a.shard {
-        let pb = flights_bar(shard.of(&a.preset.plan(a.flights.seed)).len());
-        let outcome = dataset::generate_shard(
-            a.preset,
-            a.flights.seed,
-            &a.out,
-            &sensors,
-            a.flights.workers,
-            shard,
-            Some(&pb),
-        )?;
+        let pb = flights_bar(shard.of(&plan.flights()).len());
+        let outcome =
+            dataset::generate_shard(&plan, &a.out, &sensors, a.flights.workers, shard, Some(&pb))?;
         pb.finish_and_clear();
         match outcome {
             dataset::ShardOutcome::Flown(n) => println!(
@@ -167,15 +258,8 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let pb = flights_bar(a.preset.plan(a.flights.seed).len());
-    let m = dataset::generate(
-        a.preset,
-        a.flights.seed,
-        &a.out,
-        &sensors,
-        a.flights.workers,
-        Some(&pb),
-    )?;
+    let pb = flights_bar(plan.flights().len());
+    let m = dataset::generate(&plan, &a.out, &sensors, a.flights.workers, Some(&pb))?;
     pb.finish_and_clear();
     summarize(&m, &a.out, "generated", started)
 }

@@ -30,6 +30,9 @@ pub enum Error {
     },
     #[error("cannot format the summary as JSON: {0}")]
     Json(#[from] serde_json::Error),
+    /// Arguments that do not go together.
+    #[error("{0}")]
+    Usage(String),
 }
 
 /// `Result` with hil-sim's [`Error`].

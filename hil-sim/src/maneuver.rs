@@ -1007,6 +1007,54 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_campaign_plans_its_hours_with_its_ranges() {
+        let c = Campaign {
+            hours: 10.0,
+            flight_min: 20.0,
+            ranges: ProfileRanges {
+                fuel_per_tank_lbs: (100.0, 3_400.0),
+                steady_wind_fps: (0.0, 60.0),
+                turb_severity: (2, 7),
+            },
+        };
+        let plan = Plan {
+            preset: Preset::Campaign,
+            seed: 5,
+            campaign: Some(c.clone()),
+        };
+        let f = plan.flights();
+        assert_eq!(f.len(), 30);
+        assert_eq!(
+            f.iter()
+                .filter(|x| x.split == crate::flight::Split::Test)
+                .count(),
+            3
+        );
+        assert_eq!(f[9].name, "test_high-alpha_00009");
+        let mut seeds: Vec<u64> = f.iter().map(|x| x.seed).collect();
+        seeds.sort_unstable();
+        seeds.dedup();
+        assert_eq!(seeds.len(), 30);
+        for x in &f {
+            let p = x.profile();
+            assert_eq!(p.fuel_per_tank_lbs, (100.0, 3_400.0));
+            assert_eq!(p.turb_severity, (2, 7));
+            assert_eq!(p.kind, x.profile);
+            assert_eq!(x.duration_s, 1_200.0);
+        }
+        // The same plan from the same spec; another seed, other flights.
+        assert_eq!(plan.flights(), f);
+        let other = Plan {
+            seed: 6,
+            ..plan.clone()
+        };
+        assert_ne!(other.flights()[0].seed, f[0].seed);
+        // A campaign flight's script draws from the campaign's ranges: severity 2..7.
+        let m = generate(&f[0].profile(), f[0].seed, "c", 60.0).unwrap();
+        assert!(m.script_xml.contains("milspec/severity"));
+    }
+
+    #[test]
     fn ood_plan_pairs_every_case_with_its_twin() {
         let plan = Preset::Ood.plan(1);
         assert_eq!(plan.len(), 2 * (1 + OodCase::ALL.len()));
@@ -1224,6 +1272,111 @@ pub enum Preset {
     /// the high-α profile, an in-distribution twin (`ood_nominal_<profile>`) and one flight per
     /// [`OodCase`] (`ood_<case>_<profile>`) with the twin's seed, 6 min each (16 flights).
     Ood,
+    /// A flight campaign of any size: [`Campaign`] sets its flight-hours and the mass, wind and
+    /// turbulence ranges of every profile (`hil-sim generate --preset campaign --hours ...`).
+    Campaign,
+}
+
+/// The mass, wind and turbulence ranges a campaign gives every profile in place of its own.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ProfileRanges {
+    pub fuel_per_tank_lbs: Range,
+    pub steady_wind_fps: Range,
+    pub turb_severity: (u32, u32),
+}
+
+impl ProfileRanges {
+    pub fn apply(&self, p: &mut Profile) {
+        p.fuel_per_tank_lbs = self.fuel_per_tank_lbs;
+        p.steady_wind_fps = self.steady_wind_fps;
+        p.turb_severity = self.turb_severity;
+    }
+}
+
+/// A campaign: flights of `flight_min` minutes, the four profiles in turn, until `hours` of
+/// flight; every tenth flight is a test flight. Seeds come from their own stream of the base seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Campaign {
+    pub hours: f64,
+    pub flight_min: f64,
+    pub ranges: ProfileRanges,
+}
+
+impl Default for Campaign {
+    /// 100 h of 20-min flights over the training presets' ranges.
+    fn default() -> Campaign {
+        Campaign {
+            hours: 100.0,
+            flight_min: 20.0,
+            ranges: ProfileRanges {
+                fuel_per_tank_lbs: (600.0, 3_000.0),
+                steady_wind_fps: (0.0, 40.0),
+                turb_severity: (0, 6),
+            },
+        }
+    }
+}
+
+/// Every tenth campaign flight is a test flight.
+const CAMPAIGN_TEST_EVERY: usize = 10;
+
+impl Campaign {
+    fn flights(&self, base_seed: u64) -> Vec<PlannedFlight> {
+        let n = (self.hours * 60.0 / self.flight_min.max(1.0))
+            .ceil()
+            .max(1.0) as usize;
+        let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6361_6d70_6169_676e);
+        (0..n)
+            .map(|i| {
+                let profile = ProfileKind::ALL[i % ProfileKind::ALL.len()];
+                let test = i % CAMPAIGN_TEST_EVERY == CAMPAIGN_TEST_EVERY - 1;
+                PlannedFlight {
+                    name: format!(
+                        "{}_{}_{i:05}",
+                        if test { "test" } else { "train" },
+                        profile.name()
+                    ),
+                    split: if test {
+                        crate::flight::Split::Test
+                    } else {
+                        crate::flight::Split::Train
+                    },
+                    profile,
+                    seed: rng.random::<u64>(),
+                    duration_s: self.flight_min * 60.0,
+                    ood: None,
+                    ranges: Some(self.ranges.clone()),
+                }
+            })
+            .collect()
+    }
+}
+
+/// What a dataset is planned from: a preset, the base seed, and for a campaign its parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    pub preset: Preset,
+    pub seed: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub campaign: Option<Campaign>,
+}
+
+impl Plan {
+    pub fn new(preset: Preset, seed: u64) -> Plan {
+        Plan {
+            preset,
+            seed,
+            campaign: None,
+        }
+    }
+
+    /// The planned flights.
+    pub fn flights(&self) -> Vec<PlannedFlight> {
+        match (self.preset, &self.campaign) {
+            (Preset::Campaign, Some(c)) => c.flights(self.seed),
+            (p, _) => p.plan(self.seed),
+        }
+    }
 }
 
 /// One planned flight of a preset.
@@ -1237,6 +1390,20 @@ pub struct PlannedFlight {
     /// The out-of-distribution case (`ood` preset only; absent from other presets' manifests).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ood: Option<OodCase>,
+    /// Ranges that replace the profile's own (`campaign` preset only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ranges: Option<ProfileRanges>,
+}
+
+impl PlannedFlight {
+    /// The profile this flight is drawn from, with the campaign's ranges if it has them.
+    pub fn profile(&self) -> Profile {
+        let mut p = Profile::preset(self.profile);
+        if let Some(r) = &self.ranges {
+            r.apply(&mut p);
+        }
+        p
+    }
 }
 
 impl PlannedFlight {
@@ -1258,6 +1425,7 @@ impl PlannedFlight {
                 .wrapping_add((pi * 100 + k) as u64),
             duration_s: draw(rng, len).round(),
             ood: None,
+            ranges: None,
         }
     }
 }
@@ -1269,6 +1437,7 @@ impl Preset {
             Preset::Ci => "ci",
             Preset::Large => "large",
             Preset::Ood => "ood",
+            Preset::Campaign => "campaign",
         }
     }
 
@@ -1281,6 +1450,9 @@ impl Preset {
         const PAPER_TRAIN_LEN: Range = (900.0, 1200.0);
         if self == Preset::Ood {
             return Self::ood_plan(base_seed);
+        }
+        if self == Preset::Campaign {
+            return Campaign::default().flights(base_seed);
         }
         if self == Preset::Large {
             // Paper's plan untouched, then 12 more per profile from their own random stream.
@@ -1308,8 +1480,8 @@ impl Preset {
             &[ProfileKind],
             Range,
         ) = match self {
-            // (Large and Ood returned above.)
-            Preset::Paper | Preset::Large | Preset::Ood => (
+            // (Large, Ood and Campaign returned above.)
+            Preset::Paper | Preset::Large | Preset::Ood | Preset::Campaign => (
                 PAPER_PER_PROFILE,
                 PAPER_TRAIN_LEN,
                 &ProfileKind::ALL,
@@ -1337,6 +1509,7 @@ impl Preset {
                 seed: base_seed.wrapping_mul(1000).wrapping_add(500 + k as u64),
                 duration_s: draw(&mut rng, test_len).round(),
                 ood: None,
+                ranges: None,
             });
         }
         out
@@ -1362,6 +1535,7 @@ impl Preset {
                     seed,
                     duration_s: OOD_LEN_S,
                     ood,
+                    ranges: None,
                 });
             }
         }

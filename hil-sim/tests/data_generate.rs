@@ -1,14 +1,21 @@
 //! The `ci` preset end to end: maneuver files, flights, manifest, hashes, report (a few seconds).
 
 use hil_sim::dataset::{self, Flight, Manifest, Split};
-use hil_sim::maneuver::Preset;
+use hil_sim::maneuver::{Plan, Preset};
 use hil_sim::sensors::SensorConfig;
 
 #[test]
 fn ci_preset_writes_a_consistent_dataset() {
     let dir = std::env::temp_dir().join(format!("hil-data-gen-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let m = dataset::generate(Preset::Ci, 9, &dir, &SensorConfig::default(), 2, None).unwrap();
+    let m = dataset::generate(
+        &Plan::new(Preset::Ci, 9),
+        &dir,
+        &SensorConfig::default(),
+        2,
+        None,
+    )
+    .unwrap();
     let report = dataset::report::write_report(&dir).unwrap();
     let back = Manifest::read(&dir).unwrap();
     assert_eq!(back.flights, m.flights);
@@ -100,14 +107,15 @@ fn shards_merge_into_the_one_machine_dataset() {
     let _ = std::fs::remove_dir_all(&root);
     let s = SensorConfig::default();
     let one = root.join("one");
-    dataset::generate(Preset::Ci, 4, &one, &s, 2, None).unwrap();
+    dataset::generate(&Plan::new(Preset::Ci, 4), &one, &s, 2, None).unwrap();
     dataset::report::write_report(&one).unwrap();
 
     let sh = root.join("sharded");
     let shard = |k: usize, n: usize| Shard { index: k, count: n };
     // Shard 2/3 first: order does not matter. Five flights: shards of 2, 2 and 1.
     for k in [2, 0] {
-        let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(k, 3), None).unwrap();
+        let r = dataset::generate_shard(&Plan::new(Preset::Ci, 4), &sh, &s, 1, shard(k, 3), None)
+            .unwrap();
         assert_eq!(r, ShardOutcome::Flown(if k == 2 { 1 } else { 2 }));
     }
     let e = dataset::merge(&sh).unwrap_err();
@@ -115,10 +123,12 @@ fn shards_merge_into_the_one_machine_dataset() {
         matches!(&e, GenerateError::Shard(m) if m.contains("missing shards 1/3")),
         "{e}"
     );
-    let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(1, 3), None).unwrap();
+    let r =
+        dataset::generate_shard(&Plan::new(Preset::Ci, 4), &sh, &s, 1, shard(1, 3), None).unwrap();
     assert_eq!(r, ShardOutcome::Flown(2));
     // A re-run finds the record complete and flies nothing.
-    let r = dataset::generate_shard(Preset::Ci, 4, &sh, &s, 1, shard(1, 3), None).unwrap();
+    let r =
+        dataset::generate_shard(&Plan::new(Preset::Ci, 4), &sh, &s, 1, shard(1, 3), None).unwrap();
     assert_eq!(r, ShardOutcome::AlreadyComplete(2));
     // A shard recorded twice, or a record of another shard count, in the same directory is refused.
     let stray = sh.join("shard-0-of-3-copy.json");

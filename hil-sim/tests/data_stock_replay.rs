@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use hil_sim::dataset::{self, Flight};
 use hil_sim::fly::{self, FlyConfig};
-use hil_sim::maneuver::{self, Preset};
+use hil_sim::maneuver::{self, Plan, Preset};
 use hil_sim::sensors::SensorConfig;
 
 const TOLERANCE_DEG: f64 = 1e-9;
@@ -86,7 +86,14 @@ fn assert_same_truth(what: &str, flight: &Flight, stock: &[[f64; 3]]) -> usize {
 #[test]
 fn generated_dataset_is_what_stock_jsbsim_flies() {
     let dir = tmp("ci");
-    let m = dataset::generate(Preset::Ci, 11, &dir, &SensorConfig::default(), 2, None).unwrap();
+    let m = dataset::generate(
+        &Plan::new(Preset::Ci, 11),
+        &dir,
+        &SensorConfig::default(),
+        2,
+        None,
+    )
+    .unwrap();
     assert_eq!(m.flights.len(), 5);
     for f in &m.flights {
         let (script, init) = maneuver::files(&dir, &f.name);

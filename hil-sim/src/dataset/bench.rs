@@ -95,7 +95,13 @@ pub fn run(
     let (mut generate_s, mut raw_s) = (Vec::new(), Vec::new());
     let generate = |times: &mut Vec<f64>| -> Result<Manifest, GenerateError> {
         let t = Instant::now();
-        let m = super::generate(preset, seed, out, sensors, workers, progress)?;
+        let m = super::generate(
+            &crate::maneuver::Plan::new(preset, seed),
+            out,
+            sensors,
+            workers,
+            progress,
+        )?;
         times.push(t.elapsed().as_secs_f64());
         Ok(m)
     };

@@ -6,7 +6,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::{DatasetError, FlightEntry, Manifest, git_rev, sha256_file, write_flight};
-use crate::maneuver::PlannedFlight;
+use crate::maneuver::{Plan, PlannedFlight};
 
 /// Why `generate` failed.
 #[derive(Debug, thiserror::Error)]
@@ -80,17 +80,16 @@ pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
 /// trim is re-drawn with [`redraw_seed`] (up to [`TRIM_RETRIES`] times; the seed flown is the one
 /// in the manifest), so one unlucky initial condition does not lose a whole dataset.
 pub fn generate(
-    preset: crate::maneuver::Preset,
-    base_seed: u64,
+    plan: &Plan,
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Manifest, GenerateError> {
     create_dir(out)?;
-    let plan = preset.plan(base_seed);
-    let (flights, version) = fly_plan(&plan, out, sensors, workers, progress)?;
-    let manifest = assemble(preset, base_seed, &plan, sensors, flights, version, out)?;
+    let planned = plan.flights();
+    let (flights, version) = fly_plan(&planned, out, sensors, workers, progress)?;
+    let manifest = assemble(plan, &planned, sensors, flights, version, out)?;
     manifest.write(out)?;
     Ok(manifest)
 }
@@ -114,20 +113,14 @@ fn fly_plan(
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<(Vec<FlightEntry>, String), GenerateError> {
     use crate::fly::FlyConfig;
-    use crate::maneuver::{self, Profile};
+    use crate::maneuver;
     let version = std::sync::OnceLock::new();
     let results = par_map(plan, workers, progress, |f| {
         (|| -> Result<FlightEntry, GenerateError> {
             let mut attempt = 0;
             loop {
                 let seed = redraw_seed(f.seed, attempt);
-                let m = maneuver::generate_case(
-                    &Profile::preset(f.profile),
-                    seed,
-                    &f.name,
-                    f.duration_s,
-                    f.ood,
-                )?;
+                let m = maneuver::generate_case(&f.profile(), seed, &f.name, f.duration_s, f.ood)?;
                 let script = m.write(out)?;
                 // A fresh bridge per attempt: a failed trim can leave one in any state.
                 let mut plant = crate::plant::Plant::spawn()?;
@@ -165,8 +158,7 @@ fn fly_plan(
 /// The manifest of a whole preset: its flights' entries in plan order, the maneuver files' hashes
 /// (read from `out`) and the generation config.
 fn assemble(
-    preset: crate::maneuver::Preset,
-    base_seed: u64,
+    spec: &Plan,
     plan: &[PlannedFlight],
     sensors: &crate::sensors::SensorConfig,
     flights: Vec<FlightEntry>,
@@ -185,18 +177,26 @@ fn assemble(
             files.insert(name, sha256_file(&p)?);
         }
     }
+    let mut config = serde_json::json!({
+        "seed": spec.seed,
+        "plan": plan,
+        "profiles": crate::maneuver::ProfileKind::ALL.iter().map(|k| Profile::preset(*k)).collect::<Vec<_>>(),
+        "sensors": sensors,
+    });
+    // Only a campaign says what it was asked for (the other presets' manifests stay as they were).
+    if let (Some(c), Some(obj)) = (&spec.campaign, config.as_object_mut()) {
+        obj.insert(
+            "campaign".into(),
+            serde_json::to_value(c).map_err(|e| GenerateError::Shard(e.to_string()))?,
+        );
+    }
     Ok(Manifest {
         format: Manifest::FORMAT,
         suites: Manifest::written_suites(),
-        preset: preset.name().to_string(),
+        preset: spec.preset.name().to_string(),
         jsbsim_version,
         git_rev: git_rev(),
-        config: serde_json::json!({
-            "seed": base_seed,
-            "plan": plan,
-            "profiles": crate::maneuver::ProfileKind::ALL.iter().map(|k| Profile::preset(*k)).collect::<Vec<_>>(),
-            "sensors": sensors,
-        }),
+        config,
         flights,
         files,
     })
@@ -259,8 +259,7 @@ impl Shard {
 /// same dataset as the others and to build the one-machine manifest.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ShardRecord {
-    pub preset: crate::maneuver::Preset,
-    pub seed: u64,
+    pub plan: Plan,
     pub shard: Shard,
     /// Compared as the typed config: its f32 fields do not survive a trip through a JSON value.
     pub sensors: crate::sensors::SensorConfig,
@@ -282,8 +281,7 @@ pub enum ShardOutcome {
 /// shards may share) and writes its [`ShardRecord`] last, so a record means a finished shard. A
 /// re-run finds a complete record for the same dataset and skips the work.
 pub fn generate_shard(
-    preset: crate::maneuver::Preset,
-    base_seed: u64,
+    plan: &Plan,
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
@@ -295,8 +293,7 @@ pub fn generate_shard(
     if let Ok(text) = std::fs::read_to_string(&path)
         && let Ok(r) = serde_json::from_str::<ShardRecord>(&text)
     {
-        let same =
-            r.preset == preset && r.seed == base_seed && r.shard == shard && r.sensors == *sensors;
+        let same = r.plan == *plan && r.shard == shard && r.sensors == *sensors;
         let intact = r
             .flights
             .iter()
@@ -305,12 +302,11 @@ pub fn generate_shard(
             return Ok(ShardOutcome::AlreadyComplete(r.flights.len()));
         }
     }
-    let plan = shard.of(&preset.plan(base_seed));
-    let (flights, jsbsim_version) = fly_plan(&plan, out, sensors, workers, progress)?;
+    let share = shard.of(&plan.flights());
+    let (flights, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress)?;
     let n = flights.len();
     let record = ShardRecord {
-        preset,
-        seed: base_seed,
+        plan: plan.clone(),
         shard,
         sensors: sensors.clone(),
         jsbsim_version,
@@ -381,8 +377,8 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
         if r.shard.count != n {
             return Err(differs("shard count"));
         }
-        if r.preset != first.preset || r.seed != first.seed {
-            return Err(differs("preset or seed"));
+        if r.plan != first.plan {
+            return Err(differs("preset, seed or campaign"));
         }
         if r.sensors != first.sensors {
             return Err(differs("sensor config"));
@@ -417,13 +413,13 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
         return Err(GenerateError::Shard(format!(
             "missing shards {}: run `hil-sim generate --preset {} --seed {} --shard K/{n} --out {}` for each",
             missing.join(", "),
-            first.preset.name(),
-            first.seed,
+            first.plan.preset.name(),
+            first.plan.seed,
             out.display()
         )));
     }
     let sensors = first.sensors.clone();
-    let plan = first.preset.plan(first.seed);
+    let plan = first.plan.flights();
     let mut flights = Vec::with_capacity(plan.len());
     for f in &plan {
         let mut found = records
@@ -450,15 +446,7 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
         .map(|(_, r)| r.jsbsim_version.clone())
         .find(|v| !v.is_empty())
         .unwrap_or_default();
-    let manifest = assemble(
-        first.preset,
-        first.seed,
-        &plan,
-        &sensors,
-        flights,
-        version,
-        out,
-    )?;
+    let manifest = assemble(&first.plan, &plan, &sensors, flights, version, out)?;
     manifest.write(out)?;
     for (p, _) in &records {
         std::fs::remove_file(p).map_err(|source| DatasetError::Io {
