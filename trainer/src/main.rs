@@ -147,6 +147,11 @@ enum Cmd {
         /// Print exactly one JSON object (the Table-2 numbers) on stdout.
         #[arg(long)]
         json: bool,
+        /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid`
+        /// features on the `egi` suite, medium networks, the report's seeds and epochs) and the
+        /// model-based filter alone. Needs a dataset that carries the `egi` suite.
+        #[arg(long)]
+        shipped_rows: bool,
     },
     /// Spearman rank correlations of every candidate feature with the air-data targets and among
     /// themselves (CSV + markdown + heatmap), and sampled Shapley values of the compiled-in α and β
@@ -697,6 +702,7 @@ fn cmd_report(
     gb_rows: usize,
     out: &Path,
     json: bool,
+    shipped_rows: bool,
 ) -> Result<()> {
     use trainer::report::{BenchEpoch, ReportConfig, run};
     let size = args.size()?;
@@ -729,6 +735,15 @@ fn cmd_report(
         features,
         ablation: ablation.clone(),
         suite,
+        shipped_rows: if shipped_rows {
+            ds.require(Suite::Egi)?;
+            // The configuration the shipped weights were trained with (their PROVENANCE).
+            let hybrid = FeatureSet::parse("egi-hybrid")?;
+            hybrid.check_suite(Suite::Egi)?;
+            Some((hybrid, Size::Medium))
+        } else {
+            None
+        },
     };
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let report = run(
@@ -975,7 +990,8 @@ fn main() -> Result<()> {
             gb_rows,
             out,
             json,
-        } => cmd_report(args, seeds, ablation, *gb_rows, out, *json),
+            shipped_rows,
+        } => cmd_report(args, seeds, ablation, *gb_rows, out, *json, *shipped_rows),
         Cmd::Features {
             data,
             out,

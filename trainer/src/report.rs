@@ -27,6 +27,9 @@ pub struct ReportConfig {
     pub ablation: Option<FeatureSet>,
     /// The sensor suite the models may read (both feature sets are checked against it).
     pub suite: estimator_core::Suite,
+    /// Also the shipped configuration's cascades (its feature set and size, on the `egi` suite, the
+    /// report's seeds) and the model-based filter alone: the rows of what ships.
+    pub shipped_rows: Option<(FeatureSet, Size)>,
 }
 
 /// Test metrics of one model for one angle (`int8` only for the deployed cascade).
@@ -101,6 +104,10 @@ pub const LINEAR: &str = Baseline::Linear.name();
 pub const GB: &str = Baseline::GradientBoosting.name();
 pub const MLP: &str = Baseline::Mlp.name();
 pub const CASCADE: &str = "Cascaded MLP";
+/// The shipped configuration: the hybrid (network over the filter's outputs), `egi` suite.
+pub const HYBRID: &str = "Hybrid, shipped configuration";
+/// The model-based filter alone (`estimator_core::filter`, `F16_CONFIG`), `egi` suite.
+pub const FILTER: &str = "Model-based filter alone";
 
 /// Runs every model. `on_trained` receives the cascades of the first seed (for plots).
 pub fn run(
@@ -229,6 +236,49 @@ pub fn run(
             }
         }
     }
+    if let Some((hfs, hsize)) = &cfg.shipped_rows {
+        for &seed in &cfg.seeds {
+            for angle in [Angle::Alpha, Angle::Beta] {
+                let t0 = std::time::Instant::now();
+                let t = train_angle(
+                    ds,
+                    angle,
+                    hfs.for_angle(angle),
+                    *hsize,
+                    &tc(seed, format!("{} hybrid s{seed}", angle.name())),
+                );
+                let seconds = t0.elapsed().as_secs_f64();
+                log(&format!(
+                    "{} hybrid [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
+                    angle.symbol(),
+                    hfs.name,
+                    t.float_test.overall.mae,
+                    t.int_test.overall.mae
+                ));
+                entries.push(Entry {
+                    model: HYBRID.into(),
+                    angle,
+                    features: hfs.name.clone(),
+                    seed: Some(seed),
+                    float: t.float_test.clone(),
+                    int8: Some(t.int_test.clone()),
+                    seconds,
+                    preds: t
+                        .series
+                        .iter()
+                        .map(|x| (x.0.clone(), x.2.clone()))
+                        .collect(),
+                    preds_int8: Some(
+                        t.series
+                            .iter()
+                            .map(|x| (x.0.clone(), x.3.clone()))
+                            .collect(),
+                    ),
+                });
+            }
+        }
+        entries.extend(filter_entries(ds));
+    }
     Ok(Report {
         dataset: ds.dir.display().to_string(),
         manifest_sha256: ds.manifest_sha256.clone(),
@@ -241,6 +291,45 @@ pub fn run(
         split: Split::of(ds),
         entries,
     })
+}
+
+/// The model-based filter alone on the test flights, frame by frame as the firmware runs it.
+fn filter_entries(ds: &Dataset) -> Vec<Entry> {
+    use crate::data::Target;
+    let t0 = std::time::Instant::now();
+    let mut a = Vec::new();
+    let mut b = Vec::new();
+    for fl in ds.flights(Role::Test) {
+        let out = crate::filter_eval::run_flight(estimator_core::filter::F16_CONFIG, &fl.frames);
+        let deg = |f: fn(&estimator_core::filter::Output) -> f32| -> Vec<f64> {
+            out.iter().map(|o| f64::from(f(o)).to_degrees()).collect()
+        };
+        a.push((
+            fl.name.clone(),
+            deg(|o| o.alpha_rad),
+            fl.truth(Target::AlphaDeg).to_vec(),
+        ));
+        b.push((
+            fl.name.clone(),
+            deg(|o| o.beta_rad),
+            fl.truth(Target::BetaDeg).to_vec(),
+        ));
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    [(Angle::Alpha, a), (Angle::Beta, b)]
+        .into_iter()
+        .map(|(angle, fl)| Entry {
+            model: FILTER.into(),
+            angle,
+            features: "filter".into(),
+            seed: None,
+            float: FlightMetrics::of_banded(&fl, angle.bands()),
+            int8: None,
+            seconds,
+            preds: fl.into_iter().map(|(n, p, _)| (n, p)).collect(),
+            preds_int8: None,
+        })
+        .collect()
 }
 
 /// A model's answers per test flight (name, degrees), as kept in [`Entry::preds`].
@@ -278,6 +367,8 @@ impl Report {
             (MLP, false),
             (CASCADE, false),
             (CASCADE, true),
+            (HYBRID, true),
+            (FILTER, false),
         ] {
             let first = |a: Angle| {
                 self.select(model, a, &self.features)
@@ -294,7 +385,7 @@ impl Report {
             };
             if let (Some(a), Some(b)) = (first(Angle::Alpha), first(Angle::Beta)) {
                 let kind = match (model, int8) {
-                    (CASCADE, true) => " int8",
+                    (CASCADE | HYBRID, true) => " int8",
                     (CASCADE, false) => " float",
                     _ => "",
                 };
@@ -532,7 +623,11 @@ impl Report {
     fn select(&self, model: &str, angle: Angle, features: &str) -> Vec<&Entry> {
         self.entries
             .iter()
-            .filter(|e| e.model == model && e.angle == angle && e.features == features)
+            .filter(|e| {
+                e.model == model
+                    && e.angle == angle
+                    && (e.features == features || model == HYBRID || model == FILTER)
+            })
             .collect()
     }
 
@@ -556,6 +651,9 @@ impl Report {
             (MLP, false),
             (CASCADE, false),
             (CASCADE, true),
+            (HYBRID, false),
+            (HYBRID, true),
+            (FILTER, false),
         ] {
             let chosen = |a: Angle| -> Vec<&FlightMetrics> {
                 self.select(model, a, &self.features)
@@ -580,14 +678,14 @@ impl Report {
             if na == 0 {
                 continue;
             }
-            let seeds = if model == LINEAR || model == GB {
+            let seeds = if model == LINEAR || model == GB || model == FILTER {
                 String::new()
             } else {
                 format!(", mean of {na} seed{}", if na == 1 { "" } else { "s" })
             };
             let kind = match (model, int8) {
-                (CASCADE, true) => " (int8, deployed)",
-                (CASCADE, false) => " (float)",
+                (CASCADE | HYBRID, true) => " (int8, deployed)",
+                (CASCADE | HYBRID, false) => " (float)",
                 _ => "",
             };
             rows.push(Row {
@@ -734,10 +832,13 @@ impl Report {
         );
         s.push_str("| model | α MAE | paper α | β MAE | paper β |\n|---|---|---|---|---|\n");
         for r in &overall {
-            let (pa, pb) = paper_mae(r.model).unwrap_or((f64::NAN, f64::NAN));
+            let (pa, pb) = paper_mae(r.model)
+                .map_or(("–".to_string(), "–".to_string()), |(a, b)| {
+                    (format!("{a:.3}"), format!("{b:.3}"))
+                });
             let _ = writeln!(
                 s,
-                "| {} | {:.3} | {pa:.3} | {:.3} | {pb:.3} |",
+                "| {} | {:.3} | {pa} | {:.3} | {pb} |",
                 r.label, r.alpha.mae, r.beta.mae
             );
         }
@@ -795,8 +896,19 @@ impl Report {
         if let Some(a) = ablation {
             sets.push(a.to_string());
         }
+        let mut lines: Vec<(&str, String, bool)> = Vec::new();
         for set in &sets {
             for (model, int8) in [(MLP, false), (CASCADE, false), (CASCADE, true)] {
+                lines.push((model, set.clone(), int8));
+            }
+        }
+        if let Some(h) = self.entries.iter().find(|e| e.model == HYBRID) {
+            lines.push((HYBRID, h.features.clone(), false));
+            lines.push((HYBRID, h.features.clone(), true));
+        }
+        for (model, set, int8) in &lines {
+            let (model, set, int8) = (*model, set, *int8);
+            {
                 let a = self.seed_maes(model, Angle::Alpha, set, int8);
                 let b = self.seed_maes(model, Angle::Beta, set, int8);
                 if a.is_empty() {
@@ -815,7 +927,7 @@ impl Report {
                     "| {model}{} [{set}] | {am:.3} ± {asp:.3} | {bm:.3} ± {bsp:.3} | {} | {} |",
                     if int8 {
                         " int8"
-                    } else if model == CASCADE {
+                    } else if model == CASCADE || model == HYBRID {
                         " float"
                     } else {
                         ""
