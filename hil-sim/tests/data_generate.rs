@@ -145,6 +145,18 @@ fn shards_merge_into_the_one_machine_dataset() {
         matches!(&e, GenerateError::Shard(m) if m.contains("shard count")),
         "{e}"
     );
+    // A foreign shard (another seed) is refused by name, and nothing is written.
+    assert!(text.contains("\"seed\": 4"));
+    std::fs::write(&stray, text.replace("\"seed\": 4", "\"seed\": 5")).unwrap();
+    let e = dataset::merge(&sh).unwrap_err();
+    assert!(
+        matches!(&e, GenerateError::Shard(m) if m.contains("preset, seed or campaign") && m.contains("shard-")),
+        "{e}"
+    );
+    assert!(
+        !sh.join("manifest.json").exists(),
+        "a refused merge writes nothing"
+    );
     std::fs::remove_file(&stray).unwrap();
 
     dataset::merge(&sh).unwrap();
