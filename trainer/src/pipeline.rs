@@ -202,19 +202,10 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
     }
 }
 
-/// The smallest sensor suite the compiled-in model reads, if this build has one.
+/// The smallest sensor suite the compiled-in model reads, if this build has one (the estimator's
+/// own answer, `Estimator::suite`).
 pub fn shipped_suite() -> Option<Suite> {
-    #[cfg(trainer_has_model)]
-    {
-        use estimator_core::AngleNet;
-        let sources =
-            estimator_core::model::ALPHA.sources() | estimator_core::model::BETA.sources();
-        Some(Suite::covering(sources).unwrap_or(Suite::Egi))
-    }
-    #[cfg(not(trainer_has_model))]
-    {
-        None
-    }
+    Estimator::shipped().suite()
 }
 
 /// PROVENANCE of the compiled-in model, if this build has one.
