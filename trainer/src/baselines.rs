@@ -132,14 +132,21 @@ impl Baseline {
     }
 }
 
-/// A model's answers on the test flights (degrees, per flight in test order) and their metrics.
+/// A model's answers on the test flights (degrees, per flight in test order) and their metrics,
+/// and its answers on any extra flights it was asked about (e.g. out-of-distribution ones).
 #[derive(Debug, Clone, Default)]
 pub struct Scored {
     pub metrics: FlightMetrics,
     pub preds: Vec<(String, Vec<f64>)>,
+    pub extra_preds: Vec<(String, Vec<f64>)>,
 }
 
-fn test_metrics(ds: &Dataset, angle: Angle, mut pred: impl FnMut(&Flight) -> Vec<f64>) -> Scored {
+fn test_metrics(
+    ds: &Dataset,
+    angle: Angle,
+    extra: &[&Flight],
+    mut pred: impl FnMut(&Flight) -> Vec<f64>,
+) -> Scored {
     let fl: Vec<(String, Vec<f64>, Vec<f64>)> = ds
         .flights(Role::Test)
         .map(|f| (f.name.clone(), pred(f), f.truth(angle.target()).to_vec()))
@@ -147,10 +154,13 @@ fn test_metrics(ds: &Dataset, angle: Angle, mut pred: impl FnMut(&Flight) -> Vec
     Scored {
         metrics: FlightMetrics::of_banded(&fl, angle.bands()),
         preds: fl.into_iter().map(|(n, p, _)| (n, p)).collect(),
+        extra_preds: extra.iter().map(|f| (f.name.clone(), pred(f))).collect(),
     }
 }
 
-/// Fits a baseline on the training flights and scores it on the test flights (degrees).
+/// Fits a baseline on the training flights and scores it on the test flights (degrees); also
+/// answers on `extra` flights (none: pass `&[]`).
+#[allow(clippy::too_many_arguments)]
 pub fn run_baseline(
     kind: Baseline,
     ds: &Dataset,
@@ -159,6 +169,7 @@ pub fn run_baseline(
     hidden: &[usize],
     cfg: &TrainConfig,
     gb_rows: usize,
+    extra: &[&Flight],
 ) -> Result<Scored> {
     let tr: Vec<&Flight> = ds.flights(Role::Train).collect();
     match kind {
@@ -173,7 +184,7 @@ pub fn run_baseline(
                 }
             }
             let coef = linear_fit(&x, &y)?;
-            Ok(test_metrics(ds, angle, |f| {
+            Ok(test_metrics(ds, angle, extra, |f| {
                 f.features
                     .iter()
                     .map(|v| linear_predict(&coef, &d.row(features, v)))
@@ -208,7 +219,7 @@ pub fn run_baseline(
             conf.set_training_optimization_level(2);
             let mut gb = GBDT::new(&conf);
             gb.fit(&mut data);
-            Ok(test_metrics(ds, angle, |f| {
+            Ok(test_metrics(ds, angle, extra, |f| {
                 let test: Vec<Data> = f
                     .features
                     .iter()
@@ -233,7 +244,7 @@ pub fn run_baseline(
                 &prep.matrix(&tr),
                 &prep.matrix(&va),
             );
-            Ok(test_metrics(ds, angle, |f| {
+            Ok(test_metrics(ds, angle, extra, |f| {
                 let (_, po) = predict_all(&model, &prep.inputs(&[f]), n_in);
                 po.iter().map(|z| prep.out_deg(*z as f64)).collect()
             }))

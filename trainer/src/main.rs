@@ -55,6 +55,38 @@ struct TrainArgs {
     val_fraction: f64,
 }
 
+/// `trainer report`'s arguments.
+#[derive(clap::Args)]
+struct ReportArgs {
+    #[command(flatten)]
+    args: TrainArgs,
+    /// Comma-separated seeds of the neural models.
+    #[arg(long, default_value = "1,2")]
+    seeds: String,
+    /// Feature set of the ablation against --features ("none": skip).
+    #[arg(long, default_value = "physics")]
+    ablation: String,
+    /// Training rows (evenly subsampled) for gradient boosting.
+    #[arg(long, default_value_t = 40_000)]
+    gb_rows: usize,
+    /// Output directory of training.md and the PNGs.
+    #[arg(long, default_value = "docs/results")]
+    out: PathBuf,
+    /// Print exactly one JSON object (the Table-2 numbers) on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid`
+    /// features on the `egi` suite, medium networks, the report's seeds and epochs) and the
+    /// model-based filter alone. Needs a dataset that carries the `egi` suite.
+    #[arg(long)]
+    shipped_rows: bool,
+    /// An out-of-distribution dataset (`hil-sim generate --preset ood`): every row also answers
+    /// on its flights, and the report gets the degradation of each row per case against the
+    /// in-distribution twins.
+    #[arg(long)]
+    ood: Option<PathBuf>,
+}
+
 /// The grid and training settings of `trainer sweep` (the same for every call of one sweep).
 #[derive(clap::Args, Clone)]
 struct SweepGrid {
@@ -129,30 +161,7 @@ enum Cmd {
     },
     /// Table 2: every model family for α and β on the same test flights (float and int8), seed
     /// spread, feature ablation; writes training.md + learning-curve and time-series PNGs.
-    Report {
-        #[command(flatten)]
-        args: TrainArgs,
-        /// Comma-separated seeds of the neural models.
-        #[arg(long, default_value = "1,2")]
-        seeds: String,
-        /// Feature set of the ablation against --features ("none": skip).
-        #[arg(long, default_value = "physics")]
-        ablation: String,
-        /// Training rows (evenly subsampled) for gradient boosting.
-        #[arg(long, default_value_t = 40_000)]
-        gb_rows: usize,
-        /// Output directory of training.md and the PNGs.
-        #[arg(long, default_value = "docs/results")]
-        out: PathBuf,
-        /// Print exactly one JSON object (the Table-2 numbers) on stdout.
-        #[arg(long)]
-        json: bool,
-        /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid`
-        /// features on the `egi` suite, medium networks, the report's seeds and epochs) and the
-        /// model-based filter alone. Needs a dataset that carries the `egi` suite.
-        #[arg(long)]
-        shipped_rows: bool,
-    },
+    Report(Box<ReportArgs>),
     /// Spearman rank correlations of every candidate feature with the air-data targets and among
     /// themselves (CSV + markdown + heatmap), and sampled Shapley values of the compiled-in α and β
     /// models' integer path (mean |SHAP| bar charts); writes features.md.
@@ -681,8 +690,17 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
         for kind in [Baseline::Linear, Baseline::GradientBoosting, Baseline::Mlp] {
             let cfg = args.train_config(size, format!("{} mlp", angle.name()), false);
             let t0 = std::time::Instant::now();
-            let m =
-                run_baseline(kind, &ds, angle, feats, size.hidden(angle), &cfg, gb_rows)?.metrics;
+            let m = run_baseline(
+                kind,
+                &ds,
+                angle,
+                feats,
+                size.hidden(angle),
+                &cfg,
+                gb_rows,
+                &[],
+            )?
+            .metrics;
             println!(
                 "{} {}: ({:.1} s)",
                 angle.symbol(),
@@ -695,15 +713,17 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
     Ok(())
 }
 
-fn cmd_report(
-    args: &TrainArgs,
-    seeds: &str,
-    ablation: &str,
-    gb_rows: usize,
-    out: &Path,
-    json: bool,
-    shipped_rows: bool,
-) -> Result<()> {
+fn cmd_report(r: &ReportArgs) -> Result<()> {
+    let (args, seeds, ablation, gb_rows, out, json, shipped_rows) = (
+        &r.args,
+        r.seeds.as_str(),
+        r.ablation.as_str(),
+        r.gb_rows,
+        r.out.as_path(),
+        r.json,
+        r.shipped_rows,
+    );
+    let ood = r.ood.as_deref();
     use trainer::report::{BenchEpoch, ReportConfig, run};
     let size = args.size()?;
     let seeds: Vec<u64> = seeds
@@ -746,8 +766,15 @@ fn cmd_report(
         },
     };
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let ood = ood
+        .map(|d| {
+            Dataset::load_any(d, 0.0)
+                .with_context(|| format!("cannot load the OOD dataset {}", d.display()))
+        })
+        .transpose()?;
     let report = run(
         &ds,
+        ood.as_ref(),
         &cfg,
         |a, b| {
             plot_curves(&out.join("training_learning_curves.png"), &[a, b])?;
@@ -775,12 +802,15 @@ fn cmd_report(
         })?),
         Err(_) => None,
     };
-    let md = report.markdown(
+    let mut md = report.markdown(
         &command_line(),
         &machine(),
         ablation.as_ref().map(|a| a.name.as_str()),
         bench.as_ref(),
     );
+    if let Some(o) = &ood {
+        md.push_str(&report.ood_markdown(o));
+    }
     std::fs::write(out.join("training.md"), md)
         .with_context(|| format!("writing {}", out.join("training.md").display()))?;
     eprintln!("wrote {}/training.md and PNGs", out.display());
@@ -983,15 +1013,7 @@ fn main() -> Result<()> {
         } => cmd_eval_filter(data, split, tune, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
-        Cmd::Report {
-            args,
-            seeds,
-            ablation,
-            gb_rows,
-            out,
-            json,
-            shipped_rows,
-        } => cmd_report(args, seeds, ablation, *gb_rows, out, *json, *shipped_rows),
+        Cmd::Report(r) => cmd_report(r),
         Cmd::Features {
             data,
             out,

@@ -120,6 +120,31 @@ pub fn train_angle(
     }
 }
 
+/// A model's answers per flight (name, degrees).
+pub type Answers = Vec<(String, Vec<f64>)>;
+
+/// A trained cascade's float and int8 (integer reference) answers on `flights`, degrees.
+pub fn answers(t: &Trained, flights: &[&Flight]) -> (Answers, Answers) {
+    let prep = &t.q.prep;
+    let mut f = Vec::new();
+    let mut i = Vec::new();
+    for fl in flights {
+        let (_, po) = predict_all(&t.model, &prep.inputs(&[*fl]), prep.n_inputs());
+        f.push((
+            fl.name.clone(),
+            po.iter().map(|z| prep.out_deg(*z as f64)).collect(),
+        ));
+        i.push((
+            fl.name.clone(),
+            fl.features
+                .iter()
+                .map(|v| t.q.reference(v).angle as f64 / 1000.0)
+                .collect(),
+        ));
+    }
+    (f, i)
+}
+
 /// Float and integer-reference metrics of a cascade on the test flights.
 pub fn evaluate(
     model: &Cascade,

@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::features::FeatureSet;
 use crate::metrics::{FlightMetrics, Metrics};
 use crate::model::TrainConfig;
-use crate::pipeline::{Size, Trained, train_angle};
+use crate::pipeline::{Answers, Size, Trained, train_angle};
 use crate::prep::Angle;
 use hil_sim::flight::SAMPLE_HZ;
 use serde::{Deserialize, Deserializer, Serialize};
@@ -48,6 +48,11 @@ pub struct Entry {
     pub preds: Answers,
     #[serde(skip)]
     pub preds_int8: Option<Answers>,
+    /// The same on the out-of-distribution flights (`--ood`; empty without).
+    #[serde(skip)]
+    pub ood: Answers,
+    #[serde(skip)]
+    pub ood_int8: Option<Answers>,
 }
 
 impl Entry {
@@ -112,11 +117,15 @@ pub const FILTER: &str = "Model-based filter alone";
 /// Runs every model. `on_trained` receives the cascades of the first seed (for plots).
 pub fn run(
     ds: &Dataset,
+    ood: Option<&Dataset>,
     cfg: &ReportConfig,
     mut on_trained: impl FnMut(&Trained, &Trained) -> Result<()>,
     mut log: impl FnMut(&str),
 ) -> Result<Report> {
     let mut entries = Vec::new();
+    // Out-of-distribution flights every model also answers on (`--ood`).
+    let extra: Vec<&crate::data::Flight> =
+        ood.map_or(Vec::new(), |o| o.flights(Role::Test).collect());
     let tc = |seed: u64, label: String| TrainConfig {
         epochs: cfg.epochs,
         batch: cfg.batch,
@@ -139,6 +148,7 @@ pub fn run(
                 &[],
                 &tc(0, String::new()),
                 cfg.gb_rows,
+                &extra,
             )?;
             let seconds = t0.elapsed().as_secs_f64();
             log(&format!(
@@ -156,6 +166,8 @@ pub fn run(
                 seconds,
                 preds: m.preds,
                 preds_int8: None,
+                ood: m.extra_preds,
+                ood_int8: None,
             });
         }
         for &seed in &cfg.seeds {
@@ -168,6 +180,7 @@ pub fn run(
                 cfg.size.hidden(angle),
                 &tc(seed, format!("{} mlp s{seed}", angle.name())),
                 cfg.gb_rows,
+                &extra,
             )?;
             entries.push(Entry {
                 model: MLP.into(),
@@ -179,6 +192,8 @@ pub fn run(
                 seconds: t0.elapsed().as_secs_f64(),
                 preds: m.preds,
                 preds_int8: None,
+                ood: m.extra_preds,
+                ood_int8: None,
             });
         }
     }
@@ -202,6 +217,7 @@ pub fn run(
                     ),
                 );
                 let seconds = t0.elapsed().as_secs_f64();
+                let (ood_f, ood_i) = crate::pipeline::answers(&t, &extra);
                 log(&format!(
                     "{} cascade [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
                     angle.symbol(),
@@ -228,6 +244,8 @@ pub fn run(
                             .map(|x| (x.0.clone(), x.3.clone()))
                             .collect(),
                     ),
+                    ood: ood_f.clone(),
+                    ood_int8: Some(ood_i.clone()),
                 });
                 pair.push(t);
             }
@@ -248,6 +266,7 @@ pub fn run(
                     &tc(seed, format!("{} hybrid s{seed}", angle.name())),
                 );
                 let seconds = t0.elapsed().as_secs_f64();
+                let (ood_f, ood_i) = crate::pipeline::answers(&t, &extra);
                 log(&format!(
                     "{} hybrid [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
                     angle.symbol(),
@@ -274,10 +293,12 @@ pub fn run(
                             .map(|x| (x.0.clone(), x.3.clone()))
                             .collect(),
                     ),
+                    ood: ood_f.clone(),
+                    ood_int8: Some(ood_i.clone()),
                 });
             }
         }
-        entries.extend(filter_entries(ds));
+        entries.extend(filter_entries(ds, &extra));
     }
     Ok(Report {
         dataset: ds.dir.display().to_string(),
@@ -293,32 +314,35 @@ pub fn run(
     })
 }
 
-/// The model-based filter alone on the test flights, frame by frame as the firmware runs it.
-fn filter_entries(ds: &Dataset) -> Vec<Entry> {
+/// The model-based filter alone on the test flights (and `extra` ones), frame by frame as the
+/// firmware runs it.
+fn filter_entries(ds: &Dataset, extra: &[&crate::data::Flight]) -> Vec<Entry> {
     use crate::data::Target;
     let t0 = std::time::Instant::now();
-    let mut a = Vec::new();
-    let mut b = Vec::new();
-    for fl in ds.flights(Role::Test) {
+    let run = |fl: &crate::data::Flight| -> (Vec<f64>, Vec<f64>) {
         let out = crate::filter_eval::run_flight(estimator_core::filter::F16_CONFIG, &fl.frames);
         let deg = |f: fn(&estimator_core::filter::Output) -> f32| -> Vec<f64> {
             out.iter().map(|o| f64::from(f(o)).to_degrees()).collect()
         };
-        a.push((
-            fl.name.clone(),
-            deg(|o| o.alpha_rad),
-            fl.truth(Target::AlphaDeg).to_vec(),
-        ));
-        b.push((
-            fl.name.clone(),
-            deg(|o| o.beta_rad),
-            fl.truth(Target::BetaDeg).to_vec(),
-        ));
+        (deg(|o| o.alpha_rad), deg(|o| o.beta_rad))
+    };
+    let mut a = Vec::new();
+    let mut b = Vec::new();
+    for fl in ds.flights(Role::Test) {
+        let (pa, pb) = run(fl);
+        a.push((fl.name.clone(), pa, fl.truth(Target::AlphaDeg).to_vec()));
+        b.push((fl.name.clone(), pb, fl.truth(Target::BetaDeg).to_vec()));
+    }
+    let (mut oa, mut ob) = (Vec::new(), Vec::new());
+    for fl in extra {
+        let (pa, pb) = run(fl);
+        oa.push((fl.name.clone(), pa));
+        ob.push((fl.name.clone(), pb));
     }
     let seconds = t0.elapsed().as_secs_f64();
-    [(Angle::Alpha, a), (Angle::Beta, b)]
+    [(Angle::Alpha, a, oa), (Angle::Beta, b, ob)]
         .into_iter()
-        .map(|(angle, fl)| Entry {
+        .map(|(angle, fl, o)| Entry {
             model: FILTER.into(),
             angle,
             features: "filter".into(),
@@ -328,12 +352,107 @@ fn filter_entries(ds: &Dataset) -> Vec<Entry> {
             seconds,
             preds: fl.into_iter().map(|(n, p, _)| (n, p)).collect(),
             preds_int8: None,
+            ood: o,
+            ood_int8: None,
         })
         .collect()
 }
 
-/// A model's answers per test flight (name, degrees), as kept in [`Entry::preds`].
-pub type Answers = Vec<(String, Vec<f64>)>;
+/// The cases of the `ood` preset in table order (`nominal` first: the twins).
+const OOD_CASES: [&str; 8] = [
+    "nominal",
+    "mass-low",
+    "mass-high",
+    "wind-25",
+    "turbulence-plus",
+    "gust-15",
+    "gps-outage",
+    "imu-stuck",
+];
+
+impl Report {
+    /// The out-of-distribution section: per Table 2 row and angle, MAE over both profiles' flights
+    /// of each case (mean over seeds) and its ratio to the in-distribution twins' (`nominal`).
+    pub fn ood_markdown(&self, ood: &Dataset) -> String {
+        use crate::data::Target;
+        let truth: std::collections::HashMap<&str, (&[f64], &[f64])> = ood
+            .flights(Role::Test)
+            .map(|f| {
+                (
+                    f.name.as_str(),
+                    (f.truth(Target::AlphaDeg), f.truth(Target::BetaDeg)),
+                )
+            })
+            .collect();
+        // MAE of one entry's answers over the flights of `case`.
+        let case_mae = |answers: &Answers, angle: Angle, case: &str| -> Option<f64> {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for (name, p) in answers {
+                if crate::ood::case_and_profile(name).0 != case {
+                    continue;
+                }
+                let (ta, tb) = truth.get(name.as_str())?;
+                let t = if angle == Angle::Alpha { ta } else { tb };
+                for (p, t) in p.iter().zip(t.iter()) {
+                    sum += (p - t).abs();
+                    n += 1;
+                }
+            }
+            (n > 0).then(|| sum / n as f64)
+        };
+        let mut s = format!(
+            "\n## Out of distribution (`--ood {}`)\n\n\
+             Every row trained above, answering on the `ood` preset's flights (docs/results/ood.md \
+             for the cases): MAE over the case's flights on both profiles, mean over seeds, and in \
+             brackets its ratio to the same row on the in-distribution twins (`nominal`). These \
+             rows have no flags of their own; `trainer ood` scores the shipped estimator with its \
+             flags.\n",
+            ood.dir.display()
+        );
+        for angle in [Angle::Alpha, Angle::Beta] {
+            let _ = writeln!(s, "\n### {} MAE, degrees\n", angle.symbol());
+            let _ = writeln!(s, "| model | {} |", OOD_CASES.join(" | "));
+            let _ = writeln!(s, "|---|{}", "---|".repeat(OOD_CASES.len()));
+            for (model, int8, label) in [
+                (LINEAR, false, "Linear regression"),
+                (GB, false, "Gradient boosting"),
+                (MLP, false, "Plain MLP"),
+                (CASCADE, false, "Cascaded MLP (float)"),
+                (CASCADE, true, "Cascaded MLP (int8)"),
+                (HYBRID, false, "Hybrid, shipped configuration (float)"),
+                (HYBRID, true, "Hybrid, shipped configuration (int8)"),
+                (FILTER, false, "Model-based filter alone"),
+            ] {
+                let es: Vec<&Entry> = self.select(model, angle, &self.features);
+                let per_case: Vec<Option<f64>> = OOD_CASES
+                    .iter()
+                    .map(|c| {
+                        let v: Vec<f64> = es
+                            .iter()
+                            .filter_map(|e| {
+                                let a = if int8 { e.ood_int8.as_ref()? } else { &e.ood };
+                                case_mae(a, angle, c)
+                            })
+                            .collect();
+                        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+                    })
+                    .collect();
+                let Some(Some(nominal)) = per_case.first().copied() else {
+                    continue;
+                };
+                let cells: Vec<String> = per_case
+                    .iter()
+                    .map(|m| match m {
+                        Some(m) => format!("{m:.3} (×{:.2})", m / nominal),
+                        None => "–".into(),
+                    })
+                    .collect();
+                let _ = writeln!(s, "| {label} | {} |", cells.join(" | "));
+            }
+        }
+        s
+    }
+}
 
 /// Bin edges of the error-by-regime pictures: true α in 2.5° steps, true dynamic pressure in 5 kPa.
 const ALPHA_BIN_DEG: f64 = 2.5;
@@ -1110,6 +1229,8 @@ mod tests {
             seconds: 0.0,
             preds: Vec::new(),
             preds_int8: None,
+            ood: Vec::new(),
+            ood_int8: None,
         }
     }
 
