@@ -764,6 +764,8 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
         } else {
             None
         },
+        // A killed run leaves its finished rows here; the next run with the same settings resumes.
+        progress_file: Some(out.join(".report-progress.jsonl")),
     };
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let ood = ood
@@ -813,6 +815,10 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
     }
     std::fs::write(out.join("training.md"), md)
         .with_context(|| format!("writing {}", out.join("training.md").display()))?;
+    // The report is written: its finished rows are no longer needed for a resume.
+    if let Some(p) = &cfg.progress_file {
+        let _ = std::fs::remove_file(p);
+    }
     eprintln!("wrote {}/training.md and PNGs", out.display());
     Ok(())
 }

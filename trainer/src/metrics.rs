@@ -32,12 +32,12 @@ impl Metrics {
 }
 
 /// Metrics per test flight and over all of them, and by regime band of the true angle.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct FlightMetrics {
     pub per_flight: Vec<(String, Metrics)>,
     pub overall: Metrics,
     /// Over every flight's frames, by band of the true angle ([`BandSet`]); empty when not asked for.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bands: Vec<(String, Metrics)>,
 }
 

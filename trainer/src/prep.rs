@@ -59,7 +59,7 @@ fn mean_std(v: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
 }
 
 /// Which angle a cascade estimates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Angle {
     Alpha,
     Beta,

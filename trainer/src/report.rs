@@ -30,10 +30,14 @@ pub struct ReportConfig {
     /// Also the shipped configuration's cascades (its feature set and size, on the `egi` suite, the
     /// report's seeds) and the model-based filter alone: the rows of what ships.
     pub shipped_rows: Option<(FeatureSet, Size)>,
+    /// Where finished rows are kept while the run goes on (JSON lines), so that a killed run
+    /// resumes without redoing them (None: no resuming). The caller removes it once the report is
+    /// written.
+    pub progress_file: Option<std::path::PathBuf>,
 }
 
 /// Test metrics of one model for one angle (`int8` only for the deployed cascade).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Entry {
     pub model: String,
     pub angle: Angle,
@@ -123,6 +127,7 @@ pub fn run(
     mut log: impl FnMut(&str),
 ) -> Result<Report> {
     let mut entries = Vec::new();
+    let mut progress = Progress::open(cfg.progress_file.as_deref(), &run_key(ds, ood, cfg));
     // Out-of-distribution flights every model also answers on (`--ood`).
     let extra: Vec<&crate::data::Flight> =
         ood.map_or(Vec::new(), |o| o.flights(Role::Test).collect());
@@ -139,6 +144,11 @@ pub fn run(
         let feats = fs.for_angle(angle);
         for kind in [Baseline::Linear, Baseline::GradientBoosting] {
             let name = kind.name();
+            if let Some(e) = progress.take(name, angle, &fs.name, None) {
+                log(&format!("{} {name}: resumed", angle.symbol()));
+                entries.push(e);
+                continue;
+            }
             let t0 = std::time::Instant::now();
             let m = run_baseline(
                 kind,
@@ -156,7 +166,7 @@ pub fn run(
                 angle.symbol(),
                 m.metrics.overall.mae
             ));
-            entries.push(Entry {
+            entries.push(progress.save(Entry {
                 model: name.into(),
                 angle,
                 features: fs.name.clone(),
@@ -168,9 +178,14 @@ pub fn run(
                 preds_int8: None,
                 ood: m.extra_preds,
                 ood_int8: None,
-            });
+            })?);
         }
         for &seed in &cfg.seeds {
+            if let Some(e) = progress.take(MLP, angle, &fs.name, Some(seed)) {
+                log(&format!("{} {MLP} seed {seed}: resumed", angle.symbol()));
+                entries.push(e);
+                continue;
+            }
             let t0 = std::time::Instant::now();
             let m = run_baseline(
                 Baseline::Mlp,
@@ -182,7 +197,7 @@ pub fn run(
                 cfg.gb_rows,
                 &extra,
             )?;
-            entries.push(Entry {
+            entries.push(progress.save(Entry {
                 model: MLP.into(),
                 angle,
                 features: fs.name.clone(),
@@ -194,7 +209,7 @@ pub fn run(
                 preds_int8: None,
                 ood: m.extra_preds,
                 ood_int8: None,
-            });
+            })?);
         }
     }
     let mut sets = vec![fs];
@@ -205,6 +220,15 @@ pub fn run(
         for (k, &seed) in cfg.seeds.iter().enumerate() {
             let mut pair = Vec::new();
             for angle in [Angle::Alpha, Angle::Beta] {
+                if let Some(e) = progress.take(CASCADE, angle, &set.name, Some(seed)) {
+                    log(&format!(
+                        "{} cascade [{}] seed {seed}: resumed",
+                        angle.symbol(),
+                        set.name
+                    ));
+                    entries.push(e);
+                    continue;
+                }
                 let t0 = std::time::Instant::now();
                 let t = train_angle(
                     ds,
@@ -225,38 +249,46 @@ pub fn run(
                     t.float_test.overall.mae,
                     t.int_test.overall.mae
                 ));
-                entries.push(Entry {
-                    model: CASCADE.into(),
-                    angle,
-                    features: set.name.clone(),
-                    seed: Some(seed),
-                    float: t.float_test.clone(),
-                    int8: Some(t.int_test.clone()),
-                    seconds,
-                    preds: t
-                        .series
-                        .iter()
-                        .map(|x| (x.0.clone(), x.2.clone()))
-                        .collect(),
-                    preds_int8: Some(
-                        t.series
+                entries.push(
+                    progress.save(Entry {
+                        model: CASCADE.into(),
+                        angle,
+                        features: set.name.clone(),
+                        seed: Some(seed),
+                        float: t.float_test.clone(),
+                        int8: Some(t.int_test.clone()),
+                        seconds,
+                        preds: t
+                            .series
                             .iter()
-                            .map(|x| (x.0.clone(), x.3.clone()))
+                            .map(|x| (x.0.clone(), x.2.clone()))
                             .collect(),
-                    ),
-                    ood: ood_f.clone(),
-                    ood_int8: Some(ood_i.clone()),
-                });
+                        preds_int8: Some(
+                            t.series
+                                .iter()
+                                .map(|x| (x.0.clone(), x.3.clone()))
+                                .collect(),
+                        ),
+                        ood: ood_f.clone(),
+                        ood_int8: Some(ood_i.clone()),
+                    })?,
+                );
                 pair.push(t);
             }
-            if k == 0 && std::ptr::eq(set, fs) {
-                on_trained(&pair[0], &pair[1])?;
+            // (A resumed pair drew its pictures in the run that trained it.)
+            if let (0, true, [a, b]) = (k, std::ptr::eq(set, fs), pair.as_slice()) {
+                on_trained(a, b)?;
             }
         }
     }
     if let Some((hfs, hsize)) = &cfg.shipped_rows {
         for &seed in &cfg.seeds {
             for angle in [Angle::Alpha, Angle::Beta] {
+                if let Some(e) = progress.take(HYBRID, angle, &hfs.name, Some(seed)) {
+                    log(&format!("{} hybrid seed {seed}: resumed", angle.symbol()));
+                    entries.push(e);
+                    continue;
+                }
                 let t0 = std::time::Instant::now();
                 let t = train_angle(
                     ds,
@@ -274,28 +306,30 @@ pub fn run(
                     t.float_test.overall.mae,
                     t.int_test.overall.mae
                 ));
-                entries.push(Entry {
-                    model: HYBRID.into(),
-                    angle,
-                    features: hfs.name.clone(),
-                    seed: Some(seed),
-                    float: t.float_test.clone(),
-                    int8: Some(t.int_test.clone()),
-                    seconds,
-                    preds: t
-                        .series
-                        .iter()
-                        .map(|x| (x.0.clone(), x.2.clone()))
-                        .collect(),
-                    preds_int8: Some(
-                        t.series
+                entries.push(
+                    progress.save(Entry {
+                        model: HYBRID.into(),
+                        angle,
+                        features: hfs.name.clone(),
+                        seed: Some(seed),
+                        float: t.float_test.clone(),
+                        int8: Some(t.int_test.clone()),
+                        seconds,
+                        preds: t
+                            .series
                             .iter()
-                            .map(|x| (x.0.clone(), x.3.clone()))
+                            .map(|x| (x.0.clone(), x.2.clone()))
                             .collect(),
-                    ),
-                    ood: ood_f.clone(),
-                    ood_int8: Some(ood_i.clone()),
-                });
+                        preds_int8: Some(
+                            t.series
+                                .iter()
+                                .map(|x| (x.0.clone(), x.3.clone()))
+                                .collect(),
+                        ),
+                        ood: ood_f.clone(),
+                        ood_int8: Some(ood_i.clone()),
+                    })?,
+                );
             }
         }
         entries.extend(filter_entries(ds, &extra));
@@ -312,6 +346,121 @@ pub fn run(
         split: Split::of(ds),
         entries,
     })
+}
+
+/// What makes two report runs the same run (their finished rows interchangeable): the datasets and
+/// every setting but the seed list, so that adding seeds reuses the rows already trained.
+fn run_key(ds: &Dataset, ood: Option<&Dataset>, cfg: &ReportConfig) -> String {
+    format!(
+        "{}|{}|{}|{}|{}|{}|{}|{}|{}|{}|{}",
+        ds.manifest_sha256,
+        ood.map_or("", |o| o.manifest_sha256.as_str()),
+        cfg.size.name(),
+        cfg.epochs,
+        cfg.batch,
+        cfg.lr,
+        cfg.gb_rows,
+        cfg.features.name,
+        cfg.ablation.as_ref().map_or("", |a| a.name.as_str()),
+        cfg.suite.name(),
+        cfg.shipped_rows
+            .as_ref()
+            .map_or(String::new(), |(f, z)| format!("{}:{}", f.name, z.name())),
+    )
+}
+
+/// One finished row as kept in the progress file.
+#[derive(Serialize, Deserialize)]
+struct Saved {
+    key: String,
+    entry: Entry,
+    preds: Answers,
+    preds_int8: Option<Answers>,
+    ood: Answers,
+    ood_int8: Option<Answers>,
+}
+
+/// The finished rows of a run (see [`ReportConfig::progress_file`]).
+struct Progress {
+    path: Option<std::path::PathBuf>,
+    key: String,
+    done: Vec<Entry>,
+}
+
+impl Progress {
+    /// Reads the rows of the same run (same key) left by a killed one; other lines are ignored.
+    fn open(path: Option<&std::path::Path>, key: &str) -> Progress {
+        let done = path
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .map(|text| {
+                text.lines()
+                    .filter_map(|l| serde_json::from_str::<Saved>(l).ok())
+                    .filter(|s| s.key == key)
+                    .map(|s| Entry {
+                        preds: s.preds,
+                        preds_int8: s.preds_int8,
+                        ood: s.ood,
+                        ood_int8: s.ood_int8,
+                        ..s.entry
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        Progress {
+            path: path.map(std::path::Path::to_path_buf),
+            key: key.to_string(),
+            done,
+        }
+    }
+
+    /// A finished row of this run, if the killed run had it.
+    fn take(
+        &mut self,
+        model: &str,
+        angle: Angle,
+        features: &str,
+        seed: Option<u64>,
+    ) -> Option<Entry> {
+        let i = self.done.iter().position(|e| {
+            e.model == model && e.angle == angle && e.features == features && e.seed == seed
+        })?;
+        Some(self.done.swap_remove(i))
+    }
+
+    /// Appends a finished row to the file and hands it back.
+    fn save(&mut self, entry: Entry) -> Result<Entry> {
+        let Some(path) = &self.path else {
+            return Ok(entry);
+        };
+        let saved = Saved {
+            key: self.key.clone(),
+            preds: entry.preds.clone(),
+            preds_int8: entry.preds_int8.clone(),
+            ood: entry.ood.clone(),
+            ood_int8: entry.ood_int8.clone(),
+            entry,
+        };
+        let mut line =
+            serde_json::to_string(&saved).map_err(|e| crate::Error::Plot(e.to_string()))?;
+        line.push('\n');
+        use std::io::Write as _;
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .and_then(|mut f| f.write_all(line.as_bytes()))
+            .map_err(|source| crate::Error::Io {
+                path: path.clone(),
+                source,
+            })?;
+        Ok(Entry {
+            preds: saved.preds,
+            preds_int8: saved.preds_int8,
+            ood: saved.ood,
+            ood_int8: saved.ood_int8,
+            ..saved.entry
+        })
+    }
 }
 
 /// The model-based filter alone on the test flights (and `extra` ones), frame by frame as the
@@ -1283,6 +1432,37 @@ mod tests {
                 .all(|(a, b)| a.alpha == b.alpha && a.beta == b.beta && a.label == b.label)
         );
         assert_eq!(r.rows(Some("nope"))[0].alpha.n, 0);
+    }
+
+    #[test]
+    fn progress_keeps_finished_rows_of_the_same_run_only() {
+        let path =
+            std::env::temp_dir().join(format!("report-progress-{}.jsonl", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        let mut p = Progress::open(Some(&path), "run A");
+        let mut e = entry(MLP, Angle::Beta, Some(2), 0.3, None);
+        e.preds = vec![("t1".into(), vec![1.0, 2.0])];
+        e.ood_int8 = Some(vec![("o".into(), vec![3.0])]);
+        let back = p.save(e.clone()).unwrap();
+        assert_eq!(back.preds, e.preds);
+        p.save(entry(GB, Angle::Alpha, None, 0.2, None)).unwrap();
+        // A killed run's rows come back, answers included; another run's key sees none.
+        let mut q = Progress::open(Some(&path), "run A");
+        let r = q.take(MLP, Angle::Beta, "table1", Some(2)).unwrap();
+        assert_eq!(
+            (r.preds.clone(), r.ood_int8.clone()),
+            (e.preds.clone(), e.ood_int8.clone())
+        );
+        assert!((r.float.overall.mae - 0.3).abs() < 1e-12);
+        assert!(
+            q.take(MLP, Angle::Beta, "table1", Some(2)).is_none(),
+            "taken once"
+        );
+        assert!(q.take(MLP, Angle::Beta, "table1", Some(3)).is_none());
+        assert!(q.take(GB, Angle::Alpha, "table1", None).is_some());
+        let mut other = Progress::open(Some(&path), "run B");
+        assert!(other.take(GB, Angle::Alpha, "table1", None).is_none());
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]
