@@ -240,39 +240,9 @@ pub fn run(
                         format!("{} cascade {} s{seed}", angle.name(), set.name),
                     ),
                 );
-                let seconds = t0.elapsed().as_secs_f64();
-                let (ood_f, ood_i) = crate::pipeline::answers(&t, &extra);
-                log(&format!(
-                    "{} cascade [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
-                    angle.symbol(),
-                    set.name,
-                    t.float_test.overall.mae,
-                    t.int_test.overall.mae
-                ));
-                entries.push(
-                    progress.save(Entry {
-                        model: CASCADE.into(),
-                        angle,
-                        features: set.name.clone(),
-                        seed: Some(seed),
-                        float: t.float_test.clone(),
-                        int8: Some(t.int_test.clone()),
-                        seconds,
-                        preds: t
-                            .series
-                            .iter()
-                            .map(|x| (x.0.clone(), x.2.clone()))
-                            .collect(),
-                        preds_int8: Some(
-                            t.series
-                                .iter()
-                                .map(|x| (x.0.clone(), x.3.clone()))
-                                .collect(),
-                        ),
-                        ood: ood_f.clone(),
-                        ood_int8: Some(ood_i.clone()),
-                    })?,
-                );
+                let e = trained_entry(CASCADE, &set.name, seed, &t, t0, &extra);
+                log(&trained_line("cascade", &e));
+                entries.push(progress.save(e)?);
                 pair.push(t);
             }
             // (A resumed pair drew its pictures in the run that trained it.)
@@ -297,39 +267,9 @@ pub fn run(
                     *hsize,
                     &tc(seed, format!("{} hybrid s{seed}", angle.name())),
                 );
-                let seconds = t0.elapsed().as_secs_f64();
-                let (ood_f, ood_i) = crate::pipeline::answers(&t, &extra);
-                log(&format!(
-                    "{} hybrid [{}] seed {seed}: float MAE {:.3}, int8 MAE {:.3} ({seconds:.1} s)",
-                    angle.symbol(),
-                    hfs.name,
-                    t.float_test.overall.mae,
-                    t.int_test.overall.mae
-                ));
-                entries.push(
-                    progress.save(Entry {
-                        model: HYBRID.into(),
-                        angle,
-                        features: hfs.name.clone(),
-                        seed: Some(seed),
-                        float: t.float_test.clone(),
-                        int8: Some(t.int_test.clone()),
-                        seconds,
-                        preds: t
-                            .series
-                            .iter()
-                            .map(|x| (x.0.clone(), x.2.clone()))
-                            .collect(),
-                        preds_int8: Some(
-                            t.series
-                                .iter()
-                                .map(|x| (x.0.clone(), x.3.clone()))
-                                .collect(),
-                        ),
-                        ood: ood_f.clone(),
-                        ood_int8: Some(ood_i.clone()),
-                    })?,
-                );
+                let e = trained_entry(HYBRID, &hfs.name, seed, &t, t0, &extra);
+                log(&trained_line("hybrid", &e));
+                entries.push(progress.save(e)?);
             }
         }
         entries.extend(filter_entries(ds, &extra));
@@ -346,6 +286,52 @@ pub fn run(
         split: Split::of(ds),
         entries,
     })
+}
+
+/// The row of a trained cascade (or hybrid): its test metrics and answers, float and int8, and its
+/// answers on the OOD flights (`extra`).
+fn trained_entry(
+    model: &str,
+    features: &str,
+    seed: u64,
+    t: &Trained,
+    started: std::time::Instant,
+    extra: &[&crate::data::Flight],
+) -> Entry {
+    let seconds = started.elapsed().as_secs_f64();
+    let (ood, ood_int8) = crate::pipeline::answers(t, extra);
+    let answers = |k: usize| -> Answers {
+        t.series
+            .iter()
+            .map(|x| (x.0.clone(), if k == 2 { x.2.clone() } else { x.3.clone() }))
+            .collect()
+    };
+    Entry {
+        model: model.into(),
+        angle: t.angle,
+        features: features.into(),
+        seed: Some(seed),
+        float: t.float_test.clone(),
+        int8: Some(t.int_test.clone()),
+        seconds,
+        preds: answers(2),
+        preds_int8: Some(answers(3)),
+        ood,
+        ood_int8: Some(ood_int8),
+    }
+}
+
+/// The log line of a trained row.
+fn trained_line(kind: &str, e: &Entry) -> String {
+    format!(
+        "{} {kind} [{}] seed {}: float MAE {:.3}, int8 MAE {:.3} ({:.1} s)",
+        e.angle.symbol(),
+        e.features,
+        e.seed.unwrap_or(0),
+        e.float.overall.mae,
+        e.int8.as_ref().map_or(f64::NAN, |m| m.overall.mae),
+        e.seconds
+    )
 }
 
 /// What makes two report runs the same run (their finished rows interchangeable): the datasets and
