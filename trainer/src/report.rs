@@ -739,24 +739,23 @@ impl Report {
                 "table2_error_by_qbar.png",
             ),
         ] {
-            let mae_a: Vec<Vec<(f64, f64)>> = rows
-                .iter()
-                .map(|(_, a, _)| {
-                    binned_mae(xs, &flat(a), &ta, width)
-                        .into_iter()
-                        .map(|(x, m, _)| (x, m))
-                        .collect()
-                })
-                .collect();
-            let mae_b: Vec<Vec<(f64, f64)>> = rows
-                .iter()
-                .map(|(_, _, b)| {
-                    binned_mae(xs, &flat(b), &tb, width)
-                        .into_iter()
-                        .map(|(x, m, _)| (x, m))
-                        .collect()
-                })
-                .collect();
+            // Per row, MAE by bin of one angle's answers against its truth.
+            let binned = |angle: Angle| -> Vec<Vec<(f64, f64)>> {
+                rows.iter()
+                    .map(|(_, a, b)| {
+                        let (p, t) = if angle == Angle::Alpha {
+                            (a, &ta)
+                        } else {
+                            (b, &tb)
+                        };
+                        binned_mae(xs, &flat(p), t, width)
+                            .into_iter()
+                            .map(|(x, m, _)| (x, m))
+                            .collect()
+                    })
+                    .collect()
+            };
+            let (mae_a, mae_b) = (binned(Angle::Alpha), binned(Angle::Beta));
             let counts: Vec<(f64, f64)> = binned_mae(xs, &ta, &ta, width)
                 .into_iter()
                 .map(|(x, _, n)| (x, n as f64))
