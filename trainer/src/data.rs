@@ -148,12 +148,12 @@ impl Dataset {
                 Split::Train => Role::Train,
                 Split::Test => Role::Test,
             };
-            let faults = mf
-                .faults
-                .iter()
-                .map(|f| f.parse::<Fault>())
-                .collect::<std::result::Result<Vec<_>, _>>()?;
-            flights.push(load_flight(&dir.join(&mf.file), &mf.name, role, &faults)?);
+            flights.push(load_flight(
+                &dir.join(&mf.file),
+                &mf.name,
+                role,
+                &mf.faults()?,
+            )?);
         }
         Ok(Dataset {
             dir: dir.to_path_buf(),

@@ -46,6 +46,18 @@ pub fn run_flight(cfg: Config, frames: &[estimator_core::SensorFrame]) -> Vec<Ou
         .collect()
 }
 
+/// The filter's α and β in degrees, one per output.
+pub fn degrees(out: &[Output]) -> (Vec<f64>, Vec<f64>) {
+    out.iter()
+        .map(|o| {
+            (
+                f64::from(o.alpha_rad).to_degrees(),
+                f64::from(o.beta_rad).to_degrees(),
+            )
+        })
+        .unzip()
+}
+
 /// The filter with `cfg` on every flight of `role`.
 pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
     let (mut a, mut b, mut at, mut bt, mut shares) =
@@ -54,14 +66,7 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         let out = run_flight(cfg, &fl.frames);
         let ta = fl.truth(Target::AlphaDeg);
         let tb = fl.truth(Target::BetaDeg);
-        let pa: Vec<f64> = out
-            .iter()
-            .map(|o| f64::from(o.alpha_rad).to_degrees())
-            .collect();
-        let pb: Vec<f64> = out
-            .iter()
-            .map(|o| f64::from(o.beta_rad).to_degrees())
-            .collect();
+        let (pa, pb) = degrees(&out);
         let ok: Vec<bool> = out.iter().map(|o| o.flags == 0).collect();
         let keep = |v: &[f64]| -> Vec<f64> {
             v.iter()

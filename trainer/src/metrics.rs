@@ -93,15 +93,8 @@ impl FlightMetrics {
         m.bands = set
             .bands()
             .iter()
-            .map(|&(label, lo, hi)| {
-                let (p, t): (Vec<f64>, Vec<f64>) = flights
-                    .iter()
-                    .flat_map(|(_, p, t)| p.iter().zip(t))
-                    .filter(|(_, t)| (lo..hi).contains(&set.value(**t)))
-                    .map(|(p, t)| (*p, *t))
-                    .unzip();
-                (label.to_string(), Metrics::of(&p, &t))
-            })
+            .zip(band_metrics(flights, set))
+            .map(|(&(label, _, _), b)| (label.to_string(), b))
             .collect();
         m
     }
@@ -121,29 +114,40 @@ pub struct Regimes {
 }
 
 impl Regimes {
-    /// `alpha`, `beta`: (name, predictions, truth) per flight, in degrees.
+    /// `alpha`, `beta`: (name, predictions, truth) per flight, in degrees. The bands are
+    /// [`BandSet`]'s, named as fields.
     pub fn of(
         alpha: &[(String, Vec<f64>, Vec<f64>)],
         beta: &[(String, Vec<f64>, Vec<f64>)],
     ) -> Regimes {
-        let pick = |flights: &[(String, Vec<f64>, Vec<f64>)], keep: &dyn Fn(f64) -> bool| {
+        let a = band_metrics(alpha, BandSet::Alpha);
+        let b = band_metrics(beta, BandSet::Beta);
+        let at = |v: &[Metrics], i: usize| v.get(i).copied().unwrap_or_default();
+        Regimes {
+            alpha_below_5: at(&a, 0),
+            alpha_5_15: at(&a, 1),
+            alpha_15_25: at(&a, 2),
+            alpha_above_25: at(&a, 3),
+            beta_abs_below_2: at(&b, 0),
+            beta_abs_above_2: at(&b, 1),
+        }
+    }
+}
+
+/// Metrics over every flight's frames per band of `set`, in [`BandSet::bands`] order.
+fn band_metrics(flights: &[(String, Vec<f64>, Vec<f64>)], set: BandSet) -> Vec<Metrics> {
+    set.bands()
+        .iter()
+        .map(|&(_, lo, hi)| {
             let (p, t): (Vec<f64>, Vec<f64>) = flights
                 .iter()
                 .flat_map(|(_, p, t)| p.iter().zip(t))
-                .filter(|(_, t)| keep(**t))
+                .filter(|(_, t)| (lo..hi).contains(&set.value(**t)))
                 .map(|(p, t)| (*p, *t))
                 .unzip();
             Metrics::of(&p, &t)
-        };
-        Regimes {
-            alpha_below_5: pick(alpha, &|t| t < 5.0),
-            alpha_5_15: pick(alpha, &|t| (5.0..15.0).contains(&t)),
-            alpha_15_25: pick(alpha, &|t| (15.0..25.0).contains(&t)),
-            alpha_above_25: pick(alpha, &|t| t >= 25.0),
-            beta_abs_below_2: pick(beta, &|t| t.abs() < 2.0),
-            beta_abs_above_2: pick(beta, &|t| t.abs() >= 2.0),
-        }
-    }
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -49,32 +49,20 @@ pub fn estimators() -> Vec<Estimator> {
 
 fn run_shipped(fl: &crate::data::Flight) -> Answers {
     let suite = crate::pipeline::shipped_suite().unwrap_or(estimator_core::Suite::Table1);
-    let mut est = estimator_core::Estimator::shipped();
-    let mut a = Answers {
-        alpha_deg: Vec::with_capacity(fl.len()),
-        beta_deg: Vec::with_capacity(fl.len()),
-        clear: Vec::with_capacity(fl.len()),
-    };
-    for f in &fl.frames {
-        let e = est.step(&f.restricted_to(suite));
-        a.alpha_deg.push(e.alpha_deg());
-        a.beta_deg.push(e.beta_deg());
-        a.clear.push(e.flags.0 == 0);
+    let a = crate::pipeline::shipped_answers(fl, suite);
+    Answers {
+        clear: a.flags.iter().map(|f| f.0 == 0).collect(),
+        alpha_deg: a.alpha_deg,
+        beta_deg: a.beta_deg,
     }
-    a
 }
 
 fn run_filter(fl: &crate::data::Flight) -> Answers {
     let out = run_flight(F16_CONFIG, &fl.frames);
+    let (alpha_deg, beta_deg) = crate::filter_eval::degrees(&out);
     Answers {
-        alpha_deg: out
-            .iter()
-            .map(|o| f64::from(o.alpha_rad).to_degrees())
-            .collect(),
-        beta_deg: out
-            .iter()
-            .map(|o| f64::from(o.beta_rad).to_degrees())
-            .collect(),
+        alpha_deg,
+        beta_deg,
         clear: out.iter().map(|o| o.flags == 0).collect(),
     }
 }

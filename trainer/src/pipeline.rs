@@ -196,26 +196,23 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
     let mut b = Vec::new();
     let mut flagged = Vec::new();
     for fl in ds.flights(Role::Test) {
-        let mut est = Estimator::shipped();
-        let (mut pa, mut pb) = (Vec::new(), Vec::new());
-        let (mut held, mut env) = (0usize, 0usize);
-        for f in &fl.frames {
-            let e = est.step(&f.restricted_to(suite));
-            if !e.flags.is_usable() {
-                held += 1;
-            }
-            if e.flags.has(estimator_core::Flags::OUT_OF_ENVELOPE) {
-                env += 1;
-            }
-            pa.push(e.alpha_deg());
-            pb.push(e.beta_deg());
-        }
+        let ans = shipped_answers(fl, suite);
+        let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
+        let env = ans
+            .flags
+            .iter()
+            .filter(|f| f.has(estimator_core::Flags::OUT_OF_ENVELOPE))
+            .count();
         a.push((
             fl.name.clone(),
-            pa,
+            ans.alpha_deg,
             fl.truth(Angle::Alpha.target()).to_vec(),
         ));
-        b.push((fl.name.clone(), pb, fl.truth(Angle::Beta.target()).to_vec()));
+        b.push((
+            fl.name.clone(),
+            ans.beta_deg,
+            fl.truth(Angle::Beta.target()).to_vec(),
+        ));
         flagged.push((fl.name.clone(), held, env));
     }
     ShippedEval {
@@ -225,6 +222,31 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
         flagged,
         provenance: shipped_provenance(),
     }
+}
+
+/// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.
+pub struct FlightAnswers {
+    pub alpha_deg: Vec<f64>,
+    pub beta_deg: Vec<f64>,
+    pub flags: Vec<estimator_core::Flags>,
+}
+
+/// A fresh `Estimator::shipped()` stepped over `fl`'s frames as a sender of `suite` delivers them,
+/// exactly as the firmware steps it.
+pub fn shipped_answers(fl: &Flight, suite: Suite) -> FlightAnswers {
+    let mut est = Estimator::shipped();
+    let mut a = FlightAnswers {
+        alpha_deg: Vec::with_capacity(fl.len()),
+        beta_deg: Vec::with_capacity(fl.len()),
+        flags: Vec::with_capacity(fl.len()),
+    };
+    for f in &fl.frames {
+        let e = est.step(&f.restricted_to(suite));
+        a.alpha_deg.push(e.alpha_deg());
+        a.beta_deg.push(e.beta_deg());
+        a.flags.push(e.flags);
+    }
+    a
 }
 
 /// The smallest sensor suite the compiled-in model reads, if this build has one (the estimator's

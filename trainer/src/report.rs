@@ -144,9 +144,7 @@ pub fn run(
         let feats = fs.for_angle(angle);
         for kind in [Baseline::Linear, Baseline::GradientBoosting] {
             let name = kind.name();
-            if let Some(e) = progress.take(name, angle, &fs.name, None) {
-                log(&format!("{} {name}: resumed", angle.symbol()));
-                entries.push(e);
+            if progress.resume(&mut entries, &mut log, name, angle, &fs.name, None) {
                 continue;
             }
             let t0 = std::time::Instant::now();
@@ -181,9 +179,7 @@ pub fn run(
             })?);
         }
         for &seed in &cfg.seeds {
-            if let Some(e) = progress.take(MLP, angle, &fs.name, Some(seed)) {
-                log(&format!("{} {MLP} seed {seed}: resumed", angle.symbol()));
-                entries.push(e);
+            if progress.resume(&mut entries, &mut log, MLP, angle, &fs.name, Some(seed)) {
                 continue;
             }
             let t0 = std::time::Instant::now();
@@ -220,13 +216,14 @@ pub fn run(
         for (k, &seed) in cfg.seeds.iter().enumerate() {
             let mut pair = Vec::new();
             for angle in [Angle::Alpha, Angle::Beta] {
-                if let Some(e) = progress.take(CASCADE, angle, &set.name, Some(seed)) {
-                    log(&format!(
-                        "{} cascade [{}] seed {seed}: resumed",
-                        angle.symbol(),
-                        set.name
-                    ));
-                    entries.push(e);
+                if progress.resume(
+                    &mut entries,
+                    &mut log,
+                    CASCADE,
+                    angle,
+                    &set.name,
+                    Some(seed),
+                ) {
                     continue;
                 }
                 let t0 = std::time::Instant::now();
@@ -254,9 +251,7 @@ pub fn run(
     if let Some((hfs, hsize)) = &cfg.shipped_rows {
         for &seed in &cfg.seeds {
             for angle in [Angle::Alpha, Angle::Beta] {
-                if let Some(e) = progress.take(HYBRID, angle, &hfs.name, Some(seed)) {
-                    log(&format!("{} hybrid seed {seed}: resumed", angle.symbol()));
-                    entries.push(e);
+                if progress.resume(&mut entries, &mut log, HYBRID, angle, &hfs.name, Some(seed)) {
                     continue;
                 }
                 let t0 = std::time::Instant::now();
@@ -399,6 +394,28 @@ impl Progress {
         }
     }
 
+    /// Puts the finished row of this run into `entries`, if the killed run had it (saying so).
+    fn resume(
+        &mut self,
+        entries: &mut Vec<Entry>,
+        log: &mut impl FnMut(&str),
+        model: &str,
+        angle: Angle,
+        features: &str,
+        seed: Option<u64>,
+    ) -> bool {
+        let Some(e) = self.take(model, angle, features, seed) else {
+            return false;
+        };
+        let seed = seed.map_or(String::new(), |s| format!(" seed {s}"));
+        log(&format!(
+            "{} {model} [{features}]{seed}: resumed",
+            angle.symbol()
+        ));
+        entries.push(e);
+        true
+    }
+
     /// A finished row of this run, if the killed run had it.
     fn take(
         &mut self,
@@ -454,12 +471,11 @@ impl Progress {
 fn filter_entries(ds: &Dataset, extra: &[&crate::data::Flight]) -> Vec<Entry> {
     use crate::data::Target;
     let t0 = std::time::Instant::now();
-    let run = |fl: &crate::data::Flight| -> (Vec<f64>, Vec<f64>) {
-        let out = crate::filter_eval::run_flight(estimator_core::filter::F16_CONFIG, &fl.frames);
-        let deg = |f: fn(&estimator_core::filter::Output) -> f32| -> Vec<f64> {
-            out.iter().map(|o| f64::from(f(o)).to_degrees()).collect()
-        };
-        (deg(|o| o.alpha_rad), deg(|o| o.beta_rad))
+    let run = |fl: &crate::data::Flight| {
+        crate::filter_eval::degrees(&crate::filter_eval::run_flight(
+            estimator_core::filter::F16_CONFIG,
+            &fl.frames,
+        ))
     };
     let mut a = Vec::new();
     let mut b = Vec::new();

@@ -168,18 +168,9 @@ impl Merged {
         let mut configs: Vec<String> = jobs.iter().map(Job::config).collect();
         configs.dedup();
         for c in &configs {
-            let rs: Vec<&Scores> = self
-                .done
-                .iter()
-                .filter(|r| r.job.config() == *c)
-                .filter_map(|r| r.scores.as_ref())
-                .collect();
-            let seeds: Vec<String> = self
-                .done
-                .iter()
-                .filter(|r| r.job.config() == *c)
-                .map(|r| r.job.seed.to_string())
-                .collect();
+            let mine: Vec<&JobResult> = self.done.iter().filter(|r| r.job.config() == *c).collect();
+            let rs: Vec<&Scores> = mine.iter().filter_map(|r| r.scores.as_ref()).collect();
+            let seeds: Vec<String> = mine.iter().map(|r| r.job.seed.to_string()).collect();
             let cell = |f: fn(&Scores) -> f64| {
                 let v: Vec<f64> = rs.iter().map(|r| f(r)).collect();
                 if v.is_empty() {

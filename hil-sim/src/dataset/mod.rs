@@ -195,6 +195,13 @@ pub struct FlightEntry {
     pub faults: Vec<String>,
 }
 
+impl FlightEntry {
+    /// The sensor faults this flight's frames get (`faults`, parsed).
+    pub fn faults(&self) -> Result<Vec<crate::faults::Fault>, crate::faults::FaultError> {
+        self.faults.iter().map(|f| f.parse()).collect()
+    }
+}
+
 /// `manifest.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {

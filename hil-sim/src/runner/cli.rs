@@ -158,11 +158,7 @@ fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
     let Some(entry) = m.flights.iter().find(|f| Some(&f.file) == name.as_ref()) else {
         return Ok(Vec::new());
     };
-    entry
-        .faults
-        .iter()
-        .map(|f| f.parse().map_err(RunError::Fault))
-        .collect()
+    entry.faults().map_err(RunError::Fault)
 }
 
 /// Loads or flies the flight.
