@@ -53,6 +53,9 @@ pub enum Error {
     Model { path: PathBuf, msg: String },
     #[error("{0}")]
     Plot(String),
+    /// The PyTorch side of `trainer bench-train`.
+    #[error("PyTorch benchmark: {0}")]
+    Torch(String),
     #[error("numerical problem: {0}")]
     Numeric(String),
 }

@@ -2,8 +2,10 @@
 //! contract, feature sets and leakage guard, burn models, quantization and code generation of
 //! `estimator-core/src/model/weights.rs`, an independent integer reference and test vectors,
 //! baselines, feature analysis and reports.
+pub mod adam;
 pub mod analysis;
 pub mod baselines;
+pub mod bench;
 pub mod data;
 pub mod error;
 pub mod export;

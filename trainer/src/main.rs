@@ -198,6 +198,36 @@ enum Cmd {
         #[arg(long, default_value = "docs/results/bench_epoch.json")]
         out: PathBuf,
     },
+    /// burn against PyTorch on the same cascade, data, initial weights, batches and threads
+    /// (run it through scripts/bench-train, which makes the PyTorch venv).
+    BenchTrain {
+        #[arg(long)]
+        data: PathBuf,
+        #[arg(long, default_value_t = 5)]
+        epochs: usize,
+        #[arg(long, default_value_t = 256)]
+        batch: usize,
+        /// Threads for both frameworks (burn: rayon's global pool; PyTorch: set_num_threads).
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        /// Cases to run (paper-alpha, shipped-alpha); default all.
+        #[arg(long, value_delimiter = ',')]
+        case: Vec<String>,
+        /// The benchmark venv's Python (with torch).
+        #[arg(long, default_value = ".venv-bench/bin/python")]
+        python: PathBuf,
+        #[arg(long, default_value = "scripts/bench/torch_train.py")]
+        torch_script: PathBuf,
+        /// Where the exchanged matrices, weights and batch orders go.
+        #[arg(long, default_value = "out/bench-train")]
+        exchange: PathBuf,
+        /// The Markdown page (also DIR/training-speed.json beside it).
+        #[arg(long, default_value = "docs/results/training-speed.md")]
+        out: PathBuf,
+        /// Print exactly one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Score the model-based air-data filter (estimator_core::filter, EGI suite) on a dataset's
     /// flights, frame by frame as the firmware runs it.
     EvalFilter {
@@ -1000,6 +1030,98 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     Ok(())
 }
 
+struct BenchTrainOpts<'a> {
+    epochs: usize,
+    batch: usize,
+    threads: usize,
+    cases: &'a [String],
+    json: bool,
+}
+
+fn cmd_bench_train(
+    data: &Path,
+    o: &BenchTrainOpts,
+    torch: &trainer::bench::Torch,
+    exchange: &Path,
+    out: &Path,
+) -> Result<()> {
+    use trainer::bench::{CASES, markdown, run_case};
+    if o.epochs < 2 {
+        bail!("--epochs must be at least 2 (the first epoch is warm-up and is not averaged)");
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(o.threads)
+        .build_global()
+        .context("sizing rayon's thread pool (set --threads before anything else runs)")?;
+    let cases: Vec<_> = if o.cases.is_empty() {
+        CASES.to_vec()
+    } else {
+        o.cases
+            .iter()
+            .map(|n| {
+                CASES
+                    .iter()
+                    .find(|c| c.name == n)
+                    .copied()
+                    .with_context(|| {
+                        format!("unknown case `{n}` (known: paper-alpha, shipped-alpha)")
+                    })
+            })
+            .collect::<Result<_>>()?
+    };
+    let ds = load(data, 0.15)?;
+    let mut results = Vec::new();
+    for case in &cases {
+        ds.require(case.suite)?;
+        let cfg = TrainConfig {
+            epochs: o.epochs,
+            batch: o.batch,
+            lr: 1e-3,
+            seed: 1,
+            label: format!("burn {}", case.name),
+            progress: !o.json,
+        };
+        let r = run_case(&ds, case, &cfg, torch, exchange)?;
+        eprintln!(
+            "{}: burn {:.2} s/epoch, PyTorch {:.2} s/epoch, ratio {:.2}; val loss {:.5} vs {:.5} ({:+.1} %)",
+            r.name,
+            r.burn.mean_epoch_s,
+            r.torch.mean_epoch_s,
+            r.ratio,
+            r.burn.final_val(),
+            r.torch.final_val(),
+            100.0 * r.val_loss_rel
+        );
+        results.push(r);
+    }
+    let summary = serde_json::json!({
+        "command": command_line(),
+        "machine": machine(),
+        "dataset": data.display().to_string(),
+        "threads": o.threads,
+        "cases": results,
+        "ratio": results.first().map(|r| r.ratio),
+        "burn_s_per_epoch": results.first().map(|r| r.burn.mean_epoch_s),
+        "torch_s_per_epoch": results.first().map(|r| r.torch.mean_epoch_s),
+        "burn_val_loss": results.first().map(|r| r.burn.final_val()),
+        "torch_val_loss": results.first().map(|r| r.torch.final_val()),
+    });
+    if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    std::fs::write(out, markdown(&results, &command_line(), &machine()))
+        .with_context(|| format!("writing {}", out.display()))?;
+    let json_path = out.with_extension("json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&summary)?)
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    if o.json {
+        println!("{summary}");
+    } else {
+        eprintln!("wrote {} and {}", out.display(), json_path.display());
+    }
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
@@ -1046,5 +1168,33 @@ fn main() -> Result<()> {
             out,
         } => cmd_bench(data, *epochs, *batch, out),
         Cmd::Baselines { args, gb_rows } => cmd_baselines(args, *gb_rows),
+        Cmd::BenchTrain {
+            data,
+            epochs,
+            batch,
+            threads,
+            case,
+            python,
+            torch_script,
+            exchange,
+            out,
+            json,
+        } => cmd_bench_train(
+            data,
+            &BenchTrainOpts {
+                epochs: *epochs,
+                batch: *batch,
+                threads: *threads,
+                cases: case,
+                json: *json,
+            },
+            &trainer::bench::Torch {
+                python,
+                script: torch_script,
+                threads: *threads,
+            },
+            exchange,
+            out,
+        ),
     }
 }

@@ -3,7 +3,7 @@
 //! MSE(intermediate) + MSE(angle) with Adam.
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
-use burn::optim::{AdamConfig, GradientsParams};
+use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -258,30 +258,101 @@ fn val_losses<M: Net>(model: &M, val: &Matrix) -> [f64; 2] {
 
 static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// Adam's constants (burn's defaults, spelled out so `trainer bench-train` can hand them to PyTorch).
+pub const ADAM_BETA_1: f32 = 0.9;
+pub const ADAM_BETA_2: f32 = 0.999;
+pub const ADAM_EPSILON: f32 = 1e-5;
+
+/// Learning rate of `epoch` (0-based) of `epochs`: cosine decay from `lr` to 5 % of it.
+pub fn lr_at(lr: f64, epoch: usize, epochs: usize) -> f64 {
+    lr * (0.05 + 0.95 * 0.5 * (1.0 + (std::f64::consts::PI * epoch as f64 / epochs as f64).cos()))
+}
+
+/// The seeded mini-batch order: the row indices, shuffled anew (ChaCha8) at every epoch.
+pub struct Shuffle {
+    rng: ChaCha8Rng,
+    order: Vec<usize>,
+}
+
+impl Shuffle {
+    pub fn new(rows: usize, seed: u64) -> Shuffle {
+        Shuffle {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            order: (0..rows).collect(),
+        }
+    }
+    /// The next epoch's row order.
+    pub fn next_epoch(&mut self) -> &[usize] {
+        self.order.shuffle(&mut self.rng);
+        &self.order
+    }
+}
+
+/// A seeded model on the autodiff device, its parameters materialised under the init lock.
+pub fn init_model<M: Net>(init: impl FnOnce(&Device) -> M, seed: u64) -> M {
+    let device = Device::flex().autodiff();
+    // The backend's RNG is process-global: seeding and initialising under one lock keeps concurrent
+    // trainings (tests, report runs) deterministic.
+    let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    device.seed(seed);
+    Device::flex().seed(seed);
+    let m = init(&device);
+    // Parameters initialise lazily: materialise them while the seeded RNG is ours.
+    let _ = m.layers();
+    m
+}
+
 /// Trains with Adam (cosine-decayed learning rate), mini-batches shuffled by a seeded ChaCha8, and keeps
-/// the epoch with the lowest validation loss (sum of both heads). Deterministic for a given seed.
-pub fn train<M: Net>(
-    init: impl FnOnce(&Device) -> M,
+/// the epoch with the lowest validation loss (sum of both heads). Deterministic for a given seed, on
+/// any number of threads.
+///
+/// The loop runs as a worker of its own rayon pool (as many threads as the global pool: all cores,
+/// `RAYON_NUM_THREADS`, or `bench-train --threads`). burn-flex splits its larger matrix products over
+/// the current pool; called from outside a pool, every product wakes two sleeping workers and parks
+/// the caller. Inside, the caller computes one half itself. The paper-size α cascade's epoch on 2
+/// cores: 10.8 s outside, 7.9 s inside (docs/results/training-speed.md).
+pub fn train<M: Net + Send>(
+    init: impl FnOnce(&Device) -> M + Send,
     cfg: &TrainConfig,
     train: &Matrix,
     val: &Matrix,
 ) -> (M, Curves) {
+    train_with(init, cfg, train, val, |_, _| {})
+}
+
+/// [`train`], calling `after_epoch(epoch, curves so far)` after each epoch, outside its timing
+/// (`trainer bench-train` runs PyTorch's epoch there, in lockstep).
+pub fn train_with<M: Net + Send>(
+    init: impl FnOnce(&Device) -> M + Send,
+    cfg: &TrainConfig,
+    train: &Matrix,
+    val: &Matrix,
+    after_epoch: impl FnMut(usize, &Curves) + Send,
+) -> (M, Curves) {
+    let threads = rayon::current_num_threads();
+    match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+        Ok(pool) => pool.install(|| train_here(init, cfg, train, val, after_epoch)),
+        // No threads to be had: the same loop on the caller's thread alone.
+        Err(_) => train_here(init, cfg, train, val, after_epoch),
+    }
+}
+
+fn train_here<M: Net>(
+    init: impl FnOnce(&Device) -> M,
+    cfg: &TrainConfig,
+    train: &Matrix,
+    val: &Matrix,
+    mut after_epoch: impl FnMut(usize, &Curves),
+) -> (M, Curves) {
     let device = Device::flex().autodiff();
-    // The backend's RNG is process-global: seeding and initialising under one lock keeps concurrent
-    // trainings (tests, report runs) deterministic.
-    let mut model = {
-        let _guard = INIT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-        device.seed(cfg.seed);
-        Device::flex().seed(cfg.seed);
-        let m = init(&device);
-        // Parameters initialise lazily: materialise them while the seeded RNG is ours.
-        let _ = m.layers();
-        m
-    };
-    let mut optim = AdamConfig::new().init();
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    let n = train.rows();
-    let mut order: Vec<usize> = (0..n).collect();
+    let mut model = init_model(init, cfg.seed);
+    // burn's Adam, bit for bit, in one pass per parameter (crate::adam).
+    let mut optim = ModuleOptimizer::from(crate::adam::FusedAdam {
+        beta_1: ADAM_BETA_1,
+        beta_2: ADAM_BETA_2,
+        epsilon: ADAM_EPSILON,
+    });
+    let mut shuffle = Shuffle::new(train.rows(), cfg.seed);
     let mut curves = Curves::default();
     let mut best: Option<(f64, M)> = None;
     let pb = if cfg.progress {
@@ -299,14 +370,9 @@ pub fn train<M: Net>(
     let (mut bx, mut bm, mut bo) = (Vec::new(), Vec::new(), Vec::new());
     for epoch in 0..cfg.epochs {
         let t0 = Instant::now();
-        let lr = cfg.lr
-            * (0.05
-                + 0.95
-                    * 0.5
-                    * (1.0 + (std::f64::consts::PI * epoch as f64 / cfg.epochs as f64).cos()));
-        order.shuffle(&mut rng);
+        let lr = lr_at(cfg.lr, epoch, cfg.epochs);
         let (mut sm, mut so, mut nb) = (0f64, 0f64, 0usize);
-        for chunk in order.chunks(cfg.batch) {
+        for chunk in shuffle.next_epoch().chunks(cfg.batch) {
             bx.clear();
             bm.clear();
             bo.clear();
@@ -349,6 +415,7 @@ pub fn train<M: Net>(
             v[1]
         ));
         pb.inc(1);
+        after_epoch(epoch, &curves);
     }
     pb.finish();
     let model = match best {

@@ -1,0 +1,193 @@
+//! Adam in one pass over each parameter.
+//!
+//! burn's `Adam` builds its update from about a dozen whole-tensor operations per parameter and
+//! step, each allocating and filling a fresh tensor: 1.2-1.4 s of a 8.6-s paper-size epoch on 2
+//! cores. This optimiser does the same arithmetic element by element in one loop, reusing the
+//! parameter's and the moments' own buffers (burn-flex hands a uniquely owned tensor's buffer over
+//! without a copy).
+//!
+//! It is burn's Adam (no weight decay, no AMSGrad), not an approximation of it: every element goes
+//! through the same f32 operations in the same order (`m·β₁ + g·(1-β₁)`, `v·β₂ + (g·g)·(1-β₂)`, the
+//! bias corrections folded as burn folds them, the learning rate rounded to f32 as burn rounds it).
+//! The test below holds it to bit-identical weights after many steps, so a model trained before this
+//! optimiser existed is reproduced bit for bit.
+use burn::optim::{LearningRate, Optimizer, RecordState, StateSink, StateSource};
+use burn::tensor::{Device, Tensor, TensorData};
+
+/// Adam's constants (the trainer's: [`crate::model::ADAM_BETA_1`] and friends).
+#[derive(Debug, Clone, Copy)]
+pub struct FusedAdam {
+    pub beta_1: f32,
+    pub beta_2: f32,
+    pub epsilon: f32,
+}
+
+/// One parameter's step count and moments.
+#[derive(Clone)]
+pub struct FusedAdamState<const D: usize> {
+    pub time: usize,
+    pub moment_1: Tensor<D>,
+    pub moment_2: Tensor<D>,
+}
+
+/// burn's `#[derive(RecordState)]` only expands inside burn-optim, and its scalar type is not
+/// re-exported without burn's `store` feature: the step count is recorded as a one-element f64
+/// tensor (exact up to 2⁵³ steps). The trainer never saves optimiser state; this makes it saveable.
+impl<const D: usize> RecordState for FusedAdamState<D> {
+    fn state_flatten(&self, prefix: &str, out: &mut StateSink) {
+        out.push_tensor(prefix, "time", TensorData::new(vec![self.time as f64], [1]));
+        out.push_tensor(prefix, "moment_1", self.moment_1.to_data());
+        out.push_tensor(prefix, "moment_2", self.moment_2.to_data());
+    }
+
+    fn state_unflatten(prefix: &str, src: &mut StateSource, device: &Device) -> Option<Self> {
+        let time = src
+            .take_tensor(prefix, "time")?
+            .try_into_vec::<f64>()
+            .ok()?;
+        let time = *time.first()?;
+        Some(FusedAdamState {
+            time: time as usize,
+            moment_1: Tensor::from_data(src.take_tensor(prefix, "moment_1")?, device),
+            moment_2: Tensor::from_data(src.take_tensor(prefix, "moment_2")?, device),
+        })
+    }
+}
+
+fn into_f32<const D: usize>(t: Tensor<D>) -> Vec<f32> {
+    // `convert` is a no-op for f32 storage (all of the trainer's models); the length check in
+    // `step` catches anything that still does not read.
+    t.into_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .unwrap_or_default()
+}
+
+fn from_f32<const D: usize>(v: Vec<f32>, shape: [usize; D], device: &Device) -> Tensor<D> {
+    Tensor::from_data(TensorData::new(v, shape), device)
+}
+
+impl Optimizer for FusedAdam {
+    type State<const D: usize> = FusedAdamState<D>;
+
+    fn step<const D: usize>(
+        &self,
+        lr: LearningRate,
+        tensor: Tensor<D>,
+        grad: Tensor<D>,
+        state: Option<Self::State<D>>,
+    ) -> (Tensor<D>, Option<Self::State<D>>) {
+        let device = tensor.device();
+        let shape: [usize; D] = tensor.dims();
+        let n: usize = shape.iter().product();
+        let (b1, b2) = (self.beta_1, self.beta_2);
+        let (f1, f2) = (1.0 - b1, 1.0 - b2);
+        let g = into_f32(grad);
+        let mut p = into_f32(tensor);
+        let (time, mut m, mut v) = match state {
+            Some(s) => (s.time + 1, into_f32(s.moment_1), into_f32(s.moment_2)),
+            None => (1, Vec::new(), Vec::new()),
+        };
+        if g.len() != n || p.len() != n {
+            // Only f32 parameters reach here in this crate; anything else keeps its value and
+            // says so loudly rather than training on garbage.
+            eprintln!(
+                "FusedAdam: a parameter or gradient is not f32 storage; parameter left unchanged"
+            );
+            return (from_f32(p, shape, &device), None);
+        }
+        if time == 1 {
+            // burn's first step starts the moments from the gradient alone (no `0·β` term).
+            m = g.iter().map(|&g| g * f1).collect();
+            v = g.iter().map(|&g| (g * g) * f2).collect();
+        } else {
+            for ((m, v), &g) in m.iter_mut().zip(v.iter_mut()).zip(&g) {
+                *m = *m * b1 + g * f1;
+                *v = *v * b2 + (g * g) * f2;
+            }
+        }
+        let t = i32::try_from(time).unwrap_or(i32::MAX);
+        let bc2_sqrt = (1.0 - b2.powi(t)).sqrt();
+        let combined = bc2_sqrt / (1.0 - b1.powi(t));
+        let eps = self.epsilon * bc2_sqrt;
+        let lr = lr as f32;
+        for ((p, &m), &v) in p.iter_mut().zip(&m).zip(&v) {
+            *p -= ((m * combined) / (v.sqrt() + eps)) * lr;
+        }
+        let state = FusedAdamState {
+            time,
+            moment_1: from_f32(m, shape, &device),
+            moment_2: from_f32(v, shape, &device),
+        };
+        (from_f32(p, shape, &device), Some(state))
+    }
+
+    fn to_device<const D: usize>(mut state: Self::State<D>, device: &Device) -> Self::State<D> {
+        state.moment_1 = state.moment_1.to_device(device);
+        state.moment_2 = state.moment_2.to_device(device);
+        state
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Net, init_model};
+    use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+
+    fn bits(m: &Cascade) -> Vec<u32> {
+        m.layers()
+            .into_iter()
+            .flat_map(|l| l.weights.into_iter().flatten().chain(l.bias))
+            .map(f32::to_bits)
+            .collect()
+    }
+
+    /// 40 steps on a small cascade with varying learning rates: burn's Adam and this one give the
+    /// same bits, and the weights did move.
+    #[test]
+    fn bit_identical_to_burns_adam() {
+        let make = |d: &Device| Cascade::new(5, &[16, 8], d);
+        let mut a = init_model(make, 7);
+        let mut b = init_model(make, 7);
+        let start = bits(&a);
+        assert_eq!(start, bits(&b));
+        let mut burn_adam: ModuleOptimizer = AdamConfig::new()
+            .with_beta_1(ADAM_BETA_1)
+            .with_beta_2(ADAM_BETA_2)
+            .with_epsilon(ADAM_EPSILON)
+            .init();
+        let mut fused = ModuleOptimizer::from(FusedAdam {
+            beta_1: ADAM_BETA_1,
+            beta_2: ADAM_BETA_2,
+            epsilon: ADAM_EPSILON,
+        });
+        let device = Device::flex().autodiff();
+        for step in 0..40usize {
+            let rows = 32;
+            let x: Vec<f32> = (0..rows * 5)
+                .map(|i| (((i * 37 + step * 11) % 97) as f32 / 48.0) - 1.0)
+                .collect();
+            let ym: Vec<f32> = (0..rows).map(|r| x[r * 5] * 0.5 - x[r * 5 + 1]).collect();
+            let yo: Vec<f32> = (0..rows).map(|r| x[r * 5 + 2] * x[r * 5 + 3]).collect();
+            let t = |v: &Vec<f32>, c: usize| {
+                Tensor::<2>::from_data(TensorData::new(v.clone(), [rows, c]), &device)
+            };
+            let lr = 1e-3 * (1.0 + (step % 7) as f64);
+            let (la, lb) = (
+                a.losses(t(&x, 5), t(&ym, 1), t(&yo, 1)),
+                b.losses(t(&x, 5), t(&ym, 1), t(&yo, 1)),
+            );
+            let ga = GradientsParams::from_grads((la.0 + la.1).backward(), &a);
+            let gb = GradientsParams::from_grads((lb.0 + lb.1).backward(), &b);
+            a = burn_adam.step(lr, a, ga);
+            b = fused.step(lr, b, gb);
+            assert_eq!(bits(&a), bits(&b), "step {step}");
+        }
+        assert_ne!(
+            bits(&a),
+            start,
+            "the weights never moved: the test proves nothing"
+        );
+    }
+}

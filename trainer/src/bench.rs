@@ -1,0 +1,449 @@
+//! `trainer bench-train`: burn and PyTorch train the same cascade side by side, in one run.
+//!
+//! Both sides get the same prepared design matrices, the same initial weights (burn's seeded
+//! initialisation, handed to PyTorch), the same row order in every epoch, the same optimiser
+//! (Adam with the same constants and the same per-epoch learning rates), the same batch size, the
+//! same per-epoch validation pass and the same thread count. Each epoch's time covers the batches,
+//! the optimiser steps, the per-batch loss read-out and the validation pass. The two run in
+//! lockstep, epoch by epoch, so both meet the machine in the same state. The PyTorch side is
+//! `scripts/bench/torch_train.py`, run in the benchmark venv (`scripts/bench-train` makes it).
+use crate::data::{Dataset, Role};
+use crate::features::FeatureSet;
+use crate::model::{
+    ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Curves, Matrix, Net, Shuffle, TrainConfig,
+    init_model, lr_at, train_with,
+};
+use crate::pipeline::Size;
+use crate::prep::{Angle, Prep};
+use crate::{Error, Result};
+use estimator_core::Suite;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One benchmarked configuration.
+#[derive(Debug, Clone, Copy)]
+pub struct Case {
+    pub name: &'static str,
+    pub what: &'static str,
+    pub features: &'static str,
+    pub suite: Suite,
+    pub size: Size,
+}
+
+/// The paper-size α cascade on the paper's inputs, and the shipped configuration's α cascade.
+pub const CASES: [Case; 2] = [
+    Case {
+        name: "paper-alpha",
+        what: "paper-size α cascade (512-256-128-64-32 per part), Table 1 inputs",
+        features: "table1",
+        suite: Suite::Table1,
+        size: Size::Paper,
+    },
+    Case {
+        name: "shipped-alpha",
+        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid inputs",
+        features: "egi-hybrid",
+        suite: Suite::Egi,
+        size: Size::Medium,
+    },
+];
+
+/// One framework's run of one case.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Side {
+    /// Framework and version.
+    pub framework: String,
+    pub threads: usize,
+    pub epoch_s: Vec<f64>,
+    /// Mean of epochs 2..N (the first one carries warm-up).
+    pub mean_epoch_s: f64,
+    /// Per-epoch mean training-batch losses `[intermediate, angle]`.
+    pub train: Vec<[f64; 2]>,
+    /// Per-epoch validation losses `[intermediate, angle]`.
+    pub val: Vec<[f64; 2]>,
+}
+
+impl Side {
+    fn new(framework: String, threads: usize, c: Curves) -> Side {
+        let rest = c.epoch_s.get(1..).unwrap_or(&[]);
+        let mean_epoch_s = if rest.is_empty() {
+            c.epoch_s.first().copied().unwrap_or(0.0)
+        } else {
+            rest.iter().sum::<f64>() / rest.len() as f64
+        };
+        Side {
+            framework,
+            threads,
+            epoch_s: c.epoch_s,
+            mean_epoch_s,
+            train: c.train,
+            val: c.val,
+        }
+    }
+    /// Validation loss (both heads) after the last epoch.
+    pub fn final_val(&self) -> f64 {
+        self.val.last().map_or(f64::NAN, |v| v[0] + v[1])
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseResult {
+    pub name: String,
+    pub what: String,
+    pub n_in: usize,
+    pub hidden: Vec<usize>,
+    pub train_rows: usize,
+    pub val_rows: usize,
+    pub batch: usize,
+    pub epochs: usize,
+    pub burn: Side,
+    pub torch: Side,
+    /// burn's mean epoch time over PyTorch's (below 1: burn is faster).
+    pub ratio: f64,
+    /// burn's final validation loss relative to PyTorch's, minus 1 (negative: burn's is lower).
+    pub val_loss_rel: f64,
+}
+
+/// What the benchmark needs from outside: the PyTorch interpreter and script.
+pub struct Torch<'a> {
+    pub python: &'a Path,
+    pub script: &'a Path,
+    pub threads: usize,
+}
+
+fn write_f32(path: &Path, v: impl IntoIterator<Item = f32>) -> Result<()> {
+    let bytes: Vec<u8> = v.into_iter().flat_map(f32::to_le_bytes).collect();
+    std::fs::write(path, bytes).map_err(crate::error::io(path))
+}
+
+#[derive(Serialize)]
+struct Meta<'a> {
+    n_in: usize,
+    hidden: &'a [usize],
+    train_rows: usize,
+    val_rows: usize,
+    batch: usize,
+    lr: Vec<f64>,
+    beta_1: f32,
+    beta_2: f32,
+    epsilon: f32,
+}
+
+/// Writes what PyTorch needs to train exactly the run burn makes.
+fn write_exchange(
+    dir: &Path,
+    init: &Cascade,
+    hidden: &[usize],
+    cfg: &TrainConfig,
+    tr: &Matrix,
+    va: &Matrix,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(crate::error::io(dir))?;
+    for (name, m) in [("train", tr), ("val", va)] {
+        write_f32(&dir.join(format!("x_{name}.f32")), m.x.iter().copied())?;
+        write_f32(&dir.join(format!("ym_{name}.f32")), m.ym.iter().copied())?;
+        write_f32(&dir.join(format!("yo_{name}.f32")), m.yo.iter().copied())?;
+    }
+    let weights = init.layers().into_iter().flat_map(|l| {
+        let w: Vec<f32> = l.weights.into_iter().flatten().collect();
+        w.into_iter().chain(l.bias)
+    });
+    write_f32(&dir.join("init.f32"), weights)?;
+    let mut shuffle = Shuffle::new(tr.rows(), cfg.seed);
+    let mut order = Vec::with_capacity(cfg.epochs * tr.rows() * 4);
+    for _ in 0..cfg.epochs {
+        for &i in shuffle.next_epoch() {
+            let i = u32::try_from(i).map_err(|_| Error::Numeric("more than 2^32 rows".into()))?;
+            order.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    let p = dir.join("order.u32");
+    std::fs::write(&p, order).map_err(crate::error::io(&p))?;
+    let meta = Meta {
+        n_in: tr.n_in,
+        hidden,
+        train_rows: tr.rows(),
+        val_rows: va.rows(),
+        batch: cfg.batch,
+        lr: (0..cfg.epochs)
+            .map(|e| lr_at(cfg.lr, e, cfg.epochs))
+            .collect(),
+        beta_1: ADAM_BETA_1,
+        beta_2: ADAM_BETA_2,
+        epsilon: ADAM_EPSILON,
+    };
+    let p = dir.join("meta.json");
+    let text = serde_json::to_string(&meta).map_err(|e| Error::Numeric(e.to_string()))?;
+    std::fs::write(&p, text).map_err(crate::error::io(&p))
+}
+
+#[derive(Deserialize)]
+struct TorchHello {
+    torch: String,
+    threads: usize,
+}
+
+#[derive(Deserialize)]
+struct TorchEpoch {
+    epoch_s: f64,
+    train: [f64; 2],
+    val: [f64; 2],
+}
+
+/// The PyTorch process, one epoch per request: it trains epoch `k` when burn has finished its own,
+/// so both frameworks meet the machine in the same state (the host's speed drifts by ±20 % over
+/// minutes here; back-to-back whole runs would measure that drift).
+struct TorchChild {
+    child: std::process::Child,
+    stdin: std::process::ChildStdin,
+    lines: std::io::Lines<std::io::BufReader<std::process::ChildStdout>>,
+    framework: String,
+    threads: usize,
+    curves: Curves,
+}
+
+impl TorchChild {
+    fn start(t: &Torch, dir: &Path) -> Result<TorchChild> {
+        use std::io::BufRead;
+        use std::process::{Command, Stdio};
+        let mut child = Command::new(t.python)
+            .arg(t.script)
+            .arg(dir)
+            .arg("--threads")
+            .arg(t.threads.to_string())
+            .env("OMP_NUM_THREADS", t.threads.to_string())
+            .env("MKL_NUM_THREADS", t.threads.to_string())
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .map_err(|e| {
+                Error::Torch(format!(
+                    "cannot start {} ({e}); run scripts/bench-train, which makes the benchmark venv",
+                    t.python.display()
+                ))
+            })?;
+        let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+            return Err(Error::Torch("no pipes to the PyTorch process".into()));
+        };
+        let mut c = TorchChild {
+            child,
+            stdin,
+            lines: std::io::BufReader::new(stdout).lines(),
+            framework: String::new(),
+            threads: 0,
+            curves: Curves::default(),
+        };
+        let hello: TorchHello = c.read()?;
+        c.framework = format!("PyTorch {}", hello.torch);
+        c.threads = hello.threads;
+        Ok(c)
+    }
+
+    fn read<T: serde::de::DeserializeOwned>(&mut self) -> Result<T> {
+        let line = match self.lines.next() {
+            Some(Ok(l)) => l,
+            Some(Err(e)) => return Err(Error::Torch(format!("reading its answer: {e}"))),
+            None => {
+                let status = self.child.wait().map(|s| s.to_string()).unwrap_or_default();
+                return Err(Error::Torch(format!(
+                    "the PyTorch process ended ({status}); its error is printed above"
+                )));
+            }
+        };
+        serde_json::from_str(&line).map_err(|e| Error::Torch(format!("answer `{line}`: {e}")))
+    }
+
+    fn epoch(&mut self, k: usize) -> Result<()> {
+        use std::io::Write;
+        writeln!(self.stdin, "{k}")
+            .and_then(|()| self.stdin.flush())
+            .map_err(|e| Error::Torch(format!("asking for epoch {k}: {e}")))?;
+        let e: TorchEpoch = self.read()?;
+        self.curves.epoch_s.push(e.epoch_s);
+        self.curves.train.push(e.train);
+        self.curves.val.push(e.val);
+        Ok(())
+    }
+
+    fn finish(mut self) -> Side {
+        drop(self.stdin);
+        let _ = self.child.wait();
+        Side::new(self.framework, self.threads, self.curves)
+    }
+}
+
+/// The burn version and kernels the trainer is built with.
+pub const BURN: &str = if cfg!(feature = "avx512") {
+    "burn 0.22.1 (flex backend, gemm AVX-512 kernels: feature avx512)"
+} else {
+    "burn 0.22.1 (flex backend, gemm AVX2/FMA kernels)"
+};
+
+/// Runs one case: burn first, then PyTorch on the exchange burn wrote.
+pub fn run_case(
+    ds: &Dataset,
+    case: &Case,
+    cfg: &TrainConfig,
+    torch: &Torch,
+    exchange: &Path,
+) -> Result<CaseResult> {
+    let fs = FeatureSet::parse(case.features)?;
+    fs.check_suite(case.suite)?;
+    let tr: Vec<_> = ds.flights(Role::Train).collect();
+    let va: Vec<_> = ds.flights(Role::Val).collect();
+    let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
+    let (tm, vm) = (prep.matrix(&tr), prep.matrix(&va));
+    let n_in = prep.n_inputs();
+    let hidden = case.size.hidden(Angle::Alpha);
+    let make = |d: &burn::tensor::Device| Cascade::new(n_in, hidden, d);
+    let dir: PathBuf = exchange.join(case.name);
+    write_exchange(&dir, &init_model(make, cfg.seed), hidden, cfg, &tm, &vm)?;
+    let mut torch = TorchChild::start(torch, &dir)?;
+    let mut failed = None;
+    let (_, curves) = train_with(make, cfg, &tm, &vm, |epoch, _| {
+        if failed.is_none() {
+            failed = torch.epoch(epoch).err();
+        }
+    });
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let burn = Side::new(BURN.into(), rayon::current_num_threads(), curves);
+    let torch = torch.finish();
+    Ok(CaseResult {
+        name: case.name.into(),
+        what: case.what.into(),
+        n_in,
+        hidden: hidden.to_vec(),
+        train_rows: tm.rows(),
+        val_rows: vm.rows(),
+        batch: cfg.batch,
+        epochs: cfg.epochs,
+        ratio: burn.mean_epoch_s / torch.mean_epoch_s,
+        val_loss_rel: burn.final_val() / torch.final_val() - 1.0,
+        burn,
+        torch,
+    })
+}
+
+/// The benchmark's Markdown page.
+pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String {
+    let mut s = String::from(
+        "# Training speed: burn against PyTorch, side by side (issue 18)\n\n\
+         Written by `trainer bench-train` (run it through `scripts/bench-train`, which makes the \
+         PyTorch venv and the dataset). Both frameworks train the same cascade from the same initial \
+         weights on the same batches in the same order, with Adam (same constants, same per-epoch \
+         learning rates), the same validation pass each epoch and the same thread count. An epoch's \
+         time is the mean of epochs 2..N (the first carries warm-up).\n\n",
+    );
+    s += &format!("Command: `{command}`\n\nMachine: {machine}\n\n");
+    s += "| case | rows | epochs | burn s/epoch | PyTorch s/epoch | ratio burn/PyTorch | val loss burn | val loss PyTorch | difference |\n|---|---|---|---|---|---|---|---|---|\n";
+    for r in results {
+        s += &format!(
+            "| {} | {} | {} | {:.2} | {:.2} | **{:.2}** | {:.5} | {:.5} | {:+.1} % |\n",
+            r.name,
+            r.train_rows,
+            r.epochs,
+            r.burn.mean_epoch_s,
+            r.torch.mean_epoch_s,
+            r.ratio,
+            r.burn.final_val(),
+            r.torch.final_val(),
+            100.0 * r.val_loss_rel
+        );
+    }
+    s += "\n";
+    for r in results {
+        s += &format!(
+            "**{}**: {}; {} inputs, batch {}; {} ({} threads) against {} ({} threads).\n\n",
+            r.name,
+            r.what,
+            r.n_in,
+            r.batch,
+            r.burn.framework,
+            r.burn.threads,
+            r.torch.framework,
+            r.torch.threads
+        );
+        s += "| epoch | burn s | PyTorch s | burn val loss | PyTorch val loss |\n|---|---|---|---|---|\n";
+        for (e, (b, t)) in r.burn.epoch_s.iter().zip(&r.torch.epoch_s).enumerate() {
+            let bv = r.burn.val.get(e).map_or(f64::NAN, |v| v[0] + v[1]);
+            let tv = r.torch.val.get(e).map_or(f64::NAN, |v| v[0] + v[1]);
+            s += &format!("| {} | {b:.2} | {t:.2} | {bv:.5} | {tv:.5} |\n", e + 1);
+        }
+        s += "\n";
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_u32(p: &Path) -> Vec<u32> {
+        std::fs::read(p)
+            .unwrap()
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+            .collect()
+    }
+
+    /// What PyTorch reads is what burn trains: every parameter once, in the cascade's layer order;
+    /// each epoch's row order a permutation, the one `train` draws; the per-epoch learning rates.
+    #[test]
+    fn exchange_holds_the_run_burn_makes() {
+        let (n_in, hidden, rows) = (4, [6usize, 3], 10);
+        let m = |r: usize| Matrix {
+            x: (0..r * n_in).map(|i| i as f32).collect(),
+            ym: (0..r).map(|i| i as f32).collect(),
+            yo: (0..r).map(|i| -(i as f32)).collect(),
+            n_in,
+        };
+        let (tr, va) = (m(rows), m(3));
+        let cfg = TrainConfig {
+            epochs: 3,
+            batch: 4,
+            lr: 1e-3,
+            seed: 5,
+            label: String::new(),
+            progress: false,
+        };
+        let dir = std::env::temp_dir().join(format!("bench-exchange-{}", std::process::id()));
+        let model = init_model(|d| Cascade::new(n_in, &hidden, d), cfg.seed);
+        write_exchange(&dir, &model, &hidden, &cfg, &tr, &va).unwrap();
+
+        let params = |n: usize| n * 6 + 6 + 6 * 3 + 3 + 3 + 1;
+        let init = std::fs::read(dir.join("init.f32")).unwrap();
+        assert_eq!(init.len(), 4 * (params(n_in) + params(n_in + 1)));
+        let first: Vec<f32> = model.layers()[0].weights[0].clone();
+        let got: Vec<f32> = init[..4 * n_in]
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(got, first, "layer 0, output 0's weights lead the file");
+
+        let order = read_u32(&dir.join("order.u32"));
+        assert_eq!(order.len(), cfg.epochs * rows);
+        let mut shuffle = Shuffle::new(rows, cfg.seed);
+        for e in 0..cfg.epochs {
+            let epoch: Vec<usize> = order[e * rows..(e + 1) * rows]
+                .iter()
+                .map(|&i| i as usize)
+                .collect();
+            assert_eq!(epoch, shuffle.next_epoch(), "epoch {e}");
+        }
+
+        let meta: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("meta.json")).unwrap()).unwrap();
+        assert_eq!(meta["train_rows"], rows);
+        assert_eq!(meta["val_rows"], 3);
+        assert_eq!(meta["hidden"], serde_json::json!(hidden));
+        let lr: Vec<f64> = serde_json::from_value(meta["lr"].clone()).unwrap();
+        assert_eq!(lr, (0..3).map(|e| lr_at(1e-3, e, 3)).collect::<Vec<_>>());
+        assert_eq!(
+            std::fs::read(dir.join("yo_val.f32")).unwrap().len(),
+            4 * va.rows()
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
