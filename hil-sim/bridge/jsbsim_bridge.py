@@ -7,8 +7,11 @@ ORIGINAL stdout):
   load\tSCRIPT\tINITFILE   load a runscript at the dt it declares, exactly as stock JSBSim runs it
                           (INITFILE may be empty: JSBSim looks in the aircraft folder), run the
                           initial conditions; payload = f64 little-endian dt in seconds
-  watch\tP1\tP2...        the properties returned after every step, in this order; a name
-                          prefixed with '?' is optional: absent from the model, it reads NaN
+  watch\tK\tP1\tP2...     the properties returned after every step, in this order; a name
+                          prefixed with '?' is optional: absent from the model, it reads NaN; a
+                          name prefixed with '~' is read only on every K-th step since `load`
+                          (the 20 Hz sample instants) and reads NaN on the others (the two
+                          prefixes combine as '~?'); K 0 reads every property every step
   step\tN                 run up to N steps; payload = u32 steps done (fewer when the script ended)
                           + that many rows of little-endian f64, one per watched property
   run\tN                  run up to N steps reading nothing (raw JSBSim stepping, the benchmark's
@@ -32,8 +35,19 @@ def reply(ok, payload=b""):
     _frames.write((b"O" if ok else b"E") + struct.pack("<I", len(payload)) + payload)
 
 
-def nan():
-    return float("nan")
+def sampler(getters):
+    """One function that reads the watched properties and packs the row: `pack(g0(), g1(), ...)`
+    with the getters as local names, NaN where a getter is None. Against a loop over the getters
+    building a list, this saves the list, the iteration and a global lookup per property, per
+    120 Hz step (docs/results/generate-bench.md)."""
+    names = [f"g{i}" for i in range(len(getters))]
+    scope = {n: g for n, g in zip(names, getters) if g is not None}
+    scope["pack"] = struct.Struct("<%dd" % len(getters)).pack
+    scope["nan_"] = float("nan")
+    args = ", ".join(f"{n}={n}" for n in list(scope))
+    body = ", ".join("nan_" if g is None else f"{n}()" for n, g in zip(names, getters))
+    exec(f"def sample({args}):\n    return pack({body})\n", scope)
+    return scope["sample"]
 
 
 def main():
@@ -45,7 +59,8 @@ def main():
     fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
     fdm.set_debug_level(0)
     pm = fdm.get_property_manager()
-    getters = []
+    sample = fast = sampler([])
+    every = steps = 0
     reply(True, jsbsim.__version__.encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")
@@ -67,10 +82,14 @@ def main():
                 if not fdm.run_ic():
                     reply(False, b"JSBSim could not apply the initial conditions")
                     continue
+                steps = 0
                 reply(True, struct.pack("<d", fdm.get_delta_t()))
             elif cmd == "watch":
-                found, missing = [], []
-                for p in f[1:]:
+                every = int(f[1])
+                found, missing, sampled = [], [], []
+                for p in f[2:]:
+                    sampled.append(p.startswith("~"))
+                    p = p.lstrip("~")
                     optional = p.startswith("?")
                     n = pm.get_node(p[1:] if optional else p, False)
                     if n is not None or optional:
@@ -80,17 +99,21 @@ def main():
                 if missing:
                     reply(False, ("unknown properties: " + ", ".join(missing)).encode())
                 else:
-                    getters = [nan if n is None else n.get_double_value for n in found]
+                    getters = [None if n is None else n.get_double_value for n in found]
+                    sample = sampler(getters)
+                    fast = sampler([None if s else g for g, s in zip(getters, sampled)])
                     reply(True)
             elif cmd == "step":
                 n = int(f[1])
                 rows = []
+                append = rows.append
+                run = fdm.run
                 done = 0
-                pack = struct.Struct("<%dd" % len(getters)).pack
-                for _ in range(n):
-                    alive = fdm.run()
-                    rows.append(pack(*[get() for get in getters]))
+                while done < n:
                     done += 1
+                    alive = run()
+                    steps += 1
+                    append(sample() if every == 0 or steps % every == 0 else fast())
                     if not alive:
                         break
                 reply(True, struct.pack("<I", done) + b"".join(rows))
@@ -100,6 +123,7 @@ def main():
                 done = 0
                 while done < n:
                     done += 1
+                    steps += 1
                     if not run():
                         break
                 reply(True, struct.pack("<I", done))

@@ -222,7 +222,15 @@ impl Plant {
     /// Chooses the properties returned after every step. A name prefixed with `?` is optional: a
     /// property the loaded model and script do not have reads NaN instead of failing.
     pub fn watch(&mut self, props: &[&str]) -> Result<(), PlantError> {
-        let mut f = vec!["watch"];
+        self.watch_sampled(props, 0)
+    }
+
+    /// [`Plant::watch`], where a name prefixed with `~` is read only on every `every`-th step since
+    /// the script was loaded (the sample instants) and reads NaN on the others: each property read
+    /// is a Python call, and the truth-only properties are needed only where a sample is taken.
+    pub fn watch_sampled(&mut self, props: &[&str], every: u32) -> Result<(), PlantError> {
+        let every = every.to_string();
+        let mut f = vec!["watch", every.as_str()];
         f.extend_from_slice(props);
         self.request(&f)?;
         self.watched = props.len();
@@ -231,7 +239,7 @@ impl Plant {
 
     /// Runs up to `n` steps; returns one row of watched values per step done. Fewer rows than `n`
     /// means the script reached its end.
-    pub fn step(&mut self, n: u32) -> Result<Vec<Vec<f64>>, PlantError> {
+    pub fn step(&mut self, n: u32) -> Result<Rows, PlantError> {
         let payload = self.request(&["step", &n.to_string()])?;
         let bad = |why: &str| PlantError::Bridge {
             command: "step".into(),
@@ -241,17 +249,14 @@ impl Plant {
             .split_first_chunk::<4>()
             .ok_or_else(|| bad("reply shorter than its count"))?;
         let count = u32::from_le_bytes(*count) as usize;
-        if body.len() != count * self.watched * 8 {
+        if self.watched == 0 || body.len() != count * self.watched * 8 {
             return Err(bad("reply length does not match the watched properties"));
         }
-        Ok(body
-            .chunks_exact(self.watched * 8)
-            .map(|row| {
-                row.chunks_exact(8)
-                    .map(|b| f64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
-                    .collect()
-            })
-            .collect())
+        let (words, _) = body.as_chunks::<8>();
+        Ok(Rows {
+            values: words.iter().map(|b| f64::from_le_bytes(*b)).collect(),
+            width: self.watched,
+        })
     }
 
     /// Runs up to `n` steps without reading any property (raw JSBSim stepping: the baseline of
@@ -265,6 +270,40 @@ impl Plant {
                 message: "reply shorter than its count".into(),
             })?;
         Ok(u32::from_le_bytes(*count))
+    }
+}
+
+/// The watched values of the steps one [`Plant::step`] ran, in one flat buffer (no allocation per
+/// row): row `k` is `values[k·width .. (k+1)·width]`, in [`Plant::watch`]'s order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rows {
+    values: Vec<f64>,
+    width: usize,
+}
+
+impl Rows {
+    /// Steps done.
+    pub fn len(&self) -> usize {
+        self.values.len() / self.width.max(1)
+    }
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+    /// Step `k`'s values.
+    pub fn row(&self, k: usize) -> Option<&[f64]> {
+        self.iter().nth(k)
+    }
+    /// One slice per step.
+    pub fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.values.chunks_exact(self.width.max(1))
+    }
+}
+
+impl<'a> IntoIterator for &'a Rows {
+    type Item = &'a [f64];
+    type IntoIter = std::slice::ChunksExact<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
     }
 }
 
@@ -328,6 +367,25 @@ pub(crate) mod at {
     /// Properties watched.
     pub const COUNT: usize = ZONE + 1;
 }
+
+/// The truth-only properties (air data, position, wind): read at the 20 Hz sample instants only
+/// (`~` in [`Plant::watch_sampled`]); everything the sensor models, the ground check and the zone
+/// count need is read at every 120 Hz step.
+pub(crate) const SAMPLED_ONLY: [usize; 13] = [
+    at::ALPHA,
+    at::BETA,
+    at::U_AERO,
+    at::V_AERO,
+    at::W_AERO,
+    at::VT,
+    at::MACH,
+    at::QBAR,
+    at::LAT,
+    at::LON,
+    at::WIND_NORTH,
+    at::WIND_EAST,
+    at::WIND_DOWN,
+];
 
 /// Properties read after every step, each written next to its position in [`at`]; a position
 /// left without a name fails the build.

@@ -59,7 +59,7 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
     p.watch(&["aero/alpha-deg", "aero/beta-deg"]).unwrap();
     let rows = p.step(720).unwrap();
     for (k, s) in flight.samples.iter().enumerate() {
-        let r = &rows[(k + 1) * 6 - 1];
+        let r = rows.row((k + 1) * 6 - 1).unwrap();
         assert_eq!(s.truth.alpha_deg, r[0], "sample {k}");
         assert_eq!(s.truth.beta_deg, r[1], "sample {k}");
         assert!((s.time_s - (k + 1) as f64 * 0.05).abs() < 1e-12);
@@ -101,7 +101,8 @@ fn raw_stepping_flies_the_same_flight() {
     assert_eq!(p.run_raw(719).unwrap(), 719);
     p.watch(&["aero/alpha-deg", "simulation/sim-time-sec"])
         .unwrap();
-    let row = &p.step(1).unwrap()[0];
+    let rows = p.step(1).unwrap();
+    let row = rows.row(0).unwrap();
     let last = flight.samples.last().unwrap();
     assert_eq!(row[0], last.truth.alpha_deg);
     assert!((row[1] - 6.0).abs() < 1e-9, "t {}", row[1]);

@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::generator::tick;
 use super::{GenerateError, Manifest, machine, par_map};
 use crate::plant::{self, Plant, PlantError, SIM_HZ, STEPS_PER_SAMPLE};
 
@@ -64,18 +65,23 @@ pub fn raw_steps(
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Vec<u64>, PlantError> {
-    par_map(&m.flights, workers, progress, |f| {
-        let mut plant = Plant::spawn()?;
-        plant::load_f16_script(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
-        let mut steps = 0u64;
-        loop {
-            let n = plant.run_raw(RAW_CHUNK)?;
-            steps += u64::from(n);
-            if n < RAW_CHUNK {
-                break Ok(steps);
+    par_map(
+        &m.flights,
+        workers,
+        || tick(progress),
+        |f| {
+            let mut plant = Plant::spawn()?;
+            plant::load_f16_script(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
+            let mut steps = 0u64;
+            loop {
+                let n = plant.run_raw(RAW_CHUNK)?;
+                steps += u64::from(n);
+                if n < RAW_CHUNK {
+                    break Ok(steps);
+                }
             }
-        }
-    })
+        },
+    )
     .into_iter()
     .collect()
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{DatasetError, FlightEntry, Manifest, git_rev, sha256_file, write_flight};
+use super::{DatasetError, FlightEntry, Manifest, git_rev, par_map, sha256_file, write_flight};
 use crate::maneuver::{Plan, PlannedFlight};
 
 /// Why `generate` failed.
@@ -27,37 +27,11 @@ pub enum GenerateError {
     },
 }
 
-/// `f` over `items` on `workers` threads (each takes the next unstarted item), results in item
-/// order whatever order they finish in; ticks `progress` once per item.
-pub fn par_map<T: Sync, R: Send>(
-    items: &[T],
-    workers: usize,
-    progress: Option<&indicatif::ProgressBar>,
-    f: impl Fn(&T) -> R + Sync,
-) -> Vec<R> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    let next = AtomicUsize::new(0);
-    let done: std::sync::Mutex<Vec<(usize, R)>> = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|scope| {
-        for _ in 0..workers.clamp(1, items.len().max(1)) {
-            scope.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::SeqCst);
-                    let Some(item) = items.get(i) else { break };
-                    let r = f(item);
-                    if let Some(pb) = progress {
-                        pb.inc(1);
-                    }
-                    if let Ok(mut d) = done.lock() {
-                        d.push((i, r));
-                    }
-                }
-            });
-        }
-    });
-    let mut done = done.into_inner().unwrap_or_default();
-    done.sort_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
+/// One progress tick, when there is a bar.
+pub(crate) fn tick(progress: Option<&indicatif::ProgressBar>) {
+    if let Some(pb) = progress {
+        pb.inc(1);
+    }
 }
 
 /// Sensor seed of a flight: distinct from the maneuver seed so the two random streams are unrelated.
@@ -115,42 +89,49 @@ fn fly_plan(
     use crate::fly::FlyConfig;
     use crate::maneuver;
     let version = std::sync::OnceLock::new();
-    let results = par_map(plan, workers, progress, |f| {
-        (|| -> Result<FlightEntry, GenerateError> {
-            let mut attempt = 0;
-            loop {
-                let seed = redraw_seed(f.seed, attempt);
-                let m = maneuver::generate_case(&f.profile(), seed, &f.name, f.duration_s, f.ood)?;
-                let script = m.write(out)?;
-                // A fresh bridge per attempt: a failed trim can leave one in any state.
-                let mut plant = crate::plant::Plant::spawn()?;
-                version.get_or_init(|| plant.jsbsim_version().to_string());
-                let cfg = FlyConfig {
-                    seed: sensor_seed(seed),
-                    sensors: sensors.clone(),
-                    max_time_s: None,
-                    name: Some(f.name.clone()),
-                };
-                match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
-                    Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
-                    r => {
-                        let mut entry = write_flight(out, &r?, f.split, f.profile.name(), seed)?;
-                        entry.faults = f
-                            .ood
-                            .map_or(&[][..], |c| c.faults())
-                            .iter()
-                            .map(|s| s.to_string())
-                            .collect();
-                        break Ok(entry);
+    let results = par_map(
+        plan,
+        workers,
+        || tick(progress),
+        |f| {
+            (|| -> Result<FlightEntry, GenerateError> {
+                let mut attempt = 0;
+                loop {
+                    let seed = redraw_seed(f.seed, attempt);
+                    let m =
+                        maneuver::generate_case(&f.profile(), seed, &f.name, f.duration_s, f.ood)?;
+                    let script = m.write(out)?;
+                    // A fresh bridge per attempt: a failed trim can leave one in any state.
+                    let mut plant = crate::plant::Plant::spawn()?;
+                    version.get_or_init(|| plant.jsbsim_version().to_string());
+                    let cfg = FlyConfig {
+                        seed: sensor_seed(seed),
+                        sensors: sensors.clone(),
+                        max_time_s: None,
+                        name: Some(f.name.clone()),
+                    };
+                    match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
+                        Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
+                        r => {
+                            let mut entry =
+                                write_flight(out, &r?, f.split, f.profile.name(), seed)?;
+                            entry.faults = f
+                                .ood
+                                .map_or(&[][..], |c| c.faults())
+                                .iter()
+                                .map(|s| s.to_string())
+                                .collect();
+                            break Ok(entry);
+                        }
                     }
                 }
-            }
-        })()
-        .map_err(|e| GenerateError::Flight {
-            name: f.name.clone(),
-            source: Box::new(e),
-        })
-    });
+            })()
+            .map_err(|e| GenerateError::Flight {
+                name: f.name.clone(),
+                source: Box::new(e),
+            })
+        },
+    );
     let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     Ok((flights, version.into_inner().unwrap_or_default()))
 }

@@ -66,16 +66,23 @@ impl Flight {
     }
 
     /// Writes the CSV bytes (`{}` formatting: shortest exact round trip, so reading gives the same f64s).
+    /// Every value is formatted into one reused buffer: no allocation per value.
     pub fn write_csv_to<W: Write>(&self, w: W) -> Result<(), csv::Error> {
+        use std::fmt::Write as _;
         let mut wr = csv::Writer::from_writer(w);
         wr.write_record(columns())?;
-        let mut rec: Vec<String> = Vec::with_capacity(1 + TRUTH_COUNT + CHANNELS);
+        let mut field = String::with_capacity(32);
         for s in &self.samples {
-            rec.clear();
-            rec.push(format!("{}", s.time_s));
-            rec.extend(s.truth.to_array().iter().map(|v| format!("{v}")));
-            rec.extend(s.sensed.iter().map(|v| format!("{v}")));
-            wr.write_record(&rec)?;
+            let truth = s.truth.to_array();
+            let values = std::iter::once(&s.time_s).chain(&truth).chain(&s.sensed);
+            for v in values {
+                field.clear();
+                // Writing into a String cannot fail. (ryu finds the same digits faster but breaks
+                // ties the other way: -853633233828841.25 is "…841.2" there, "…841.3" here.)
+                let _ = write!(field, "{v}");
+                wr.write_field(&field)?;
+            }
+            wr.write_record(None::<&[u8]>)?;
         }
         wr.flush()?;
         Ok(())
@@ -319,8 +326,39 @@ pub mod report;
 #[cfg(feature = "sim")]
 pub use generator::{
     BadShard, GenerateError, Shard, ShardOutcome, ShardRecord, TRIM_RETRIES, generate,
-    generate_shard, merge, par_map, redraw_seed, sensor_seed,
+    generate_shard, merge, redraw_seed, sensor_seed,
 };
+
+/// `f` over `items` on `workers` threads (each takes the next unstarted item), results in item
+/// order whatever order they finish in; calls `done_one` after each item (a progress tick).
+pub fn par_map<T: Sync, R: Send>(
+    items: &[T],
+    workers: usize,
+    done_one: impl Fn() + Sync,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let done: std::sync::Mutex<Vec<(usize, R)>> = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..workers.clamp(1, items.len().max(1)) {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(item) = items.get(i) else { break };
+                    let r = f(item);
+                    done_one();
+                    if let Ok(mut d) = done.lock() {
+                        d.push((i, r));
+                    }
+                }
+            });
+        }
+    });
+    let mut done = done.into_inner().unwrap_or_default();
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
 
 /// SHA-256 of a file, lowercase hex.
 pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {

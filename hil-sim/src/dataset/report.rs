@@ -400,13 +400,21 @@ pub struct Report {
 pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
     crate::font::register();
     let manifest = Manifest::read(dir)?;
-    let mut flights = Vec::new();
-    for entry in &manifest.flights {
-        let mut f = Flight::read_csv(&dir.join(&entry.file))?;
-        f.cut = entry.cut.clone();
-        f.zones = entry.zones;
-        flights.push((f, entry.split, entry.profile.clone()));
-    }
+    // Parsing the CSVs is most of the report's time: one reader per core.
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let read = super::par_map(
+        &manifest.flights,
+        workers,
+        || {},
+        |entry| {
+            Flight::read_csv(&dir.join(&entry.file)).map(|mut f| {
+                f.cut = entry.cut.clone();
+                f.zones = entry.zones;
+                (f, entry.split, entry.profile.clone())
+            })
+        },
+    );
+    let flights = read.into_iter().collect::<Result<Vec<_>, _>>()?;
     let of = |split| -> Vec<&Flight> {
         flights
             .iter()
