@@ -13,6 +13,10 @@
 //! optimiser existed is reproduced bit for bit.
 use burn::optim::{LearningRate, Optimizer, RecordState, StateSink, StateSource};
 use burn::tensor::{Device, Tensor, TensorData};
+use rayon::prelude::*;
+
+/// Elements per parallel task of the update.
+const CHUNK: usize = 16 * 1024;
 
 /// Adam's constants (the trainer's: [`crate::model::ADAM_BETA_1`] and friends).
 #[derive(Debug, Clone, Copy)]
@@ -88,32 +92,43 @@ impl Optimizer for FusedAdam {
             Some(s) => (s.time + 1, into_f32(s.moment_1), into_f32(s.moment_2)),
             None => (1, Vec::new(), Vec::new()),
         };
-        if g.len() != n || p.len() != n {
-            // Only f32 parameters reach here in this crate; anything else keeps its value and
-            // says so loudly rather than training on garbage.
+        let moments_ok = time == 1 || (m.len() == n && v.len() == n);
+        if g.len() != n || p.len() != n || !moments_ok {
+            // Only f32 parameters and their own moments reach here in this crate; anything else
+            // keeps its value and says so loudly rather than training on garbage.
             eprintln!(
-                "FusedAdam: a parameter or gradient is not f32 storage; parameter left unchanged"
+                "FusedAdam: a parameter, gradient or moment is not f32 storage of the parameter's \
+                 size; parameter left unchanged"
             );
             return (from_f32(p, shape, &device), None);
         }
-        if time == 1 {
-            // burn's first step starts the moments from the gradient alone (no `0·β` term).
-            m = g.iter().map(|&g| g * f1).collect();
-            v = g.iter().map(|&g| (g * g) * f2).collect();
-        } else {
-            for ((m, v), &g) in m.iter_mut().zip(v.iter_mut()).zip(&g) {
-                *m = *m * b1 + g * f1;
-                *v = *v * b2 + (g * g) * f2;
-            }
+        let first = time == 1;
+        if first {
+            (m, v) = (vec![0.0; n], vec![0.0; n]);
         }
         let t = i32::try_from(time).unwrap_or(i32::MAX);
         let bc2_sqrt = (1.0 - b2.powi(t)).sqrt();
         let combined = bc2_sqrt / (1.0 - b1.powi(t));
         let eps = self.epsilon * bc2_sqrt;
         let lr = lr as f32;
-        for ((p, &m), &v) in p.iter_mut().zip(&m).zip(&v) {
-            *p -= ((m * combined) / (v.sqrt() + eps)) * lr;
-        }
+        // Element by element, so splitting the tensor over the pool's threads changes no bit.
+        p.par_chunks_mut(CHUNK)
+            .zip(m.par_chunks_mut(CHUNK))
+            .zip(v.par_chunks_mut(CHUNK))
+            .zip(g.par_chunks(CHUNK))
+            .for_each(|(((p, m), v), g)| {
+                for (((p, m), v), &g) in p.iter_mut().zip(m.iter_mut()).zip(v.iter_mut()).zip(g) {
+                    if first {
+                        // burn's first step starts the moments from the gradient alone (no `0·β`).
+                        *m = g * f1;
+                        *v = (g * g) * f2;
+                    } else {
+                        *m = *m * b1 + g * f1;
+                        *v = *v * b2 + (g * g) * f2;
+                    }
+                    *p -= ((*m * combined) / (v.sqrt() + eps)) * lr;
+                }
+            });
         let state = FusedAdamState {
             time,
             moment_1: from_f32(m, shape, &device),
@@ -147,7 +162,8 @@ mod tests {
     /// same bits, and the weights did move.
     #[test]
     fn bit_identical_to_burns_adam() {
-        let make = |d: &Device| Cascade::new(5, &[16, 8], d);
+        // 160·128 weights: more than one parallel chunk of the update.
+        let make = |d: &Device| Cascade::new(5, &[160, 128], d);
         let mut a = init_model(make, 7);
         let mut b = init_model(make, 7);
         let start = bits(&a);

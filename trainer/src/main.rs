@@ -1004,6 +1004,8 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
     let rows = train_m.rows();
     let v = BenchEpoch {
         batch,
+        best_epoch: curves.best_epoch + 1,
+        time_to_best_s: curves.epoch_s.iter().take(curves.best_epoch + 1).sum(),
         command: command_line(),
         dataset: data.display().to_string(),
         first_epoch_s: curves.epoch_s[0],

@@ -1266,7 +1266,7 @@ impl Report {
                 "\n## Benchmark: paper-size α cascade epoch time\n\n`{}` on {}: **{:.2} s per epoch** \
                  (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation \
                  pass, α cascade 2 × {}-{}-1, batch {}; ≈ {:.1} s per epoch scaled \
-                 linearly to the paper's 288 000 rows.\n",
+                 linearly to the paper's 288 000 rows.{}\n",
                 b.command,
                 b.machine,
                 b.mean_epoch_s,
@@ -1278,6 +1278,18 @@ impl Report {
                 widths(Size::Paper.hidden(Angle::Alpha)),
                 b.batch,
                 b.per_epoch_288k_s,
+                if b.best_epoch > 0 {
+                    format!(
+                        " Its best validation epoch is epoch {} of {}, reached after **{:.1} min**                          of training (all {} epochs: {:.1} min).",
+                        b.best_epoch,
+                        b.epochs,
+                        b.time_to_best_s / 60.0,
+                        b.epochs,
+                        b.epoch_s.iter().sum::<f64>() / 60.0
+                    )
+                } else {
+                    String::new()
+                },
             );
         }
         s
@@ -1299,6 +1311,8 @@ fn widths(h: &[usize]) -> String {
 #[serde(default)]
 pub struct BenchEpoch {
     pub batch: usize,
+    /// The epoch (1-based) with the lowest validation loss; 0 in files from before it was recorded.
+    pub best_epoch: usize,
     pub command: String,
     pub dataset: String,
     pub epoch_s: Vec<f64>,
@@ -1313,6 +1327,9 @@ pub struct BenchEpoch {
     /// `mean_epoch_s` scaled linearly to [`PAPER_TRAIN_ROWS`] training rows.
     #[serde(deserialize_with = "nan_if_null")]
     pub per_epoch_288k_s: f64,
+    /// Training time up to and including the best validation epoch, s.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub time_to_best_s: f64,
     pub train_rows: usize,
     pub val_rows: usize,
 }
@@ -1321,6 +1338,7 @@ impl Default for BenchEpoch {
     fn default() -> BenchEpoch {
         BenchEpoch {
             batch: 0,
+            best_epoch: 0,
             command: "?".into(),
             dataset: "?".into(),
             epoch_s: Vec::new(),
@@ -1330,6 +1348,7 @@ impl Default for BenchEpoch {
             mean_epoch_s: f64::NAN,
             n_in: 0,
             per_epoch_288k_s: f64::NAN,
+            time_to_best_s: f64::NAN,
             train_rows: 0,
             val_rows: 0,
         }
