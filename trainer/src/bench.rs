@@ -336,6 +336,8 @@ pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String 
          learning rates), the same validation pass each epoch and the same thread count. An epoch's \
          time is the mean of epochs 2..N (the first carries warm-up).\n\n",
     );
+    s += "How it is made fair, where burn's time goes and the backends offered: \
+          [docs/training-speed.md](../training-speed.md).\n\n";
     s += &format!("Command: `{command}`\n\nMachine: {machine}\n\n");
     s += "| case | rows | epochs | burn s/epoch | PyTorch s/epoch | ratio burn/PyTorch | val loss burn | val loss PyTorch | difference |\n|---|---|---|---|---|---|---|---|---|\n";
     for r in results {
