@@ -104,6 +104,22 @@ pub struct CaseResult {
     pub val_loss_rel: f64,
 }
 
+impl CaseResult {
+    /// One line: both epoch times, the ratio and both final validation losses.
+    pub fn summary(&self) -> String {
+        format!(
+            "{}: burn {:.2} s/epoch, PyTorch {:.2} s/epoch, ratio {:.2}; val loss {:.5} vs {:.5} ({:+.1} %)",
+            self.name,
+            self.burn.mean_epoch_s,
+            self.torch.mean_epoch_s,
+            self.ratio,
+            self.burn.final_val(),
+            self.torch.final_val(),
+            100.0 * self.val_loss_rel
+        )
+    }
+}
+
 /// What the benchmark needs from outside: the PyTorch interpreter and script.
 pub struct Torch<'a> {
     pub python: &'a Path,

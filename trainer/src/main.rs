@@ -1084,16 +1084,7 @@ fn cmd_bench_train(
             progress: !o.json,
         };
         let r = run_case(&ds, case, &cfg, torch, exchange)?;
-        eprintln!(
-            "{}: burn {:.2} s/epoch, PyTorch {:.2} s/epoch, ratio {:.2}; val loss {:.5} vs {:.5} ({:+.1} %)",
-            r.name,
-            r.burn.mean_epoch_s,
-            r.torch.mean_epoch_s,
-            r.ratio,
-            r.burn.final_val(),
-            r.torch.final_val(),
-            100.0 * r.val_loss_rel
-        );
+        eprintln!("{}", r.summary());
         results.push(r);
     }
     let summary = serde_json::json!({
