@@ -259,9 +259,10 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
         return Ok(());
     }
     let pb = flights_bar(plan.flights().len());
-    let m = dataset::generate(&plan, &a.out, &sensors, a.flights.workers, Some(&pb))?;
+    let (m, flights) = dataset::generate(&plan, &a.out, &sensors, a.flights.workers, Some(&pb))?;
     pb.finish_and_clear();
-    summarize(&m, &a.out, "generated", started)
+    let report = dataset::report::write_report_of(&a.out, m.clone(), flights)?;
+    summarize(&m, &a.out, "generated", started, report)
 }
 
 #[derive(clap::Args)]
@@ -275,17 +276,18 @@ pub struct MergeArgs {
 pub fn merge(a: &MergeArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let m = dataset::merge(&a.out)?;
-    summarize(&m, &a.out, "merged", started)
+    let report = dataset::report::write_report(&a.out)?;
+    summarize(&m, &a.out, "merged", started, report)
 }
 
-/// Writes the dataset report and prints what `generate` and `merge` made.
+/// Prints what `generate` and `merge` made, with the dataset report's numbers.
 fn summarize(
     m: &Manifest,
     out: &std::path::Path,
     verb: &str,
     started: std::time::Instant,
+    report: dataset::report::Report,
 ) -> Result<()> {
-    let report = dataset::report::write_report(out)?;
     let samples: usize = m.flights.iter().map(|f| f.samples).sum();
     let cut = m.flights.iter().filter(|f| f.cut.is_some()).count();
     println!(

@@ -8,7 +8,7 @@ use hil_sim::sensors::SensorConfig;
 fn ci_preset_writes_a_consistent_dataset() {
     let dir = std::env::temp_dir().join(format!("hil-data-gen-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let m = dataset::generate(
+    let (m, flights) = dataset::generate(
         &Plan::new(Preset::Ci, 9),
         &dir,
         &SensorConfig::default(),
@@ -16,7 +16,13 @@ fn ci_preset_writes_a_consistent_dataset() {
         None,
     )
     .unwrap();
+    // The report from the flights in memory (what `hil-sim generate` writes) is the report from
+    // the CSVs on disk (what `merge` and a re-run write): same numbers, same dataset.md bytes.
+    let from_memory = dataset::report::write_report_of(&dir, m.clone(), flights).unwrap();
+    let md_memory = std::fs::read(dir.join("dataset.md")).unwrap();
     let report = dataset::report::write_report(&dir).unwrap();
+    assert_eq!(from_memory, report);
+    assert_eq!(md_memory, std::fs::read(dir.join("dataset.md")).unwrap());
     let back = Manifest::read(&dir).unwrap();
     assert_eq!(back.flights, m.flights);
     assert_eq!(back.format, Manifest::FORMAT);

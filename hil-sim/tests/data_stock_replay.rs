@@ -86,7 +86,7 @@ fn assert_same_truth(what: &str, flight: &Flight, stock: &[[f64; 3]]) -> usize {
 #[test]
 fn generated_dataset_is_what_stock_jsbsim_flies() {
     let dir = tmp("ci");
-    let m = dataset::generate(
+    let (m, _) = dataset::generate(
         &Plan::new(Preset::Ci, 11),
         &dir,
         &SensorConfig::default(),

@@ -14,6 +14,7 @@ use serde::Serialize;
 
 use super::generator::tick;
 use super::{GenerateError, Manifest, machine, par_map};
+use crate::flight::Flight;
 use crate::plant::{self, Plant, PlantError, SIM_HZ, STEPS_PER_SAMPLE};
 
 /// Steps per bridge request on the raw side (one minute of flight).
@@ -99,7 +100,7 @@ pub fn run(
 ) -> Result<BenchReport, GenerateError> {
     let repeats = repeats.max(1);
     let (mut generate_s, mut raw_s) = (Vec::new(), Vec::new());
-    let generate = |times: &mut Vec<f64>| -> Result<Manifest, GenerateError> {
+    let generate = |times: &mut Vec<f64>| -> Result<(Manifest, Vec<Flight>), GenerateError> {
         let t = Instant::now();
         let m = super::generate(
             &crate::maneuver::Plan::new(preset, seed),
@@ -119,19 +120,20 @@ pub fn run(
     };
     // The raw side needs the maneuver files, so the first repeat generates first; later repeats
     // alternate. Every repeat writes the same bytes (same seed).
-    let mut m = generate(&mut generate_s)?;
+    let (mut m, mut flights) = generate(&mut generate_s)?;
     let mut steps = raw(&m, &mut raw_s)?;
     for r in 1..repeats {
         if r % 2 == 1 {
             steps = raw(&m, &mut raw_s)?;
-            m = generate(&mut generate_s)?;
+            (m, flights) = generate(&mut generate_s)?;
         } else {
-            m = generate(&mut generate_s)?;
+            (m, flights) = generate(&mut generate_s)?;
             steps = raw(&m, &mut raw_s)?;
         }
     }
+    // As `hil-sim generate` does: the report from the flights in memory.
     let t = Instant::now();
-    super::report::write_report(out)?;
+    super::report::write_report_of(out, m.clone(), flights)?;
     let report_s = t.elapsed().as_secs_f64();
 
     let total_steps: u64 = steps.iter().sum();

@@ -6,6 +6,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::{DatasetError, FlightEntry, Manifest, git_rev, par_map, sha256_file, write_flight};
+use crate::flight::Flight;
 use crate::maneuver::{Plan, PlannedFlight};
 
 /// Why `generate` failed.
@@ -50,7 +51,8 @@ pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
 /// Generates a dataset: writes each planned maneuver ([`crate::maneuver::files`]) into `out`,
 /// flies it through [`crate::fly::fly_script_with`] (the same path as `hil-sim fly --script`) on
 /// `workers` threads, and writes the CSVs and `manifest.json`. Flights are written in plan order
-/// whatever order the workers finish in, so the manifest is deterministic. A flight JSBSim cannot
+/// whatever order the workers finish in, so the manifest is deterministic; the flights come back
+/// too, in the same order, for [`super::report::write_report_of`]. A flight JSBSim cannot
 /// trim is re-drawn with [`redraw_seed`] (up to [`TRIM_RETRIES`] times; the seed flown is the one
 /// in the manifest), so one unlucky initial condition does not lose a whole dataset.
 pub fn generate(
@@ -59,13 +61,14 @@ pub fn generate(
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<Manifest, GenerateError> {
+) -> Result<(Manifest, Vec<Flight>), GenerateError> {
     create_dir(out)?;
     let planned = plan.flights();
-    let (flights, version) = fly_plan(&planned, out, sensors, workers, progress)?;
-    let manifest = assemble(plan, &planned, sensors, flights, version, out)?;
+    let (flown, version) = fly_plan(&planned, out, sensors, workers, progress)?;
+    let (entries, flights) = flown.into_iter().unzip();
+    let manifest = assemble(plan, &planned, sensors, entries, version, out)?;
     manifest.write(out)?;
-    Ok(manifest)
+    Ok((manifest, flights))
 }
 
 fn create_dir(out: &Path) -> Result<(), GenerateError> {
@@ -77,15 +80,16 @@ fn create_dir(out: &Path) -> Result<(), GenerateError> {
     Ok(())
 }
 
-/// Flies `plan` (a preset's plan or a shard of it) into `out`: the flights' entries in `plan` order
-/// and the JSBSim version (empty for an empty plan).
+/// Flies `plan` (a preset's plan or a shard of it) into `out`: the flights' entries and the flights
+/// themselves in `plan` order, and the JSBSim version (empty for an empty plan).
+#[allow(clippy::type_complexity)]
 fn fly_plan(
     plan: &[PlannedFlight],
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<(Vec<FlightEntry>, String), GenerateError> {
+) -> Result<(Vec<(FlightEntry, Flight)>, String), GenerateError> {
     use crate::fly::FlyConfig;
     use crate::maneuver;
     let version = std::sync::OnceLock::new();
@@ -94,7 +98,7 @@ fn fly_plan(
         workers,
         || tick(progress),
         |f| {
-            (|| -> Result<FlightEntry, GenerateError> {
+            (|| -> Result<(FlightEntry, Flight), GenerateError> {
                 let mut attempt = 0;
                 loop {
                     let seed = redraw_seed(f.seed, attempt);
@@ -113,15 +117,16 @@ fn fly_plan(
                     match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
                         Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
                         r => {
+                            let flight = r?;
                             let mut entry =
-                                write_flight(out, &r?, f.split, f.profile.name(), seed)?;
+                                write_flight(out, &flight, f.split, f.profile.name(), seed)?;
                             entry.faults = f
                                 .ood
                                 .map_or(&[][..], |c| c.faults())
                                 .iter()
                                 .map(|s| s.to_string())
                                 .collect();
-                            break Ok(entry);
+                            break Ok((entry, flight));
                         }
                     }
                 }
@@ -132,8 +137,8 @@ fn fly_plan(
             })
         },
     );
-    let flights = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    Ok((flights, version.into_inner().unwrap_or_default()))
+    let flown = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    Ok((flown, version.into_inner().unwrap_or_default()))
 }
 
 /// The manifest of a whole preset: its flights' entries in plan order, the maneuver files' hashes
@@ -284,7 +289,8 @@ pub fn generate_shard(
         }
     }
     let share = shard.of(&plan.flights());
-    let (flights, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress)?;
+    let (flown, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress)?;
+    let flights: Vec<FlightEntry> = flown.into_iter().map(|(entry, _)| entry).collect();
     let n = flights.len();
     let record = ShardRecord {
         plan: plan.clone(),
