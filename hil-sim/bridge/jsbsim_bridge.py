@@ -60,7 +60,7 @@ def main():
     fdm.set_debug_level(0)
     pm = fdm.get_property_manager()
     sample = fast = sampler([])
-    every = steps = 0
+    every, steps = 1, 0
     reply(True, jsbsim.__version__.encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")
@@ -85,7 +85,7 @@ def main():
                 steps = 0
                 reply(True, struct.pack("<d", fdm.get_delta_t()))
             elif cmd == "watch":
-                every = int(f[1])
+                every = int(f[1]) or 1  # 0: every property every step
                 found, missing, sampled = [], [], []
                 for p in f[2:]:
                     sampled.append(p.startswith("~"))
@@ -108,14 +108,15 @@ def main():
                 rows = []
                 append = rows.append
                 run = fdm.run
+                base = steps
                 done = 0
                 while done < n:
                     done += 1
                     alive = run()
-                    steps += 1
-                    append(sample() if every == 0 or steps % every == 0 else fast())
+                    append(sample() if (base + done) % every == 0 else fast())
                     if not alive:
                         break
+                steps = base + done
                 reply(True, struct.pack("<I", done) + b"".join(rows))
             elif cmd == "run":
                 n = int(f[1])
@@ -123,9 +124,9 @@ def main():
                 done = 0
                 while done < n:
                     done += 1
-                    steps += 1
                     if not run():
                         break
+                steps += done
                 reply(True, struct.pack("<I", done))
             elif cmd == "quit":
                 reply(True)

@@ -6,8 +6,8 @@ use std::path::Path;
 
 use crate::flight::{FT_TO_M, Flight, LB_TO_KG, SIM_HZ, STEPS_PER_SAMPLE, Sample, Zone, ZoneTimes};
 use crate::plant::{
-    AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError,
-    SAMPLED_ONLY, TEF_DEG_PER_UNIT, WATCH, at, load_f16_script, truth_of,
+    AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, SAMPLED,
+    TEF_DEG_PER_UNIT, WATCH, at, load_f16_script, truth_of,
 };
 use crate::sensors::{SensorConfig, SensorInput, SensorModel};
 
@@ -73,21 +73,9 @@ pub fn fly_script_with(
     cfg: &FlyConfig,
 ) -> Result<Flight, PlantError> {
     let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
-    // Truth-only properties are read where a sample is taken (every STEPS_PER_SAMPLE-th step since
-    // the load, as `step_count` below counts): fewer Python calls per 120 Hz step.
-    let watch: Vec<String> = WATCH
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            if SAMPLED_ONLY.contains(&i) {
-                format!("~{p}")
-            } else {
-                (*p).to_string()
-            }
-        })
-        .collect();
-    let watch: Vec<&str> = watch.iter().map(String::as_str).collect();
-    plant.watch_sampled(&watch, STEPS_PER_SAMPLE)?;
+    // Truth-only properties (`~`) are read where a sample is taken: every STEPS_PER_SAMPLE-th step
+    // since the load, as `step_count` below counts.
+    plant.watch_sampled(&WATCH, STEPS_PER_SAMPLE)?;
 
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
     let name = cfg.name.clone().unwrap_or_else(|| {
@@ -108,7 +96,7 @@ pub fn fly_script_with(
     'outer: loop {
         let rows = plant.step(SIM_HZ * 5)?;
         let ended = rows.len() < (SIM_HZ * 5) as usize;
-        for r in rows.iter() {
+        for r in &rows {
             step_count += 1;
             let t = r[at::TIME];
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
@@ -117,11 +105,10 @@ pub fn fly_script_with(
             let sample_step = step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE));
             // The optional zone column (last) is NaN for scripts without a generator state; the
             // truth-only ones are NaN between samples.
-            let read = |i: &usize| sample_step || !SAMPLED_ONLY.contains(i);
             if r[..at::ZONE]
                 .iter()
-                .enumerate()
-                .any(|(i, v)| read(&i) && !v.is_finite())
+                .zip(SAMPLED)
+                .any(|(v, sampled)| (sample_step || !sampled) && !v.is_finite())
             {
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;

@@ -368,38 +368,21 @@ pub(crate) mod at {
     pub const COUNT: usize = ZONE + 1;
 }
 
-/// The truth-only properties (air data, position, wind): read at the 20 Hz sample instants only
-/// (`~` in [`Plant::watch_sampled`]); everything the sensor models, the ground check and the zone
-/// count need is read at every 120 Hz step.
-pub(crate) const SAMPLED_ONLY: [usize; 13] = [
-    at::ALPHA,
-    at::BETA,
-    at::U_AERO,
-    at::V_AERO,
-    at::W_AERO,
-    at::VT,
-    at::MACH,
-    at::QBAR,
-    at::LAT,
-    at::LON,
-    at::WIND_NORTH,
-    at::WIND_EAST,
-    at::WIND_DOWN,
-];
-
 /// Properties read after every step, each written next to its position in [`at`]; a position
-/// left without a name fails the build.
+/// left without a name fails the build. The truth-only ones (air data, position, wind: `~`, see
+/// [`Plant::watch_sampled`]) are read at the 20 Hz sample instants only; everything the sensor
+/// models, the ground check and the zone count need is read at every 120 Hz step.
 pub(crate) const WATCH: [&str; at::COUNT] = {
     let mut w = [""; at::COUNT];
     w[at::TIME] = "simulation/sim-time-sec";
-    w[at::ALPHA] = "aero/alpha-deg";
-    w[at::BETA] = "aero/beta-deg";
-    w[at::U_AERO] = "velocities/u-aero-fps";
-    w[at::V_AERO] = "velocities/v-aero-fps";
-    w[at::W_AERO] = "velocities/w-aero-fps";
-    w[at::VT] = "velocities/vt-fps";
-    w[at::MACH] = "velocities/mach";
-    w[at::QBAR] = "aero/qbar-psf";
+    w[at::ALPHA] = "~aero/alpha-deg";
+    w[at::BETA] = "~aero/beta-deg";
+    w[at::U_AERO] = "~velocities/u-aero-fps";
+    w[at::V_AERO] = "~velocities/v-aero-fps";
+    w[at::W_AERO] = "~velocities/w-aero-fps";
+    w[at::VT] = "~velocities/vt-fps";
+    w[at::MACH] = "~velocities/mach";
+    w[at::QBAR] = "~aero/qbar-psf";
     w[at::H_SL] = "position/h-sl-ft";
     w[at::H_AGL] = "position/h-agl-ft";
     w[at::P] = "velocities/p-rad_sec";
@@ -424,8 +407,8 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::FLAPERON] = "fcs/left-flaperon-norm";
     w[at::SPEEDBRAKE] = "fcs/speedbrake-pos-deg";
     w[at::THROTTLE] = "fcs/throttle-cmd-norm";
-    w[at::LAT] = "position/lat-geod-deg";
-    w[at::LON] = "position/long-gc-deg";
+    w[at::LAT] = "~position/lat-geod-deg";
+    w[at::LON] = "~position/long-gc-deg";
     // Body rates relative to inertial space (Earth rate included): what a gyro measures.
     w[at::PI] = "velocities/pi-rad_sec";
     w[at::QI] = "velocities/qi-rad_sec";
@@ -436,9 +419,9 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::V_DOWN] = "velocities/v-down-fps";
     w[at::FUEL] = "propulsion/total-fuel-lbs";
     // Steady wind + turbulence + gusts, NED: truth only, for evaluating wind estimators.
-    w[at::WIND_NORTH] = "atmosphere/total-wind-north-fps";
-    w[at::WIND_EAST] = "atmosphere/total-wind-east-fps";
-    w[at::WIND_DOWN] = "atmosphere/total-wind-down-fps";
+    w[at::WIND_NORTH] = "~atmosphere/total-wind-north-fps";
+    w[at::WIND_EAST] = "~atmosphere/total-wind-east-fps";
+    w[at::WIND_DOWN] = "~atmosphere/total-wind-down-fps";
     w[at::ZONE] = "?maneuver/zone";
     let mut i = 0;
     while i < at::COUNT {
@@ -446,6 +429,17 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
         i += 1;
     }
     w
+};
+
+/// Which [`WATCH`] positions read NaN between samples (their name starts with `~`).
+pub(crate) const SAMPLED: [bool; at::COUNT] = {
+    let mut m = [false; at::COUNT];
+    let mut i = 0;
+    while i < at::COUNT {
+        m[i] = WATCH[i].as_bytes()[0] == b'~';
+        i += 1;
+    }
+    m
 };
 
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;

@@ -65,24 +65,22 @@ pub struct Side {
 
 impl Side {
     fn new(framework: String, threads: usize, c: Curves) -> Side {
-        let rest = c.epoch_s.get(1..).unwrap_or(&[]);
-        let mean_epoch_s = if rest.is_empty() {
-            c.epoch_s.first().copied().unwrap_or(0.0)
-        } else {
-            rest.iter().sum::<f64>() / rest.len() as f64
-        };
         Side {
             framework,
             threads,
+            mean_epoch_s: c.mean_after_warmup(),
             epoch_s: c.epoch_s,
-            mean_epoch_s,
             train: c.train,
             val: c.val,
         }
     }
+    /// Validation loss (both heads) after epoch `e` (0-based).
+    pub fn val_at(&self, e: usize) -> f64 {
+        self.val.get(e).map_or(f64::NAN, |v| v[0] + v[1])
+    }
     /// Validation loss (both heads) after the last epoch.
     pub fn final_val(&self) -> f64 {
-        self.val.last().map_or(f64::NAN, |v| v[0] + v[1])
+        self.val_at(self.val.len().wrapping_sub(1))
     }
 }
 
@@ -118,6 +116,14 @@ impl CaseResult {
             100.0 * self.val_loss_rel
         )
     }
+}
+
+/// The α design matrices (training, validation) of `fs` on `ds`, as `train_angle` prepares them.
+pub fn alpha_matrices(ds: &Dataset, fs: &FeatureSet) -> (Matrix, Matrix) {
+    let tr: Vec<_> = ds.flights(Role::Train).collect();
+    let va: Vec<_> = ds.flights(Role::Val).collect();
+    let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
+    (prep.matrix(&tr), prep.matrix(&va))
 }
 
 /// What the benchmark needs from outside: the PyTorch interpreter and script.
@@ -160,10 +166,10 @@ fn write_exchange(
         write_f32(&dir.join(format!("ym_{name}.f32")), m.ym.iter().copied())?;
         write_f32(&dir.join(format!("yo_{name}.f32")), m.yo.iter().copied())?;
     }
-    let weights = init.layers().into_iter().flat_map(|l| {
-        let w: Vec<f32> = l.weights.into_iter().flatten().collect();
-        w.into_iter().chain(l.bias)
-    });
+    let weights = init
+        .layers()
+        .into_iter()
+        .flat_map(|l| l.weights.into_iter().flatten().chain(l.bias));
     write_f32(&dir.join("init.f32"), weights)?;
     let mut shuffle = Shuffle::new(tr.rows(), cfg.seed);
     let mut order = Vec::with_capacity(cfg.epochs * tr.rows() * 4);
@@ -305,18 +311,15 @@ pub fn run_case(
 ) -> Result<CaseResult> {
     let fs = FeatureSet::parse(case.features)?;
     fs.check_suite(case.suite)?;
-    let tr: Vec<_> = ds.flights(Role::Train).collect();
-    let va: Vec<_> = ds.flights(Role::Val).collect();
-    let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
-    let (tm, vm) = (prep.matrix(&tr), prep.matrix(&va));
-    let n_in = prep.n_inputs();
+    let (tm, vm) = alpha_matrices(ds, &fs);
+    let n_in = tm.n_in;
     let hidden = case.size.hidden(Angle::Alpha);
     let make = |d: &burn::tensor::Device| Cascade::new(n_in, hidden, d);
     let dir: PathBuf = exchange.join(case.name);
     write_exchange(&dir, &init_model(make, cfg.seed), hidden, cfg, &tm, &vm)?;
     let mut torch = TorchChild::start(torch, &dir)?;
     let mut failed = None;
-    let (_, curves) = train_with(make, cfg, &tm, &vm, |epoch, _| {
+    let (_, curves) = train_with(make, cfg, &tm, &vm, |epoch| {
         if failed.is_none() {
             failed = torch.epoch(epoch).err();
         }
@@ -385,8 +388,7 @@ pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String 
         );
         s += "| epoch | burn s | PyTorch s | burn val loss | PyTorch val loss |\n|---|---|---|---|---|\n";
         for (e, (b, t)) in r.burn.epoch_s.iter().zip(&r.torch.epoch_s).enumerate() {
-            let bv = r.burn.val.get(e).map_or(f64::NAN, |v| v[0] + v[1]);
-            let tv = r.torch.val.get(e).map_or(f64::NAN, |v| v[0] + v[1]);
+            let (bv, tv) = (r.burn.val_at(e), r.torch.val_at(e));
             s += &format!("| {} | {b:.2} | {t:.2} | {bv:.5} | {tv:.5} |\n", e + 1);
         }
         s += "\n";

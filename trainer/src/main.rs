@@ -910,7 +910,6 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
 fn shap_section(ds: &Dataset, out: &Path, a: &ShapArgs) -> Result<String> {
     use estimator_core::AngleNet;
     use trainer::analysis::{rng, sample_rows, shapley};
-    use trainer::data::Role;
     let bg = sample_rows(ds, &[Role::Train, Role::Val], a.background);
     let xs = sample_rows(ds, &[Role::Test], a.explain);
     let prov = estimator_core::model::PROVENANCE
@@ -971,20 +970,14 @@ fn shap_section(_: &Dataset, _: &Path, _: &ShapArgs) -> Result<String> {
 }
 
 fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()> {
-    use trainer::data::Role;
     use trainer::model::{Cascade, train};
-    use trainer::prep::Prep;
     use trainer::report::BenchEpoch;
     if epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
     }
     let ds = load(data, 0.15)?;
-    let fs = FeatureSet::parse("table1")?;
-    let tr: Vec<_> = ds.flights(Role::Train).collect();
-    let va: Vec<_> = ds.flights(Role::Val).collect();
-    let prep = Prep::fit(Angle::Alpha, &fs.alpha, &tr);
-    let (train_m, val_m) = (prep.matrix(&tr), prep.matrix(&va));
-    let n_in = prep.n_inputs();
+    let (train_m, val_m) = trainer::bench::alpha_matrices(&ds, &FeatureSet::parse("table1")?);
+    let n_in = train_m.n_in;
     let cfg = TrainConfig {
         epochs,
         batch,
@@ -999,8 +992,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
         &train_m,
         &val_m,
     );
-    let rest = &curves.epoch_s[1..];
-    let mean = rest.iter().sum::<f64>() / rest.len() as f64;
+    let mean = curves.mean_after_warmup();
     let rows = train_m.rows();
     let v = BenchEpoch {
         batch,
@@ -1066,7 +1058,8 @@ fn cmd_bench_train(
                     .find(|c| c.name == n)
                     .copied()
                     .with_context(|| {
-                        format!("unknown case `{n}` (known: paper-alpha, shipped-alpha)")
+                        let known: Vec<_> = CASES.iter().map(|c| c.name).collect();
+                        format!("unknown case `{n}` (known: {})", known.join(", "))
                     })
             })
             .collect::<Result<_>>()?

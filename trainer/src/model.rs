@@ -220,6 +220,14 @@ pub struct Curves {
     pub best_epoch: usize,
 }
 
+impl Curves {
+    /// Mean epoch time over epochs 2..N (the first carries warm-up); NaN with fewer than 2.
+    pub fn mean_after_warmup(&self) -> f64 {
+        let rest = self.epoch_s.get(1..).unwrap_or(&[]);
+        rest.iter().sum::<f64>() / rest.len() as f64
+    }
+}
+
 /// Predictions (normalised) in batches on the plain device.
 pub fn predict_all<M: Net>(model: &M, x: &[f32], n_in: usize) -> (Vec<f32>, Vec<f32>) {
     let dev = Device::flex();
@@ -317,17 +325,17 @@ pub fn train<M: Net + Send>(
     train: &Matrix,
     val: &Matrix,
 ) -> (M, Curves) {
-    train_with(init, cfg, train, val, |_, _| {})
+    train_with(init, cfg, train, val, |_| {})
 }
 
-/// [`train`], calling `after_epoch(epoch, curves so far)` after each epoch, outside its timing
+/// [`train`], calling `after_epoch(epoch)` after each epoch, outside its timing
 /// (`trainer bench-train` runs PyTorch's epoch there, in lockstep).
 pub fn train_with<M: Net + Send>(
     init: impl FnOnce(&Device) -> M + Send,
     cfg: &TrainConfig,
     train: &Matrix,
     val: &Matrix,
-    after_epoch: impl FnMut(usize, &Curves) + Send,
+    after_epoch: impl FnMut(usize) + Send,
 ) -> (M, Curves) {
     let threads = rayon::current_num_threads();
     match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
@@ -342,7 +350,7 @@ fn train_here<M: Net>(
     cfg: &TrainConfig,
     train: &Matrix,
     val: &Matrix,
-    mut after_epoch: impl FnMut(usize, &Curves),
+    mut after_epoch: impl FnMut(usize),
 ) -> (M, Curves) {
     let device = Device::flex().autodiff();
     let mut model = init_model(init, cfg.seed);
@@ -415,7 +423,7 @@ fn train_here<M: Net>(
             v[1]
         ));
         pb.inc(1);
-        after_epoch(epoch, &curves);
+        after_epoch(epoch);
     }
     pb.finish();
     let model = match best {

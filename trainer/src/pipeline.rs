@@ -123,26 +123,28 @@ pub fn train_angle(
 /// A model's answers per flight (name, degrees).
 pub type Answers = Vec<(String, Vec<f64>)>;
 
+/// A cascade's float and int8 (integer reference) answers on one flight, degrees.
+fn flight_answers(model: &Cascade, q: &QCascade, fl: &Flight) -> (Vec<f64>, Vec<f64>) {
+    let prep = &q.prep;
+    let (_, po) = predict_all(model, &prep.inputs(&[fl]), prep.n_inputs());
+    let float = po.iter().map(|z| prep.out_deg(*z as f64)).collect();
+    let int8 = fl
+        .features
+        .iter()
+        .map(|v| q.reference(v).angle as f64 / 1000.0)
+        .collect();
+    (float, int8)
+}
+
 /// A trained cascade's float and int8 (integer reference) answers on `flights`, degrees.
 pub fn answers(t: &Trained, flights: &[&Flight]) -> (Answers, Answers) {
-    let prep = &t.q.prep;
-    let mut f = Vec::new();
-    let mut i = Vec::new();
-    for fl in flights {
-        let (_, po) = predict_all(&t.model, &prep.inputs(&[*fl]), prep.n_inputs());
-        f.push((
-            fl.name.clone(),
-            po.iter().map(|z| prep.out_deg(*z as f64)).collect(),
-        ));
-        i.push((
-            fl.name.clone(),
-            fl.features
-                .iter()
-                .map(|v| t.q.reference(v).angle as f64 / 1000.0)
-                .collect(),
-        ));
-    }
-    (f, i)
+    flights
+        .iter()
+        .map(|fl| {
+            let (f, i) = flight_answers(&t.model, &t.q, fl);
+            ((fl.name.clone(), f), (fl.name.clone(), i))
+        })
+        .unzip()
 }
 
 /// Float and integer-reference metrics of a cascade on the test flights.
@@ -156,13 +158,7 @@ pub fn evaluate(
     let mut fl_i = Vec::new();
     let mut series = Vec::new();
     for fl in ds.flights(Role::Test) {
-        let (_, po) = predict_all(model, &prep.inputs(&[fl]), prep.n_inputs());
-        let pf: Vec<f64> = po.iter().map(|z| prep.out_deg(*z as f64)).collect();
-        let pi: Vec<f64> = fl
-            .features
-            .iter()
-            .map(|v| q.reference(v).angle as f64 / 1000.0)
-            .collect();
+        let (pf, pi) = flight_answers(model, q, fl);
         let truth = fl.truth(prep.angle.target()).to_vec();
         fl_f.push((fl.name.clone(), pf.clone(), truth.clone()));
         fl_i.push((fl.name.clone(), pi.clone(), truth.clone()));

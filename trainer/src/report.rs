@@ -452,10 +452,7 @@ impl Progress {
             .append(true)
             .open(path)
             .and_then(|mut f| f.write_all(line.as_bytes()))
-            .map_err(|source| crate::Error::Io {
-                path: path.clone(),
-                source,
-            })?;
+            .map_err(crate::error::io(&path))?;
         Ok(Entry {
             preds: saved.preds,
             preds_int8: saved.preds_int8,

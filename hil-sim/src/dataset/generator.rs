@@ -64,8 +64,7 @@ pub fn generate(
 ) -> Result<(Manifest, Vec<Flight>), GenerateError> {
     create_dir(out)?;
     let planned = plan.flights();
-    let (flown, version) = fly_plan(&planned, out, sensors, workers, progress)?;
-    let (entries, flights) = flown.into_iter().unzip();
+    let (entries, flights, version) = fly_plan(&planned, out, sensors, workers, progress, true)?;
     let manifest = assemble(plan, &planned, sensors, entries, version, out)?;
     manifest.write(out)?;
     Ok((manifest, flights))
@@ -80,16 +79,17 @@ fn create_dir(out: &Path) -> Result<(), GenerateError> {
     Ok(())
 }
 
-/// Flies `plan` (a preset's plan or a shard of it) into `out`: the flights' entries and the flights
-/// themselves in `plan` order, and the JSBSim version (empty for an empty plan).
-#[allow(clippy::type_complexity)]
+/// Flies `plan` (a preset's plan or a shard of it) into `out`: the flights' entries in `plan` order,
+/// the flights themselves (with `keep`; none otherwise, so a shard lets each go once written) and
+/// the JSBSim version (empty for an empty plan).
 fn fly_plan(
     plan: &[PlannedFlight],
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
-) -> Result<(Vec<(FlightEntry, Flight)>, String), GenerateError> {
+    keep: bool,
+) -> Result<(Vec<FlightEntry>, Vec<Flight>, String), GenerateError> {
     use crate::fly::FlyConfig;
     use crate::maneuver;
     let version = std::sync::OnceLock::new();
@@ -98,7 +98,7 @@ fn fly_plan(
         workers,
         || tick(progress),
         |f| {
-            (|| -> Result<(FlightEntry, Flight), GenerateError> {
+            (|| -> Result<(FlightEntry, Option<Flight>), GenerateError> {
                 let mut attempt = 0;
                 loop {
                     let seed = redraw_seed(f.seed, attempt);
@@ -126,7 +126,7 @@ fn fly_plan(
                                 .iter()
                                 .map(|s| s.to_string())
                                 .collect();
-                            break Ok((entry, flight));
+                            break Ok((entry, keep.then_some(flight)));
                         }
                     }
                 }
@@ -137,8 +137,13 @@ fn fly_plan(
             })
         },
     );
-    let flown = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    Ok((flown, version.into_inner().unwrap_or_default()))
+    let (entries, flights): (Vec<_>, Vec<_>) = results
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
+    let flights = flights.into_iter().flatten().collect();
+    Ok((entries, flights, version.into_inner().unwrap_or_default()))
 }
 
 /// The manifest of a whole preset: its flights' entries in plan order, the maneuver files' hashes
@@ -170,11 +175,8 @@ fn assemble(
         "sensors": sensors,
     });
     // Only a campaign says what it was asked for (the other presets' manifests stay as they were).
-    if let (Some(c), Some(obj)) = (&spec.campaign, config.as_object_mut()) {
-        obj.insert(
-            "campaign".into(),
-            serde_json::to_value(c).map_err(|e| GenerateError::Shard(e.to_string()))?,
-        );
+    if let Some(c) = &spec.campaign {
+        config["campaign"] = serde_json::json!(c);
     }
     Ok(Manifest {
         format: Manifest::FORMAT,
@@ -289,8 +291,7 @@ pub fn generate_shard(
         }
     }
     let share = shard.of(&plan.flights());
-    let (flown, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress)?;
-    let flights: Vec<FlightEntry> = flown.into_iter().map(|(entry, _)| entry).collect();
+    let (flights, _, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress, false)?;
     let n = flights.len();
     let record = ShardRecord {
         plan: plan.clone(),
