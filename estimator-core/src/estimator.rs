@@ -13,6 +13,7 @@
 //! | EGI ground speed below [`crate::features::MIN_SPEED_MMS`], for a model reading the EGI velocity | kinematic angles are noise: `OUT_OF_ENVELOPE` |
 //! | a model reads an EGI channel and the frame is of the Table 1 suite (the channel is absent) | as an invalid channel: `INVALID_INPUT`, held |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
+//! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
@@ -22,7 +23,7 @@ use crate::channels::{Channel, SensorFrame};
 use crate::features::{Feature, FeatureState, FeatureValues, VELOCITY_SOURCES};
 use crate::filter;
 use crate::nn::{Aligned, Layer};
-use crate::normalize::{Envelope, Norm};
+use crate::normalize::{Envelope, Norm, TurbulenceEnvelope};
 
 pub use crate::health::STUCK_FRAMES;
 
@@ -63,6 +64,11 @@ impl Flags {
     /// (ground speed from its velocity, altitude coasted on its vertical velocity, at most
     /// [`crate::features::GPS_COAST_MAX_MS`]). The estimate is computed, from substitutes.
     pub const GPS_SUBSTITUTED: u16 = 1 << 10;
+    /// A computed angle reads the air-data filter, and the filter's turbulence index is above
+    /// anything the model was trained on at this airspeed
+    /// ([`crate::normalize::TurbulenceEnvelope`]): the estimate is computed, but the air mass
+    /// moves α and β faster than training flew it, and errors of degrees are possible.
+    pub const TURBULENCE: u16 = 1 << 11;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -118,6 +124,10 @@ pub trait AngleNet: Sync {
     fn lags(&self) -> u8 {
         self.features().iter().fold(0, |m, f| m | f.lags())
     }
+    /// The turbulence it was trained on, by airspeed.
+    fn turbulence(&self) -> TurbulenceEnvelope {
+        TurbulenceEnvelope::ANY
+    }
 }
 
 /// Part 1 maps the `N` features to the intermediate; part 2 maps the features plus the normalised
@@ -126,7 +136,7 @@ pub trait AngleNet: Sync {
 /// A cascade of two features whose part 2 takes three inputs:
 /// ```
 /// # use estimator_core::nn::{Dense, Output, Requant};
-/// # use estimator_core::normalize::{Envelope, Norm};
+/// # use estimator_core::normalize::{Envelope, Norm, TurbulenceEnvelope};
 /// # use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
 /// let one = Norm { center: 0, mult: 1 << 20, shift: 20 };
 /// let net: CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> = CascadeNet {
@@ -137,6 +147,7 @@ pub trait AngleNet: Sync {
 ///     mid_norm: one,
 ///     part2: Output(Dense::new([[1, 1, 1]], [0], [Requant::ONE])),
 ///     out_range: Envelope::ANY,
+///     turbulence: TurbulenceEnvelope::ANY,
 /// };
 /// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
 /// assert_eq!(net.run(&values), (7, 7, false));
@@ -145,7 +156,7 @@ pub trait AngleNet: Sync {
 /// check runs where the cascade is used as an [`AngleNet`], as the estimator uses every model):
 /// ```compile_fail,E0080
 /// # use estimator_core::nn::{Dense, Output, Requant};
-/// # use estimator_core::normalize::{Envelope, Norm};
+/// # use estimator_core::normalize::{Envelope, Norm, TurbulenceEnvelope};
 /// # use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
 /// let one = Norm { center: 0, mult: 1 << 20, shift: 20 };
 /// let net: CascadeNet<Output<2, 1>, Output<4, 1>, 2, 4> = CascadeNet {
@@ -156,6 +167,7 @@ pub trait AngleNet: Sync {
 ///     mid_norm: one,
 ///     part2: Output(Dense::new([[1, 1, 1, 1]], [0], [Requant::ONE])),
 ///     out_range: Envelope::ANY,
+///     turbulence: TurbulenceEnvelope::ANY,
 /// };
 /// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
 /// assert_eq!(net.run(&values), (7, 7, false));
@@ -170,6 +182,9 @@ pub struct CascadeNet<P1, P2, const N: usize, const N1: usize> {
     pub part2: P2,
     /// Training range of the angle, millidegrees.
     pub out_range: Envelope,
+    /// Turbulence trained on, by filter airspeed ([`TurbulenceEnvelope::ANY`] if it does not read
+    /// the filter).
+    pub turbulence: TurbulenceEnvelope,
 }
 
 impl<P1, P2, const N: usize, const N1: usize> CascadeNet<P1, P2, N, N1>
@@ -228,6 +243,10 @@ where
             || values.low_speed && sources & Channel::GpsSpeed.bit() != 0
             || values.low_ground_speed && sources & VELOCITY_SOURCES != 0;
         (mid[0], angle, clamped)
+    }
+
+    fn turbulence(&self) -> TurbulenceEnvelope {
+        self.turbulence
     }
 
     fn macs(&self) -> usize {
@@ -329,6 +348,8 @@ impl<'m> Estimator<'m> {
         let values = self.state.next(frame);
         let health = values.health;
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
+        // Held filter outputs (no input this step) are not judged again.
+        let fresh_filter = values.filter_flags & filter::flags::NO_INPUT == 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
             // Sources the features could not use (a channel the EGI filled in is usable): why.
@@ -364,6 +385,15 @@ impl<'m> Estimator<'m> {
             }
             if m.reads_filter && diverged {
                 flags |= Flags::FILTER_DIVERGED;
+            }
+            if m.reads_filter
+                && fresh_filter
+                && m.net.turbulence().exceeded(
+                    values.get(Feature::FilterAirspeed),
+                    values.get(Feature::FilterTurbulence),
+                )
+            {
+                flags |= Flags::TURBULENCE;
             }
             if m.sources & values.substituted != 0 {
                 flags |= Flags::GPS_SUBSTITUTED;

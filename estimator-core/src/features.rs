@@ -46,7 +46,7 @@ const DERIVED: usize = 5;
 const EGI_DERIVED: usize = 5;
 
 /// Number of air-data filter outputs offered as features, after the EGI kinematic ones.
-const FILTER_DERIVED: usize = 6;
+const FILTER_DERIVED: usize = 7;
 
 /// First filter feature.
 const FILTERED: usize = CHANNELS + DERIVED + EGI_DERIVED;
@@ -163,6 +163,8 @@ pub enum Feature {
     FilterAirspeed,
     /// The filter's lift scale, 1e-4.
     FilterLiftScale,
+    /// The filter's turbulence index ([`crate::filter::Output::turbulence_rad`]), µrad.
+    FilterTurbulence,
     /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
 }
@@ -201,6 +203,7 @@ impl Feature {
         all[FILTERED + 3] = Feature::FilterSigmaBeta;
         all[FILTERED + 4] = Feature::FilterAirspeed;
         all[FILTERED + 5] = Feature::FilterLiftScale;
+        all[FILTERED + 6] = Feature::FilterTurbulence;
         let mut c = 0;
         while c < TABLE1_CHANNELS {
             let mut l = 0;
@@ -236,6 +239,7 @@ impl Feature {
             Feature::FilterSigmaBeta => FILTERED + 3,
             Feature::FilterAirspeed => FILTERED + 4,
             Feature::FilterLiftScale => FILTERED + 5,
+            Feature::FilterTurbulence => FILTERED + 6,
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
         }
     }
@@ -259,6 +263,7 @@ impl Feature {
             Feature::FilterSigmaBeta => "filter_sigma_beta_rad",
             Feature::FilterAirspeed => "filter_airspeed_mps",
             Feature::FilterLiftScale => "filter_lift_scale",
+            Feature::FilterTurbulence => "filter_turbulence_rad",
             Feature::Delta(c, l) => match c.delta_names() {
                 [d1, d4, d10, d20] => match l {
                     Lag::F1 => d1,
@@ -285,6 +290,7 @@ impl Feature {
             | Feature::FilterSigmaBeta => 1e-6,
             Feature::FilterAirspeed => 1e-3,
             Feature::FilterLiftScale => 1e-4,
+            Feature::FilterTurbulence => 1e-6,
         }
     }
 
@@ -317,7 +323,8 @@ impl Feature {
             | Feature::FilterSigmaAlpha
             | Feature::FilterSigmaBeta
             | Feature::FilterAirspeed
-            | Feature::FilterLiftScale => crate::filter::NEEDED_MASK,
+            | Feature::FilterLiftScale
+            | Feature::FilterTurbulence => crate::filter::NEEDED_MASK,
         }
     }
 
@@ -331,6 +338,7 @@ impl Feature {
                 | Feature::FilterSigmaBeta
                 | Feature::FilterAirspeed
                 | Feature::FilterLiftScale
+                | Feature::FilterTurbulence
         )
     }
 
@@ -683,6 +691,7 @@ impl FeatureValues {
             q(Feature::FilterSigmaBeta, out.sigma_beta_rad),
             q(Feature::FilterAirspeed, out.airspeed_mps),
             q(Feature::FilterLiftScale, out.lift_scale),
+            q(Feature::FilterTurbulence, out.turbulence_rad),
         ] {
             if let Some(r) = self.raw.get_mut(f.index()) {
                 *r = v;

@@ -53,9 +53,81 @@ impl Envelope {
     }
 }
 
+/// Number of airspeed bands of a [`TurbulenceEnvelope`].
+pub const TURBULENCE_BANDS: usize = 8;
+
+/// The turbulence the training flights flew, by airspeed: per band of the air-data filter's
+/// airspeed, the largest turbulence index ([`crate::Feature::FilterTurbulence`]) a model was trained
+/// on.
+///
+/// A model's single-feature envelopes miss the combination that hurts: training flies its hardest
+/// turbulence in fast flight and only light turbulence in slow flight near the α limiter, so each
+/// feature alone stays in its range when heavy turbulence meets slow flight. The index is an angle
+/// (the wind change over the airspeed), so the same air turns α and β further the slower the
+/// aircraft flies. An airspeed below the first band counts in the first, above the last in the last.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TurbulenceEnvelope {
+    /// Lower edge of the first band, mm/s of filter airspeed.
+    pub speed_lo_mms: i32,
+    /// Width of each band, mm/s (a width ≤ 0 puts everything in the first band).
+    pub band_mms: i32,
+    /// Largest turbulence index trained in each band, µrad.
+    pub limit_urad: [i32; TURBULENCE_BANDS],
+}
+
+impl TurbulenceEnvelope {
+    /// No limit: a model that does not read the filter.
+    pub const ANY: TurbulenceEnvelope = TurbulenceEnvelope {
+        speed_lo_mms: 0,
+        band_mms: 1,
+        limit_urad: [i32::MAX; TURBULENCE_BANDS],
+    };
+
+    /// The band of a filter airspeed (mm/s).
+    pub fn band(&self, speed_mms: i32) -> usize {
+        if self.band_mms <= 0 {
+            return 0;
+        }
+        // The difference of two i32 fits i64; the width is positive here.
+        let d = i64::from(speed_mms).wrapping_sub(i64::from(self.speed_lo_mms));
+        let k = d.checked_div_euclid(i64::from(self.band_mms)).unwrap_or(0);
+        k.clamp(0, TURBULENCE_BANDS.saturating_sub(1) as i64) as usize
+    }
+
+    /// Whether `turbulence_urad` is above what training saw at filter airspeed `speed_mms`.
+    pub fn exceeded(&self, speed_mms: i32, turbulence_urad: i32) -> bool {
+        self.limit_urad
+            .get(self.band(speed_mms))
+            .is_some_and(|l| turbulence_urad > *l)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn turbulence_bands_clamp_at_both_ends() {
+        let e = TurbulenceEnvelope {
+            speed_lo_mms: -100,
+            band_mms: 50,
+            limit_urad: [10, 20, 30, 40, 50, 60, 70, 80],
+        };
+        assert_eq!(e.band(i32::MIN), 0);
+        assert_eq!(e.band(-101), 0);
+        assert_eq!(e.band(-100), 0);
+        assert_eq!(e.band(-51), 0);
+        assert_eq!(e.band(-50), 1);
+        assert_eq!(e.band(249), 6);
+        assert_eq!(e.band(250), 7);
+        assert_eq!(e.band(i32::MAX), 7);
+        assert!(!e.exceeded(-50, 20));
+        assert!(e.exceeded(-50, 21));
+        assert!(e.exceeded(i32::MAX, 81));
+        assert!(!TurbulenceEnvelope::ANY.exceeded(0, i32::MAX));
+        let flat = TurbulenceEnvelope { band_mms: 0, ..e };
+        assert_eq!(flat.band(1_000_000), 0);
+    }
 
     #[test]
     fn norm_rounds_and_saturates() {

@@ -13,7 +13,7 @@
 use estimator_core::channels::{ALL_VALID, CHANNELS};
 use estimator_core::estimator::STUCK_FRAMES;
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
-use estimator_core::normalize::{Envelope, Norm};
+use estimator_core::normalize::{Envelope, Norm, TurbulenceEnvelope};
 use estimator_core::{AngleNet, CascadeNet, Channel, Estimator, Feature, Flags, Lag, SensorFrame};
 
 type Part1 = Chain<Hidden<2, 3>, Output<3, 1>, 3>;
@@ -70,6 +70,7 @@ fn net_of(a: Feature, b: Feature, env_hi: i32) -> CascadeNet<Part1, Part2, 2, 3>
             lo: -90_000,
             hi: 90_000,
         },
+        turbulence: TurbulenceEnvelope::ANY,
     }
 }
 
@@ -374,4 +375,51 @@ fn table1_models_give_the_same_estimates_with_or_without_egi_channels() {
             without.step(&f.restricted_to(estimator_core::Suite::Table1))
         );
     }
+}
+
+#[test]
+fn turbulence_beyond_the_trained_envelope_is_flagged_while_the_filter_has_input() {
+    use estimator_core::normalize::TURBULENCE_BANDS;
+    // α reads the filter's turbulence index and airspeed; β reads Table 1 channels only.
+    let mut a = net_of(
+        Feature::FilterTurbulence,
+        Feature::FilterAirspeed,
+        400_000_000,
+    );
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    let run = |a: &CascadeNet<Part1, Part2, 2, 3>| {
+        let mut e = Estimator::new(a, &b);
+        (0..40)
+            .map(|s| {
+                // `egi_frame`'s heading is constant: keep it moving, as a real one does.
+                let mut f = egi_frame(s, 200_000);
+                f.raw[Channel::Heading.index()] += i32::from(s % 3);
+                let out = e.step(&f);
+                assert!(out.flags.is_usable(), "frame {s}: {:?}", out.flags);
+                out.flags.has(Flags::TURBULENCE)
+            })
+            .collect::<Vec<_>>()
+    };
+    // The default: no limit.
+    assert!(run(&a).iter().all(|t| !t));
+    // A model trained in still air everywhere (limit below any index): every frame with filter
+    // output is flagged.
+    a.turbulence = TurbulenceEnvelope {
+        speed_lo_mms: 60_000,
+        band_mms: 20_000,
+        limit_urad: [-1; TURBULENCE_BANDS],
+    };
+    assert!(run(&a).iter().all(|t| *t));
+    // Limits no index reaches: never.
+    a.turbulence.limit_urad = [i32::MAX; TURBULENCE_BANDS];
+    assert!(run(&a).iter().all(|t| !t));
+    // Without filter input (the same frames as a Table 1 sender delivers them) α is held and
+    // nothing is judged; β, which does not read the filter, is never flagged.
+    a.turbulence.limit_urad = [-1; TURBULENCE_BANDS];
+    let mut e = Estimator::new(&a, &b);
+    let out = e.step(&egi_frame(0, 200_000).restricted_to(estimator_core::Suite::Table1));
+    assert!(out.flags.has(Flags::ALPHA_HELD));
+    assert!(!out.flags.has(Flags::TURBULENCE));
+    let mut t1 = Estimator::new(&b, &b);
+    assert!(!t1.step(&egi_frame(0, 200_000)).flags.has(Flags::TURBULENCE));
 }

@@ -135,7 +135,8 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
 /// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
-/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), or explicit
+/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), `egi-hybrid-turb`
+/// (egi-hybrid + the filter's turbulence index), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FeatureSet {
@@ -230,6 +231,17 @@ impl FeatureSet {
                     beta: d.beta.into_iter().chain(FILTER_FEATURES).collect(),
                 })
             }
+            // egi-hybrid plus the filter's turbulence index: better on the validation flights, but
+            // slow to come back after a sensor outage (docs/results/hybrid.md), so not shipped.
+            "egi-hybrid-turb" => {
+                let d = FeatureSet::parse("egi-hybrid")?;
+                let t = Feature::FilterTurbulence;
+                Ok(FeatureSet {
+                    name: "egi-hybrid-turb".into(),
+                    alpha: d.alpha.into_iter().chain([t]).collect(),
+                    beta: d.beta.into_iter().chain([t]).collect(),
+                })
+            }
             custom => {
                 let mut alpha = None;
                 let mut beta = None;
@@ -237,7 +249,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;

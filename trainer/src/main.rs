@@ -25,7 +25,7 @@ struct TrainArgs {
     data: PathBuf,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Network sizes: small (CI), medium, or paper.
+    /// Network sizes: small (CI), medium, large (the largest that fits the target budget), or paper.
     #[arg(long, default_value = "small")]
     config: String,
     /// Epochs (default: 40 small, 30 medium and paper).
@@ -39,8 +39,8 @@ struct TrainArgs {
     /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
     /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
     /// axes and the kinematic α/β; needs --suite egi), egi-hybrid (egi-dynamics + the model-based
-    /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), or
-    /// "alpha=a,b,...;beta=c,d,..." with names
+    /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), egi-hybrid-turb
+    /// (egi-hybrid + the filter's turbulence index), or "alpha=a,b,...;beta=c,d,..." with names
     /// of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,
@@ -96,7 +96,7 @@ struct SweepGrid {
     /// Where the job results and sweep.md go (shared by every job).
     #[arg(long)]
     out: PathBuf,
-    /// Network sizes (repeat the flag for several): small, medium, paper.
+    /// Network sizes (repeat the flag for several): small, medium, large, paper.
     #[arg(long = "size", default_value = "small")]
     sizes: Vec<String>,
     /// Feature sets (repeat the flag for several), as `trainer train --features`.
@@ -288,7 +288,7 @@ enum Cmd {
 
 impl TrainArgs {
     fn size(&self) -> Result<Size> {
-        Size::parse(&self.config).context("--config must be small, medium or paper")
+        Size::parse(&self.config).context("--config must be small, medium, large or paper")
     }
 
     fn epochs(&self, size: Size) -> usize {
@@ -377,6 +377,11 @@ fn cmd_train(
         println!("{} ({}): float", t.angle.symbol(), t.q.widths());
         print_metrics("float", &t.float_test);
         print_metrics("int8", &t.int_test);
+        let v = t.int_val.overall;
+        println!(
+            "  int8 on the validation flights: MAE {:.3}  RMSE {:.3}  p95 {:.3}  (n={})",
+            v.mae, v.rmse, v.p95, v.n
+        );
         let ep: f64 = t.curves.epoch_s.iter().sum::<f64>() / t.curves.epoch_s.len().max(1) as f64;
         println!(
             "  mean epoch time {ep:.2} s, best epoch {}",
@@ -388,8 +393,8 @@ fn cmd_train(
     let summary = serde_json::json!({
         "seed": args.seed, "config": size.name(), "features": fs.name, "suite": suite.name(),
         "epochs": epochs,
-        "alpha": {"float": alpha.float_test, "int8": alpha.int_test, "curves": alpha.curves},
-        "beta": {"float": beta.float_test, "int8": beta.int_test, "curves": beta.curves},
+        "alpha": {"float": alpha.float_test, "int8": alpha.int_test, "int8_val": alpha.int_val, "curves": alpha.curves},
+        "beta": {"float": beta.float_test, "int8": beta.int_test, "int8_val": beta.int_val, "curves": beta.curves},
         "provenance": prov,
     });
     std::fs::write(
@@ -438,7 +443,7 @@ fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
             "manifest_sha256": ds.manifest_sha256,
             "alpha": e.alpha, "beta": e.beta,
             "regimes": e.regimes,
-            "flagged": e.flagged.iter().map(|(n, h, o)| serde_json::json!({"flight": n, "not_usable": h, "out_of_envelope": o})).collect::<Vec<_>>(),
+            "flagged": e.flagged,
             "provenance": prov,
         });
         println!("{}", serde_json::to_string(&v)?);
@@ -463,8 +468,11 @@ fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
                 m.mae, m.p95, m.max, m.n
             );
         }
-        for (n, h, o) in &e.flagged {
-            println!("  {n}: {h} frames not usable (held/no estimate), {o} out of envelope");
+        for c in &e.flagged {
+            println!(
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training",
+                c.flight, c.not_usable, c.out_of_envelope, c.turbulence
+            );
         }
     }
     Ok(())
@@ -553,7 +561,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     let t0 = std::time::Instant::now();
     let run = || -> Result<Scores> {
         let size = Size::parse(&job.size)
-            .with_context(|| format!("size `{}`: small, medium or paper", job.size))?;
+            .with_context(|| format!("size `{}`: small, medium, large or paper", job.size))?;
         let suite = parse_suite(&job.suite)?;
         let fs = FeatureSet::parse(&job.features)?;
         fs.check_suite(suite)?;

@@ -13,6 +13,9 @@ pub enum Size {
     Small,
     /// α 64-32-16, β 32-16 per part: for the larger datasets.
     Medium,
+    /// α 128-64-32, β 64-32-16 per part: the largest that keeps both cascades, the filter and the
+    /// link inside the Cortex-M4F step budget (`docs/results/wcet.md`).
+    Large,
     /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
     Paper,
 }
@@ -22,6 +25,7 @@ impl Size {
         match s {
             "small" => Some(Size::Small),
             "medium" => Some(Size::Medium),
+            "large" => Some(Size::Large),
             "paper" => Some(Size::Paper),
             _ => None,
         }
@@ -30,13 +34,14 @@ impl Size {
         match self {
             Size::Small => "small",
             Size::Medium => "medium",
+            Size::Large => "large",
             Size::Paper => "paper",
         }
     }
     pub fn default_epochs(self) -> usize {
         match self {
             Size::Small => 40,
-            Size::Medium | Size::Paper => 30,
+            Size::Medium | Size::Large | Size::Paper => 30,
         }
     }
     pub fn hidden(self, a: Angle) -> &'static [usize] {
@@ -45,6 +50,8 @@ impl Size {
             (Size::Small, Angle::Beta) => &[16, 8],
             (Size::Medium, Angle::Alpha) => &[64, 32, 16],
             (Size::Medium, Angle::Beta) => &[32, 16],
+            (Size::Large, Angle::Alpha) => &[128, 64, 32],
+            (Size::Large, Angle::Beta) => &[64, 32, 16],
             (Size::Paper, Angle::Alpha) => &[512, 256, 128, 64, 32],
             (Size::Paper, Angle::Beta) => &[32, 16, 8, 4, 2],
         }
@@ -64,6 +71,9 @@ pub struct Trained {
     pub curves: Curves,
     pub float_test: FlightMetrics,
     pub int_test: FlightMetrics,
+    /// Integer-reference metrics on the validation flights: what a model choice may look at (the
+    /// test flights only report it).
+    pub int_val: FlightMetrics,
     /// Float and int8 predictions (degrees) per test flight, for plots.
     pub series: Vec<TestSeries>,
 }
@@ -106,7 +116,8 @@ pub fn train_angle(
     let part2 = model.part2.export();
     let calib = calibration(&prep, &tr, 20_000);
     let q = quantize_cascade(&prep, &part1, &part2, &calib);
-    let (float_test, int_test, series) = evaluate(&model, &q, ds);
+    let (float_test, int_test, series) = evaluate(&model, &q, ds, Role::Test);
+    let (_, int_val, _) = evaluate(&model, &q, ds, Role::Val);
     Trained {
         angle,
         model,
@@ -116,6 +127,7 @@ pub fn train_angle(
         curves,
         float_test,
         int_test,
+        int_val,
         series,
     }
 }
@@ -147,17 +159,18 @@ pub fn answers(t: &Trained, flights: &[&Flight]) -> (Answers, Answers) {
         .unzip()
 }
 
-/// Float and integer-reference metrics of a cascade on the test flights.
+/// Float and integer-reference metrics of a cascade on the flights of `role`.
 pub fn evaluate(
     model: &Cascade,
     q: &QCascade,
     ds: &Dataset,
+    role: Role,
 ) -> (FlightMetrics, FlightMetrics, Vec<TestSeries>) {
     let prep = &q.prep;
     let mut fl_f = Vec::new();
     let mut fl_i = Vec::new();
     let mut series = Vec::new();
-    for fl in ds.flights(Role::Test) {
+    for fl in ds.flights(role) {
         let (pf, pi) = flight_answers(model, q, fl);
         let truth = fl.truth(prep.angle.target()).to_vec();
         fl_f.push((fl.name.clone(), pf.clone(), truth.clone()));
@@ -178,8 +191,9 @@ pub struct ShippedEval {
     pub beta: FlightMetrics,
     /// The same errors by flight regime (true α band, true |β| band).
     pub regimes: crate::metrics::Regimes,
-    /// Frames whose estimate was held, out of envelope, or missing, per flight.
-    pub flagged: Vec<(String, usize, usize)>,
+    /// Frames whose estimate was held or missing, out of envelope, or in turbulence beyond the
+    /// trained envelope, per flight.
+    pub flagged: Vec<FlagCounts>,
     pub provenance: Option<&'static str>,
 }
 
@@ -194,11 +208,13 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
     for fl in ds.flights(Role::Test) {
         let ans = shipped_answers(fl, suite);
         let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
-        let env = ans
-            .flags
-            .iter()
-            .filter(|f| f.has(estimator_core::Flags::OUT_OF_ENVELOPE))
-            .count();
+        let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
+        let counts = FlagCounts {
+            flight: fl.name.clone(),
+            not_usable: held,
+            out_of_envelope: count(estimator_core::Flags::OUT_OF_ENVELOPE),
+            turbulence: count(estimator_core::Flags::TURBULENCE),
+        };
         a.push((
             fl.name.clone(),
             ans.alpha_deg,
@@ -209,7 +225,7 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
             ans.beta_deg,
             fl.truth(Angle::Beta.target()).to_vec(),
         ));
-        flagged.push((fl.name.clone(), held, env));
+        flagged.push(counts);
     }
     ShippedEval {
         alpha: FlightMetrics::of(&a),
@@ -218,6 +234,16 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
         flagged,
         provenance: shipped_provenance(),
     }
+}
+
+/// How many frames of one flight carried which flags.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct FlagCounts {
+    pub flight: String,
+    /// Held or no estimate (`!Flags::is_usable`).
+    pub not_usable: usize,
+    pub out_of_envelope: usize,
+    pub turbulence: usize,
 }
 
 /// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.

@@ -2,7 +2,7 @@
 //! trained on exactly the scaling the integer `Norm`s apply (integer centers, `mult / 2^shift` slopes).
 use crate::data::{Flight, Target};
 use crate::model::Matrix;
-use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
+use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA, TURBULENCE_BANDS, TurbulenceEnvelope};
 use estimator_core::{Feature, FeatureValues};
 
 /// Largest `|z|` the int16 input can carry (32767 / 4096).
@@ -113,6 +113,47 @@ pub struct Prep {
     pub out_center: i32,
     pub out_sigma: f64,
     pub out_range: Envelope,
+    /// Turbulence trained on, by filter airspeed ([`turbulence_envelope`]; `ANY` for a model that
+    /// does not read the filter).
+    pub turbulence: TurbulenceEnvelope,
+}
+
+/// Share of a band's training frames at or below its turbulence limit: the rest (one frame in a
+/// thousand) is what the envelope calls turbulence training did not fly.
+pub const TURBULENCE_QUANTILE: f64 = 0.999;
+
+/// Filter-airspeed bands of the turbulence envelope: from 60 m/s in 20 m/s steps (the first band
+/// takes everything below 80 m/s, the last everything above 200 m/s).
+const TURBULENCE_SPEED_LO_MPS: f64 = 60.0;
+const TURBULENCE_BAND_MPS: f64 = 20.0;
+
+/// A band with fewer training frames than this (25 s) has no trained turbulence: limit 0, so any
+/// turbulence there is flagged.
+const TURBULENCE_MIN_FRAMES: usize = 500;
+
+/// Per filter-airspeed band, the [`TURBULENCE_QUANTILE`] of the filter's turbulence index over the
+/// training frames on which the filter had its inputs.
+pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
+    let mms = |mps: f64| (mps * 1e3).round() as i32;
+    let mut env = TurbulenceEnvelope {
+        speed_lo_mms: mms(TURBULENCE_SPEED_LO_MPS),
+        band_mms: mms(TURBULENCE_BAND_MPS),
+        limit_urad: [0; TURBULENCE_BANDS],
+    };
+    let mut bands: Vec<Vec<i32>> = vec![Vec::new(); TURBULENCE_BANDS];
+    let fresh = |v: &&FeatureValues| v.filter_flags & estimator_core::filter::flags::NO_INPUT == 0;
+    for v in train.iter().flat_map(|f| f.features.iter()).filter(fresh) {
+        if let Some(b) = bands.get_mut(env.band(v.get(Feature::FilterAirspeed))) {
+            b.push(v.get(Feature::FilterTurbulence));
+        }
+    }
+    for (limit, mut b) in env.limit_urad.iter_mut().zip(bands) {
+        if b.len() >= TURBULENCE_MIN_FRAMES {
+            let k = ((TURBULENCE_QUANTILE * b.len() as f64).ceil() as usize).clamp(1, b.len()) - 1;
+            *limit = *b.select_nth_unstable(k).1;
+        }
+    }
+    env
 }
 
 impl Prep {
@@ -151,6 +192,11 @@ impl Prep {
             out_center: om.round() as i32,
             out_sigma: if os > 0.0 { os } else { 1.0 },
             out_range: Envelope { lo, hi },
+            turbulence: if features.iter().any(|f| f.needs_filter()) {
+                turbulence_envelope(train)
+            } else {
+                TurbulenceEnvelope::ANY
+            },
         }
     }
 

@@ -362,7 +362,15 @@ fn static_item(name: &str, q: &QCascade, out: &mut String) {
     chain_expr(&q.part1, out);
     let _ = write!(out, ",\nmid_norm: {},\npart2: ", norm_expr(&p.mid_norm));
     chain_expr(&q.part2, out);
-    let _ = writeln!(out, ",\nout_range: {},\n}};\n", env_expr(&p.out_range));
+    let t = &p.turbulence;
+    let _ = writeln!(
+        out,
+        ",\nout_range: {},\nturbulence: crate::normalize::TurbulenceEnvelope {{ speed_lo_mms: {}, band_mms: {}, limit_urad: {:?} }},\n}};\n",
+        env_expr(&p.out_range),
+        t.speed_lo_mms,
+        t.band_mms,
+        t.limit_urad
+    );
 }
 
 /// The complete `weights.rs`: header, `ALPHA`, `BETA`, `PROVENANCE`.

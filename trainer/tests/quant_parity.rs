@@ -2,7 +2,7 @@
 //! `CascadeNet::run`, and stays close to the float network it was quantized from. Uses a small network
 //! trained in-process on a deterministic function (no dataset needed).
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
-use estimator_core::normalize::Envelope;
+use estimator_core::normalize::{Envelope, TurbulenceEnvelope};
 use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
 use trainer::model::{Cascade, Matrix, TrainConfig, float_forward, train};
 use trainer::prep::{Angle, Prep, norm_for};
@@ -79,6 +79,7 @@ fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
             lo: -1_000_000,
             hi: 1_000_000,
         },
+        turbulence: TurbulenceEnvelope::ANY,
     };
     let mut x = Vec::new();
     let mut xs = Vec::new();
@@ -139,6 +140,7 @@ fn core_net(q: &QCascade) -> CascadeNet<P1, P2, 3, 4> {
             Chain(Hidden(dense(&q.part2[1])), Output(dense(&q.part2[2]))),
         ),
         out_range: p.out_range,
+        turbulence: p.turbulence,
     }
 }
 

@@ -260,6 +260,10 @@ pub struct Output {
     pub sigma_beta_rad: f32,
     /// Normalised innovation squared of this step's measurement (0 when none).
     pub nis: f32,
+    /// Turbulence index, rad: the RMS over [`TURBULENCE_TAU_S`] of the frame-to-frame change of
+    /// the estimated wind over the airspeed (the angle the air mass turned the relative wind by
+    /// between two 20 Hz frames), see [`AirDataFilter::step`]. 0 after a start or restart.
+    pub turbulence_rad: f32,
     /// [`flags`].
     pub flags: u8,
 }
@@ -275,7 +279,26 @@ pub struct AirDataFilter {
     last: Output,
     /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
     alt: Option<(f32, f32)>,
+    /// Wind of the previous step with inputs, for the turbulence index, and the index's running
+    /// mean square, rad².
+    turb_prev_wind: Option<Vector3<f32>>,
+    turb_ms: f32,
+    /// Steps with inputs still to pass before the index takes wind changes in again, after a start,
+    /// a restart or a step without inputs ([`TURBULENCE_SETTLE_STEPS`]).
+    turb_settle: u16,
 }
+
+/// Time constant of the turbulence index's running mean square, s: long enough to average a
+/// gust's random increments, short enough to follow a change of air mass within a few seconds.
+pub const TURBULENCE_TAU_S: f32 = 2.0;
+
+/// The sensor frame period the turbulence index is scaled to, s (20 Hz).
+const TURBULENCE_FRAME_S: f32 = 0.05;
+
+/// Steps (1 s at 20 Hz) the turbulence index holds after a start, a restart or an input outage:
+/// the wind estimate then moves because the filter re-converges, not because the air does (a gust
+/// state that decayed through an outage is re-learnt in its first updates).
+pub const TURBULENCE_SETTLE_STEPS: u16 = 20;
 
 /// Longest GPS altitude outage the filter bridges with the EGI's vertical velocity, s. The EGI's
 /// velocity error (0.05 m/s class, docs/sensors.md) makes that a few metres, nothing for the air
@@ -418,6 +441,9 @@ impl AirDataFilter {
             gated_run: 0,
             alt: None,
             last: Output::default(),
+            turb_prev_wind: None,
+            turb_ms: 0.0,
+            turb_settle: TURBULENCE_SETTLE_STEPS,
         };
         f.restart();
         f
@@ -442,6 +468,34 @@ impl AirDataFilter {
         ]));
         self.prev = None;
         self.gated_run = 0;
+        self.turb_prev_wind = None;
+        self.turb_ms = 0.0;
+        self.turb_settle = TURBULENCE_SETTLE_STEPS;
+    }
+
+    /// Folds this step's wind change into the turbulence index; returns the index, rad.
+    ///
+    /// Milspec-like turbulence adds near-white increments to the gust, so the per-frame change of
+    /// the estimated wind, over the airspeed, measures how far the air mass moves α and β faster
+    /// than any sensor behind the anti-alias filter can follow. A step of `dt` other than one
+    /// frame is scaled by √(frame / dt), as a random walk's increment would be. For
+    /// [`TURBULENCE_SETTLE_STEPS`] after a start, restart or outage the index holds its value.
+    fn turbulence(&mut self, wind: Vector3<f32>, airspeed: f32, dt: f32) -> f32 {
+        if self.turb_settle > 0 {
+            self.turb_settle = self.turb_settle.saturating_sub(1);
+        } else if let Some(prev) = self.turb_prev_wind
+            && dt > 0.0
+        {
+            let v = airspeed.max(self.cfg.min_airspeed_mps).max(1.0);
+            let d = (wind - prev).norm() / v;
+            let d2 = d * d * (TURBULENCE_FRAME_S / dt);
+            let a = dt / (TURBULENCE_TAU_S + dt);
+            if d2.is_finite() {
+                self.turb_ms += a * (d2 - self.turb_ms);
+            }
+        }
+        self.turb_prev_wind = Some(wind);
+        libm::sqrtf(self.turb_ms.max(0.0))
     }
 
     pub fn wind(&self) -> Vector3<f32> {
@@ -620,6 +674,8 @@ impl AirDataFilter {
         self.predict(dt);
         if !inputs_valid || !inp.is_finite() {
             self.prev = None;
+            self.turb_prev_wind = None;
+            self.turb_settle = TURBULENCE_SETTLE_STEPS;
             if !self.healthy() {
                 self.restart();
                 flags |= flags::RESTARTED;
@@ -653,6 +709,8 @@ impl AirDataFilter {
                 if out.airspeed_mps < self.cfg.min_airspeed_mps {
                     flags |= flags::SLOW;
                 }
+                out.turbulence_rad =
+                    self.turbulence(Vector3::from(out.wind_ned_mps), out.airspeed_mps, dt);
                 out.flags = flags;
                 self.last = out;
                 out
@@ -700,6 +758,7 @@ impl AirDataFilter {
             sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
             sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
             nis,
+            turbulence_rad: 0.0,
             flags: 0,
         };
         let finite = [

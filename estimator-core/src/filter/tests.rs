@@ -13,6 +13,18 @@ struct World {
     k: f32,
 }
 
+impl World {
+    /// The wind at `t` plus a gust that jumps every frame by up to ±`amp` m/s per axis (quasi-random,
+    /// deterministic): turbulence as the sensors see it.
+    fn gusty(&self, t: f32, amp: f32) -> World {
+        let g = |w: f32| amp * libm::sinf(t * w);
+        World {
+            wind: self.wind + Vector3::new(g(91.7), g(57.3), g(33.1)),
+            k: self.k,
+        }
+    }
+}
+
 struct Truth {
     alpha: f32,
     beta: f32,
@@ -110,6 +122,37 @@ fn finds_a_steady_wind_and_alpha_beta_while_turning() {
         worst.1.to_degrees()
     );
     assert!((f.lift_scale() - 1.0).abs() < 0.02, "k {}", f.lift_scale());
+}
+
+#[test]
+fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
+    let calm = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.0,
+    };
+    let c = cfg();
+    let index_after = |amp: f32| {
+        let mut f = AirDataFilter::new(c);
+        let mut last = Output::default();
+        let mut t = 0.0;
+        while t < 60.0 {
+            let (inp, _) = calm.gusty(t, amp).frame(t, &c);
+            last = f.step(&inp, true);
+            t += DT;
+        }
+        last.turbulence_rad
+    };
+    let (steady, light, heavy) = (index_after(0.0), index_after(1.0), index_after(4.0));
+    // The steady wind is learnt within seconds and then barely moves: a small fraction of a
+    // milliradian per frame (150 m/s airspeed).
+    assert!(steady < 2e-4, "steady {steady}");
+    assert!(light > 3.0 * steady, "steady {steady}, light {light}");
+    assert!(heavy > 2.0 * light, "light {light}, heavy {heavy}");
+    // A restart forgets it.
+    let mut f = AirDataFilter::new(c);
+    f.restart();
+    let (inp, _) = calm.frame(0.0, &c);
+    assert_eq!(f.step(&inp, true).turbulence_rad, 0.0);
 }
 
 #[test]

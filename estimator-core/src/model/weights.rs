@@ -401,6 +401,7 @@ crate::nn::Output(crate::nn::Dense::new(
 [crate::nn::Requant { mult: 1792955345, shift: 39, offset: 4722 },],
 ))))),
 out_range: crate::normalize::Envelope { lo: -13948, hi: 26235 },
+turbulence: crate::normalize::TurbulenceEnvelope { speed_lo_mms: 60000, band_mms: 20000, limit_urad: [2077, 1875, 1942, 2375, 5367, 7293, 7629, 6765] },
 };
 
 /// β cascade: 43 features, hidden 32-16 per part, 3938 parameters.
@@ -631,7 +632,8 @@ crate::nn::Output(crate::nn::Dense::new(
 [crate::nn::Requant { mult: 1136622116, shift: 40, offset: 172 },],
 )))),
 out_range: crate::normalize::Envelope { lo: -10362, hi: 12926 },
+turbulence: crate::normalize::TurbulenceEnvelope { speed_lo_mms: 60000, band_mms: 20000, limit_urad: [2077, 1875, 1942, 2375, 5367, 7293, 7629, 6765] },
 };
 
 /// Where this model came from: dataset, seed, command, git revision and its test metrics.
-pub const PROVENANCE: &str = "dataset: out/data/large-egi (preset large), manifest sha256 d38dc44f2623673af681a064a9b1b2440bd2d62ca32c4b3d8e6dc7810f281237\nsplit by flight: train 54 flights / 1146300 rows, validation 10 / 209880, test 4 / 31540\nseed: 1; features: egi-hybrid; sensor suite: egi\ncommand: target/release/trainer train --data out/data/large-egi --suite egi --features egi-hybrid --config medium --seed 1 --out out/train/shipped\ngit: 49a6aee96fca68df87ccc41afb384be2489f7b52-dirty\nalpha: hidden 64-32-16 per part, 12994 params, best epoch 30/30; test float MAE 0.221 RMSE 0.338 p95 0.727 max 2.978 deg (n=31540); test int8 MAE 0.219 RMSE 0.336 p95 0.724 max 2.913 deg (n=31540)\nbeta: hidden 32-16 per part, 3938 params, best epoch 29/30; test float MAE 0.122 RMSE 0.195 p95 0.455 max 1.505 deg (n=31540); test int8 MAE 0.124 RMSE 0.203 p95 0.457 max 2.743 deg (n=31540)\n";
+pub const PROVENANCE: &str = "dataset: out/data/large-egi (preset large), manifest sha256 d38dc44f2623673af681a064a9b1b2440bd2d62ca32c4b3d8e6dc7810f281237\nsplit by flight: train 54 flights / 1146300 rows, validation 10 / 209880, test 4 / 31540\nseed: 1; features: egi-hybrid; sensor suite: egi\ncommand: target/release/trainer train --data out/data/large-egi --suite egi --features egi-hybrid --config medium --seed 1 --out out/train/shipped\ngit: 4d7df8b79684c4a2a0a90e24073b579fbaab5740-dirty\nalpha: hidden 64-32-16 per part, 12994 params, best epoch 30/30; test float MAE 0.221 RMSE 0.338 p95 0.727 max 2.978 deg (n=31540); test int8 MAE 0.219 RMSE 0.336 p95 0.724 max 2.913 deg (n=31540)\nbeta: hidden 32-16 per part, 3938 params, best epoch 29/30; test float MAE 0.122 RMSE 0.195 p95 0.455 max 1.505 deg (n=31540); test int8 MAE 0.124 RMSE 0.203 p95 0.457 max 2.743 deg (n=31540)\n";
