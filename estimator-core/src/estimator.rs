@@ -64,8 +64,8 @@ impl Flags {
     /// (ground speed from its velocity, altitude coasted on its vertical velocity, at most
     /// [`crate::features::GPS_COAST_MAX_MS`]). The estimate is computed, from substitutes.
     pub const GPS_SUBSTITUTED: u16 = 1 << 10;
-    /// A computed angle reads the air-data filter, and the filter's turbulence index is above
-    /// anything the model was trained on at this airspeed
+    /// A computed angle reads the air-data filter, and the filter's turbulence index is above the
+    /// 99.9th percentile of what the model was trained on at this airspeed
     /// ([`crate::normalize::TurbulenceEnvelope`]): the estimate is computed, but the air mass
     /// moves α and β faster than training flew it, and errors of degrees are possible.
     pub const TURBULENCE: u16 = 1 << 11;
@@ -348,8 +348,9 @@ impl<'m> Estimator<'m> {
         let values = self.state.next(frame);
         let health = values.health;
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
-        // Held filter outputs (no input this step) are not judged again.
-        let fresh_filter = values.filter_flags & filter::flags::NO_INPUT == 0;
+        // Held filter outputs (no input this step, or a restart) are not judged again.
+        let fresh_filter =
+            values.filter_flags & (filter::flags::NO_INPUT | filter::flags::RESTARTED) == 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
             // Sources the features could not use (a channel the EGI filled in is usable): why.

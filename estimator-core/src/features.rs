@@ -1029,6 +1029,29 @@ mod tests {
     }
 
     #[test]
+    fn set_filter_writes_every_filter_output_in_its_feature_unit() {
+        let out = crate::filter::Output {
+            alpha_rad: 0.25,
+            beta_rad: -0.03,
+            sigma_alpha_rad: 0.004,
+            sigma_beta_rad: 0.002,
+            airspeed_mps: 123.456,
+            lift_scale: 1.0321,
+            turbulence_rad: 0.001_234,
+            ..Default::default()
+        };
+        let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        v.set_filter(&out);
+        assert_eq!(v.get(Feature::FilterAlpha), 250_000);
+        assert_eq!(v.get(Feature::FilterBeta), -30_000);
+        assert_eq!(v.get(Feature::FilterSigmaAlpha), 4_000);
+        assert_eq!(v.get(Feature::FilterSigmaBeta), 2_000);
+        assert_eq!(v.get(Feature::FilterAirspeed), 123_456);
+        assert_eq!(v.get(Feature::FilterLiftScale), 10_321);
+        assert_eq!(v.get(Feature::FilterTurbulence), 1_234);
+    }
+
+    #[test]
     fn feature_state_runs_the_filter_only_when_asked_and_only_on_egi_frames() {
         let mut with = FeatureState::new(true);
         let mut without = FeatureState::new(false);

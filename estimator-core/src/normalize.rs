@@ -57,8 +57,8 @@ impl Envelope {
 pub const TURBULENCE_BANDS: usize = 8;
 
 /// The turbulence the training flights flew, by airspeed: per band of the air-data filter's
-/// airspeed, the largest turbulence index ([`crate::Feature::FilterTurbulence`]) a model was trained
-/// on.
+/// airspeed, the limit of the turbulence index ([`crate::Feature::FilterTurbulence`]) a model was
+/// trained on (the trainer takes the 99.9th percentile of the band's training frames).
 ///
 /// A model's single-feature envelopes miss the combination that hurts: training flies its hardest
 /// turbulence in fast flight and only light turbulence in slow flight near the α limiter, so each
@@ -71,7 +71,7 @@ pub struct TurbulenceEnvelope {
     pub speed_lo_mms: i32,
     /// Width of each band, mm/s (a width ≤ 0 puts everything in the first band).
     pub band_mms: i32,
-    /// Largest turbulence index trained in each band, µrad.
+    /// Turbulence index limit of each band, µrad.
     pub limit_urad: [i32; TURBULENCE_BANDS],
 }
 

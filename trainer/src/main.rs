@@ -28,7 +28,7 @@ struct TrainArgs {
     /// Network sizes: small (CI), medium, large (the largest that fits the target budget), or paper.
     #[arg(long, default_value = "small")]
     config: String,
-    /// Epochs (default: 40 small, 30 medium and paper).
+    /// Epochs (default: 40 small, 30 medium, large and paper).
     #[arg(long)]
     epochs: Option<usize>,
     #[arg(long, default_value_t = 256)]

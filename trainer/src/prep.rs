@@ -132,7 +132,8 @@ const TURBULENCE_BAND_MPS: f64 = 20.0;
 const TURBULENCE_MIN_FRAMES: usize = 500;
 
 /// Per filter-airspeed band, the [`TURBULENCE_QUANTILE`] of the filter's turbulence index over the
-/// training frames on which the filter had its inputs.
+/// training frames on which the filter had its inputs and did not restart (the frames
+/// `Estimator::step` judges).
 pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
     let mms = |mps: f64| (mps * 1e3).round() as i32;
     let mut env = TurbulenceEnvelope {
@@ -141,7 +142,8 @@ pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
         limit_urad: [0; TURBULENCE_BANDS],
     };
     let mut bands: Vec<Vec<i32>> = vec![Vec::new(); TURBULENCE_BANDS];
-    let fresh = |v: &&FeatureValues| v.filter_flags & estimator_core::filter::flags::NO_INPUT == 0;
+    use estimator_core::filter::flags::{NO_INPUT, RESTARTED};
+    let fresh = |v: &&FeatureValues| v.filter_flags & (NO_INPUT | RESTARTED) == 0;
     for v in train.iter().flat_map(|f| f.features.iter()).filter(fresh) {
         if let Some(b) = bands.get_mut(env.band(v.get(Feature::FilterAirspeed))) {
             b.push(v.get(Feature::FilterTurbulence));

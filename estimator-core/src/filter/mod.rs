@@ -262,7 +262,8 @@ pub struct Output {
     pub nis: f32,
     /// Turbulence index, rad: the RMS over [`TURBULENCE_TAU_S`] of the frame-to-frame change of
     /// the estimated wind over the airspeed (the angle the air mass turned the relative wind by
-    /// between two 20 Hz frames), see [`AirDataFilter::step`]. 0 after a start or restart.
+    /// between two 20 Hz frames), see [`AirDataFilter::step`]. 0 after a start or restart; held,
+    /// not updated, for [`TURBULENCE_SETTLE_STEPS`] after one and after a step without inputs.
     pub turbulence_rad: f32,
     /// [`flags`].
     pub flags: u8,
@@ -682,6 +683,9 @@ impl AirDataFilter {
             }
             let mut out = self.last;
             out.flags = flags | flags::NO_INPUT | flags::LOW_CONFIDENCE;
+            if flags & flags::RESTARTED != 0 {
+                out.turbulence_rad = 0.0;
+            }
             out.nis = 0.0;
             self.last = out;
             return out;
@@ -719,6 +723,7 @@ impl AirDataFilter {
                 self.restart();
                 let mut out = self.last;
                 out.flags = flags | flags::RESTARTED | flags::LOW_CONFIDENCE;
+                out.turbulence_rad = 0.0;
                 self.last = out;
                 out
             }

@@ -131,27 +131,39 @@ fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
         k: 1.0,
     };
     let c = cfg();
-    let index_after = |amp: f32| {
-        let mut f = AirDataFilter::new(c);
+    let fly_for = |f: &mut AirDataFilter, amp: f32, from: f32, to: f32| {
         let mut last = Output::default();
-        let mut t = 0.0;
-        while t < 60.0 {
+        let mut t = from;
+        while t < to {
             let (inp, _) = calm.gusty(t, amp).frame(t, &c);
             last = f.step(&inp, true);
             t += DT;
         }
         last.turbulence_rad
     };
+    let index_after = |amp: f32| fly_for(&mut AirDataFilter::new(c), amp, 0.0, 60.0);
     let (steady, light, heavy) = (index_after(0.0), index_after(1.0), index_after(4.0));
     // The steady wind is learnt within seconds and then barely moves: a small fraction of a
     // milliradian per frame (150 m/s airspeed).
     assert!(steady < 2e-4, "steady {steady}");
     assert!(light > 3.0 * steady, "steady {steady}, light {light}");
     assert!(heavy > 2.0 * light, "light {light}, heavy {heavy}");
-    // A restart forgets it.
+    // Through an outage and for TURBULENCE_SETTLE_STEPS after it, the index holds; then it moves.
     let mut f = AirDataFilter::new(c);
+    let before = fly_for(&mut f, 4.0, 0.0, 60.0);
+    let out = f.step(&Input::default(), false);
+    assert_eq!(out.turbulence_rad, before);
+    let mut t = 60.0;
+    for k in 0..TURBULENCE_SETTLE_STEPS {
+        let (inp, _) = calm.gusty(t, 4.0).frame(t, &c);
+        assert_eq!(f.step(&inp, true).turbulence_rad, before, "settle step {k}");
+        t += DT;
+    }
+    let (inp, _) = calm.gusty(t, 4.0).frame(t, &c);
+    assert_ne!(f.step(&inp, true).turbulence_rad, before);
+    // A restart of the turbulent filter forgets it.
     f.restart();
-    let (inp, _) = calm.frame(0.0, &c);
+    let (inp, _) = calm.gusty(t + DT, 4.0).frame(t + DT, &c);
     assert_eq!(f.step(&inp, true).turbulence_rad, 0.0);
 }
 
@@ -263,7 +275,7 @@ proptest! {
                 fuel_kg: g(20),
             };
             let out = f.step(&inp, ok);
-            let all = [out.alpha_rad, out.beta_rad, out.airspeed_mps, out.lift_scale, out.sigma_alpha_rad, out.sigma_beta_rad, out.nis, out.wind_ned_mps[0], out.wind_ned_mps[1], out.wind_ned_mps[2]];
+            let all = [out.alpha_rad, out.beta_rad, out.airspeed_mps, out.lift_scale, out.sigma_alpha_rad, out.sigma_beta_rad, out.nis, out.turbulence_rad, out.wind_ned_mps[0], out.wind_ned_mps[1], out.wind_ned_mps[2]];
             prop_assert!(all.iter().all(|v| v.is_finite()), "{:?}", out);
             if !ok || !inp.is_finite() {
                 prop_assert!(out.flags & flags::NO_INPUT != 0);
