@@ -186,6 +186,33 @@ impl FeatureSet {
         }
     }
 
+    /// The set without the comma-separated feature names in `names` (each must be in the set),
+    /// named `<set> without <names>`; the set itself for an empty list.
+    pub fn without(self, names: &str) -> Result<FeatureSet> {
+        let drop = names
+            .split(',')
+            .filter(|n| !n.trim().is_empty())
+            .map(parse_feature)
+            .collect::<Result<Vec<_>>>()?;
+        if drop.is_empty() {
+            return Ok(self);
+        }
+        for f in &drop {
+            if !self.alpha.contains(f) && !self.beta.contains(f) {
+                return Err(Error::UnknownFeature(
+                    f.name().to_string(),
+                    format!("the features of `{}`", self.name),
+                ));
+            }
+        }
+        let keep = |v: Vec<Feature>| v.into_iter().filter(|f| !drop.contains(f)).collect();
+        Ok(FeatureSet {
+            name: format!("{} without {}", self.name, names.trim()),
+            alpha: keep(self.alpha),
+            beta: keep(self.beta),
+        })
+    }
+
     pub fn parse(spec: &str) -> Result<FeatureSet> {
         match spec {
             "table1" => Ok(FeatureSet {
@@ -278,6 +305,33 @@ impl FeatureSet {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn without_drops_named_features_from_both_angles_and_refuses_strangers() {
+        let full = FeatureSet::parse("egi-hybrid-turb").unwrap();
+        let s = full
+            .clone()
+            .without("filter_airspeed_mps, filter_lift_scale")
+            .unwrap();
+        for f in [Feature::FilterAirspeed, Feature::FilterLiftScale] {
+            assert!(!s.alpha.contains(&f) && !s.beta.contains(&f));
+        }
+        assert_eq!(s.alpha.len() + 2, full.alpha.len());
+        assert_eq!(s.beta.len() + 2, full.beta.len());
+        assert_eq!(
+            s.name,
+            "egi-hybrid-turb without filter_airspeed_mps, filter_lift_scale"
+        );
+        assert_eq!(full.clone().without("").unwrap(), full);
+        // Not in the set, unknown, or air data: refused.
+        let t1 = FeatureSet::parse("table1").unwrap();
+        assert!(matches!(
+            t1.clone().without("filter_alpha_rad"),
+            Err(Error::UnknownFeature(..))
+        ));
+        assert!(t1.clone().without("no_such_feature").is_err());
+        assert!(matches!(t1.without("alpha_deg"), Err(Error::Leakage(_))));
+    }
 
     #[test]
     fn air_data_can_never_become_an_input() {

@@ -44,6 +44,10 @@ struct TrainArgs {
     /// of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,
+    /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
+    /// `filter_airspeed_mps,filter_lift_scale`): an ablation without spelling out the whole list.
+    #[arg(long, default_value = "")]
+    without: String,
     /// Sensor suite the models may read: table1 (the paper's inputs, the default: every command
     /// keeps the meaning it had before the suites) or egi (Table 1 + the embedded GPS/INS attitude
     /// and velocity and the fuel quantity; needs a dataset of format 4). A feature of a suite the
@@ -309,7 +313,7 @@ impl TrainArgs {
     /// The sensor suite and the feature set, checked against each other.
     fn suite_features(&self) -> Result<(Suite, FeatureSet)> {
         let suite = parse_suite(&self.suite)?;
-        let fs = FeatureSet::parse(&self.features)?;
+        let fs = FeatureSet::parse(&self.features)?.without(&self.without)?;
         fs.check_suite(suite)?;
         Ok((suite, fs))
     }
