@@ -263,15 +263,19 @@ struct Model<'m> {
     sources: u32,
     lags: u8,
     reads_filter: bool,
+    /// Its turbulence envelope, if it reads the filter.
+    turbulence: Option<TurbulenceEnvelope>,
 }
 
 impl<'m> Model<'m> {
     fn new(net: &'m dyn AngleNet) -> Self {
+        let reads_filter = net.features().iter().any(|f| f.needs_filter());
         Model {
             net,
             sources: net.sources(),
             lags: net.lags(),
-            reads_filter: net.features().iter().any(|f| f.needs_filter()),
+            reads_filter,
+            turbulence: reads_filter.then(|| net.turbulence()),
         }
     }
 }
@@ -348,9 +352,6 @@ impl<'m> Estimator<'m> {
         let values = self.state.next(frame);
         let health = values.health;
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
-        // Held filter outputs (no input this step, or a restart) are not judged again.
-        let fresh_filter =
-            values.filter_flags & (filter::flags::NO_INPUT | filter::flags::RESTARTED) == 0;
         let mut flags = 0u16;
         let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
             // Sources the features could not use (a channel the EGI filled in is usable): why.
@@ -387,9 +388,10 @@ impl<'m> Estimator<'m> {
             if m.reads_filter && diverged {
                 flags |= Flags::FILTER_DIVERGED;
             }
-            if m.reads_filter
-                && fresh_filter
-                && m.net.turbulence().exceeded(
+            // Held filter outputs (no input this step, or a restart) are not judged again.
+            if let Some(t) = m.turbulence
+                && values.filter_fresh()
+                && t.exceeded(
                     values.get(Feature::FilterAirspeed),
                     values.get(Feature::FilterTurbulence),
                 )

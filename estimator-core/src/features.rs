@@ -680,6 +680,12 @@ impl FeatureValues {
         self.raw.get(f.index()).copied().unwrap_or(0)
     }
 
+    /// The filter's outputs are this step's: it had inputs and did not restart (otherwise they are
+    /// held from an earlier step, or there is no filter and they are 0).
+    pub fn filter_fresh(&self) -> bool {
+        self.filter_flags & (crate::filter::flags::NO_INPUT | crate::filter::flags::RESTARTED) == 0
+    }
+
     /// Writes the air-data filter's outputs into their features (rounded to the feature's LSB;
     /// the filter never returns a non-finite value, and `as` saturates).
     pub fn set_filter(&mut self, out: &crate::filter::Output) {

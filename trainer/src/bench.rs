@@ -80,7 +80,7 @@ impl Side {
     }
     /// Validation loss (both heads) after the last epoch.
     pub fn final_val(&self) -> f64 {
-        self.val_at(self.val.len().wrapping_sub(1))
+        self.val.last().map_or(f64::NAN, |v| v[0] + v[1])
     }
 }
 
@@ -195,7 +195,7 @@ fn write_exchange(
         epsilon: ADAM_EPSILON,
     };
     let p = dir.join("meta.json");
-    let text = serde_json::to_string(&meta).map_err(|e| Error::Numeric(e.to_string()))?;
+    let text = serde_json::to_string(&meta).map_err(|e| Error::Torch(e.to_string()))?;
     std::fs::write(&p, text).map_err(crate::error::io(&p))
 }
 

@@ -103,7 +103,11 @@ pub fn train_angle(
 ) -> Trained {
     let tr = flights(ds, Role::Train);
     let va = flights(ds, Role::Val);
-    let prep = Prep::fit(angle, features, &tr);
+    let mut prep = Prep::fit(angle, features, &tr);
+    if features.iter().any(|f| f.needs_filter()) {
+        // Only an exported model carries it: the scaling fits of baselines and benches skip it.
+        prep.turbulence = crate::prep::turbulence_envelope(&tr);
+    }
     let n_in = prep.n_inputs();
     let hidden = size.hidden(angle);
     let (model, curves) = train(
@@ -116,8 +120,8 @@ pub fn train_angle(
     let part2 = model.part2.export();
     let calib = calibration(&prep, &tr, 20_000);
     let q = quantize_cascade(&prep, &part1, &part2, &calib);
-    let (float_test, int_test, series) = evaluate(&model, &q, ds, Role::Test);
-    let (_, int_val, _) = evaluate(&model, &q, ds, Role::Val);
+    let (float_test, int_test, series) = evaluate(&model, &q, ds);
+    let int_val = int8_metrics(&q, ds, Role::Val);
     Trained {
         angle,
         model,
@@ -140,12 +144,28 @@ fn flight_answers(model: &Cascade, q: &QCascade, fl: &Flight) -> (Vec<f64>, Vec<
     let prep = &q.prep;
     let (_, po) = predict_all(model, &prep.inputs(&[fl]), prep.n_inputs());
     let float = po.iter().map(|z| prep.out_deg(*z as f64)).collect();
-    let int8 = fl
-        .features
+    (float, int8_answers(q, fl))
+}
+
+/// A cascade's int8 (integer reference) answers on one flight, degrees.
+fn int8_answers(q: &QCascade, fl: &Flight) -> Vec<f64> {
+    fl.features
         .iter()
         .map(|v| q.reference(v).angle as f64 / 1000.0)
+        .collect()
+}
+
+/// Integer-reference metrics of a cascade on the flights of `role` (no float pass).
+pub fn int8_metrics(q: &QCascade, ds: &Dataset, role: Role) -> FlightMetrics {
+    let target = q.prep.angle.target();
+    let per_flight: Vec<_> = ds
+        .flights(role)
+        .map(|fl| {
+            let truth = fl.truth(target).to_vec();
+            (fl.name.clone(), int8_answers(q, fl), truth)
+        })
         .collect();
-    (float, int8)
+    FlightMetrics::of_banded(&per_flight, q.prep.angle.bands())
 }
 
 /// A trained cascade's float and int8 (integer reference) answers on `flights`, degrees.
@@ -159,18 +179,17 @@ pub fn answers(t: &Trained, flights: &[&Flight]) -> (Answers, Answers) {
         .unzip()
 }
 
-/// Float and integer-reference metrics of a cascade on the flights of `role`.
+/// Float and integer-reference metrics of a cascade on the test flights.
 pub fn evaluate(
     model: &Cascade,
     q: &QCascade,
     ds: &Dataset,
-    role: Role,
 ) -> (FlightMetrics, FlightMetrics, Vec<TestSeries>) {
     let prep = &q.prep;
     let mut fl_f = Vec::new();
     let mut fl_i = Vec::new();
     let mut series = Vec::new();
-    for fl in ds.flights(role) {
+    for fl in ds.flights(Role::Test) {
         let (pf, pi) = flight_answers(model, q, fl);
         let truth = fl.truth(prep.angle.target()).to_vec();
         fl_f.push((fl.name.clone(), pf.clone(), truth.clone()));

@@ -113,8 +113,8 @@ pub struct Prep {
     pub out_center: i32,
     pub out_sigma: f64,
     pub out_range: Envelope,
-    /// Turbulence trained on, by filter airspeed ([`turbulence_envelope`]; `ANY` for a model that
-    /// does not read the filter).
+    /// Turbulence trained on, by filter airspeed: `ANY` from [`Prep::fit`]; `train_angle` sets
+    /// [`turbulence_envelope`] for a model that reads the filter.
     pub turbulence: TurbulenceEnvelope,
 }
 
@@ -142,9 +142,11 @@ pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
         limit_urad: [0; TURBULENCE_BANDS],
     };
     let mut bands: Vec<Vec<i32>> = vec![Vec::new(); TURBULENCE_BANDS];
-    use estimator_core::filter::flags::{NO_INPUT, RESTARTED};
-    let fresh = |v: &&FeatureValues| v.filter_flags & (NO_INPUT | RESTARTED) == 0;
-    for v in train.iter().flat_map(|f| f.features.iter()).filter(fresh) {
+    for v in train
+        .iter()
+        .flat_map(|f| f.features.iter())
+        .filter(|v| v.filter_fresh())
+    {
         if let Some(b) = bands.get_mut(env.band(v.get(Feature::FilterAirspeed))) {
             b.push(v.get(Feature::FilterTurbulence));
         }
@@ -194,11 +196,7 @@ impl Prep {
             out_center: om.round() as i32,
             out_sigma: if os > 0.0 { os } else { 1.0 },
             out_range: Envelope { lo, hi },
-            turbulence: if features.iter().any(|f| f.needs_filter()) {
-                turbulence_envelope(train)
-            } else {
-                TurbulenceEnvelope::ANY
-            },
+            turbulence: TurbulenceEnvelope::ANY,
         }
     }
 

@@ -2,7 +2,7 @@
 //! reference of the deployed network, the `weights.rs` code generator and the test-vector writer.
 use crate::model::{FloatLayer, float_forward};
 use crate::prep::{Angle, Prep, fixed_point, fp_value};
-use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA};
+use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA, TurbulenceEnvelope};
 use estimator_core::{Channel, Feature, FeatureState, FeatureValues, SensorFrame, Suite};
 use std::fmt::Write;
 
@@ -328,6 +328,13 @@ fn env_expr(e: &Envelope) -> String {
     )
 }
 
+fn turbulence_expr(t: &TurbulenceEnvelope) -> String {
+    format!(
+        "crate::normalize::TurbulenceEnvelope {{ speed_lo_mms: {}, band_mms: {}, limit_urad: {:?} }}",
+        t.speed_lo_mms, t.band_mms, t.limit_urad
+    )
+}
+
 fn static_item(name: &str, q: &QCascade, out: &mut String) {
     let p = &q.prep;
     let n = p.features.len();
@@ -362,14 +369,11 @@ fn static_item(name: &str, q: &QCascade, out: &mut String) {
     chain_expr(&q.part1, out);
     let _ = write!(out, ",\nmid_norm: {},\npart2: ", norm_expr(&p.mid_norm));
     chain_expr(&q.part2, out);
-    let t = &p.turbulence;
     let _ = writeln!(
         out,
-        ",\nout_range: {},\nturbulence: crate::normalize::TurbulenceEnvelope {{ speed_lo_mms: {}, band_mms: {}, limit_urad: {:?} }},\n}};\n",
+        ",\nout_range: {},\nturbulence: {},\n}};\n",
         env_expr(&p.out_range),
-        t.speed_lo_mms,
-        t.band_mms,
-        t.limit_urad
+        turbulence_expr(&p.turbulence)
     );
 }
 

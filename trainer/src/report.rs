@@ -1277,7 +1277,7 @@ impl Report {
                 b.per_epoch_288k_s,
                 if b.best_epoch > 0 {
                     format!(
-                        " Its best validation epoch is epoch {} of {}, reached after **{:.1} min**                          of training (all {} epochs: {:.1} min).",
+                        " Its best validation epoch is epoch {} of {}, reached after **{:.1} min** of training (all {} epochs: {:.1} min).",
                         b.best_epoch,
                         b.epochs,
                         b.time_to_best_s / 60.0,

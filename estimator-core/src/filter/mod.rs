@@ -280,9 +280,7 @@ pub struct AirDataFilter {
     last: Output,
     /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
     alt: Option<(f32, f32)>,
-    /// Wind of the previous step with inputs, for the turbulence index, and the index's running
-    /// mean square, rad².
-    turb_prev_wind: Option<Vector3<f32>>,
+    /// The turbulence index's running mean square, rad² (the previous wind is `last`'s).
     turb_ms: f32,
     /// Steps with inputs still to pass before the index takes wind changes in again, after a start,
     /// a restart or a step without inputs ([`TURBULENCE_SETTLE_STEPS`]).
@@ -442,7 +440,6 @@ impl AirDataFilter {
             gated_run: 0,
             alt: None,
             last: Output::default(),
-            turb_prev_wind: None,
             turb_ms: 0.0,
             turb_settle: TURBULENCE_SETTLE_STEPS,
         };
@@ -469,9 +466,9 @@ impl AirDataFilter {
         ]));
         self.prev = None;
         self.gated_run = 0;
-        self.turb_prev_wind = None;
         self.turb_ms = 0.0;
         self.turb_settle = TURBULENCE_SETTLE_STEPS;
+        self.last.turbulence_rad = 0.0;
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -480,22 +477,22 @@ impl AirDataFilter {
     /// the estimated wind, over the airspeed, measures how far the air mass moves α and β faster
     /// than any sensor behind the anti-alias filter can follow. A step of `dt` other than one
     /// frame is scaled by √(frame / dt), as a random walk's increment would be. For
-    /// [`TURBULENCE_SETTLE_STEPS`] after a start, restart or outage the index holds its value.
+    /// [`TURBULENCE_SETTLE_STEPS`] after a start, restart or outage the index holds its value;
+    /// past them, `last` is the previous step's output (every path that skips one resets the
+    /// settle count).
     fn turbulence(&mut self, wind: Vector3<f32>, airspeed: f32, dt: f32) -> f32 {
         if self.turb_settle > 0 {
             self.turb_settle = self.turb_settle.saturating_sub(1);
-        } else if let Some(prev) = self.turb_prev_wind
-            && dt > 0.0
-        {
-            let v = airspeed.max(self.cfg.min_airspeed_mps).max(1.0);
-            let d = (wind - prev).norm() / v;
+        } else if dt > 0.0 {
+            // `output` returns `None` below 1 m/s, so the divisor is at least the flag's floor.
+            let v = airspeed.max(self.cfg.min_airspeed_mps);
+            let d = (wind - Vector3::from(self.last.wind_ned_mps)).norm() / v;
             let d2 = d * d * (TURBULENCE_FRAME_S / dt);
             let a = dt / (TURBULENCE_TAU_S + dt);
             if d2.is_finite() {
                 self.turb_ms += a * (d2 - self.turb_ms);
             }
         }
-        self.turb_prev_wind = Some(wind);
         libm::sqrtf(self.turb_ms.max(0.0))
     }
 
@@ -675,7 +672,6 @@ impl AirDataFilter {
         self.predict(dt);
         if !inputs_valid || !inp.is_finite() {
             self.prev = None;
-            self.turb_prev_wind = None;
             self.turb_settle = TURBULENCE_SETTLE_STEPS;
             if !self.healthy() {
                 self.restart();
@@ -683,9 +679,6 @@ impl AirDataFilter {
             }
             let mut out = self.last;
             out.flags = flags | flags::NO_INPUT | flags::LOW_CONFIDENCE;
-            if flags & flags::RESTARTED != 0 {
-                out.turbulence_rad = 0.0;
-            }
             out.nis = 0.0;
             self.last = out;
             return out;
@@ -723,7 +716,6 @@ impl AirDataFilter {
                 self.restart();
                 let mut out = self.last;
                 out.flags = flags | flags::RESTARTED | flags::LOW_CONFIDENCE;
-                out.turbulence_rad = 0.0;
                 self.last = out;
                 out
             }

@@ -176,7 +176,8 @@ fn assemble(
     });
     // Only a campaign says what it was asked for (the other presets' manifests stay as they were).
     if let Some(c) = &spec.campaign {
-        config["campaign"] = serde_json::json!(c);
+        config["campaign"] =
+            serde_json::to_value(c).map_err(|e| GenerateError::Shard(e.to_string()))?;
     }
     Ok(Manifest {
         format: Manifest::FORMAT,
