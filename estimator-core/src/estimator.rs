@@ -14,6 +14,7 @@
 //! | a model reads an EGI channel and the frame is of the Table 1 suite (the channel is absent) | as an invalid channel: `INVALID_INPUT`, held |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
 //! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
+//! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
@@ -69,6 +70,10 @@ impl Flags {
     /// ([`crate::normalize::TurbulenceEnvelope`]): the estimate is computed, but the air mass
     /// moves α and β faster than training flew it, and errors of degrees are possible.
     pub const TURBULENCE: u16 = 1 << 11;
+    /// α (and `w_aero_mms`) are the air-data filter's, not the α network's: the network was out of
+    /// its envelope (`OUT_OF_ENVELOPE` is set too) while the filter reported no flag and its
+    /// innovations were consistent ([`filter_alpha_fallback`]). β is still the network's.
+    pub const ALPHA_FROM_FILTER: u16 = 1 << 12;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -255,6 +260,39 @@ where
     }
 }
 
+/// Largest [`crate::filter::Output::nis_mean`] (in the 1e-3 of [`Feature::FilterNisMean`]) at which
+/// the filter may stand in for the α network: 2, the mean of a χ² variable with the measurement's
+/// two degrees of freedom. Above it, the innovations are larger than the filter's own covariance
+/// accounts for (turbulence it does not follow, an unmodelled configuration, a sensor fault), and
+/// its α is no better founded than a network outside its envelope.
+pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
+
+/// The air-data filter's α (millidegrees) and the body-z air velocity it implies (mm/s,
+/// `V·sin α·cos β`), when the filter is fit to stand in for an α network that is out of its
+/// envelope: its outputs are this step's and it raised no flag at all (inputs present, no restart,
+/// no gate run, confident, not slow, GPS altitude present), and its NIS mean is at most
+/// [`FALLBACK_NIS_MEAN_MAX`]. `None` otherwise, and for a state without a filter (airspeed 0).
+///
+/// Why the α only: the filter's α rests on lift, which the aerodynamic model and the lift scale
+/// carry through mass and wind outside the training envelope (the `mass-*` flights of
+/// `docs/results/ood.md`). Its β rests on the side force, which it follows less well than the
+/// network does even there.
+pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
+    let airspeed_mms = values.get(Feature::FilterAirspeed);
+    if values.filter_flags != 0
+        || airspeed_mms <= 0
+        || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX
+    {
+        return None;
+    }
+    let rad = |f: Feature| values.get(f) as f32 * 1e-6;
+    let (alpha, beta) = (rad(Feature::FilterAlpha), rad(Feature::FilterBeta));
+    let w = airspeed_mms as f32 * libm::sinf(alpha) * libm::cosf(beta);
+    let mdeg = alpha * (180_000.0 / core::f32::consts::PI);
+    // Both are finite (the features are integers) and far inside i32; `as` saturates anyway.
+    Some((libm::roundf(w) as i32, libm::roundf(mdeg) as i32))
+}
+
 /// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
 /// over its feature list).
 #[derive(Clone, Copy)]
@@ -353,7 +391,11 @@ impl<'m> Estimator<'m> {
         let health = values.health;
         let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
         let mut flags = 0u16;
-        let mut angle = |m: Model, last: &mut Option<(i32, i32)>, held_flag: u16| -> (i32, i32) {
+        let mut angle = |m: Model,
+                         last: &mut Option<(i32, i32)>,
+                         held_flag: u16,
+                         fallback: bool|
+         -> (i32, i32) {
             // Sources the features could not use (a channel the EGI filled in is usable): why.
             let bad = m.sources & !values.usable;
             let invalid = bad & !frame.valid != 0;
@@ -378,7 +420,7 @@ impl<'m> Estimator<'m> {
                     }
                 };
             }
-            let (mid, out, clamped) = m.net.run(&values);
+            let (mut mid, mut out, clamped) = m.net.run(&values);
             if clamped {
                 flags |= Flags::OUT_OF_ENVELOPE;
             }
@@ -389,14 +431,24 @@ impl<'m> Estimator<'m> {
                 flags |= Flags::FILTER_DIVERGED;
             }
             // Held filter outputs (no input this step, or a restart) are not judged again.
-            if let Some(t) = m.turbulence
-                && values.filter_fresh()
-                && t.exceeded(
-                    values.get(Feature::FilterAirspeed),
-                    values.get(Feature::FilterTurbulence),
-                )
-            {
+            let turbulent = m.turbulence.is_some_and(|t| {
+                values.filter_fresh()
+                    && t.exceeded(
+                        values.get(Feature::FilterAirspeed),
+                        values.get(Feature::FilterTurbulence),
+                    )
+            });
+            if turbulent {
                 flags |= Flags::TURBULENCE;
+            }
+            if fallback
+                && clamped
+                && m.reads_filter
+                && !turbulent
+                && let Some((w, a)) = filter_alpha_fallback(&values)
+            {
+                (mid, out) = (w, a);
+                flags |= Flags::ALPHA_FROM_FILTER;
             }
             if m.sources & values.substituted != 0 {
                 flags |= Flags::GPS_SUBSTITUTED;
@@ -404,9 +456,119 @@ impl<'m> Estimator<'m> {
             *last = Some((mid, out));
             (mid, out)
         };
-        (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD);
-        (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD);
+        (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD, true);
+        (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD, false);
         e.flags = Flags(flags);
         e
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::nn::{Dense, Output, Requant};
+    use crate::{FeatureValues, History, SensorFrame};
+
+    /// Filter features of a consistent filter: α 0.1 rad, β −0.02 rad, 150 m/s, NIS mean 0.5.
+    fn consistent() -> FeatureValues {
+        let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        v.set_filter(&filter::Output {
+            alpha_rad: 0.1,
+            beta_rad: -0.02,
+            airspeed_mps: 150.0,
+            nis_mean: 0.5,
+            ..Default::default()
+        });
+        v
+    }
+
+    #[test]
+    fn the_filter_stands_in_for_alpha_only_while_it_is_unflagged_and_consistent() {
+        let v = consistent();
+        // α 0.1 rad = 5.729578°; w = 150 m/s · sin 0.1 · cos 0.02 = 14.9721 m/s.
+        assert_eq!(filter_alpha_fallback(&v), Some((14_972, 5_730)));
+        // Every filter flag on its own forbids it.
+        for bit in 0..8 {
+            let mut f = v;
+            f.filter_flags = 1 << bit;
+            assert_eq!(filter_alpha_fallback(&f), None, "filter flag bit {bit}");
+        }
+        // The NIS mean at the bound is fine, one LSB above it is not.
+        let mut f = v;
+        f.raw[Feature::FilterNisMean.index()] = FALLBACK_NIS_MEAN_MAX;
+        assert!(filter_alpha_fallback(&f).is_some());
+        f.raw[Feature::FilterNisMean.index()] = FALLBACK_NIS_MEAN_MAX + 1;
+        assert_eq!(filter_alpha_fallback(&f), None);
+        // No filter (its features read 0): nothing to stand in with.
+        let none = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        assert_eq!(filter_alpha_fallback(&none), None);
+    }
+
+    /// A one-layer cascade reading the filter's α and air speed; `hi` bounds both inputs' envelope.
+    fn filter_net(hi: i32) -> CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> {
+        let one = Norm {
+            center: 0,
+            mult: 1 << 20,
+            shift: 30,
+        };
+        CascadeNet {
+            features: [Feature::FilterAlpha, Feature::FilterAirspeed],
+            norm: [one; 2],
+            envelope: [Envelope { lo: -hi, hi }; 2],
+            part1: Output(Dense::new([[1, 1]], [7], [Requant::ONE])),
+            mid_norm: one,
+            part2: Output(Dense::new([[1, 1, 1]], [3], [Requant::ONE])),
+            out_range: Envelope::ANY,
+            turbulence: TurbulenceEnvelope::ANY,
+        }
+    }
+
+    #[test]
+    fn an_alpha_network_out_of_its_envelope_gives_way_to_a_consistent_filter() {
+        // 60 s of a turn whose IMU reads the filter's own force model.
+        let frames: Vec<SensorFrame> = crate::filter::tests::consistent_frames(1200).collect();
+        let inside = filter_net(i32::MAX);
+        let outside = filter_net(1);
+        let run = |a: &CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3>,
+                   b: &CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3>| {
+            let mut e = Estimator::new(a, b);
+            frames.iter().map(|f| e.step(f)).collect::<Vec<_>>()
+        };
+        // Inside its envelope the network answers on every frame.
+        for (k, e) in run(&inside, &outside).iter().enumerate() {
+            assert!(!e.flags.has(Flags::ALPHA_FROM_FILTER), "frame {k}");
+        }
+        // Outside it, the filter takes over α once it has proven consistent (its NIS mean starts at
+        // the gate and must fall below 2), never on the first second, and β never.
+        let out = run(&outside, &outside);
+        let mut state = FeatureState::new(true);
+        let mut from_filter = 0;
+        for (k, (e, f)) in out.iter().zip(&frames).enumerate() {
+            let values = state.next(f);
+            assert!(e.flags.has(Flags::OUT_OF_ENVELOPE), "frame {k}");
+            if e.flags.has(Flags::ALPHA_FROM_FILTER) {
+                from_filter += 1;
+                assert!(k >= 20, "frame {k}");
+                let (w, a) = filter_alpha_fallback(&values).unwrap();
+                assert_eq!((e.w_aero_mms, e.alpha_mdeg), (w, a), "frame {k}");
+                // The turn flies α 6°.
+                assert!(
+                    (e.alpha_mdeg - 6_000).abs() < 300,
+                    "frame {k}: {}",
+                    e.alpha_mdeg
+                );
+                assert_eq!(
+                    (e.v_aero_mms, e.beta_mdeg),
+                    (outside.run(&values).0, outside.run(&values).1),
+                    "β is the network's, frame {k}"
+                );
+            } else {
+                assert_eq!(filter_alpha_fallback(&values), None, "frame {k}");
+            }
+        }
+        assert!(
+            from_filter > 600,
+            "only {from_filter} frames from the filter"
+        );
     }
 }

@@ -46,7 +46,7 @@ const DERIVED: usize = 5;
 const EGI_DERIVED: usize = 5;
 
 /// Number of air-data filter outputs offered as features, after the EGI kinematic ones.
-const FILTER_DERIVED: usize = 7;
+const FILTER_DERIVED: usize = 8;
 
 /// First filter feature.
 const FILTERED: usize = CHANNELS + DERIVED + EGI_DERIVED;
@@ -165,6 +165,9 @@ pub enum Feature {
     FilterLiftScale,
     /// The filter's turbulence index ([`crate::filter::Output::turbulence_rad`]), µrad.
     FilterTurbulence,
+    /// The filter's running mean of its normalised innovation squared
+    /// ([`crate::filter::Output::nis_mean`]), 1e-3.
+    FilterNisMean,
     /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
 }
@@ -204,6 +207,7 @@ impl Feature {
         all[FILTERED + 4] = Feature::FilterAirspeed;
         all[FILTERED + 5] = Feature::FilterLiftScale;
         all[FILTERED + 6] = Feature::FilterTurbulence;
+        all[FILTERED + 7] = Feature::FilterNisMean;
         let mut c = 0;
         while c < TABLE1_CHANNELS {
             let mut l = 0;
@@ -240,6 +244,7 @@ impl Feature {
             Feature::FilterAirspeed => FILTERED + 4,
             Feature::FilterLiftScale => FILTERED + 5,
             Feature::FilterTurbulence => FILTERED + 6,
+            Feature::FilterNisMean => FILTERED + 7,
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
         }
     }
@@ -264,6 +269,7 @@ impl Feature {
             Feature::FilterAirspeed => "filter_airspeed_mps",
             Feature::FilterLiftScale => "filter_lift_scale",
             Feature::FilterTurbulence => "filter_turbulence_rad",
+            Feature::FilterNisMean => "filter_nis_mean",
             Feature::Delta(c, l) => match c.delta_names() {
                 [d1, d4, d10, d20] => match l {
                     Lag::F1 => d1,
@@ -291,6 +297,7 @@ impl Feature {
             Feature::FilterAirspeed => 1e-3,
             Feature::FilterLiftScale => 1e-4,
             Feature::FilterTurbulence => 1e-6,
+            Feature::FilterNisMean => 1e-3,
         }
     }
 
@@ -324,7 +331,8 @@ impl Feature {
             | Feature::FilterSigmaBeta
             | Feature::FilterAirspeed
             | Feature::FilterLiftScale
-            | Feature::FilterTurbulence => crate::filter::NEEDED_MASK,
+            | Feature::FilterTurbulence
+            | Feature::FilterNisMean => crate::filter::NEEDED_MASK,
         }
     }
 
@@ -339,6 +347,7 @@ impl Feature {
                 | Feature::FilterAirspeed
                 | Feature::FilterLiftScale
                 | Feature::FilterTurbulence
+                | Feature::FilterNisMean
         )
     }
 
@@ -698,6 +707,7 @@ impl FeatureValues {
             q(Feature::FilterAirspeed, out.airspeed_mps),
             q(Feature::FilterLiftScale, out.lift_scale),
             q(Feature::FilterTurbulence, out.turbulence_rad),
+            q(Feature::FilterNisMean, out.nis_mean),
         ] {
             if let Some(r) = self.raw.get_mut(f.index()) {
                 *r = v;
@@ -1044,6 +1054,7 @@ mod tests {
             airspeed_mps: 123.456,
             lift_scale: 1.0321,
             turbulence_rad: 0.001_234,
+            nis_mean: 1.5,
             ..Default::default()
         };
         let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
@@ -1055,6 +1066,7 @@ mod tests {
         assert_eq!(v.get(Feature::FilterAirspeed), 123_456);
         assert_eq!(v.get(Feature::FilterLiftScale), 10_321);
         assert_eq!(v.get(Feature::FilterTurbulence), 1_234);
+        assert_eq!(v.get(Feature::FilterNisMean), 1_500);
     }
 
     #[test]

@@ -279,6 +279,10 @@ enum Cmd {
     Eval {
         #[arg(long)]
         data: PathBuf,
+        /// Which flights: `test` (the manifest's test flights), `train` or `val` (to see how the
+        /// shipped estimator behaves in distribution, e.g. how often its flags fire).
+        #[arg(long, default_value = "test")]
+        split: String,
         /// Sensor suite of the frames the model is stepped with (table1 or egi): as a sender of that
         /// suite delivers them. A model that reads a channel the suite lacks is refused. Default: the
         /// suite the compiled-in model reads.
@@ -416,7 +420,18 @@ fn cmd_train(
     Ok(())
 }
 
-fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
+/// The flights a `--split` names.
+fn parse_split(split: &str) -> Result<Role> {
+    Ok(match split {
+        "test" => Role::Test,
+        "train" => Role::Train,
+        "val" => Role::Val,
+        other => bail!("--split must be test, train or val, not `{other}`"),
+    })
+}
+
+fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result<()> {
+    let role = parse_split(split)?;
     let suite = match suite {
         Some(s) => parse_suite(s)?,
         None => trainer::pipeline::shipped_suite().unwrap_or(estimator_core::Suite::Table1),
@@ -438,11 +453,12 @@ fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
             needs.name()
         );
     }
-    let e = eval_shipped(&ds, suite);
+    let e = eval_shipped(&ds, role, suite);
     if json {
         let v = serde_json::json!({
             "model": "shipped (Estimator::shipped, int8)",
             "suite": suite.name(),
+            "split": split,
             "dataset": data.display().to_string(),
             "manifest_sha256": ds.manifest_sha256,
             "alpha": e.alpha, "beta": e.beta,
@@ -474,8 +490,8 @@ fn cmd_eval(data: &Path, suite: Option<&str>, json: bool) -> Result<()> {
         }
         for c in &e.flagged {
             println!(
-                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training",
-                c.flight, c.not_usable, c.out_of_envelope, c.turbulence
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter",
+                c.flight, c.not_usable, c.out_of_envelope, c.turbulence, c.alpha_from_filter
             );
         }
     }
@@ -675,12 +691,7 @@ fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
 
 fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<()> {
     use trainer::filter_eval::eval_filter;
-    let role = match split {
-        "test" => Role::Test,
-        "train" => Role::Train,
-        "val" => Role::Val,
-        other => bail!("--split must be test, train or val, not `{other}`"),
-    };
+    let role = parse_split(split)?;
     let ds = load(data, 0.15)?;
     let cfg = filter_config(tune)?;
     let e = eval_filter(&ds, role, cfg);
@@ -1130,7 +1141,12 @@ fn main() -> Result<()> {
             vectors_out,
             no_export,
         } => cmd_train(args, out, weights_out, vectors_out, *no_export),
-        Cmd::Eval { data, suite, json } => cmd_eval(data, suite.as_deref(), *json),
+        Cmd::Eval {
+            data,
+            split,
+            suite,
+            json,
+        } => cmd_eval(data, split, suite.as_deref(), *json),
         Cmd::EvalFilter {
             data,
             split,

@@ -23,6 +23,8 @@ pub struct Answers {
     pub alpha_deg: Vec<f64>,
     pub beta_deg: Vec<f64>,
     pub clear: Vec<bool>,
+    /// α came from the air-data filter (`Flags::ALPHA_FROM_FILTER`; never for the filter alone).
+    pub alpha_from_filter: Vec<bool>,
 }
 
 /// An estimator under test.
@@ -52,6 +54,11 @@ fn run_shipped(fl: &crate::data::Flight) -> Answers {
     let a = crate::pipeline::shipped_answers(fl, suite);
     Answers {
         clear: a.flags.iter().map(|f| f.0 == 0).collect(),
+        alpha_from_filter: a
+            .flags
+            .iter()
+            .map(|f| f.has(estimator_core::Flags::ALPHA_FROM_FILTER))
+            .collect(),
         alpha_deg: a.alpha_deg,
         beta_deg: a.beta_deg,
     }
@@ -64,6 +71,7 @@ fn run_filter(fl: &crate::data::Flight) -> Answers {
         alpha_deg,
         beta_deg,
         clear: out.iter().map(|o| o.flags == 0).collect(),
+        alpha_from_filter: vec![false; out.len()],
     }
 }
 
@@ -81,6 +89,8 @@ pub struct FlightScore {
     pub beta_ratio: f64,
     /// Share of frames with at least one flag raised.
     pub flagged_share: f64,
+    /// Share of frames whose α came from the air-data filter.
+    pub alpha_from_filter_share: f64,
     /// Frames with every flag clear and |α error| > 2° or |β error| > 1°, and the longest run of
     /// them in seconds.
     pub silent_frames: usize,
@@ -143,6 +153,8 @@ pub fn score(ds: &Dataset, est: &Estimator) -> EstimatorScores {
             alpha_ratio: f64::NAN,
             beta_ratio: f64::NAN,
             flagged_share: ans.clear.iter().filter(|c| !**c).count() as f64 / n,
+            alpha_from_filter_share: ans.alpha_from_filter.iter().filter(|c| **c).count() as f64
+                / n,
             silent_frames: silent,
             silent_longest_s: longest as f64 / f64::from(hil_sim::flight::SAMPLE_HZ),
         });
@@ -195,7 +207,8 @@ pub fn markdown(r: &OodReport) -> String {
         s,
         "Dataset `{}` (manifest sha256 `{}`). MAE in degrees over every frame, flagged or not; \
          ratio = MAE on the flight / MAE on its in-distribution twin (`nominal`, same maneuver seed). \
-         Flagged = share of frames with any flag raised. Silent = frames with every flag clear and \
+         Flagged = share of frames with any flag raised. α from filter = share of frames whose α the \
+         air-data filter gave because the α network was out of its envelope (`ALPHA_FROM_FILTER`). Silent = frames with every flag clear and \
          |α error| > {SILENT_ALPHA_DEG}° or |β error| > {SILENT_BETA_DEG}° (longest run).\n",
         r.dataset, r.manifest_sha256
     );
@@ -212,11 +225,11 @@ pub fn markdown(r: &OodReport) -> String {
     );
     for e in &r.estimators {
         let _ = writeln!(s, "### {}\n", e.estimator);
-        s.push_str("| flight | case | α MAE | α ×twin | α max | β MAE | β ×twin | β max | flagged | silent frames (longest) |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str("| flight | case | α MAE | α ×twin | α max | β MAE | β ×twin | β max | flagged | α from filter | silent frames (longest) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
         for f in &e.flights {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {:.1} % | {} ({:.1} s) |",
+                "| {} | {} | {:.3} | {:.2} | {:.2} | {:.3} | {:.2} | {:.2} | {:.1} % | {:.1} % | {} ({:.1} s) |",
                 f.flight,
                 f.case,
                 f.alpha.mae,
@@ -226,6 +239,7 @@ pub fn markdown(r: &OodReport) -> String {
                 f.beta_ratio,
                 f.beta.max,
                 100.0 * f.flagged_share,
+                100.0 * f.alpha_from_filter_share,
                 f.silent_frames,
                 f.silent_longest_s
             );

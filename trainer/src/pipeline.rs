@@ -204,7 +204,7 @@ pub fn evaluate(
     )
 }
 
-/// Result of running the compiled-in model through `Estimator::shipped()` on the test flights.
+/// Result of running the compiled-in model through `Estimator::shipped()` on one split's flights.
 pub struct ShippedEval {
     pub alpha: FlightMetrics,
     pub beta: FlightMetrics,
@@ -216,15 +216,15 @@ pub struct ShippedEval {
     pub provenance: Option<&'static str>,
 }
 
-/// Steps a fresh `Estimator::shipped()` through every test flight, frame by frame, exactly as the
+/// Steps a fresh `Estimator::shipped()` through every flight of `role`, frame by frame, exactly as the
 /// firmware would (including held values on invalid or stuck channels), with the frames a sender of
 /// `suite` delivers (`SensorFrame::restricted_to`): a model reading a channel the suite lacks is
 /// held as `INVALID_INPUT`, as on target.
-pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
+pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
     let mut a = Vec::new();
     let mut b = Vec::new();
     let mut flagged = Vec::new();
-    for fl in ds.flights(Role::Test) {
+    for fl in ds.flights(role) {
         let ans = shipped_answers(fl, suite);
         let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
         let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
@@ -233,6 +233,7 @@ pub fn eval_shipped(ds: &Dataset, suite: Suite) -> ShippedEval {
             not_usable: held,
             out_of_envelope: count(estimator_core::Flags::OUT_OF_ENVELOPE),
             turbulence: count(estimator_core::Flags::TURBULENCE),
+            alpha_from_filter: count(estimator_core::Flags::ALPHA_FROM_FILTER),
         };
         a.push((
             fl.name.clone(),
@@ -263,6 +264,8 @@ pub struct FlagCounts {
     pub not_usable: usize,
     pub out_of_envelope: usize,
     pub turbulence: usize,
+    /// α from the air-data filter (`Flags::ALPHA_FROM_FILTER`).
+    pub alpha_from_filter: usize,
 }
 
 /// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.

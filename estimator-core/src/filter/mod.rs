@@ -260,6 +260,11 @@ pub struct Output {
     pub sigma_beta_rad: f32,
     /// Normalised innovation squared of this step's measurement (0 when none).
     pub nis: f32,
+    /// Running mean of the NIS over [`NIS_TAU_S`] (steps with a measurement only; held through an
+    /// outage). A consistent filter averages the measurement's degrees of freedom, 2; model or
+    /// sensor trouble and turbulence the model does not follow push it up. It starts at
+    /// [`Config::gate`] after a start or restart, so it proves consistency rather than assume it.
+    pub nis_mean: f32,
     /// Turbulence index, rad: the RMS over [`TURBULENCE_TAU_S`] of the frame-to-frame change of
     /// the estimated wind over the airspeed (the angle the air mass turned the relative wind by
     /// between two 20 Hz frames), see [`AirDataFilter::step`]. 0 after a start or restart; held,
@@ -285,7 +290,13 @@ pub struct AirDataFilter {
     /// Steps with inputs still to pass before the index takes wind changes in again, after a start,
     /// a restart or a step without inputs ([`TURBULENCE_SETTLE_STEPS`]).
     turb_settle: u16,
+    /// [`Output::nis_mean`]'s running mean.
+    nis_mean: f32,
 }
+
+/// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
+/// does not decide it, short enough to notice within seconds that the model stopped fitting.
+pub const NIS_TAU_S: f32 = 2.0;
 
 /// Time constant of the turbulence index's running mean square, s: long enough to average a
 /// gust's random increments, short enough to follow a change of air mass within a few seconds.
@@ -442,6 +453,7 @@ impl AirDataFilter {
             last: Output::default(),
             turb_ms: 0.0,
             turb_settle: TURBULENCE_SETTLE_STEPS,
+            nis_mean: cfg.gate,
         };
         f.restart();
         f
@@ -469,6 +481,7 @@ impl AirDataFilter {
         self.turb_ms = 0.0;
         self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.last.turbulence_rad = 0.0;
+        self.nis_mean = self.cfg.gate;
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -684,9 +697,16 @@ impl AirDataFilter {
             return out;
         }
         let nis = match self.prev {
-            Some(prev) => self.update(inp, &prev).unwrap_or(0.0),
-            None => 0.0,
+            Some(prev) => self.update(inp, &prev),
+            None => None,
         };
+        if let Some(n) = nis {
+            // `update` returns finite values only; a gated one counts as the gate, so one wild
+            // innovation cannot hold the mean up for long.
+            let a = dt / (NIS_TAU_S + dt);
+            self.nis_mean += a * (n.min(self.cfg.gate) - self.nis_mean);
+        }
+        let nis = nis.unwrap_or(0.0);
         self.prev = Some(*inp);
         if !self.healthy() {
             self.restart();
@@ -755,6 +775,7 @@ impl AirDataFilter {
             sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
             sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
             nis,
+            nis_mean: self.nis_mean,
             turbulence_rad: 0.0,
             flags: 0,
         };
@@ -766,6 +787,7 @@ impl AirDataFilter {
             out.sigma_alpha_rad,
             out.sigma_beta_rad,
             out.nis,
+            out.nis_mean,
         ]
         .iter()
         .chain(&out.wind_ned_mps)
@@ -775,4 +797,4 @@ impl AirDataFilter {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
