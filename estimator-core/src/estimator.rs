@@ -153,6 +153,7 @@ pub trait AngleNet: Sync {
 ///     part2: Output(Dense::new([[1, 1, 1]], [0], [Requant::ONE])),
 ///     out_range: Envelope::ANY,
 ///     turbulence: TurbulenceEnvelope::ANY,
+///     lift_scale: Envelope::ANY,
 /// };
 /// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
 /// assert_eq!(net.run(&values), (7, 7, false));
@@ -173,6 +174,7 @@ pub trait AngleNet: Sync {
 ///     part2: Output(Dense::new([[1, 1, 1, 1]], [0], [Requant::ONE])),
 ///     out_range: Envelope::ANY,
 ///     turbulence: TurbulenceEnvelope::ANY,
+///     lift_scale: Envelope::ANY,
 /// };
 /// let values = FeatureValues::compute(&SensorFrame::default(), &History::new());
 /// assert_eq!(net.run(&values), (7, 7, false));
@@ -190,6 +192,11 @@ pub struct CascadeNet<P1, P2, const N: usize, const N1: usize> {
     /// Turbulence trained on, by filter airspeed ([`TurbulenceEnvelope::ANY`] if it does not read
     /// the filter).
     pub turbulence: TurbulenceEnvelope,
+    /// Range of the air-data filter's lift scale over the training frames ([`Envelope::ANY`] if it
+    /// does not read the filter). Outside it, the aerodynamic model and the sensors disagree in a
+    /// way training never flew (mass, configuration, severe turbulence): [`AngleNet::run`] reports
+    /// the model as clamped, whether or not the lift scale is one of its inputs.
+    pub lift_scale: Envelope,
 }
 
 impl<P1, P2, const N: usize, const N1: usize> CascadeNet<P1, P2, N, N1>
@@ -245,6 +252,10 @@ where
         let (angle, out_clamped) = self.out_range.clamp(out[0]);
         let sources = self.sources();
         clamped |= out_clamped
+            || self
+                .lift_scale
+                .clamp(values.get(Feature::FilterLiftScale))
+                .1
             || values.low_speed && sources & Channel::GpsSpeed.bit() != 0
             || values.low_ground_speed && sources & VELOCITY_SOURCES != 0;
         (mid[0], angle, clamped)
@@ -520,6 +531,7 @@ mod tests {
             part2: Output(Dense::new([[1, 1, 1]], [3], [Requant::ONE])),
             out_range: Envelope::ANY,
             turbulence: TurbulenceEnvelope::ANY,
+            lift_scale: Envelope::ANY,
         }
     }
 

@@ -71,6 +71,7 @@ fn net_of(a: Feature, b: Feature, env_hi: i32) -> CascadeNet<Part1, Part2, 2, 3>
             hi: 90_000,
         },
         turbulence: TurbulenceEnvelope::ANY,
+        lift_scale: Envelope::ANY,
     }
 }
 
@@ -427,4 +428,46 @@ fn turbulence_beyond_the_trained_envelope_is_flagged_while_the_filter_has_input(
     assert!(!out.flags.has(Flags::TURBULENCE));
     let mut t1 = Estimator::new(&b, &b);
     assert!(!t1.step(&egi_frame(0, 200_000)).flags.has(Flags::TURBULENCE));
+}
+
+#[test]
+fn a_filter_lift_scale_outside_training_flags_a_model_that_runs_the_filter_even_without_reading_it()
+{
+    // α reads the filter's α and β (not its lift scale); β reads Table 1 channels only.
+    let mut a = net_of(Feature::FilterAlpha, Feature::FilterBeta, 400_000_000);
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    let flagged = |a: &CascadeNet<Part1, Part2, 2, 3>| {
+        let mut e = Estimator::new(a, &b);
+        (0..40)
+            .map(|s| {
+                let mut f = egi_frame(s, 200_000);
+                f.raw[Channel::Heading.index()] += i32::from(s % 3);
+                e.step(&f).flags.has(Flags::OUT_OF_ENVELOPE)
+            })
+            .collect::<Vec<_>>()
+    };
+    // No recorded range: never.
+    assert!(flagged(&a).iter().all(|f| !f));
+    // A range that holds the filter's lift scale (it starts at 1 and this made-up flight moves it
+    // little): never.
+    a.lift_scale = Envelope {
+        lo: 5_000,
+        hi: 15_000,
+    };
+    assert!(flagged(&a).iter().all(|f| !f));
+    // A range the lift scale is outside of: every frame.
+    a.lift_scale = Envelope {
+        lo: 20_000,
+        hi: 30_000,
+    };
+    assert!(flagged(&a).iter().all(|f| *f));
+    // A model that does not read the filter is exported with `ANY` (trainer::pipeline::train_angle):
+    // never flagged, though without a filter its lift scale feature reads 0.
+    let t = net(Channel::Rudder, Channel::GyroP, 400_000);
+    let mut e = Estimator::new(&t, &b);
+    assert!(
+        !e.step(&egi_frame(0, 200_000))
+            .flags
+            .has(Flags::OUT_OF_ENVELOPE)
+    );
 }

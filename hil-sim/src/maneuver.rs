@@ -282,7 +282,9 @@ impl Profile {
             stick_hold_s: (0.5, 3.0),
             rudder_amp: 0.2,
             rudder_hold_s: (1.0, 6.0),
-            throttle: (0.3, 0.7),
+            // From idle: a speed-holding pilot or autothrottle pulls it back whenever the aircraft
+            // is fast (the HIL flight does, to 0.02), and stock scripts fly it.
+            throttle: (0.0, 0.7),
             throttle_hold_s: (10.0, 40.0),
             speedbrake_share: 0.1,
             min_agl_ft: 2_500.0,
@@ -314,7 +316,7 @@ impl Profile {
                 alpha_target_deg: (14.0, 28.0),
                 bank_target_deg: (20.0, 75.0),
                 pitch_stick_amp: 0.1,
-                throttle: (0.2, 0.6),
+                throttle: (0.0, 0.6),
                 min_vc_kts: 90.0,
                 recover_vc_kts: 180.0,
                 target_ramp_s: 2.0,
@@ -330,7 +332,7 @@ impl Profile {
                 target_hold_s: (8.0, 30.0),
                 alpha_mode_share: 0.1,
                 bank_target_deg: (0.0, 45.0),
-                throttle: (0.2, 1.0),
+                throttle: (0.0, 1.0),
                 turb_severity: (0, 5),
                 ..base
             },
@@ -743,6 +745,7 @@ fn control_laws(s: &mut String, p: &Profile) {
         ),
     );
     // Re-climb: at least military power, afterburner as the speed falls toward the recovery speed.
+    // Down to idle (0), as a speed-holding pilot or autothrottle flies it.
     law(
         s,
         "throttle: random, by airspeed in Danger, power up in Re-climb",
@@ -750,7 +753,7 @@ fn control_laws(s: &mut String, p: &Profile) {
         &format!(
             "          {}\n",
             clamp(
-                0.05,
+                0.0,
                 1.0,
                 &blend(
                     "<property>maneuver/throttle</property>",

@@ -41,8 +41,8 @@ pub const CASES: [Case; 2] = [
     },
     Case {
         name: "shipped-alpha",
-        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid inputs",
-        features: "egi-hybrid",
+        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid-fast inputs",
+        features: "egi-hybrid-fast",
         suite: Suite::Egi,
         size: Size::Medium,
     },

@@ -126,6 +126,17 @@ pub const FILTER_FEATURES: [Feature; 6] = [
     Feature::FilterLiftScale,
 ];
 
+/// The filter outputs that are back within a second of a sensor outage: α, β and their 1σ. Its air
+/// speed (through the along-track wind) and lift scale re-converge over tens of seconds when an
+/// outage falls in the first minutes of flight, and a network that reads them inherits that
+/// (docs/results/hybrid.md). The `egi-hybrid-fast` set reads only these.
+pub const FILTER_FAST_FEATURES: [Feature; 4] = [
+    Feature::FilterAlpha,
+    Feature::FilterBeta,
+    Feature::FilterSigmaAlpha,
+    Feature::FilterSigmaBeta,
+];
+
 fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
     channels
         .iter()
@@ -135,7 +146,9 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
 /// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
-/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), `egi-hybrid-turb`
+/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), `egi-hybrid-fast`
+/// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]: the
+/// shipped set), `egi-hybrid-turb`
 /// (egi-hybrid + the filter's turbulence index), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -258,6 +271,14 @@ impl FeatureSet {
                     beta: d.beta.into_iter().chain(FILTER_FEATURES).collect(),
                 })
             }
+            "egi-hybrid-fast" => {
+                let d = FeatureSet::parse("egi-dynamics")?;
+                Ok(FeatureSet {
+                    name: "egi-hybrid-fast".into(),
+                    alpha: d.alpha.into_iter().chain(FILTER_FAST_FEATURES).collect(),
+                    beta: d.beta.into_iter().chain(FILTER_FAST_FEATURES).collect(),
+                })
+            }
             // egi-hybrid plus the filter's turbulence index: better on the validation flights, but
             // slow to come back after a sensor outage (docs/results/hybrid.md), so not shipped.
             "egi-hybrid-turb" => {
@@ -276,7 +297,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;

@@ -107,6 +107,7 @@ pub fn train_angle(
     if features.iter().any(|f| f.needs_filter()) {
         // Only an exported model carries it: the scaling fits of baselines and benches skip it.
         prep.turbulence = crate::prep::turbulence_envelope(&tr);
+        prep.lift_scale = crate::prep::lift_scale_envelope(&tr);
     }
     let n_in = prep.n_inputs();
     let hidden = size.hidden(angle);

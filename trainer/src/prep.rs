@@ -116,6 +116,9 @@ pub struct Prep {
     /// Turbulence trained on, by filter airspeed: `ANY` from [`Prep::fit`]; `train_angle` sets
     /// [`turbulence_envelope`] for a model that reads the filter.
     pub turbulence: TurbulenceEnvelope,
+    /// The filter's lift scale over the training frames: `ANY` from [`Prep::fit`]; `train_angle`
+    /// sets [`lift_scale_envelope`] for a model that reads the filter.
+    pub lift_scale: Envelope,
 }
 
 /// Share of a band's training frames at or below its turbulence limit: the rest (one frame in a
@@ -160,6 +163,22 @@ pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
     env
 }
 
+/// Smallest and largest lift scale of the air-data filter over the training frames (as for an
+/// input's envelope): outside it a model that reads the filter is flown where the aerodynamic model
+/// and the sensors disagree as training never saw, and `CascadeNet::run` says so.
+pub fn lift_scale_envelope(train: &[&Flight]) -> Envelope {
+    let scale = || {
+        train
+            .iter()
+            .flat_map(|f| f.features.iter())
+            .map(|v| v.get(Feature::FilterLiftScale))
+    };
+    match (scale().min(), scale().max()) {
+        (Some(lo), Some(hi)) => Envelope { lo, hi },
+        _ => Envelope::ANY,
+    }
+}
+
 impl Prep {
     pub fn fit(angle: Angle, features: &[Feature], train: &[&Flight]) -> Prep {
         let rows = || train.iter().flat_map(|f| f.features.iter());
@@ -197,6 +216,7 @@ impl Prep {
             out_sigma: if os > 0.0 { os } else { 1.0 },
             out_range: Envelope { lo, hi },
             turbulence: TurbulenceEnvelope::ANY,
+            lift_scale: Envelope::ANY,
         }
     }
 

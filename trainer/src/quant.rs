@@ -214,6 +214,9 @@ impl QCascade {
         let out = ref_mlp(&self.part2, x);
         let angle = out.clamp(p.out_range.lo as i64, p.out_range.hi as i64);
         clamped |= angle != out;
+        // As `CascadeNet::run` does: the filter's lift scale outside its training range.
+        let k = v.get(Feature::FilterLiftScale);
+        clamped |= k < p.lift_scale.lo || k > p.lift_scale.hi;
         // As `Estimator` does: a speed below the envelope's floor flags a model reading it, GPS
         // speed or the EGI velocity (`FeatureValues::low_speed`, `low_ground_speed`).
         let sources = p.features.iter().fold(0u32, |acc, f| acc | f.sources());
@@ -371,9 +374,10 @@ fn static_item(name: &str, q: &QCascade, out: &mut String) {
     chain_expr(&q.part2, out);
     let _ = writeln!(
         out,
-        ",\nout_range: {},\nturbulence: {},\n}};\n",
+        ",\nout_range: {},\nturbulence: {},\nlift_scale: {},\n}};\n",
         env_expr(&p.out_range),
-        turbulence_expr(&p.turbulence)
+        turbulence_expr(&p.turbulence),
+        env_expr(&p.lift_scale)
     );
 }
 

@@ -80,6 +80,7 @@ fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
             hi: 1_000_000,
         },
         turbulence: TurbulenceEnvelope::ANY,
+        lift_scale: Envelope::ANY,
     };
     let mut x = Vec::new();
     let mut xs = Vec::new();
@@ -141,6 +142,7 @@ fn core_net(q: &QCascade) -> CascadeNet<P1, P2, 3, 4> {
         ),
         out_range: p.out_range,
         turbulence: p.turbulence,
+        lift_scale: p.lift_scale,
     }
 }
 
@@ -219,6 +221,16 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
         r.clamped && n.2,
         "a model reading the EGI velocity: reference {r:?}, core {n:?}"
     );
+    // The filter's lift scale outside its recorded training range marks the frame in both, though
+    // it is not an input (these frames run no filter: the feature reads 0).
+    v.low_ground_speed = false;
+    let mut ql = q.clone();
+    ql.prep.lift_scale = Envelope { lo: 1, hi: 2 };
+    let nl = core_net(&ql);
+    assert!(!q.reference(&v).clamped && !net.run(&v).2);
+    let (r, n) = (ql.reference(&v), nl.run(&v));
+    assert!(r.clamped && n.2, "lift scale: reference {r:?}, core {n:?}");
+    assert_eq!((r.mid, r.angle), (n.0, n.1));
     // Vectors round-trip through the text format.
     let seq: Vec<(bool, SensorFrame)> = fr[..50]
         .iter()
