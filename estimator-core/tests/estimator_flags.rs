@@ -431,9 +431,8 @@ fn turbulence_beyond_the_trained_envelope_is_flagged_while_the_filter_has_input(
 }
 
 #[test]
-fn a_filter_lift_scale_outside_training_flags_a_model_that_runs_the_filter_even_without_reading_it()
-{
-    // α reads the filter's α and β (not its lift scale); β reads Table 1 channels only.
+fn a_filter_lift_scale_outside_training_flags_a_model_that_does_not_read_it() {
+    // α reads the filter's α and β, not its lift scale; β reads Table 1 channels only.
     let mut a = net_of(Feature::FilterAlpha, Feature::FilterBeta, 400_000_000);
     let b = net(Channel::Rudder, Channel::GyroP, 400_000);
     let flagged = |a: &CascadeNet<Part1, Part2, 2, 3>| {
@@ -461,12 +460,16 @@ fn a_filter_lift_scale_outside_training_flags_a_model_that_runs_the_filter_even_
         hi: 30_000,
     };
     assert!(flagged(&a).iter().all(|f| *f));
-    // A model that does not read the filter is exported with `ANY` (trainer::pipeline::train_angle):
-    // never flagged, though without a filter its lift scale feature reads 0.
-    let t = net(Channel::Rudder, Channel::GyroP, 400_000);
+    // The check is the range's, not the filter's: a model that does not run the filter reads a
+    // lift scale of 0, so `trainer::pipeline::train_angle` exports `ANY` for it.
+    let mut t = net(Channel::Rudder, Channel::GyroP, 400_000);
+    t.lift_scale = Envelope {
+        lo: 5_000,
+        hi: 15_000,
+    };
     let mut e = Estimator::new(&t, &b);
     assert!(
-        !e.step(&egi_frame(0, 200_000))
+        e.step(&egi_frame(0, 200_000))
             .flags
             .has(Flags::OUT_OF_ENVELOPE)
     );

@@ -744,8 +744,9 @@ fn control_laws(s: &mut String, p: &Profile) {
             )
         ),
     );
-    // Re-climb: at least military power, afterburner as the speed falls toward the recovery speed.
-    // Down to idle (0), as a speed-holding pilot or autothrottle flies it.
+    // Flight Zone: the random draws, down to idle (0) as a speed-holding pilot or autothrottle flies
+    // it. Danger: by airspeed, idle when fast. Re-climb: at least military power, afterburner as
+    // the speed falls toward the recovery speed.
     law(
         s,
         "throttle: random, by airspeed in Danger, power up in Re-climb",

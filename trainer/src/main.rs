@@ -470,7 +470,10 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
         println!("{}", serde_json::to_string(&v)?);
     } else {
         println!("compiled-in model:\n{prov}");
-        println!("sensor suite of the frames: {}", suite.name());
+        println!(
+            "flights: {split}; sensor suite of the frames: {}",
+            suite.name()
+        );
         println!("α (deg):");
         print_metrics("int8", &e.alpha);
         println!("β (deg):");

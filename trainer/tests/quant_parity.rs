@@ -224,13 +224,15 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
     // The filter's lift scale outside its recorded training range marks the frame in both, though
     // it is not an input (these frames run no filter: the feature reads 0).
     v.low_ground_speed = false;
-    let mut ql = q.clone();
-    ql.prep.lift_scale = Envelope { lo: 1, hi: 2 };
-    let nl = core_net(&ql);
     assert!(!q.reference(&v).clamped && !net.run(&v).2);
-    let (r, n) = (ql.reference(&v), nl.run(&v));
-    assert!(r.clamped && n.2, "lift scale: reference {r:?}, core {n:?}");
-    assert_eq!((r.mid, r.angle), (n.0, n.1));
+    // At both edges of the range (0 inside) and one LSB beyond each.
+    for (lo, hi, out) in [(0, 5, false), (-5, 0, false), (1, 5, true), (-5, -1, true)] {
+        let mut ql = q.clone();
+        ql.prep.lift_scale = Envelope { lo, hi };
+        let (r, n) = (ql.reference(&v), core_net(&ql).run(&v));
+        assert_eq!((r.clamped, n.2), (out, out), "lift scale range {lo}..={hi}");
+        assert_eq!((r.mid, r.angle), (n.0, n.1));
+    }
     // Vectors round-trip through the text format.
     let seq: Vec<(bool, SensorFrame)> = fr[..50]
         .iter()

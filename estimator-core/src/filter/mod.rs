@@ -260,10 +260,11 @@ pub struct Output {
     pub sigma_beta_rad: f32,
     /// Normalised innovation squared of this step's measurement (0 when none).
     pub nis: f32,
-    /// Running mean of the NIS over [`NIS_TAU_S`] (steps with a measurement only; held through an
-    /// outage). A consistent filter averages the measurement's degrees of freedom, 2; model or
-    /// sensor trouble and turbulence the model does not follow push it up. It starts at
-    /// [`Config::gate`] after a start or restart, so it proves consistency rather than assume it.
+    /// Running mean of the NIS over [`NIS_TAU_S`] (steps with a measurement only). A consistent
+    /// filter averages the measurement's degrees of freedom, 2; model or sensor trouble and
+    /// turbulence the model does not follow push it up. It starts at [`Config::gate`] after a
+    /// start, a restart or a step without inputs (the held output of that step keeps the old
+    /// value), so the filter proves consistency again rather than assume it.
     pub nis_mean: f32,
     /// Turbulence index, rad: the RMS over [`TURBULENCE_TAU_S`] of the frame-to-frame change of
     /// the estimated wind over the airspeed (the angle the air mass turned the relative wind by
@@ -686,6 +687,7 @@ impl AirDataFilter {
         if !inputs_valid || !inp.is_finite() {
             self.prev = None;
             self.turb_settle = TURBULENCE_SETTLE_STEPS;
+            self.nis_mean = self.cfg.gate;
             if !self.healthy() {
                 self.restart();
                 flags |= flags::RESTARTED;
