@@ -25,7 +25,8 @@ struct TrainArgs {
     data: PathBuf,
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Network sizes: small (CI), medium, large (the largest that fits the target budget), or paper.
+    /// Network sizes: small (CI), medium, large (the largest that fits the target budget),
+    /// medium-wide-beta (α as medium, β as large: the shipped sizes), or paper.
     #[arg(long, default_value = "small")]
     config: String,
     /// Epochs (default: 40 small, 30 medium, large and paper).
@@ -297,7 +298,8 @@ enum Cmd {
 
 impl TrainArgs {
     fn size(&self) -> Result<Size> {
-        Size::parse(&self.config).context("--config must be small, medium, large or paper")
+        Size::parse(&self.config)
+            .context("--config must be small, medium, large, medium-wide-beta or paper")
     }
 
     fn epochs(&self, size: Size) -> usize {
@@ -584,8 +586,12 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
         .with_context(|| format!("--job {k}: the grid has jobs 0..{}", jobs.len()))?;
     let t0 = std::time::Instant::now();
     let run = || -> Result<Scores> {
-        let size = Size::parse(&job.size)
-            .with_context(|| format!("size `{}`: small, medium, large or paper", job.size))?;
+        let size = Size::parse(&job.size).with_context(|| {
+            format!(
+                "size `{}`: small, medium, large, medium-wide-beta or paper",
+                job.size
+            )
+        })?;
         let suite = parse_suite(&job.suite)?;
         let fs = FeatureSet::parse(&job.features)?;
         fs.check_suite(suite)?;

@@ -16,6 +16,9 @@ pub enum Size {
     /// α 128-64-32, β 64-32-16 per part: the largest that keeps both cascades, the filter and the
     /// link inside the Cortex-M4F step budget (`docs/results/wcet.md`).
     Large,
+    /// α as `Medium`, β as `Large` (α 64-32-16, β 64-32-16 per part): the shipped sizes, each
+    /// angle's the better on the validation flights over three seeds (`docs/results/hybrid.md`).
+    MediumWideBeta,
     /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
     Paper,
 }
@@ -26,6 +29,7 @@ impl Size {
             "small" => Some(Size::Small),
             "medium" => Some(Size::Medium),
             "large" => Some(Size::Large),
+            "medium-wide-beta" => Some(Size::MediumWideBeta),
             "paper" => Some(Size::Paper),
             _ => None,
         }
@@ -35,23 +39,24 @@ impl Size {
             Size::Small => "small",
             Size::Medium => "medium",
             Size::Large => "large",
+            Size::MediumWideBeta => "medium-wide-beta",
             Size::Paper => "paper",
         }
     }
     pub fn default_epochs(self) -> usize {
         match self {
             Size::Small => 40,
-            Size::Medium | Size::Large | Size::Paper => 30,
+            Size::Medium | Size::Large | Size::MediumWideBeta | Size::Paper => 30,
         }
     }
     pub fn hidden(self, a: Angle) -> &'static [usize] {
         match (self, a) {
             (Size::Small, Angle::Alpha) => &[32, 16],
             (Size::Small, Angle::Beta) => &[16, 8],
-            (Size::Medium, Angle::Alpha) => &[64, 32, 16],
+            (Size::Medium | Size::MediumWideBeta, Angle::Alpha) => &[64, 32, 16],
             (Size::Medium, Angle::Beta) => &[32, 16],
             (Size::Large, Angle::Alpha) => &[128, 64, 32],
-            (Size::Large, Angle::Beta) => &[64, 32, 16],
+            (Size::Large | Size::MediumWideBeta, Angle::Beta) => &[64, 32, 16],
             (Size::Paper, Angle::Alpha) => &[512, 256, 128, 64, 32],
             (Size::Paper, Angle::Beta) => &[32, 16, 8, 4, 2],
         }
