@@ -88,18 +88,24 @@ impl Flight {
         Ok(())
     }
 
-    /// Writes the flight as a CSV file.
-    pub fn write_csv(&self, path: &Path) -> Result<(), DatasetError> {
+    /// Writes the flight as a CSV file; returns the file's SHA-256 (lowercase hex), hashed on the
+    /// way out rather than read back.
+    pub fn write_csv(&self, path: &Path) -> Result<String, DatasetError> {
         let f = std::fs::File::create(path).map_err(|source| DatasetError::Io {
             action: "create",
             path: path.to_path_buf(),
             source,
         })?;
-        self.write_csv_to(std::io::BufWriter::new(f))
+        let mut hashed = Hashing {
+            inner: std::io::BufWriter::new(f),
+            hash: Sha256::new(),
+        };
+        self.write_csv_to(&mut hashed)
             .map_err(|e| DatasetError::Csv {
                 path: path.to_path_buf(),
                 message: e.to_string(),
-            })
+            })?;
+        Ok(hex(hashed.hash))
     }
 
     /// Reads a flight CSV (columns found by name; extra columns are ignored). The name is the file stem;
@@ -360,6 +366,29 @@ pub fn par_map<T: Sync, R: Send>(
     done.into_iter().map(|(_, r)| r).collect()
 }
 
+/// A writer that hashes every byte it passes on (the CSV's SHA-256 without reading the file back).
+struct Hashing<W> {
+    inner: W,
+    hash: Sha256,
+}
+
+impl<W: Write> Write for Hashing<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hash.update(buf.get(..n).unwrap_or(buf));
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// A finished SHA-256 as lowercase hex.
+fn hex(h: Sha256) -> String {
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
 /// SHA-256 of a file, lowercase hex.
 pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {
     let mut f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
@@ -380,7 +409,7 @@ pub fn sha256_file(path: &Path) -> Result<String, DatasetError> {
         }
         h.update(&buf[..n]);
     }
-    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+    Ok(hex(h))
 }
 
 /// The workspace's git revision (`-dirty` when the tree has changes), or `unknown`.
@@ -440,7 +469,7 @@ pub fn write_flight(
 ) -> Result<FlightEntry, DatasetError> {
     let file = format!("{}.csv", flight.name);
     let path = dir.join(&file);
-    flight.write_csv(&path)?;
+    let sha256 = flight.write_csv(&path)?;
     Ok(FlightEntry {
         file,
         name: flight.name.clone(),
@@ -449,7 +478,7 @@ pub fn write_flight(
         seed,
         duration_s: flight.duration_s(),
         samples: flight.samples.len(),
-        sha256: sha256_file(&path)?,
+        sha256,
         cut: flight.cut.clone(),
         zones: flight.zones,
         faults: Vec::new(),
@@ -483,9 +512,11 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("hil-ds-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("t.csv");
-        f.write_csv(&p).unwrap();
+        let hash = f.write_csv(&p).unwrap();
         let g = Flight::read_csv(&p).unwrap();
         assert_eq!(f, g);
+        // The hash taken on the way out is the file's.
+        assert_eq!(hash, sha256_file(&p).unwrap());
         std::fs::remove_dir_all(&dir).ok();
     }
 
