@@ -320,8 +320,8 @@ struct Model<'m> {
     sources: u32,
     lags: u8,
     reads_filter: bool,
-    /// Its turbulence envelope, if it reads the filter.
-    turbulence: Option<TurbulenceEnvelope>,
+    /// Its turbulence envelope (judged only if it reads the filter).
+    turbulence: TurbulenceEnvelope,
 }
 
 impl<'m> Model<'m> {
@@ -332,7 +332,7 @@ impl<'m> Model<'m> {
             sources: net.sources(),
             lags: net.lags(),
             reads_filter,
-            turbulence: reads_filter.then(|| net.turbulence()),
+            turbulence: net.turbulence(),
         }
     }
 }
@@ -450,13 +450,12 @@ impl<'m> Estimator<'m> {
                 flags |= Flags::FILTER_DIVERGED;
             }
             // Held filter outputs (no input this step, or a restart) are not judged again.
-            let turbulent = m.turbulence.is_some_and(|t| {
-                values.filter_fresh()
-                    && t.exceeded(
-                        values.get(Feature::FilterAirspeed),
-                        values.get(Feature::FilterTurbulence),
-                    )
-            });
+            let turbulent = m.reads_filter
+                && values.filter_fresh()
+                && m.turbulence.exceeded(
+                    values.get(Feature::FilterAirspeed),
+                    values.get(Feature::FilterTurbulence),
+                );
             if turbulent {
                 flags |= Flags::TURBULENCE;
             }

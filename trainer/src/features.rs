@@ -114,17 +114,11 @@ pub const EGI_BETA: [Feature; 6] = [
     Feature::Sensor(Channel::Fuel),
 ];
 
-/// What the `egi-hybrid` set adds to `egi-dynamics`: the model-based air-data filter's estimates
-/// (`estimator_core::filter`: α, β and their 1σ, air speed, lift scale). The network learns where to
-/// trust the filter (slow, high-α flight, where lift tells α) and where its own inputs do better.
-pub const FILTER_FEATURES: [Feature; 6] = [
-    Feature::FilterAlpha,
-    Feature::FilterBeta,
-    Feature::FilterSigmaAlpha,
-    Feature::FilterSigmaBeta,
-    Feature::FilterAirspeed,
-    Feature::FilterLiftScale,
-];
+/// What the `egi-hybrid` set adds to `egi-hybrid-fast`: the filter's air speed and lift scale, the
+/// outputs that re-converge slowly after an outage. With them the network sees all the model-based
+/// air-data filter's estimates (`estimator_core::filter`) and learns where to trust the filter
+/// (slow, high-α flight, where lift tells α) and where its own inputs do better.
+pub const FILTER_SLOW_FEATURES: [Feature; 2] = [Feature::FilterAirspeed, Feature::FilterLiftScale];
 
 /// The filter outputs that are back within a second of a sensor outage: α, β and their 1σ. Its air
 /// speed (through the along-track wind) and lift scale re-converge over tens of seconds when an
@@ -146,7 +140,7 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
 /// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
-/// (egi-dynamics + the air-data filter's outputs, [`FILTER_FEATURES`]), `egi-hybrid-fast`
+/// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
 /// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]: the
 /// shipped set), `egi-hybrid-turb`
 /// (egi-hybrid + the filter's turbulence index), or explicit
@@ -269,10 +263,10 @@ impl FeatureSet {
                     .collect(),
             }),
             "egi-dynamics" => FeatureSet::parse("dynamics")?.extended(spec, &EGI_ALPHA, &EGI_BETA),
-            "egi-hybrid" => FeatureSet::parse("egi-dynamics")?.extended(
+            "egi-hybrid" => FeatureSet::parse("egi-hybrid-fast")?.extended(
                 spec,
-                &FILTER_FEATURES,
-                &FILTER_FEATURES,
+                &FILTER_SLOW_FEATURES,
+                &FILTER_SLOW_FEATURES,
             ),
             "egi-hybrid-fast" => FeatureSet::parse("egi-dynamics")?.extended(
                 spec,

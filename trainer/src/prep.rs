@@ -167,16 +167,22 @@ pub fn turbulence_envelope(train: &[&Flight]) -> TurbulenceEnvelope {
 /// input's envelope): outside it a model that reads the filter is flown where the aerodynamic model
 /// and the sensors disagree as training never saw, and `CascadeNet::run` says so.
 pub fn lift_scale_envelope(train: &[&Flight]) -> Envelope {
-    let scale = || {
+    training_range(train, Feature::FilterLiftScale).unwrap_or(Envelope::ANY)
+}
+
+/// Smallest and largest value of `f` over the training frames (`None` without frames): what an
+/// input's envelope is.
+fn training_range(train: &[&Flight], f: Feature) -> Option<Envelope> {
+    let values = || {
         train
             .iter()
-            .flat_map(|f| f.features.iter())
-            .map(|v| v.get(Feature::FilterLiftScale))
+            .flat_map(|fl| fl.features.iter())
+            .map(|v| v.get(f))
     };
-    match (scale().min(), scale().max()) {
-        (Some(lo), Some(hi)) => Envelope { lo, hi },
-        _ => Envelope::ANY,
-    }
+    Some(Envelope {
+        lo: values().min()?,
+        hi: values().max()?,
+    })
 }
 
 impl Prep {
@@ -188,9 +194,7 @@ impl Prep {
             let vals = rows().map(|v| v.get(*f) as f64);
             let (m, s) = mean_std(vals);
             norm.push(norm_for(m.round() as i32, s));
-            let lo = rows().map(|v| v.get(*f)).min().unwrap_or(0);
-            let hi = rows().map(|v| v.get(*f)).max().unwrap_or(0);
-            envelope.push(Envelope { lo, hi });
+            envelope.push(training_range(train, *f).unwrap_or(Envelope { lo: 0, hi: 0 }));
         }
         let mid = || {
             train

@@ -316,6 +316,12 @@ pub const TURBULENCE_SETTLE_STEPS: u16 = 20;
 /// density; beyond it the filter stops (no input) rather than trust an old altitude.
 pub const MAX_ALT_COAST_S: f32 = 120.0;
 
+/// One step of an exponential running mean with time constant `tau_s` over a step of `dt` s.
+fn running_mean(mean: &mut f32, value: f32, dt: f32, tau_s: f32) {
+    let a = dt / (tau_s + dt);
+    *mean += a * (value - *mean);
+}
+
 fn wrap_pi(a: f32) -> f32 {
     let two_pi = 2.0 * core::f32::consts::PI;
     a - two_pi * libm::floorf((a + core::f32::consts::PI) / two_pi)
@@ -477,11 +483,18 @@ impl AirDataFilter {
             sq(c.gust_sigma),
             sq(c.lift_scale_sigma0),
         ]));
-        self.prev = None;
         self.gated_run = 0;
         self.turb_ms = 0.0;
-        self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.last.turbulence_rad = 0.0;
+        self.unsettle();
+    }
+
+    /// What a start, a restart and a step without inputs all forget: the previous input, the
+    /// settled wind the turbulence index compares against, and the proof that the model fits (the
+    /// NIS mean starts again at the gate).
+    fn unsettle(&mut self) {
+        self.prev = None;
+        self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.nis_mean = self.cfg.gate;
     }
 
@@ -502,9 +515,8 @@ impl AirDataFilter {
             let v = airspeed.max(self.cfg.min_airspeed_mps);
             let d = (wind - Vector3::from(self.last.wind_ned_mps)).norm() / v;
             let d2 = d * d * (TURBULENCE_FRAME_S / dt);
-            let a = dt / (TURBULENCE_TAU_S + dt);
             if d2.is_finite() {
-                self.turb_ms += a * (d2 - self.turb_ms);
+                running_mean(&mut self.turb_ms, d2, dt, TURBULENCE_TAU_S);
             }
         }
         libm::sqrtf(self.turb_ms.max(0.0))
@@ -685,9 +697,7 @@ impl AirDataFilter {
         };
         self.predict(dt);
         if !inputs_valid || !inp.is_finite() {
-            self.prev = None;
-            self.turb_settle = TURBULENCE_SETTLE_STEPS;
-            self.nis_mean = self.cfg.gate;
+            self.unsettle();
             if !self.healthy() {
                 self.restart();
                 flags |= flags::RESTARTED;
@@ -705,8 +715,7 @@ impl AirDataFilter {
         if let Some(n) = nis {
             // `update` returns finite values only; a gated one counts as the gate, so one wild
             // innovation cannot hold the mean up for long.
-            let a = dt / (NIS_TAU_S + dt);
-            self.nis_mean += a * (n.min(self.cfg.gate) - self.nis_mean);
+            running_mean(&mut self.nis_mean, n.min(self.cfg.gate), dt, NIS_TAU_S);
         }
         let nis = nis.unwrap_or(0.0);
         self.prev = Some(*inp);
