@@ -7,11 +7,13 @@ ORIGINAL stdout):
   load\tSCRIPT\tINITFILE   load a runscript at the dt it declares, exactly as stock JSBSim runs it
                           (INITFILE may be empty: JSBSim looks in the aircraft folder), run the
                           initial conditions; payload = f64 little-endian dt in seconds
-  watch\tK\tP1\tP2...     the properties returned after every step, in this order; a name
-                          prefixed with '?' is optional: absent from the model, it reads NaN; a
-                          name prefixed with '~' is read only on every K-th step since `load`
-                          (the 20 Hz sample instants) and reads NaN on the others (the two
-                          prefixes combine as '~?'); K 0 reads every property every step
+  watch\tL\tM0..ML-1\tP1\tP2...
+                          the properties returned after every step, in this order, and when each
+                          is read: step k (counted from 0 since `load`) reads property i when
+                          k == 0 or bit i of the hexadecimal mask M(k mod L) is set, and NaN
+                          otherwise (a property needed at some steps only costs nothing at the
+                          others); a name prefixed with '?' is optional: absent from the model, it
+                          reads NaN
   step\tN                 run up to N steps; payload = u32 steps done (fewer when the script ended)
                           + that many rows of little-endian f64, one per watched property
   run\tN                  run up to N steps reading nothing (raw JSBSim stepping, the benchmark's
@@ -32,21 +34,25 @@ sys.stdout = sys.stderr
 
 
 def reply(ok, payload=b""):
-    _frames.write((b"O" if ok else b"E") + struct.pack("<I", len(payload)) + payload)
+    for part in ((b"O" if ok else b"E") + struct.pack("<I", len(payload)), payload):
+        view = memoryview(part)
+        while view:  # an unbuffered write may take only part of it
+            view = view[_frames.write(view):]
 
 
 def sampler(getters):
-    """One function that reads the watched properties and packs the row: `pack(g0(), g1(), ...)`
-    with the getters as local names, NaN where a getter is None. Against a loop over the getters
-    building a list, this saves the list, the iteration and a global lookup per property, per
-    120 Hz step (docs/results/generate-bench.md)."""
+    """One function that reads the watched properties and packs the row into a buffer:
+    `pack_into(buf, off, g0(), g1(), ...)` with the getters as local names, NaN where a getter is
+    None. Against a loop over the getters building a list, this saves the list, the iteration and
+    a global lookup per property, per 120 Hz step; writing into one reused buffer saves a bytes
+    object per step and their join per reply (docs/results/generate-bench.md)."""
     names = [f"g{i}" for i in range(len(getters))]
     scope = {n: g for n, g in zip(names, getters) if g is not None}
-    scope["pack"] = struct.Struct("<%dd" % len(getters)).pack
+    scope["pack_into"] = struct.Struct("<%dd" % len(getters)).pack_into
     scope["nan_"] = float("nan")
     args = ", ".join(f"{n}={n}" for n in list(scope))
-    body = ", ".join("nan_" if g is None else f"{n}()" for n, g in zip(names, getters))
-    exec(f"def sample({args}):\n    return pack({body})\n", scope)
+    body = "".join(", nan_" if g is None else f", {n}()" for n, g in zip(names, getters))
+    exec(f"def sample(buf, off, {args}):\n    pack_into(buf, off{body})\n", scope)
     return scope["sample"]
 
 
@@ -59,8 +65,8 @@ def main():
     fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
     fdm.set_debug_level(0)
     pm = fdm.get_property_manager()
-    sample = fast = sampler([])
-    every, steps = 1, 0
+    full = sampler([])
+    cycle, steps, width, buf = [full], 0, 0, bytearray(4)
     reply(True, jsbsim.__version__.encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")
@@ -85,11 +91,13 @@ def main():
                 steps = 0
                 reply(True, struct.pack("<d", fdm.get_delta_t()))
             elif cmd == "watch":
-                every = int(f[1]) or 1  # 0: every property every step
-                found, missing, sampled = [], [], []
-                for p in f[2:]:
-                    sampled.append(p.startswith("~"))
-                    p = p.lstrip("~")
+                period = int(f[1])
+                masks = [int(m, 16) for m in f[2:2 + period]]
+                if period < 1 or len(masks) != period:
+                    reply(False, f"watch: {period} masks announced, {len(masks)} sent".encode())
+                    continue
+                found, missing = [], []
+                for p in f[2 + period:]:
                     optional = p.startswith("?")
                     n = pm.get_node(p[1:] if optional else p, False)
                     if n is not None or optional:
@@ -100,24 +108,33 @@ def main():
                     reply(False, ("unknown properties: " + ", ".join(missing)).encode())
                 else:
                     getters = [None if n is None else n.get_double_value for n in found]
-                    sample = sampler(getters)
-                    fast = sampler([None if s else g for g, s in zip(getters, sampled)])
+                    width = len(getters)
+                    full = sampler(getters)
+                    made = {}
+                    for m in masks:
+                        if m not in made:
+                            made[m] = sampler([g if m >> i & 1 else None for i, g in enumerate(getters)])
+                    cycle = [made[m] for m in masks]
                     reply(True)
             elif cmd == "step":
                 n = int(f[1])
-                rows = []
-                append = rows.append
+                row = 8 * width
+                if len(buf) < 4 + n * row:
+                    buf = bytearray(4 + n * row)
                 run = fdm.run
-                base = steps
-                done = 0
+                length = len(cycle)
+                done, off = 0, 4
                 while done < n:
+                    k = steps + done
                     done += 1
                     alive = run()
-                    append(sample() if (base + done) % every == 0 else fast())
+                    (cycle[k % length] if k else full)(buf, off)
+                    off += row
                     if not alive:
                         break
-                steps = base + done
-                reply(True, struct.pack("<I", done) + b"".join(rows))
+                steps += done
+                struct.pack_into("<I", buf, 0, done)
+                reply(True, memoryview(buf)[:off])
             elif cmd == "run":
                 n = int(f[1])
                 run = fdm.run

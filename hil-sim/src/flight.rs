@@ -16,6 +16,34 @@ pub const FT_TO_M: f64 = 0.3048;
 /// Pounds (mass) to kilograms.
 pub const LB_TO_KG: f64 = 0.453_592_37;
 
+/// A set of 120 Hz steps: the steps `k` with `k % period == offset`, counted from 0 (the steps
+/// since a script was loaded, which are also `sensors::SensorModel::step`'s calls).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Every {
+    /// At least 1.
+    pub period: u64,
+    /// Below `period`.
+    pub offset: u64,
+}
+
+impl Every {
+    /// Every `period`-th step, where `k + lead` is a multiple of `period`, `lag` steps earlier:
+    /// the steps whose value a sensor refreshed on `(k + lead) % period == 0` reads when it reports
+    /// the truth `lag` steps old.
+    pub fn before(period: u64, lead: u64, lag: u64) -> Every {
+        let period = period.max(1);
+        let shift = (lead % period + lag % period) % period;
+        Every {
+            period,
+            offset: (period - shift) % period,
+        }
+    }
+
+    pub fn contains(self, k: u64) -> bool {
+        k % self.period.max(1) == self.offset
+    }
+}
+
 /// Truth columns, in CSV order (after `time_s`).
 pub const TRUTH_COLUMNS: [&str; TRUTH_COUNT] = [
     "alpha_deg",

@@ -4,12 +4,14 @@
 
 use std::path::Path;
 
-use crate::flight::{FT_TO_M, Flight, LB_TO_KG, SIM_HZ, STEPS_PER_SAMPLE, Sample, Zone, ZoneTimes};
-use crate::plant::{
-    AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, SAMPLED,
-    TEF_DEG_PER_UNIT, WATCH, at, load_f16_script, truth_of,
+use crate::flight::{
+    Every, FT_TO_M, Flight, LB_TO_KG, SIM_HZ, STEPS_PER_SAMPLE, Sample, Zone, ZoneTimes,
 };
-use crate::sensors::{SensorConfig, SensorInput, SensorModel};
+use crate::plant::{
+    AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan,
+    TEF_DEG_PER_UNIT, TRUTH_ONLY, WATCH, at, load_f16_script, truth_of,
+};
+use crate::sensors::{InputSchedule, SensorConfig, SensorInput, SensorModel};
 
 /// Settings of one flight.
 #[derive(Clone, Debug, Default)]
@@ -56,6 +58,39 @@ fn sensor_input(r: &[f64]) -> SensorInput {
     }
 }
 
+/// The steps (from 0 after the load) that become 20 Hz samples: every sixth, the first at step 5.
+const SAMPLE_STEPS: Every = Every {
+    period: STEPS_PER_SAMPLE as u64,
+    offset: STEPS_PER_SAMPLE as u64 - 1,
+};
+
+/// When each [`WATCH`] property is read: the truth at the samples ([`truth_of`]); the sensor inputs
+/// that the models use only at some steps ([`InputSchedule`]) there and at the samples; everything
+/// else (the IMU's inputs, the surfaces, mass, the ground check, the zone) at every step. The
+/// rows then hold exactly what a read at every step would give wherever it is used, so the
+/// flight is the same bit for bit (the sensors' tests and `data_generate` check this).
+fn read_plan(s: &InputSchedule) -> ReadPlan {
+    let mut when: Vec<Option<Vec<Every>>> = vec![None; at::COUNT];
+    let mut set = |i: usize, steps: &[Every]| {
+        if let Some(w) = when.get_mut(i) {
+            *w = Some(steps.iter().copied().chain([SAMPLE_STEPS]).collect());
+        }
+    };
+    for i in TRUTH_ONLY {
+        set(i, &[]);
+    }
+    set(at::GPS_SPEED, &[s.gps]);
+    set(at::H_SL, &[s.gps]);
+    set(at::PHI, &s.roll_pitch);
+    set(at::THETA, &s.roll_pitch);
+    set(at::PSI, &s.heading);
+    for i in [at::P, at::Q, at::R, at::V_NORTH, at::V_EAST, at::V_DOWN] {
+        set(i, &[s.egi_velocity]);
+    }
+    set(at::FUEL, &[s.fuel]);
+    ReadPlan::new(&when)
+}
+
 /// Flies a JSBSim runscript (aircraft `f16`) to its end (or `cfg.max_time_s`) at 120 Hz and returns
 /// the 20 Hz flight. The initialize file is taken from beside the script when it is there, else
 /// JSBSim looks in the aircraft folder (where the stock `reset*` files live). A flight that hits the
@@ -73,11 +108,9 @@ pub fn fly_script_with(
     cfg: &FlyConfig,
 ) -> Result<Flight, PlantError> {
     let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
-    // Truth-only properties (`~`) are read where a sample is taken: every STEPS_PER_SAMPLE-th step
-    // since the load, as `step_count` below counts.
-    plant.watch_sampled(&WATCH, STEPS_PER_SAMPLE)?;
-
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
+    let plan = read_plan(&sensors.input_schedule());
+    plant.watch_planned(&WATCH, &plan)?;
     let name = cfg.name.clone().unwrap_or_else(|| {
         script
             .file_stem()
@@ -90,25 +123,27 @@ pub fn fly_script_with(
         cut: None,
         zones: None,
     };
-    let mut step_count: u64 = 0;
+    // Steps since the load, counted from 0 as the read plan counts them.
+    let mut k: u64 = 0;
     let mut zone_steps: Option<[u64; 3]> = None;
     let mut airborne = false;
     'outer: loop {
         let rows = plant.step(SIM_HZ * 5)?;
         let ended = rows.len() < (SIM_HZ * 5) as usize;
         for r in &rows {
-            step_count += 1;
+            let read = plan.at(k);
+            let sample_step = SAMPLE_STEPS.contains(k);
+            k += 1;
             let t = r[at::TIME];
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
                 break 'outer;
             }
-            let sample_step = step_count.is_multiple_of(u64::from(STEPS_PER_SAMPLE));
             // The optional zone column (last) is NaN for scripts without a generator state; the
-            // truth-only ones are NaN between samples.
+            // properties not read at this step are NaN.
             if r[..at::ZONE]
                 .iter()
-                .zip(SAMPLED)
-                .any(|(v, sampled)| (sample_step || !sampled) && !v.is_finite())
+                .zip(read)
+                .any(|(v, read)| *read && !v.is_finite())
             {
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 
-use crate::flight::Truth;
+use crate::flight::{Every, Truth};
 pub use crate::flight::{FT_TO_M, LB_TO_KG, SAMPLE_HZ, SIM_HZ, STEPS_PER_SAMPLE};
 
 /// How far a script's rate may be from [`SIM_HZ`] (relative) and still be flown: the stock scripts
@@ -219,18 +219,31 @@ impl Plant {
             })
     }
 
-    /// Chooses the properties returned after every step. A name prefixed with `?` is optional: a
-    /// property the loaded model and script do not have reads NaN instead of failing.
+    /// Chooses the properties returned after every step, each read at every step. A name prefixed
+    /// with `?` is optional: a property the loaded model and script do not have reads NaN instead
+    /// of failing.
     pub fn watch(&mut self, props: &[&str]) -> Result<(), PlantError> {
-        self.watch_sampled(props, 0)
+        self.watch_planned(props, &ReadPlan::every_step(props.len()))
     }
 
-    /// [`Plant::watch`], where a name prefixed with `~` is read only on every `every`-th step since
-    /// the script was loaded (the sample instants) and reads NaN on the others: each property read
-    /// is a Python call, and the truth-only properties are needed only where a sample is taken.
-    pub fn watch_sampled(&mut self, props: &[&str], every: u32) -> Result<(), PlantError> {
-        let every = every.to_string();
-        let mut f = vec!["watch", every.as_str()];
+    /// [`Plant::watch`], each property read only at the steps `plan` names and NaN at the others:
+    /// each read is a Python call per 120 Hz step, so what is needed only at some steps (the truth
+    /// at the 20 Hz samples, the truth behind a GPS fix) is read only there.
+    pub fn watch_planned(&mut self, props: &[&str], plan: &ReadPlan) -> Result<(), PlantError> {
+        if plan.width() != props.len() {
+            return Err(PlantError::Bridge {
+                command: "watch".into(),
+                message: format!(
+                    "read plan for {} properties, {} watched",
+                    plan.width(),
+                    props.len()
+                ),
+            });
+        }
+        let masks = plan.hex_masks();
+        let period = masks.len().to_string();
+        let mut f = vec!["watch", period.as_str()];
+        f.extend(masks.iter().map(String::as_str));
         f.extend_from_slice(props);
         self.request(&f)?;
         self.watched = props.len();
@@ -270,6 +283,97 @@ impl Plant {
                 message: "reply shorter than its count".into(),
             })?;
         Ok(u32::from_le_bytes(*count))
+    }
+}
+
+/// Which watched properties the bridge reads at each step. Step `k` (counted from 0 after `load`)
+/// reads every property when `k == 0`, and otherwise those its cycle marks at `k % cycle length`;
+/// the others read NaN.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadPlan {
+    /// Per step of the cycle, per property: read?
+    cycle: Vec<Vec<bool>>,
+    /// Step 0: every property.
+    all: Vec<bool>,
+}
+
+/// The longest cycle a [`ReadPlan`] keeps (20 s at 120 Hz); the steps of a longer one read every
+/// property.
+pub const MAX_READ_CYCLE: u64 = 2400;
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 { a } else { gcd(b, a % b) }
+}
+
+impl ReadPlan {
+    /// Every property at every step.
+    pub fn every_step(width: usize) -> ReadPlan {
+        ReadPlan {
+            cycle: vec![vec![true; width]],
+            all: vec![true; width],
+        }
+    }
+
+    /// Property `i` read at the steps in any of `when[i]`, or at every step for `None`. When the
+    /// periods' least common multiple exceeds [`MAX_READ_CYCLE`], every property at every step.
+    pub fn new(when: &[Option<Vec<Every>>]) -> ReadPlan {
+        let len = when.iter().flatten().flatten().try_fold(1, |l: u64, e| {
+            let p = e.period.max(1);
+            let l = l / gcd(l, p) * p;
+            (l <= MAX_READ_CYCLE).then_some(l)
+        });
+        let Some(len) = len else {
+            return ReadPlan::every_step(when.len());
+        };
+        let cycle = (0..len)
+            .map(|k| {
+                let at = |es: &Vec<Every>| es.iter().any(|e| e.contains(k));
+                when.iter().map(|w| w.as_ref().is_none_or(at)).collect()
+            })
+            .collect();
+        ReadPlan {
+            cycle,
+            all: vec![true; when.len()],
+        }
+    }
+
+    /// Properties per step.
+    pub fn width(&self) -> usize {
+        self.all.len()
+    }
+
+    /// Steps before the plan repeats.
+    pub fn cycle_len(&self) -> usize {
+        self.cycle.len()
+    }
+
+    /// Which properties step `k` reads, in watch order.
+    pub fn at(&self, k: u64) -> &[bool] {
+        let n = self.cycle.len().max(1) as u64;
+        match self.cycle.get((k % n) as usize) {
+            Some(m) if k > 0 => m,
+            _ => &self.all,
+        }
+    }
+
+    /// The cycle as the bridge takes it: per step, a hexadecimal number whose bit `i` is set when
+    /// property `i` is read.
+    fn hex_masks(&self) -> Vec<String> {
+        self.cycle
+            .iter()
+            .map(|m| {
+                let nibbles = m.len().div_ceil(4).max(1);
+                (0..nibbles)
+                    .rev()
+                    .map(|n| {
+                        let v = (0..4)
+                            .filter(|b| m.get(n * 4 + b).copied().unwrap_or(false))
+                            .fold(0, |v, b| v | (1 << b));
+                        char::from_digit(v, 16).unwrap_or('0')
+                    })
+                    .collect()
+            })
+            .collect()
     }
 }
 
@@ -368,21 +472,20 @@ pub(crate) mod at {
     pub const COUNT: usize = ZONE + 1;
 }
 
-/// Properties read after every step, each written next to its position in [`at`]; a position
-/// left without a name fails the build. The truth-only ones (air data, position, wind: `~`, see
-/// [`Plant::watch_sampled`]) are read at the 20 Hz sample instants only; everything the sensor
-/// models, the ground check and the zone count need is read at every 120 Hz step.
+/// The properties a flight watches, each written next to its position in [`at`]; a position left
+/// without a name fails the build. When each is read is `crate::fly`'s read plan: the truth at
+/// the 20 Hz sample instants, each sensor input where its model uses it.
 pub(crate) const WATCH: [&str; at::COUNT] = {
     let mut w = [""; at::COUNT];
     w[at::TIME] = "simulation/sim-time-sec";
-    w[at::ALPHA] = "~aero/alpha-deg";
-    w[at::BETA] = "~aero/beta-deg";
-    w[at::U_AERO] = "~velocities/u-aero-fps";
-    w[at::V_AERO] = "~velocities/v-aero-fps";
-    w[at::W_AERO] = "~velocities/w-aero-fps";
-    w[at::VT] = "~velocities/vt-fps";
-    w[at::MACH] = "~velocities/mach";
-    w[at::QBAR] = "~aero/qbar-psf";
+    w[at::ALPHA] = "aero/alpha-deg";
+    w[at::BETA] = "aero/beta-deg";
+    w[at::U_AERO] = "velocities/u-aero-fps";
+    w[at::V_AERO] = "velocities/v-aero-fps";
+    w[at::W_AERO] = "velocities/w-aero-fps";
+    w[at::VT] = "velocities/vt-fps";
+    w[at::MACH] = "velocities/mach";
+    w[at::QBAR] = "aero/qbar-psf";
     w[at::H_SL] = "position/h-sl-ft";
     w[at::H_AGL] = "position/h-agl-ft";
     w[at::P] = "velocities/p-rad_sec";
@@ -407,8 +510,8 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::FLAPERON] = "fcs/left-flaperon-norm";
     w[at::SPEEDBRAKE] = "fcs/speedbrake-pos-deg";
     w[at::THROTTLE] = "fcs/throttle-cmd-norm";
-    w[at::LAT] = "~position/lat-geod-deg";
-    w[at::LON] = "~position/long-gc-deg";
+    w[at::LAT] = "position/lat-geod-deg";
+    w[at::LON] = "position/long-gc-deg";
     // Body rates relative to inertial space (Earth rate included): what a gyro measures.
     w[at::PI] = "velocities/pi-rad_sec";
     w[at::QI] = "velocities/qi-rad_sec";
@@ -419,9 +522,9 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::V_DOWN] = "velocities/v-down-fps";
     w[at::FUEL] = "propulsion/total-fuel-lbs";
     // Steady wind + turbulence + gusts, NED: truth only, for evaluating wind estimators.
-    w[at::WIND_NORTH] = "~atmosphere/total-wind-north-fps";
-    w[at::WIND_EAST] = "~atmosphere/total-wind-east-fps";
-    w[at::WIND_DOWN] = "~atmosphere/total-wind-down-fps";
+    w[at::WIND_NORTH] = "atmosphere/total-wind-north-fps";
+    w[at::WIND_EAST] = "atmosphere/total-wind-east-fps";
+    w[at::WIND_DOWN] = "atmosphere/total-wind-down-fps";
     w[at::ZONE] = "?maneuver/zone";
     let mut i = 0;
     while i < at::COUNT {
@@ -431,16 +534,23 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w
 };
 
-/// Which [`WATCH`] positions read NaN between samples (their name starts with `~`).
-pub(crate) const SAMPLED: [bool; at::COUNT] = {
-    let mut m = [false; at::COUNT];
-    let mut i = 0;
-    while i < at::COUNT {
-        m[i] = WATCH[i].as_bytes()[0] == b'~';
-        i += 1;
-    }
-    m
-};
+/// The [`WATCH`] positions only [`truth_of`] reads: air data, position, wind. They are needed at the
+/// 20 Hz sample instants only.
+pub(crate) const TRUTH_ONLY: [usize; 13] = [
+    at::ALPHA,
+    at::BETA,
+    at::U_AERO,
+    at::V_AERO,
+    at::W_AERO,
+    at::VT,
+    at::MACH,
+    at::QBAR,
+    at::LAT,
+    at::LON,
+    at::WIND_NORTH,
+    at::WIND_EAST,
+    at::WIND_DOWN,
+];
 
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
 pub(crate) const PSF_TO_PA: f64 = 47.880_258_98;
@@ -580,6 +690,38 @@ pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<Loaded, Plant
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn read_plan_cycles_over_the_periods_common_multiple() {
+        let e = |period, offset| Every { period, offset };
+        let plan = ReadPlan::new(&[None, Some(vec![e(6, 5)]), Some(vec![e(4, 1), e(6, 0)])]);
+        assert_eq!((plan.width(), plan.cycle_len()), (3, 12));
+        assert_eq!(plan.at(0), [true; 3], "step 0 reads everything");
+        assert_eq!(plan.at(1), [true, false, true]);
+        assert_eq!(plan.at(5), [true, true, true]);
+        assert_eq!(plan.at(6), [true, false, true]);
+        assert_eq!(plan.at(7), [true, false, false]);
+        assert_eq!(plan.at(12 + 7), plan.at(7));
+        // Bit i of each step's mask is property i, most significant nibble first.
+        let masks = plan.hex_masks();
+        assert_eq!(
+            (masks[0].as_str(), masks[1].as_str(), masks[5].as_str()),
+            ("5", "5", "7")
+        );
+        assert_eq!(masks[7], "1");
+        let wide = ReadPlan::new(&vec![Some(vec![e(2, 1)]); 9]);
+        assert_eq!(wide.hex_masks(), ["000", "1ff"]);
+    }
+
+    #[test]
+    fn a_read_plan_too_long_to_cycle_reads_everything() {
+        let e = |period| Some(vec![Every { period, offset: 1 }]);
+        // 7 · 11 · 13 · 3 = 3003 steps > MAX_READ_CYCLE.
+        let plan = ReadPlan::new(&[e(7), e(11), e(13), e(3)]);
+        assert_eq!(plan, ReadPlan::every_step(4));
+        assert_eq!(plan.at(5), [true; 4]);
+        assert_eq!(ReadPlan::new(&[e(7), e(11), e(13)]).cycle_len(), 1001);
+    }
 
     #[test]
     fn use_tag_attributes_are_read() {

@@ -23,7 +23,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::flight::SIM_HZ;
+use crate::flight::{Every, SIM_HZ};
 
 const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
@@ -809,6 +809,24 @@ impl EgiModel {
     }
 }
 
+/// The steps at which [`SensorModel::step`] uses the inputs it does not need at every step. Step 0
+/// uses every input; every input not named here is used at every step. On any other step such an
+/// input may be anything, NaN included: the outputs do not change (tested), so a simulation can
+/// skip reading it there (`crate::fly`: each property read is a Python call).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InputSchedule {
+    /// `gps_speed_mps` and `alt_msl_m`: the truth behind each GPS fix, `latency` before it.
+    pub gps: Every,
+    /// `euler_rad[0..2]` (roll, pitch): the EGI's attitude output and its velocity (the lever arm).
+    pub roll_pitch: [Every; 2],
+    /// `euler_rad[2]` (heading): the EGI's heading output and its velocity.
+    pub heading: [Every; 2],
+    /// `omega_earth_rps` and `v_ned_mps`: the EGI's velocity output.
+    pub egi_velocity: Every,
+    /// `fuel_kg`: the gauge's updates.
+    pub fuel: Every,
+}
+
 /// The stateful sensor suite of one flight.
 pub struct SensorModel {
     cfg: SensorConfig,
@@ -858,6 +876,22 @@ impl SensorModel {
             egi: EgiModel::new(cfg, seed),
             cfg: cfg.clone(),
             rng,
+        }
+    }
+
+    /// When this flight's models use their slowly sampled inputs ([`InputSchedule`]).
+    pub fn input_schedule(&self) -> InputSchedule {
+        let gps_lag = self.gps_delay_steps as u64;
+        let e = &self.egi;
+        let lag = e.delay_steps as u64;
+        let egi = |hz: f64, phase: u64| Every::before(every_steps(hz), phase, lag);
+        let velocity = egi(e.cfg.velocity_hz, e.phase[2]);
+        InputSchedule {
+            gps: Every::before(self.gps_every_steps, 0, gps_lag),
+            roll_pitch: [egi(e.cfg.attitude_hz, e.phase[0]), velocity],
+            heading: [egi(e.cfg.heading_hz, e.phase[1]), velocity],
+            egi_velocity: velocity,
+            fuel: Every::before(every_steps(e.fuel_cfg.update_hz), e.phase[3], 0),
         }
     }
 
@@ -1045,6 +1079,120 @@ mod tests {
             fuel_kg: 1000.0,
             ..SensorInput::default()
         }
+    }
+
+    /// A smooth but never repeating flight: every input moves, each at its own rate.
+    fn wandering(k: u64) -> SensorInput {
+        let t = k as f64 / SIM_HZ as f64;
+        let w = |f: f64, a: f64, b: f64| b + a * (f * t).sin();
+        SensorInput {
+            omega_rps: [w(1.1, 0.3, 0.0), w(0.7, 0.2, 0.01), w(1.9, 0.1, 0.0)],
+            omega_dot_rps2: [w(2.3, 0.5, 0.0), w(1.3, 0.4, 0.0), w(0.9, 0.2, 0.0)],
+            f_cg_mps2: [w(0.3, 2.0, 1.0), w(1.7, 1.0, 0.0), w(0.5, 5.0, -9.8)],
+            gps_speed_mps: w(0.2, 30.0, 180.0),
+            alt_msl_m: w(0.1, 300.0, 3000.0),
+            elevator_deg: w(0.9, 5.0, -2.0),
+            aileron_deg: w(1.5, 4.0, 0.0),
+            rudder_deg: w(2.5, 3.0, 0.0),
+            lef_deg: w(0.4, 6.0, 8.0),
+            throttle_norm: w(0.05, 0.3, 0.5),
+            euler_rad: [w(0.6, 0.8, 0.0), w(0.35, 0.3, 0.05), w(0.15, 3.0, 3.2)],
+            omega_earth_rps: [w(1.1, 0.3, 0.0), w(0.7, 0.2, 0.01), w(1.9, 0.1, 0.0)],
+            v_ned_mps: [w(0.15, 150.0, 0.0), w(0.12, 150.0, 0.0), w(0.35, 20.0, 0.0)],
+            fuel_kg: 3000.0 - 0.5 * t,
+            ..SensorInput::default()
+        }
+    }
+
+    /// `t` with NaN in every input [`InputSchedule`] says step `k` does not use.
+    fn unscheduled_nan(s: &InputSchedule, k: u64, mut t: SensorInput) -> SensorInput {
+        let any = |e: &[Every]| k == 0 || e.iter().any(|e| e.contains(k));
+        if !any(&[s.gps]) {
+            t.gps_speed_mps = f64::NAN;
+            t.alt_msl_m = f64::NAN;
+        }
+        if !any(&s.roll_pitch) {
+            t.euler_rad[0] = f64::NAN;
+            t.euler_rad[1] = f64::NAN;
+        }
+        if !any(&s.heading) {
+            t.euler_rad[2] = f64::NAN;
+        }
+        if !any(&[s.egi_velocity]) {
+            t.omega_earth_rps = [f64::NAN; 3];
+            t.v_ned_mps = [f64::NAN; 3];
+        }
+        if !any(&[s.fuel]) {
+            t.fuel_kg = f64::NAN;
+        }
+        t
+    }
+
+    #[test]
+    fn inputs_off_their_schedule_change_no_output_bit() {
+        let mut odd = SensorConfig::default();
+        odd.gps.update_hz = 7.0;
+        odd.gps.latency_s = 0.23;
+        odd.egi.attitude_hz = 64.0;
+        odd.egi.heading_hz = 11.0;
+        odd.egi.velocity_hz = 9.0;
+        odd.egi.latency_s = 0.07;
+        odd.fuel.update_hz = 0.5;
+        for (cfg, seed) in [
+            (SensorConfig::default(), 1),
+            (SensorConfig::default(), 9),
+            (odd, 4),
+        ] {
+            let mut full = SensorModel::new(&cfg, seed);
+            let mut sparse = SensorModel::new(&cfg, seed);
+            let s = sparse.input_schedule();
+            let mut skipped = 0;
+            for k in 0..3000 {
+                let t = wandering(k);
+                let masked = unscheduled_nan(&s, k, t);
+                skipped += usize::from(masked.fuel_kg.is_nan());
+                let (a, b) = (full.step(&t), sparse.step(&masked));
+                for c in 0..CHANNELS {
+                    assert_eq!(
+                        a[c].to_bits(),
+                        b[c].to_bits(),
+                        "seed {seed} step {k} channel {c}"
+                    );
+                }
+            }
+            // The schedule does leave inputs out (else the test proves nothing).
+            assert!(skipped > 2500, "{skipped}");
+        }
+    }
+
+    #[test]
+    fn every_before_names_the_steps_a_delayed_refresh_reads() {
+        // Refreshed when (k + 3) % 12 == 0, i.e. k = 9, 21, …, reading the truth 5 steps old:
+        // steps 4, 16, ….
+        let e = Every::before(12, 3, 5);
+        assert_eq!(
+            e,
+            Every {
+                period: 12,
+                offset: 4
+            }
+        );
+        assert!(e.contains(16) && !e.contains(9));
+        // A lag of whole periods lands on the refresh steps themselves.
+        assert_eq!(
+            Every::before(6, 0, 12),
+            Every {
+                period: 6,
+                offset: 0
+            }
+        );
+        assert_eq!(
+            Every::before(0, 7, 7),
+            Every {
+                period: 1,
+                offset: 0
+            }
+        );
     }
 
     #[test]

@@ -4,9 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use hil_sim::dataset::Flight;
+use hil_sim::flight::Every;
 use hil_sim::fly::{self, FlyConfig};
 use hil_sim::maneuver::{self, Profile, ProfileKind};
-use hil_sim::plant::{self, Plant, PlantError};
+use hil_sim::plant::{self, Plant, PlantError, ReadPlan};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -89,6 +90,47 @@ fn truth_alpha_is_jsbsims_alpha_at_the_same_step() {
         "east {east} m, expected {expected} m"
     );
     assert!(north.abs() < 0.01 * expected, "north {north} m");
+}
+
+/// A planned watch reads exactly what a read at every step gives where the plan says so, NaN
+/// elsewhere, everything at step 0, and keeps its step count across `step` requests.
+#[test]
+fn a_read_plan_reads_the_same_values_where_it_reads() {
+    let script = stock_script("f16_test.xml");
+    let props = ["aero/alpha-deg", "velocities/p-rad_sec", "attitude/phi-rad"];
+    let e = |period, offset| Every { period, offset };
+    let plan = ReadPlan::new(&[None, Some(vec![e(6, 5)]), Some(vec![e(4, 1), e(6, 0)])]);
+    let run = |plan: &ReadPlan| {
+        let mut p = Plant::spawn().unwrap();
+        plant::load_f16_script(&mut p, &script).unwrap();
+        p.watch_planned(&props, plan).unwrap();
+        let mut rows: Vec<f64> = Vec::new();
+        for n in [37, 50, 13] {
+            let r = p.step(n).unwrap();
+            rows.extend((0..r.len()).flat_map(|k| r.row(k).unwrap().to_vec()));
+        }
+        rows
+    };
+    let all = run(&ReadPlan::every_step(props.len()));
+    let some = run(&plan);
+    assert_eq!(all.len(), 100 * props.len());
+    for (k, (a, s)) in all.chunks(3).zip(some.chunks(3)).enumerate() {
+        for (i, read) in plan.at(k as u64).iter().enumerate() {
+            if *read {
+                assert_eq!(a[i].to_bits(), s[i].to_bits(), "step {k} property {i}");
+            } else {
+                assert!(s[i].is_nan(), "step {k} property {i}: {}", s[i]);
+            }
+        }
+    }
+    let mut p = Plant::spawn().unwrap();
+    plant::load_f16_script(&mut p, &script).unwrap();
+    let err = p.watch_planned(&props[..2], &plan).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("read plan for 3 properties, 2 watched"),
+        "{err}"
+    );
 }
 
 /// The benchmark's raw stepping (`run`, nothing read) flies the same flight as `fly_script`: after

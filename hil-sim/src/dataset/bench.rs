@@ -4,8 +4,9 @@
 //! Raw stepping is the floor any data generator on JSBSim pays: the same maneuver scripts, loaded
 //! the same way ([`crate::plant::load_f16_script`], one bridge process per flight), run to their end
 //! with the bridge's `run` command, which calls `FGFDMExec::run` and reads nothing. `generate` on top
-//! of that reads 35 properties per 120 Hz step, runs the sensor models in Rust, and writes the CSVs
-//! and the manifest. Repeats alternate which side goes first so neither always meets a cold cache.
+//! of that reads the properties its read plan names at each 120 Hz step (`crate::fly`: 21 at every
+//! step, the others only where the truth or a sensor model uses them), runs the sensor models in
+//! Rust, and writes the CSVs and the manifest. Repeats alternate which side goes first so neither always meets a cold cache.
 
 use std::path::Path;
 use std::time::Instant;
@@ -13,7 +14,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::generator::tick;
-use super::{GenerateError, Manifest, machine, par_map};
+use super::{FlightEntry, GenerateError, Manifest, machine, par_map};
 use crate::flight::Flight;
 use crate::plant::{self, Plant, PlantError, SIM_HZ, STEPS_PER_SAMPLE};
 
@@ -32,7 +33,8 @@ pub struct BenchReport {
     pub flight_hours: f64,
     /// 120 Hz JSBSim steps over all flights (raw side).
     pub steps: u64,
-    /// Every raw flight ran exactly the steps behind the samples `generate` recorded for it.
+    /// Every raw flight ran exactly the steps behind the samples `generate` recorded for it. Always
+    /// true: when they differ, [`run`] returns [`GenerateError::NotComparable`] instead of a report.
     pub same_flights: bool,
     /// Wall time of each `generate` repeat (flights, CSVs, manifest), s.
     pub generate_s: Vec<f64>,
@@ -87,6 +89,30 @@ pub fn raw_steps(
     .collect()
 }
 
+/// The first flight whose raw step count is not the steps behind its recorded samples (a cut
+/// flight, a script that ended differently), or `None` when every flight matches.
+fn first_mismatch(flights: &[FlightEntry], steps: &[u64]) -> Option<String> {
+    if steps.len() != flights.len() {
+        return Some(format!(
+            "{} flights generated, {} raw-stepped",
+            flights.len(),
+            steps.len()
+        ));
+    }
+    flights
+        .iter()
+        .zip(steps)
+        .find(|(f, s)| *s / u64::from(STEPS_PER_SAMPLE) != f.samples as u64)
+        .map(|(f, s)| {
+            format!(
+                "flight {}: {} samples recorded, {s} raw steps ({} samples' worth)",
+                f.name,
+                f.samples,
+                s / u64::from(STEPS_PER_SAMPLE)
+            )
+        })
+}
+
 /// Generates `preset` into `out` and raw-steps the same flights, `repeats` times each, alternating
 /// which goes first; then writes the dataset report once and times it.
 pub fn run(
@@ -139,11 +165,10 @@ pub fn run(
     let total_steps: u64 = steps.iter().sum();
     let samples: usize = m.flights.iter().map(|f| f.samples).sum();
     let flight_hours = samples as f64 / f64::from(plant::SAMPLE_HZ) / 3600.0;
-    let same_flights = steps.len() == m.flights.len()
-        && m.flights
-            .iter()
-            .zip(&steps)
-            .all(|(f, s)| s / u64::from(STEPS_PER_SAMPLE) == f.samples as u64);
+    if let Some(why) = first_mismatch(&m.flights, &steps) {
+        return Err(GenerateError::NotComparable(why));
+    }
+    let same_flights = true;
     let best = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
     let generate_total_best_s = best(&generate_s) + report_s;
     let raw_best_s = best(&raw_s);
@@ -172,4 +197,35 @@ pub fn run(
         git_rev: m.git_rev.clone(),
         machine: machine(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flight(name: &str, samples: usize) -> FlightEntry {
+        serde_json::from_value(serde_json::json!({
+            "file": format!("{name}.csv"), "name": name, "split": "train", "profile": "gentle",
+            "seed": 1, "duration_s": samples as f64 / 20.0, "samples": samples, "sha256": "",
+            "cut": null
+        }))
+        .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn a_flight_with_fewer_samples_than_raw_steps_is_named() {
+        let flights = [flight("a", 100), flight("b", 50)];
+        assert_eq!(
+            first_mismatch(&flights, &[600, 305]),
+            None,
+            "part of a sample: same"
+        );
+        let why = first_mismatch(&flights, &[600, 12_000]).unwrap_or_default();
+        assert_eq!(
+            why,
+            "flight b: 50 samples recorded, 12000 raw steps (2000 samples' worth)"
+        );
+        let why = first_mismatch(&flights, &[600]).unwrap_or_default();
+        assert_eq!(why, "2 flights generated, 1 raw-stepped");
+    }
 }

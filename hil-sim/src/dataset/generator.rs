@@ -21,6 +21,12 @@ pub enum GenerateError {
     /// Shard records that do not make one dataset, or cannot be written.
     #[error("{0}")]
     Shard(String),
+    /// `hil-sim bench`: the two sides did different work, so their times cannot be compared.
+    #[error(
+        "bench: {0}; generate and raw stepping did not fly the same steps, so no ratio is \
+         reported (a cut flight records fewer samples: `hil-sim generate` prints why it was cut)"
+    )]
+    NotComparable(String),
     #[error("flight {name}: {source}")]
     Flight {
         name: String,
