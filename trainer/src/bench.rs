@@ -399,6 +399,7 @@ pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Loss;
 
     fn read_u32(p: &Path) -> Vec<u32> {
         std::fs::read(p)
@@ -427,6 +428,7 @@ mod tests {
             seed: 5,
             label: String::new(),
             progress: false,
+            loss: Loss::Mse,
         };
         let dir = std::env::temp_dir().join(format!("bench-exchange-{}", std::process::id()));
         let model = init_model(|d| Cascade::new(n_in, &hidden, d), cfg.seed);

@@ -7,7 +7,11 @@ use trainer::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::{FeatureSet, parse_suite};
 use trainer::metrics::FlightMetrics;
-use trainer::model::TrainConfig;
+use trainer::model::{Loss, TrainConfig};
+
+fn parse_loss(s: &str) -> std::result::Result<Loss, String> {
+    Loss::parse(s).ok_or_else(|| format!("`{s}`: the loss is mse or l1"))
+}
 use trainer::pipeline::{Size, eval_shipped, train_angle};
 use trainer::prep::Angle;
 
@@ -36,6 +40,10 @@ struct TrainArgs {
     batch: usize,
     #[arg(long, default_value_t = 1e-3)]
     lr: f64,
+    /// Training loss of both heads: mse (the paper's) or l1 (mean absolute error, the metric the
+    /// accuracy tables report).
+    #[arg(long, default_value = "mse", value_parser = parse_loss)]
+    loss: Loss,
     /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
     /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
     /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
@@ -314,6 +322,7 @@ impl TrainArgs {
             seed: self.seed,
             label,
             progress,
+            loss: self.loss,
         }
     }
 
@@ -604,6 +613,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
             seed: job.seed,
             label: format!("job {k} {}", angle.name()),
             progress: false,
+            loss: Loss::Mse,
         };
         let a = train_angle(
             &ds,
@@ -1018,6 +1028,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
         seed: 1,
         label: "alpha paper cascade".into(),
         progress: true,
+        loss: Loss::Mse,
     };
     let (_, curves) = train(
         |d| Cascade::new(n_in, Size::Paper.hidden(Angle::Alpha), d),
@@ -1108,6 +1119,7 @@ fn cmd_bench_train(
             seed: 1,
             label: format!("burn {}", case.name),
             progress: !o.json,
+            loss: Loss::Mse,
         };
         let r = run_case(&ds, case, &cfg, torch, exchange)?;
         eprintln!("{}", r.summary());

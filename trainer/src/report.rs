@@ -6,7 +6,7 @@ use crate::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use crate::error::Result;
 use crate::features::FeatureSet;
 use crate::metrics::{FlightMetrics, Metrics};
-use crate::model::TrainConfig;
+use crate::model::{Loss, TrainConfig};
 use crate::pipeline::{Answers, Size, Trained, train_angle};
 use crate::prep::Angle;
 use hil_sim::flight::SAMPLE_HZ;
@@ -138,6 +138,7 @@ pub fn run(
         seed,
         label,
         progress: true,
+        loss: Loss::Mse,
     };
     let fs = &cfg.features;
     for angle in [Angle::Alpha, Angle::Beta] {

@@ -3,7 +3,7 @@
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
 use trainer::adam::FusedAdam;
-use trainer::model::{ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Net, init_model};
+use trainer::model::{ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Loss, Net, init_model};
 
 fn bits(m: &Cascade) -> Vec<u32> {
     m.layers()
@@ -46,8 +46,8 @@ fn bit_identical_to_burns_adam() {
         };
         let lr = 1e-3 * (1.0 + (step % 7) as f64);
         let (la, lb) = (
-            a.losses(t(&x, 5), t(&ym, 1), t(&yo, 1)),
-            b.losses(t(&x, 5), t(&ym, 1), t(&yo, 1)),
+            a.losses(t(&x, 5), t(&ym, 1), t(&yo, 1), Loss::Mse),
+            b.losses(t(&x, 5), t(&ym, 1), t(&yo, 1), Loss::Mse),
         );
         let ga = GradientsParams::from_grads((la.0 + la.1).backward(), &a);
         let gb = GradientsParams::from_grads((lb.0 + lb.1).backward(), &b);

@@ -4,7 +4,7 @@
 use estimator_core::nn::{Chain, Dense, Hidden, Output, Requant};
 use estimator_core::normalize::{Envelope, TurbulenceEnvelope};
 use estimator_core::{AngleNet, CascadeNet, Channel, Feature, FeatureValues, History, SensorFrame};
-use trainer::model::{Cascade, Matrix, TrainConfig, float_forward, train};
+use trainer::model::{Cascade, Loss, Matrix, TrainConfig, float_forward, train};
 use trainer::prep::{Angle, Prep, norm_for};
 use trainer::quant::{QCascade, QLayer, format_vectors, parse_vectors, quantize_cascade, vectors};
 
@@ -100,6 +100,7 @@ fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
         seed,
         label: "test".into(),
         progress: false,
+        loss: Loss::Mse,
     };
     let (model, _) = train(|d| Cascade::new(3, &[8, 4], d), &cfg, &m, &m);
     (prep, model, xs)
