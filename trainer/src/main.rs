@@ -90,8 +90,8 @@ struct ReportArgs {
     #[arg(long)]
     json: bool,
     /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid-fast`
-    /// features on the `egi` suite, medium networks, the report's seeds and epochs) and the
-    /// model-based filter alone. Needs a dataset that carries the `egi` suite.
+    /// features on the `egi` suite, `medium-wide-beta` networks trained with `--loss l1`, the
+    /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi` suite.
     #[arg(long)]
     shipped_rows: bool,
     /// An out-of-distribution dataset (`hil-sim generate --preset ood`): every row also answers
@@ -833,7 +833,7 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
             // The configuration the shipped weights were trained with (their PROVENANCE).
             let hybrid = FeatureSet::parse("egi-hybrid-fast")?;
             hybrid.check_suite(Suite::Egi)?;
-            Some((hybrid, Size::Medium))
+            Some((hybrid, Size::MediumWideBeta, Loss::L1))
         } else {
             None
         },

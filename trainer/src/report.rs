@@ -29,7 +29,7 @@ pub struct ReportConfig {
     pub suite: estimator_core::Suite,
     /// Also the shipped configuration's cascades (its feature set and size, on the `egi` suite, the
     /// report's seeds) and the model-based filter alone: the rows of what ships.
-    pub shipped_rows: Option<(FeatureSet, Size)>,
+    pub shipped_rows: Option<(FeatureSet, Size, Loss)>,
     /// Where finished rows are kept while the run goes on (JSON lines), so that a killed run
     /// resumes without redoing them (None: no resuming). The caller removes it once the report is
     /// written.
@@ -249,7 +249,7 @@ pub fn run(
             }
         }
     }
-    if let Some((hfs, hsize)) = &cfg.shipped_rows {
+    if let Some((hfs, hsize, hloss)) = &cfg.shipped_rows {
         for &seed in &cfg.seeds {
             for angle in [Angle::Alpha, Angle::Beta] {
                 if progress.resume(&mut entries, &mut log, HYBRID, angle, &hfs.name, Some(seed)) {
@@ -261,7 +261,10 @@ pub fn run(
                     angle,
                     hfs.for_angle(angle),
                     *hsize,
-                    &tc(seed, format!("{} hybrid s{seed}", angle.name())),
+                    &TrainConfig {
+                        loss: *hloss,
+                        ..tc(seed, format!("{} hybrid s{seed}", angle.name()))
+                    },
                 );
                 let e = trained_entry(HYBRID, &hfs.name, seed, &t, t0, &extra);
                 log(&trained_line("hybrid", &e));
@@ -347,7 +350,9 @@ fn run_key(ds: &Dataset, ood: Option<&Dataset>, cfg: &ReportConfig) -> String {
         cfg.suite.name(),
         cfg.shipped_rows
             .as_ref()
-            .map_or(String::new(), |(f, z)| format!("{}:{}", f.name, z.name())),
+            .map_or(String::new(), |(f, z, l)| {
+                format!("{}:{}:{}", f.name, z.name(), l.name())
+            }),
     )
 }
 
