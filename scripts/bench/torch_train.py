@@ -81,7 +81,14 @@ def main():
         eps=meta["epsilon"],
         fused=True,
     )
-    mse = torch.nn.functional.mse_loss
+    # The training loss of both heads, as burn's (`trainer::model::Loss`); the validation pass
+    # scores the same one.
+    l1 = meta.get("loss", "mse") == "l1"
+    loss = torch.nn.functional.l1_loss if l1 else torch.nn.functional.mse_loss
+
+    def err(p, y):
+        d = (p - y).double()
+        return float((d.abs() if l1 else d**2).sum())
 
     def forward(x):
         mid = part1(x)
@@ -103,7 +110,7 @@ def main():
         for s in range(0, n_tr, batch):
             idx = perm[s : s + batch]
             mid, o = forward(x_tr[idx])
-            lm, lo = mse(mid, ym_tr[idx]), mse(o, yo_tr[idx])
+            lm, lo = loss(mid, ym_tr[idx]), loss(o, yo_tr[idx])
             opt.zero_grad(set_to_none=True)
             (lm + lo).backward()
             opt.step()
@@ -114,8 +121,8 @@ def main():
             em = eo = 0.0
             for s in range(0, n_va, 8192):
                 mid, o = forward(x_va[s : s + 8192])
-                em += float(((mid - ym_va[s : s + 8192]).double() ** 2).sum())
-                eo += float(((o - yo_va[s : s + 8192]).double() ** 2).sum())
+                em += err(mid, ym_va[s : s + 8192])
+                eo += err(o, yo_va[s : s + 8192])
         dt = time.perf_counter() - t0
         val = [em / max(n_va, 1), eo / max(n_va, 1)]
         print(f"torch epoch {epoch + 1}/{epochs}: {dt:.2f} s, val {val[0]:.5f}/{val[1]:.5f}",

@@ -10,8 +10,8 @@
 use crate::data::{Dataset, Role};
 use crate::features::FeatureSet;
 use crate::model::{
-    ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Curves, Matrix, Net, Shuffle, TrainConfig,
-    init_model, lr_at, train_with,
+    ADAM_BETA_1, ADAM_BETA_2, ADAM_EPSILON, Cascade, Curves, Loss, Matrix, Net, Shuffle,
+    TrainConfig, init_model, lr_at, train_with,
 };
 use crate::pipeline::Size;
 use crate::prep::{Angle, Prep};
@@ -28,6 +28,8 @@ pub struct Case {
     pub features: &'static str,
     pub suite: Suite,
     pub size: Size,
+    /// The training loss, on both sides.
+    pub loss: Loss,
 }
 
 /// The paper-size α cascade on the paper's inputs, and the shipped configuration's α cascade.
@@ -38,13 +40,15 @@ pub const CASES: [Case; 2] = [
         features: "table1",
         suite: Suite::Table1,
         size: Size::Paper,
+        loss: Loss::Mse,
     },
     Case {
         name: "shipped-alpha",
-        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid-fast inputs",
+        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid-fast inputs, L1 loss",
         features: "egi-hybrid-fast",
         suite: Suite::Egi,
         size: Size::Medium,
+        loss: Loss::L1,
     },
 ];
 
@@ -149,6 +153,8 @@ struct Meta<'a> {
     beta_1: f32,
     beta_2: f32,
     epsilon: f32,
+    /// `mse` or `l1` (`Loss::name`).
+    loss: &'static str,
 }
 
 /// Writes what PyTorch needs to train exactly the run burn makes.
@@ -193,6 +199,7 @@ fn write_exchange(
         beta_1: ADAM_BETA_1,
         beta_2: ADAM_BETA_2,
         epsilon: ADAM_EPSILON,
+        loss: cfg.loss.name(),
     };
     let p = dir.join("meta.json");
     let text = serde_json::to_string(&meta).map_err(|e| Error::Torch(e.to_string()))?;
@@ -399,7 +406,6 @@ pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Loss;
 
     fn read_u32(p: &Path) -> Vec<u32> {
         std::fs::read(p)
