@@ -20,7 +20,8 @@
     clippy::arithmetic_side_effects
 )]
 
-use std::path::PathBuf;
+mod common;
+
 use std::sync::OnceLock;
 
 use estimator_core::filter::{NEEDED_MASK, flags as filter_flags};
@@ -51,13 +52,7 @@ struct Flight {
 fn flight() -> &'static Flight {
     static F: OnceLock<Flight> = OnceLock::new();
     F.get_or_init(|| {
-        let script =
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../flights/f16_test_flight.xml");
-        let source = hil_sim::runner::cli::Source {
-            dataset: None,
-            script: Some(script),
-        };
-        let f = hil_sim::runner::cli::flight(&source, 1, Some(150.0)).expect("fly the test flight");
+        let f = common::first_150_s_of_the_test_flight();
         let samples = hil_sim::runner::samples_of(&f);
         Flight {
             frames: samples

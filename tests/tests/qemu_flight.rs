@@ -8,7 +8,7 @@
 // Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::path::PathBuf;
+mod common;
 
 use estimator_core::Flags;
 use hil_sim::runner::target::default_elf;
@@ -16,13 +16,7 @@ use hil_sim::runner::{self, InProcess, Qemu, QemuLink, RunConfig};
 
 #[test]
 fn the_flight_image_in_qemu_answers_the_test_flight_as_the_host_does_fallback_included() {
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../flights/f16_test_flight.xml");
-    let source = hil_sim::runner::cli::Source {
-        dataset: None,
-        script: Some(script),
-    };
-    let flight =
-        hil_sim::runner::cli::flight(&source, 1, Some(150.0)).expect("fly the test flight");
+    let flight = common::first_150_s_of_the_test_flight();
     let samples = runner::samples_of(&flight);
     let cfg = RunConfig::default();
     let host = runner::run(&mut InProcess::new(), &samples, &cfg).unwrap();
