@@ -68,7 +68,8 @@ const SAMPLE_STEPS: Every = Every {
 /// that the models use only at some steps ([`InputSchedule`]) there and at the samples; everything
 /// else (the IMU's inputs, the surfaces, mass, the ground check, the zone) at every step. The
 /// rows then hold exactly what a read at every step would give wherever it is used, so the
-/// flight is the same bit for bit (the sensors' tests and `data_generate` check this).
+/// flight is the same bit for bit (`tests::a_planned_flight_is_the_every_step_flight_bit_for_bit`;
+/// the sensors' own schedule: `sensors::tests::inputs_off_their_schedule_change_no_output_bit`).
 fn read_plan(s: &InputSchedule) -> ReadPlan {
     let mut when: Vec<Option<Vec<Every>>> = vec![None; at::COUNT];
     let mut set = |i: usize, steps: &[Every]| {
@@ -107,9 +108,19 @@ pub fn fly_script_with(
     script: &Path,
     cfg: &FlyConfig,
 ) -> Result<Flight, PlantError> {
+    fly_planned(plant, script, cfg, read_plan)
+}
+
+/// [`fly_script_with`], each property read where `plan` says.
+fn fly_planned(
+    plant: &mut Plant,
+    script: &Path,
+    cfg: &FlyConfig,
+    plan: fn(&InputSchedule) -> ReadPlan,
+) -> Result<Flight, PlantError> {
     let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
-    let plan = read_plan(&sensors.input_schedule());
+    let plan = plan(&sensors.input_schedule());
     plant.watch_planned(&WATCH, &plan)?;
     let name = cfg.name.clone().unwrap_or_else(|| {
         script
@@ -139,7 +150,8 @@ pub fn fly_script_with(
                 break 'outer;
             }
             // The optional zone column (last) is NaN for scripts without a generator state; the
-            // properties not read at this step are NaN.
+            // properties not read at this step are NaN and are checked where they are read (a
+            // diverging JSBSim state shows first in the forces and rates, read at every step).
             if r[..at::ZONE]
                 .iter()
                 .zip(read)
@@ -177,4 +189,40 @@ pub fn fly_script_with(
     }
     flight.zones = zone_steps.map(|n| ZoneTimes::from_steps(n, dt_s));
     Ok(flight)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 30 s of the stock test flight (a climbing turn with its sensors' GPS fixes, EGI outputs and
+    /// fuel updates), flown once reading only what the plan names and once reading every property
+    /// at every step: every sample's truth and sensed values are the same bits. Moving any property
+    /// of `read_plan` to a schedule that misses a step where it is used fails this.
+    #[test]
+    fn a_planned_flight_is_the_every_step_flight_bit_for_bit() {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../flights/f16_test_flight.xml");
+        let cfg = FlyConfig {
+            seed: 7,
+            max_time_s: Some(30.0),
+            ..FlyConfig::default()
+        };
+        let fly = |plan: fn(&InputSchedule) -> ReadPlan| {
+            let mut plant = Plant::spawn().unwrap_or_else(|e| panic!("{e}"));
+            fly_planned(&mut plant, &script, &cfg, plan).unwrap_or_else(|e| panic!("{e}"))
+        };
+        let (planned, full) = (fly(read_plan), fly(|_| ReadPlan::every_step(at::COUNT)));
+        assert_eq!(planned.samples.len(), 600);
+        assert_eq!(planned.cut, full.cut);
+        for (k, (p, f)) in planned.samples.iter().zip(&full.samples).enumerate() {
+            assert_eq!(p.time_s.to_bits(), f.time_s.to_bits(), "sample {k}");
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(
+                bits(&p.truth.to_array()),
+                bits(&f.truth.to_array()),
+                "truth, sample {k}"
+            );
+            assert_eq!(bits(&p.sensed), bits(&f.sensed), "sensed, sample {k}");
+        }
+    }
 }

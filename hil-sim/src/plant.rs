@@ -319,8 +319,9 @@ impl ReadPlan {
     pub fn new(when: &[Option<Vec<Every>>]) -> ReadPlan {
         let len = when.iter().flatten().flatten().try_fold(1, |l: u64, e| {
             let p = e.period.max(1);
-            let l = l / gcd(l, p) * p;
-            (l <= MAX_READ_CYCLE).then_some(l)
+            (l / gcd(l, p))
+                .checked_mul(p)
+                .filter(|l| *l <= MAX_READ_CYCLE)
         });
         let Some(len) = len else {
             return ReadPlan::every_step(when.len());

@@ -83,7 +83,10 @@ def main():
     )
     # The training loss of both heads, as burn's (`trainer::model::Loss`); the validation pass
     # scores the same one.
-    l1 = meta.get("loss", "mse") == "l1"
+    kind = meta.get("loss", "mse")
+    if kind not in ("mse", "l1"):
+        raise SystemExit(f"meta.json: loss {kind!r} is neither mse nor l1")
+    l1 = kind == "l1"
     loss = torch.nn.functional.l1_loss if l1 else torch.nn.functional.mse_loss
 
     def err(p, y):

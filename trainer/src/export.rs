@@ -193,7 +193,7 @@ pub fn plot_curves(path: &Path, ts: &[&Trained]) -> Result<()> {
                 crate::prep::Angle::Beta => "v_aero",
             };
             (
-                format!("{} cascade: MSE (normalised)", a.symbol()),
+                format!("{} cascade: training loss (normalised; --loss)", a.symbol()),
                 "epoch",
                 "loss",
                 true,

@@ -8,12 +8,12 @@ use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::{FeatureSet, parse_suite};
 use trainer::metrics::FlightMetrics;
 use trainer::model::{Loss, TrainConfig};
+use trainer::pipeline::{Size, eval_shipped, train_angle};
+use trainer::prep::Angle;
 
 fn parse_loss(s: &str) -> std::result::Result<Loss, String> {
     Loss::parse(s).ok_or_else(|| format!("`{s}`: the loss is mse or l1"))
 }
-use trainer::pipeline::{Size, eval_shipped, train_angle};
-use trainer::prep::Angle;
 
 #[derive(Parser)]
 #[command(about = "Train, quantize, export and evaluate the synthetic air data estimator")]
@@ -412,7 +412,7 @@ fn cmd_train(
     let prov = provenance(&ds, args.seed, &command, &fs.name, suite, &alpha, &beta);
     let summary = serde_json::json!({
         "seed": args.seed, "config": size.name(), "features": fs.name, "suite": suite.name(),
-        "epochs": epochs,
+        "epochs": epochs, "loss": args.loss.name(),
         "alpha": {"float": alpha.float_test, "int8": alpha.int_test, "int8_val": alpha.int_val, "curves": alpha.curves},
         "beta": {"float": beta.float_test, "int8": beta.int_test, "int8_val": beta.int_val, "curves": beta.curves},
         "provenance": prov,

@@ -6,7 +6,8 @@
 //! with the bridge's `run` command, which calls `FGFDMExec::run` and reads nothing. `generate` on top
 //! of that reads the properties its read plan names at each 120 Hz step (`crate::fly`: 21 at every
 //! step, the others only where the truth or a sensor model uses them), runs the sensor models in
-//! Rust, and writes the CSVs and the manifest. Repeats alternate which side goes first so neither always meets a cold cache.
+//! Rust, and writes the CSVs and the manifest. Repeats alternate which side goes first so neither
+//! always meets a cold cache.
 
 use std::path::Path;
 use std::time::Instant;
@@ -148,6 +149,10 @@ pub fn run(
     // alternate. Every repeat writes the same bytes (same seed).
     let (mut m, mut flights) = generate(&mut generate_s)?;
     let mut steps = raw(&m, &mut raw_s)?;
+    // Fail before the other repeats when the two sides do different work.
+    if let Some(why) = first_mismatch(&m.flights, &steps) {
+        return Err(GenerateError::NotComparable(why));
+    }
     for r in 1..repeats {
         if r % 2 == 1 {
             steps = raw(&m, &mut raw_s)?;
