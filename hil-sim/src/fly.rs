@@ -82,9 +82,9 @@ fn read_plan(s: &InputSchedule) -> ReadPlan {
     }
     set(at::GPS_SPEED, &[s.gps]);
     set(at::H_SL, &[s.gps]);
-    set(at::PHI, &s.roll_pitch);
-    set(at::THETA, &s.roll_pitch);
-    set(at::PSI, &s.heading);
+    set(at::PHI, &[s.attitude, s.egi_velocity]);
+    set(at::THETA, &[s.attitude, s.egi_velocity]);
+    set(at::PSI, &[s.heading, s.egi_velocity]);
     for i in [at::P, at::Q, at::R, at::V_NORTH, at::V_EAST, at::V_DOWN] {
         set(i, &[s.egi_velocity]);
     }

@@ -817,11 +817,12 @@ impl EgiModel {
 pub struct InputSchedule {
     /// `gps_speed_mps` and `alt_msl_m`: the truth behind each GPS fix, `latency` before it.
     pub gps: Every,
-    /// `euler_rad[0..2]` (roll, pitch): the EGI's attitude output and its velocity (the lever arm).
-    pub roll_pitch: [Every; 2],
-    /// `euler_rad[2]` (heading): the EGI's heading output and its velocity.
-    pub heading: [Every; 2],
-    /// `omega_earth_rps` and `v_ned_mps`: the EGI's velocity output.
+    /// `euler_rad[0..2]` (roll, pitch): the EGI's attitude output.
+    pub attitude: Every,
+    /// `euler_rad[2]` (heading): the EGI's heading output.
+    pub heading: Every,
+    /// `omega_earth_rps`, `v_ned_mps` and all three of `euler_rad` (the lever arm turned into NED):
+    /// the EGI's velocity output. The Euler angles are used on these steps as well as their own.
     pub egi_velocity: Every,
     /// `fuel_kg`: the gauge's updates.
     pub fuel: Every,
@@ -885,12 +886,11 @@ impl SensorModel {
         let e = &self.egi;
         let lag = e.delay_steps as u64;
         let egi = |hz: f64, phase: u64| Every::before(every_steps(hz), phase, lag);
-        let velocity = egi(e.cfg.velocity_hz, e.phase[2]);
         InputSchedule {
             gps: Every::before(self.gps_every_steps, 0, gps_lag),
-            roll_pitch: [egi(e.cfg.attitude_hz, e.phase[0]), velocity],
-            heading: [egi(e.cfg.heading_hz, e.phase[1]), velocity],
-            egi_velocity: velocity,
+            attitude: egi(e.cfg.attitude_hz, e.phase[0]),
+            heading: egi(e.cfg.heading_hz, e.phase[1]),
+            egi_velocity: egi(e.cfg.velocity_hz, e.phase[2]),
             fuel: Every::before(every_steps(e.fuel_cfg.update_hz), e.phase[3], 0),
         }
     }
@@ -1111,11 +1111,11 @@ mod tests {
             t.gps_speed_mps = f64::NAN;
             t.alt_msl_m = f64::NAN;
         }
-        if !any(&s.roll_pitch) {
+        if !any(&[s.attitude, s.egi_velocity]) {
             t.euler_rad[0] = f64::NAN;
             t.euler_rad[1] = f64::NAN;
         }
-        if !any(&s.heading) {
+        if !any(&[s.heading, s.egi_velocity]) {
             t.euler_rad[2] = f64::NAN;
         }
         if !any(&[s.egi_velocity]) {

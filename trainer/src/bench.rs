@@ -309,7 +309,8 @@ pub const BURN: &str = if cfg!(feature = "avx512") {
     "burn 0.22.1 (flex backend, gemm AVX2/FMA kernels)"
 };
 
-/// Runs one case: burn first, then PyTorch on the exchange burn wrote.
+/// Runs one case: burn first, then PyTorch on the exchange burn wrote, both with the case's loss
+/// (whatever `cfg.loss` says).
 pub fn run_case(
     ds: &Dataset,
     case: &Case,
@@ -317,6 +318,10 @@ pub fn run_case(
     torch: &Torch,
     exchange: &Path,
 ) -> Result<CaseResult> {
+    let cfg = &TrainConfig {
+        loss: case.loss,
+        ..cfg.clone()
+    };
     let fs = FeatureSet::parse(case.features)?;
     fs.check_suite(case.suite)?;
     let (tm, vm) = alpha_matrices(ds, &fs);

@@ -1119,7 +1119,7 @@ fn cmd_bench_train(
             seed: 1,
             label: format!("burn {}", case.name),
             progress: !o.json,
-            loss: case.loss,
+            loss: Loss::Mse, // run_case trains with the case's own loss
         };
         let r = run_case(&ds, case, &cfg, torch, exchange)?;
         eprintln!("{}", r.summary());
