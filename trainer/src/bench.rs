@@ -99,6 +99,8 @@ pub struct CaseResult {
     pub val_rows: usize,
     pub batch: usize,
     pub epochs: usize,
+    /// Replicas burn split each batch over (`TrainConfig::replicas`; PyTorch: one pass).
+    pub replicas: usize,
     pub burn: Side,
     pub torch: Side,
     /// burn's mean epoch time over PyTorch's (below 1: burn is faster).
@@ -340,7 +342,12 @@ pub fn run_case(
     if let Some(e) = failed {
         return Err(e);
     }
-    let burn = Side::new(BURN.into(), rayon::current_num_threads(), curves);
+    let replicas = curves.replicas;
+    let framework = match replicas {
+        1 => BURN.to_string(),
+        r => format!("{BURN}, each batch split over {r} replicas"),
+    };
+    let burn = Side::new(framework, rayon::current_num_threads(), curves);
     let torch = torch.finish();
     Ok(CaseResult {
         name: case.name.into(),
@@ -351,6 +358,7 @@ pub fn run_case(
         val_rows: vm.rows(),
         batch: cfg.batch,
         epochs: cfg.epochs,
+        replicas,
         ratio: burn.mean_epoch_s / torch.mean_epoch_s,
         val_loss_rel: burn.final_val() / torch.final_val() - 1.0,
         burn,
@@ -441,6 +449,7 @@ mod tests {
             label: String::new(),
             progress: false,
             loss: Loss::Mse,
+            replicas: None,
         };
         let dir = std::env::temp_dir().join(format!("bench-exchange-{}", std::process::id()));
         let model = init_model(|d| Cascade::new(n_in, &hidden, d), cfg.seed);

@@ -44,6 +44,10 @@ struct TrainArgs {
     /// accuracy tables report).
     #[arg(long, default_value = "mse", value_parser = parse_loss)]
     loss: Loss,
+    /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
+    /// 256 or more outputs, else 1). Part of what a seed reproduces.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
+    replicas: Option<u64>,
     /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
     /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
     /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
@@ -211,6 +215,10 @@ enum Cmd {
         /// Where the measured figures go (JSON; `trainer report --out DIR` includes DIR/bench_epoch.json).
         #[arg(long, default_value = "docs/results/bench_epoch.json")]
         out: PathBuf,
+        /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
+        /// 256 or more outputs, else 1). Part of what a seed reproduces.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
+        replicas: Option<u64>,
     },
     /// burn against PyTorch on the same cascade, data, initial weights, batches and threads
     /// (run it through scripts/bench-train, which makes the PyTorch venv).
@@ -241,6 +249,10 @@ enum Cmd {
         /// Print exactly one JSON object on stdout.
         #[arg(long)]
         json: bool,
+        /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
+        /// 256 or more outputs, else 1). Part of what a seed reproduces.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
+        replicas: Option<u64>,
     },
     /// Score the model-based air-data filter (estimator_core::filter, EGI suite) on a dataset's
     /// flights, frame by frame as the firmware runs it.
@@ -323,6 +335,7 @@ impl TrainArgs {
             label,
             progress,
             loss: self.loss,
+            replicas: self.replicas.map(|r| r as usize),
         }
     }
 
@@ -614,6 +627,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
             label: format!("job {k} {}", angle.name()),
             progress: false,
             loss: Loss::Mse,
+            replicas: None,
         };
         let a = train_angle(
             &ds,
@@ -1012,7 +1026,13 @@ fn shap_section(_: &Dataset, _: &Path, _: &ShapArgs) -> Result<String> {
     Ok("## SHAP\n\nNot computed: this build has no compiled-in model (run `trainer train` first).\n".into())
 }
 
-fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()> {
+fn cmd_bench(
+    data: &Path,
+    epochs: usize,
+    batch: usize,
+    replicas: Option<usize>,
+    out: &Path,
+) -> Result<()> {
     use trainer::model::{Cascade, train};
     use trainer::report::BenchEpoch;
     if epochs < 2 {
@@ -1029,6 +1049,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
         label: "alpha paper cascade".into(),
         progress: true,
         loss: Loss::Mse,
+        replicas,
     };
     let (_, curves) = train(
         |d| Cascade::new(n_in, Size::Paper.hidden(Angle::Alpha), d),
@@ -1042,6 +1063,7 @@ fn cmd_bench(data: &Path, epochs: usize, batch: usize, out: &Path) -> Result<()>
         batch,
         best_epoch: curves.best_epoch + 1,
         time_to_best_s: curves.epoch_s.iter().take(curves.best_epoch + 1).sum(),
+        replicas: curves.replicas,
         command: command_line(),
         dataset: data.display().to_string(),
         first_epoch_s: curves.epoch_s[0],
@@ -1072,6 +1094,7 @@ struct BenchTrainOpts<'a> {
     epochs: usize,
     batch: usize,
     threads: usize,
+    replicas: Option<usize>,
     cases: &'a [String],
     json: bool,
 }
@@ -1120,6 +1143,7 @@ fn cmd_bench_train(
             label: format!("burn {}", case.name),
             progress: !o.json,
             loss: Loss::Mse, // run_case trains with the case's own loss
+            replicas: o.replicas,
         };
         let r = run_case(&ds, case, &cfg, torch, exchange)?;
         eprintln!("{}", r.summary());
@@ -1202,7 +1226,8 @@ fn main() -> Result<()> {
             epochs,
             batch,
             out,
-        } => cmd_bench(data, *epochs, *batch, out),
+            replicas,
+        } => cmd_bench(data, *epochs, *batch, replicas.map(|r| r as usize), out),
         Cmd::Baselines { args, gb_rows } => cmd_baselines(args, *gb_rows),
         Cmd::BenchTrain {
             data,
@@ -1215,12 +1240,14 @@ fn main() -> Result<()> {
             exchange,
             out,
             json,
+            replicas,
         } => cmd_bench_train(
             data,
             &BenchTrainOpts {
                 epochs: *epochs,
                 batch: *batch,
                 threads: *threads,
+                replicas: replicas.map(|r| r as usize),
                 cases: case,
                 json: *json,
             },

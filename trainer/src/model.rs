@@ -139,7 +139,7 @@ impl Cascade {
 }
 
 /// What is trained: the cascade (both losses) or a plain MLP (angle loss only).
-pub trait Net: Module + Sized {
+pub trait Net: Module + Sized + Send + Sync {
     /// Per-head losses `[intermediate, angle]` (a plain MLP reports 0 for the intermediate).
     fn losses(
         &self,
@@ -268,6 +268,9 @@ pub struct TrainConfig {
     pub label: String,
     pub progress: bool,
     pub loss: Loss,
+    /// Replicas each batch is split over: 1, one forward and backward pass; 2, its two halves at
+    /// once, each on its own copy of the model, gradients summed. `None`: [`auto_replicas`].
+    pub replicas: Option<usize>,
 }
 
 /// Per-epoch mean losses `[mid, angle]` of the training batches and of the validation set.
@@ -277,6 +280,8 @@ pub struct Curves {
     pub val: Vec<[f64; 2]>,
     pub epoch_s: Vec<f64>,
     pub best_epoch: usize,
+    /// Replicas each batch was split over ([`TrainConfig::replicas`]).
+    pub replicas: usize,
 }
 
 impl Curves {
@@ -321,6 +326,136 @@ fn val_losses<M: Net>(model: &M, val: &Matrix, loss: Loss) -> [f64; 2] {
         .sum::<f64>()
         / n;
     [m, o]
+}
+
+/// Widest layer from which [`auto_replicas`] splits each batch over two replicas.
+pub const SPLIT_FROM_WIDTH: usize = 256;
+
+/// Replicas for a model of these layers when the configuration does not say: 2 when a layer has
+/// at least [`SPLIT_FROM_WIDTH`] outputs (the paper-size α cascade: its element-wise work, which
+/// burn-flex runs on one thread below 4 Mi elements, then runs on both cores; 20-25 % less time
+/// per epoch on 2 cores, docs/training-speed.md), else 1 (small layers: the split's copies and
+/// extra operations cost more than they save, and the shipped network stays reproducible bit for
+/// bit). A rule on the model alone, never on the thread count, so a seed gives the same weights on
+/// any machine.
+pub fn auto_replicas(layers: &[FloatLayer]) -> usize {
+    if layers.iter().any(|l| l.n_out() >= SPLIT_FROM_WIDTH) {
+        2
+    } else {
+        1
+    }
+}
+
+/// One batch's forward and backward pass on `model`: rows `x` (`n_in` per row) with targets
+/// `ym`, `yo`; the losses are scaled by `weight` before the backward pass. Returns the unscaled
+/// per-head losses and the gradients.
+#[allow(clippy::too_many_arguments)]
+fn batch_step<M: Net>(
+    model: &M,
+    x: &[f32],
+    ym: &[f32],
+    yo: &[f32],
+    n_in: usize,
+    weight: f32,
+    loss: Loss,
+    device: &Device,
+) -> (f64, f64, GradientsParams) {
+    let b = yo.len();
+    let x = Tensor::<2>::from_data(TensorData::new(x.to_vec(), [b, n_in]), device);
+    let ym = Tensor::<2>::from_data(TensorData::new(ym.to_vec(), [b, 1]), device);
+    let yo = Tensor::<2>::from_data(TensorData::new(yo.to_vec(), [b, 1]), device);
+    let (lm, lo) = model.losses(x, ym, yo, loss);
+    let total = lm.clone() + lo.clone();
+    let total = if weight == 1.0 { total } else { total * weight };
+    let (lm, lo) = (
+        lm.into_scalar::<f32>() as f64,
+        lo.into_scalar::<f32>() as f64,
+    );
+    (lm, lo, GradientsParams::from_grads(total.backward(), model))
+}
+
+/// The same batch in `parts` contiguous slices, one per replica, run on the pool's threads: the
+/// first slice on `model`, the others on forks of it (same values, each its own autodiff graph, so
+/// the backward passes do not share a lock). Each slice's loss is weighted by its share of the
+/// rows, so the summed gradients are the whole batch's mean-loss gradients; they are added in slice
+/// order, so the result does not depend on the number of threads or on which thread ran what.
+#[allow(clippy::too_many_arguments)]
+fn batch_step_split<M: Net>(
+    model: &M,
+    x: &[f32],
+    ym: &[f32],
+    yo: &[f32],
+    n_in: usize,
+    parts: usize,
+    loss: Loss,
+    device: &Device,
+) -> (f64, f64, GradientsParams) {
+    use rayon::prelude::*;
+    let b = yo.len();
+    let parts = parts.clamp(1, b.max(1));
+    let bounds: Vec<(usize, usize)> = (0..parts)
+        .map(|k| (k * b / parts, (k + 1) * b / parts))
+        .collect();
+    let results: Vec<(f64, f64, f64, GradientsParams)> = bounds
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(lo_row, hi_row))| {
+            let w = (hi_row - lo_row) as f32 / b as f32;
+            fn rows(v: &[f32], lo: usize, hi: usize, width: usize) -> &[f32] {
+                &v[lo * width..hi * width]
+            }
+            let (l, h) = (lo_row, hi_row);
+            let step = |m: &M| {
+                let (x, ym, yo) = (rows(x, l, h, n_in), rows(ym, l, h, 1), rows(yo, l, h, 1));
+                batch_step(m, x, ym, yo, n_in, w, loss, device)
+            };
+            let (lm, lo, g) = if k == 0 {
+                step(model)
+            } else {
+                step(&model.clone().fork(device))
+            };
+            (lm, lo, w as f64, g)
+        })
+        .collect();
+    let (mut sm, mut so) = (0.0, 0.0);
+    let mut grads: Option<GradientsParams> = None;
+    for (lm, lo, w, g) in results {
+        sm += lm * w;
+        so += lo * w;
+        grads = Some(match grads {
+            None => g,
+            Some(acc) => sum_grads(model, acc, g),
+        });
+    }
+    (sm, so, grads.unwrap_or_default())
+}
+
+/// `a + b` per parameter of `model`; a parameter with a gradient in only one keeps that one.
+fn sum_grads<M: Module>(model: &M, a: GradientsParams, b: GradientsParams) -> GradientsParams {
+    struct Sum {
+        a: GradientsParams,
+        b: GradientsParams,
+        out: GradientsParams,
+    }
+    impl burn::module::ModuleVisitor for Sum {
+        fn visit_float<const D: usize>(&mut self, param: &burn::module::Param<Tensor<D>>) {
+            let sum = match (self.a.remove::<D>(param.id), self.b.remove::<D>(param.id)) {
+                (Some(a), Some(b)) => Some(a + b),
+                (Some(g), None) | (None, Some(g)) => Some(g),
+                (None, None) => None,
+            };
+            if let Some(g) = sum {
+                self.out.register(param.id, g);
+            }
+        }
+    }
+    let mut v = Sum {
+        a,
+        b,
+        out: GradientsParams::new(),
+    };
+    model.visit(&mut v);
+    v.out
 }
 
 static INIT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -420,7 +555,13 @@ fn train_here<M: Net>(
         epsilon: ADAM_EPSILON,
     });
     let mut shuffle = Shuffle::new(train.rows(), cfg.seed);
-    let mut curves = Curves::default();
+    let replicas = cfg
+        .replicas
+        .unwrap_or_else(|| auto_replicas(&model.layers()));
+    let mut curves = Curves {
+        replicas,
+        ..Curves::default()
+    };
     let mut best: Option<(f64, M)> = None;
     let pb = if cfg.progress {
         let pb = ProgressBar::new(cfg.epochs as u64);
@@ -448,16 +589,14 @@ fn train_here<M: Net>(
                 bm.push(train.ym[i]);
                 bo.push(train.yo[i]);
             }
-            let b = chunk.len();
-            let x = Tensor::<2>::from_data(TensorData::new(bx.clone(), [b, n_in]), &device);
-            let ym = Tensor::<2>::from_data(TensorData::new(bm.clone(), [b, 1]), &device);
-            let yo = Tensor::<2>::from_data(TensorData::new(bo.clone(), [b, 1]), &device);
-            let (lm, lo) = model.losses(x, ym, yo, cfg.loss);
-            let loss = lm.clone() + lo.clone();
-            sm += lm.into_scalar::<f32>() as f64;
-            so += lo.into_scalar::<f32>() as f64;
+            let (lm, lo, grads) = if replicas >= 2 && chunk.len() >= 2 {
+                batch_step_split(&model, &bx, &bm, &bo, n_in, replicas, cfg.loss, &device)
+            } else {
+                batch_step(&model, &bx, &bm, &bo, n_in, 1.0, cfg.loss, &device)
+            };
+            sm += lm;
+            so += lo;
             nb += 1;
-            let grads = GradientsParams::from_grads(loss.backward(), &model);
             model = optim.step(lr, model, grads);
         }
         let nbf = nb.max(1) as f64;
@@ -519,6 +658,7 @@ mod tests {
             label: String::new(),
             progress: false,
             loss,
+            replicas: None,
         };
         let (model, curves) = train(|d| Cascade::new(1, &[4], d), &cfg, &m, &m);
         // The validation loss is the training loss's own kind (at the epoch `train` returns).
@@ -554,5 +694,113 @@ mod tests {
             assert_eq!(Loss::parse(l.name()), Some(l));
         }
         assert_eq!(Loss::parse("huber"), None);
+    }
+
+    /// A small regression problem: 3 inputs, both targets smooth functions of them.
+    fn ramp(rows: usize) -> Matrix {
+        let x: Vec<f32> = (0..rows * 3)
+            .map(|i| ((i * 37 % 101) as f32 / 50.0) - 1.0)
+            .collect();
+        let ym = x.chunks(3).map(|r| r[0] - 0.5 * r[1]).collect();
+        let yo = x.chunks(3).map(|r| r[0] * r[2] + 0.3 * r[1]).collect();
+        Matrix { x, ym, yo, n_in: 3 }
+    }
+
+    fn run(
+        replicas: usize,
+        epochs: usize,
+        batch: usize,
+        threads: usize,
+    ) -> (Vec<FloatLayer>, Curves) {
+        let m = ramp(96);
+        let cfg = TrainConfig {
+            epochs,
+            batch,
+            lr: 1e-2,
+            seed: 11,
+            label: String::new(),
+            progress: false,
+            loss: Loss::Mse,
+            replicas: Some(replicas),
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (model, curves) = pool.install(|| train(|d| Cascade::new(3, &[8, 4], d), &cfg, &m, &m));
+        (model.layers(), curves)
+    }
+
+    /// Every gradient of a model, parameter after parameter.
+    fn flat_grads<M: Module>(model: &M, grads: &GradientsParams) -> Vec<f32> {
+        struct Flat<'a>(&'a GradientsParams, Vec<f32>);
+        impl burn::module::ModuleVisitor for Flat<'_> {
+            fn visit_float<const D: usize>(&mut self, param: &burn::module::Param<Tensor<D>>) {
+                let g = self
+                    .0
+                    .get::<D>(param.id)
+                    .map(|t| t.into_data().try_to_vec::<f32>().unwrap_or_default());
+                self.1.extend(g.unwrap_or_default());
+            }
+        }
+        let mut v = Flat(grads, Vec::new());
+        model.visit(&mut v);
+        v.1
+    }
+
+    /// A batch of 96 rows in one pass and split over 2 and over 5 replicas (slices of unequal
+    /// size): the same gradient of every parameter and the same batch losses, up to rounding.
+    #[test]
+    fn a_split_batch_has_the_whole_batch_gradient() {
+        let m = ramp(96);
+        let device = Device::flex().autodiff();
+        let model = init_model(|d| Cascade::new(3, &[8, 4], d), 11);
+        let (wm, wo, wg) = batch_step(&model, &m.x, &m.ym, &m.yo, 3, 1.0, Loss::Mse, &device);
+        let whole = flat_grads(&model, &wg);
+        let scale = whole.iter().map(|g| g.abs()).fold(0.0, f32::max);
+        assert_eq!(
+            whole.len(),
+            3 * 8 + 8 + 8 * 4 + 4 + 4 + 1 + 4 * 8 + 8 + 8 * 4 + 4 + 4 + 1
+        );
+        assert!(scale > 1e-2, "gradients too small to compare: {scale}");
+        for r in [2, 5] {
+            let (sm, so, sg) =
+                batch_step_split(&model, &m.x, &m.ym, &m.yo, 3, r, Loss::Mse, &device);
+            let split = flat_grads(&model, &sg);
+            assert_eq!(split.len(), whole.len(), "{r} replicas");
+            let d = whole
+                .iter()
+                .zip(&split)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f32::max);
+            assert!(
+                d < 1e-5 * scale,
+                "{r} replicas: gradients differ by {d} (scale {scale})"
+            );
+            assert!(
+                (sm - wm).abs() < 1e-6 && (so - wo).abs() < 1e-6,
+                "{r}: {sm} {so} vs {wm} {wo}"
+            );
+        }
+    }
+
+    /// Split training gives the same bits on one thread as on two (which replica ran where, and
+    /// when, does not enter), and is not the one-pass result bit for bit (the split really ran).
+    #[test]
+    fn split_training_is_the_same_on_any_thread_count() {
+        let (one, _) = run(2, 3, 16, 1);
+        let (two, _) = run(2, 3, 16, 2);
+        assert_eq!(one, two);
+        let (whole, _) = run(1, 3, 16, 2);
+        assert_ne!(one, whole);
+    }
+
+    #[test]
+    fn only_wide_models_split_by_default() {
+        let layers = |hidden: &[usize]| init_model(|d| Cascade::new(10, hidden, d), 1).layers();
+        assert_eq!(auto_replicas(&layers(&[512, 256, 128, 64, 32])), 2);
+        assert_eq!(auto_replicas(&layers(&[64, 32, 16])), 1);
+        assert_eq!(auto_replicas(&layers(&[255])), 1);
+        assert_eq!(auto_replicas(&layers(&[256])), 2);
     }
 }

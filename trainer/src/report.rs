@@ -139,6 +139,7 @@ pub fn run(
         label,
         progress: true,
         loss: Loss::Mse,
+        replicas: None,
     };
     let fs = &cfg.features;
     for angle in [Angle::Alpha, Angle::Beta] {
@@ -1268,7 +1269,7 @@ impl Report {
                 s,
                 "\n## Benchmark: paper-size α cascade epoch time\n\n`{}` on {}: **{:.2} s per epoch** \
                  (mean of epochs 2..{}, first epoch {:.2} s) for {} training rows + a {}-row validation \
-                 pass, α cascade 2 × {}-{}-1, batch {}; ≈ {:.1} s per epoch scaled \
+                 pass, α cascade 2 × {}-{}-1, batch {}{}; ≈ {:.1} s per epoch scaled \
                  linearly to the paper's 288 000 rows.{}\n",
                 b.command,
                 b.machine,
@@ -1280,6 +1281,11 @@ impl Report {
                 b.n_in,
                 widths(Size::Paper.hidden(Angle::Alpha)),
                 b.batch,
+                if b.replicas > 1 {
+                    format!(" split over {} replicas", b.replicas)
+                } else {
+                    String::new()
+                },
                 b.per_epoch_288k_s,
                 if b.best_epoch > 0 {
                     format!(
@@ -1333,6 +1339,8 @@ pub struct BenchEpoch {
     /// Training time up to and including the best validation epoch, s.
     #[serde(deserialize_with = "nan_if_null")]
     pub time_to_best_s: f64,
+    /// Replicas each batch was split over; 1 in files from before the split existed.
+    pub replicas: usize,
     pub train_rows: usize,
     pub val_rows: usize,
 }
@@ -1352,6 +1360,7 @@ impl Default for BenchEpoch {
             n_in: 0,
             per_epoch_288k_s: f64::NAN,
             time_to_best_s: f64::NAN,
+            replicas: 1,
             train_rows: 0,
             val_rows: 0,
         }
