@@ -450,6 +450,7 @@ mod tests {
             progress: false,
             loss: Loss::Mse,
             replicas: None,
+            bars: None,
         };
         let dir = std::env::temp_dir().join(format!("bench-exchange-{}", std::process::id()));
         let model = init_model(|d| Cascade::new(n_in, &hidden, d), cfg.seed);

@@ -336,6 +336,7 @@ impl TrainArgs {
             progress,
             loss: self.loss,
             replicas: self.replicas.map(|r| r as usize),
+            bars: None,
         }
     }
 
@@ -400,9 +401,20 @@ fn cmd_train(
         ds.rows(trainer::data::Role::Test)
     );
     let epochs = args.epochs(size);
-    let cfg = |a: Angle| args.train_config(size, a.name().into(), true);
-    let alpha = train_angle(&ds, Angle::Alpha, &fs.alpha, size, &cfg(Angle::Alpha));
-    let beta = train_angle(&ds, Angle::Beta, &fs.beta, size, &cfg(Angle::Beta));
+    // α and β train side by side: each is deterministic on any number of threads, so this
+    // changes no bit, and the shipped networks' small layers leave a core idle each on its own.
+    let bars = indicatif::MultiProgress::new();
+    let cfg = |a: Angle| TrainConfig {
+        bars: Some(bars.clone()),
+        ..args.train_config(size, a.name().into(), true)
+    };
+    let (alpha, beta) = std::thread::scope(|s| {
+        let beta = s.spawn(|| train_angle(&ds, Angle::Beta, &fs.beta, size, &cfg(Angle::Beta)));
+        let alpha = train_angle(&ds, Angle::Alpha, &fs.alpha, size, &cfg(Angle::Alpha));
+        (alpha, beta.join())
+    });
+    let beta =
+        beta.map_err(|_| anyhow::anyhow!("the β training thread panicked; see the message above"))?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     plot_curves(&out.join("learning_curves.png"), &[&alpha, &beta])?;
     plot_series(&out.join("test_timeseries.png"), &ds, &[&alpha, &beta], 2)?;
@@ -628,6 +640,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
             progress: false,
             loss: Loss::Mse,
             replicas: None,
+            bars: None,
         };
         let a = train_angle(
             &ds,
@@ -1050,6 +1063,7 @@ fn cmd_bench(
         progress: true,
         loss: Loss::Mse,
         replicas,
+        bars: None,
     };
     let (_, curves) = train(
         |d| Cascade::new(n_in, Size::Paper.hidden(Angle::Alpha), d),
@@ -1144,6 +1158,7 @@ fn cmd_bench_train(
             progress: !o.json,
             loss: Loss::Mse, // run_case trains with the case's own loss
             replicas: o.replicas,
+            bars: None,
         };
         let r = run_case(&ds, case, &cfg, torch, exchange)?;
         eprintln!("{}", r.summary());

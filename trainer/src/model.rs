@@ -271,6 +271,9 @@ pub struct TrainConfig {
     /// Replicas each batch is split over: 1, one forward and backward pass; 2, its two halves at
     /// once, each on its own copy of the model, gradients summed. `None`: [`auto_replicas`].
     pub replicas: Option<usize>,
+    /// Where the progress bar goes when trainings run side by side (`trainer train` trains α and
+    /// β at once); `None`: a bar of its own.
+    pub bars: Option<indicatif::MultiProgress>,
 }
 
 /// Per-epoch mean losses `[mid, angle]` of the training batches and of the validation set.
@@ -565,6 +568,10 @@ fn train_here<M: Net>(
     let mut best: Option<(f64, M)> = None;
     let pb = if cfg.progress {
         let pb = ProgressBar::new(cfg.epochs as u64);
+        let pb = match &cfg.bars {
+            Some(bars) => bars.add(pb),
+            None => pb,
+        };
         pb.set_style(
             ProgressStyle::with_template("{prefix} [{bar:30}] epoch {pos}/{len} {msg} ({elapsed})")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -659,6 +666,7 @@ mod tests {
             progress: false,
             loss,
             replicas: None,
+            bars: None,
         };
         let (model, curves) = train(|d| Cascade::new(1, &[4], d), &cfg, &m, &m);
         // The validation loss is the training loss's own kind (at the epoch `train` returns).
@@ -722,6 +730,7 @@ mod tests {
             progress: false,
             loss: Loss::Mse,
             replicas: Some(replicas),
+            bars: None,
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -140,6 +140,7 @@ pub fn run(
         progress: true,
         loss: Loss::Mse,
         replicas: None,
+        bars: None,
     };
     let fs = &cfg.features;
     for angle in [Angle::Alpha, Angle::Beta] {

@@ -102,6 +102,7 @@ fn setup(seed: u64, epochs: usize) -> (Prep, Cascade, Vec<Vec<f32>>) {
         progress: false,
         loss: Loss::Mse,
         replicas: None,
+        bars: None,
     };
     let (model, _) = train(|d| Cascade::new(3, &[8, 4], d), &cfg, &m, &m);
     (prep, model, xs)
