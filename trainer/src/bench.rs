@@ -125,6 +125,77 @@ impl CaseResult {
     }
 }
 
+/// One case run once per seed, each seed a full side-by-side run (its own initial weights and row
+/// order on both sides). A single epoch's validation loss moves by 10-25 % from one epoch to the
+/// next on both sides, and the two sides' rounding drifts apart, so one seed's loss comparison is
+/// mostly that noise; the mean over seeds is the framework's.
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseSeeds {
+    pub name: String,
+    pub seeds: Vec<u64>,
+    /// Mean over seeds of each side's mean epoch time.
+    pub burn_s_per_epoch: f64,
+    pub torch_s_per_epoch: f64,
+    /// `burn_s_per_epoch / torch_s_per_epoch` (below 1: burn is faster).
+    pub ratio: f64,
+    /// Mean over seeds of each side's validation loss after the last epoch.
+    pub burn_val_loss: f64,
+    pub torch_val_loss: f64,
+    /// `burn_val_loss / torch_val_loss - 1` (negative: burn's is lower).
+    pub val_loss_rel: f64,
+    /// The smallest and largest single-seed `val_loss_rel`.
+    pub val_loss_rel_range: [f64; 2],
+    pub runs: Vec<CaseResult>,
+}
+
+impl CaseSeeds {
+    /// Aggregates the runs of one case (one per seed, same case); `None` for no runs.
+    pub fn new(runs: Vec<CaseResult>, seeds: Vec<u64>) -> Option<CaseSeeds> {
+        let first = runs.first()?;
+        let n = runs.len() as f64;
+        let mean = |f: &dyn Fn(&CaseResult) -> f64| runs.iter().map(f).sum::<f64>() / n;
+        let burn_s = mean(&|r| r.burn.mean_epoch_s);
+        let torch_s = mean(&|r| r.torch.mean_epoch_s);
+        let burn_v = mean(&|r| r.burn.final_val());
+        let torch_v = mean(&|r| r.torch.final_val());
+        let rel = runs.iter().map(|r| r.val_loss_rel);
+        let range = [
+            rel.clone().fold(f64::INFINITY, f64::min),
+            rel.fold(f64::NEG_INFINITY, f64::max),
+        ];
+        Some(CaseSeeds {
+            name: first.name.clone(),
+            seeds,
+            burn_s_per_epoch: burn_s,
+            torch_s_per_epoch: torch_s,
+            ratio: burn_s / torch_s,
+            burn_val_loss: burn_v,
+            torch_val_loss: torch_v,
+            val_loss_rel: burn_v / torch_v - 1.0,
+            val_loss_rel_range: range,
+            runs,
+        })
+    }
+
+    /// One line: both mean epoch times, the ratio and both mean final validation losses.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} over {} seed(s): burn {:.2} s/epoch, PyTorch {:.2} s/epoch, ratio {:.2}; mean val \
+             loss {:.5} vs {:.5} ({:+.1} %; single seeds {:+.1} to {:+.1} %)",
+            self.name,
+            self.seeds.len(),
+            self.burn_s_per_epoch,
+            self.torch_s_per_epoch,
+            self.ratio,
+            self.burn_val_loss,
+            self.torch_val_loss,
+            100.0 * self.val_loss_rel,
+            100.0 * self.val_loss_rel_range[0],
+            100.0 * self.val_loss_rel_range[1],
+        )
+    }
+}
+
 /// The α design matrices (training, validation) of `fs` on `ds`, as `train_angle` prepares them.
 pub fn alpha_matrices(ds: &Dataset, fs: &FeatureSet) -> (Matrix, Matrix) {
     let tr: Vec<_> = ds.flights(Role::Train).collect();
@@ -367,38 +438,45 @@ pub fn run_case(
 }
 
 /// The benchmark's Markdown page.
-pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String {
+pub fn markdown(results: &[CaseSeeds], command: &str, machine: &str) -> String {
     let mut s = String::from(
         "# Training speed: burn against PyTorch, side by side (issue 18)\n\n\
          Written by `trainer bench-train` (run it through `scripts/bench-train`, which makes the \
          PyTorch venv and the dataset). Both frameworks train the same cascade from the same initial \
          weights on the same batches in the same order, with Adam (same constants, same per-epoch \
          learning rates), the same validation pass each epoch and the same thread count. An epoch's \
-         time is the mean of epochs 2..N (the first carries warm-up).\n\n",
+         time is the mean of epochs 2..N (the first carries warm-up). Each seed is a full \
+         side-by-side run with its own initial weights and row order; the first table gives the \
+         means over the seeds, the validation losses after the last epoch.\n\n",
     );
     s += "How it is made fair, where burn's time goes and the backends offered: \
           [docs/training-speed.md](../training-speed.md).\n\n";
     s += &format!("Command: `{command}`\n\nMachine: {machine}\n\n");
-    s += "| case | rows | epochs | burn s/epoch | PyTorch s/epoch | ratio burn/PyTorch | val loss burn | val loss PyTorch | difference |\n|---|---|---|---|---|---|---|---|---|\n";
-    for r in results {
+    s += "| case | rows | epochs | seeds | burn s/epoch | PyTorch s/epoch | ratio burn/PyTorch | val loss burn | val loss PyTorch | difference | single seeds |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for c in results {
+        let Some(r) = c.runs.first() else { continue };
         s += &format!(
-            "| {} | {} | {} | {:.2} | {:.2} | **{:.2}** | {:.5} | {:.5} | {:+.1} % |\n",
-            r.name,
+            "| {} | {} | {} | {} | {:.2} | {:.2} | **{:.2}** | {:.5} | {:.5} | **{:+.1} %** | {:+.1} to {:+.1} % |\n",
+            c.name,
             r.train_rows,
             r.epochs,
-            r.burn.mean_epoch_s,
-            r.torch.mean_epoch_s,
-            r.ratio,
-            r.burn.final_val(),
-            r.torch.final_val(),
-            100.0 * r.val_loss_rel
+            c.seeds.len(),
+            c.burn_s_per_epoch,
+            c.torch_s_per_epoch,
+            c.ratio,
+            c.burn_val_loss,
+            c.torch_val_loss,
+            100.0 * c.val_loss_rel,
+            100.0 * c.val_loss_rel_range[0],
+            100.0 * c.val_loss_rel_range[1],
         );
     }
     s += "\n";
-    for r in results {
+    for c in results {
+        let Some(r) = c.runs.first() else { continue };
         s += &format!(
             "**{}**: {}; {} inputs, batch {}; {} ({} threads) against {} ({} threads).\n\n",
-            r.name,
+            c.name,
             r.what,
             r.n_in,
             r.batch,
@@ -407,10 +485,27 @@ pub fn markdown(results: &[CaseResult], command: &str, machine: &str) -> String 
             r.torch.framework,
             r.torch.threads
         );
-        s += "| epoch | burn s | PyTorch s | burn val loss | PyTorch val loss |\n|---|---|---|---|---|\n";
-        for (e, (b, t)) in r.burn.epoch_s.iter().zip(&r.torch.epoch_s).enumerate() {
-            let (bv, tv) = (r.burn.val_at(e), r.torch.val_at(e));
-            s += &format!("| {} | {b:.2} | {t:.2} | {bv:.5} | {tv:.5} |\n", e + 1);
+        s += "| seed | burn s/epoch | PyTorch s/epoch | ratio | burn val loss | PyTorch val loss | difference |\n|---|---|---|---|---|---|---|\n";
+        for (seed, r) in c.seeds.iter().zip(&c.runs) {
+            s += &format!(
+                "| {seed} | {:.2} | {:.2} | {:.2} | {:.5} | {:.5} | {:+.1} % |\n",
+                r.burn.mean_epoch_s,
+                r.torch.mean_epoch_s,
+                r.ratio,
+                r.burn.final_val(),
+                r.torch.final_val(),
+                100.0 * r.val_loss_rel
+            );
+        }
+        s += "\nPer epoch:\n\n| seed | epoch | burn s | PyTorch s | burn val loss | PyTorch val loss |\n|---|---|---|---|---|---|\n";
+        for (seed, r) in c.seeds.iter().zip(&c.runs) {
+            for (e, (b, t)) in r.burn.epoch_s.iter().zip(&r.torch.epoch_s).enumerate() {
+                let (bv, tv) = (r.burn.val_at(e), r.torch.val_at(e));
+                s += &format!(
+                    "| {seed} | {} | {b:.2} | {t:.2} | {bv:.5} | {tv:.5} |\n",
+                    e + 1
+                );
+            }
         }
         s += "\n";
     }
@@ -427,6 +522,62 @@ mod tests {
             .chunks_exact(4)
             .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
             .collect()
+    }
+
+    fn run(burn_s: f64, torch_s: f64, burn_val: f64, torch_val: f64) -> CaseResult {
+        let side = |s: f64, v: f64| Side {
+            framework: String::new(),
+            threads: 2,
+            epoch_s: vec![9.0, s],
+            mean_epoch_s: s,
+            train: vec![[0.0; 2]; 2],
+            val: vec![[1.0, 1.0], [v / 4.0, 3.0 * v / 4.0]],
+        };
+        let (burn, torch) = (side(burn_s, burn_val), side(torch_s, torch_val));
+        CaseResult {
+            name: "c".into(),
+            what: String::new(),
+            n_in: 1,
+            hidden: vec![],
+            train_rows: 1,
+            val_rows: 1,
+            batch: 1,
+            epochs: 2,
+            replicas: 1,
+            ratio: burn_s / torch_s,
+            val_loss_rel: burn_val / torch_val - 1.0,
+            burn,
+            torch,
+        }
+    }
+
+    /// The seeds' means are compared, not the mean of the per-seed ratios: two seeds at -10 % and
+    /// +10 % around different losses are not a tie.
+    #[test]
+    fn seeds_compare_their_means() {
+        let c = CaseSeeds::new(
+            vec![run(6.0, 8.0, 0.09, 0.10), run(8.0, 8.0, 0.22, 0.20)],
+            vec![1, 2],
+        )
+        .unwrap();
+        assert_eq!(c.burn_s_per_epoch, 7.0);
+        assert_eq!(c.torch_s_per_epoch, 8.0);
+        assert_eq!(c.ratio, 7.0 / 8.0);
+        assert!((c.burn_val_loss - 0.155).abs() < 1e-12);
+        assert!((c.torch_val_loss - 0.15).abs() < 1e-12);
+        assert!((c.val_loss_rel - (0.155 / 0.15 - 1.0)).abs() < 1e-12);
+        assert!((c.val_loss_rel_range[0] + 0.1).abs() < 1e-12);
+        assert!((c.val_loss_rel_range[1] - 0.1).abs() < 1e-12);
+        assert!(CaseSeeds::new(vec![], vec![]).is_none());
+        let page = markdown(&[c], "cmd", "machine");
+        assert!(
+            page.contains("| c | 1 | 2 | 2 | 7.00 | 8.00 | **0.88** |"),
+            "{page}"
+        );
+        assert!(
+            page.contains("| 2 | 2 | 8.00 | 8.00 | 0.22000 | 0.20000 |"),
+            "{page}"
+        );
     }
 
     /// What PyTorch reads is what burn trains: every parameter once, in the cascade's layer order;

@@ -232,6 +232,10 @@ enum Cmd {
         /// Threads for both frameworks (burn: rayon's global pool; PyTorch: set_num_threads).
         #[arg(long, default_value_t = 2)]
         threads: usize,
+        /// Seeds per case (1..=N), each a full side-by-side run; the page and the JSON compare the
+        /// means over seeds (one seed's validation loss is mostly epoch-to-epoch noise).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=20))]
+        seeds: u64,
         /// Cases to run (paper-alpha, shipped-alpha); default all.
         #[arg(long, value_delimiter = ',')]
         case: Vec<String>,
@@ -1106,6 +1110,7 @@ fn cmd_bench(
 
 struct BenchTrainOpts<'a> {
     epochs: usize,
+    seeds: u64,
     batch: usize,
     threads: usize,
     replicas: Option<usize>,
@@ -1120,7 +1125,7 @@ fn cmd_bench_train(
     exchange: &Path,
     out: &Path,
 ) -> Result<()> {
-    use trainer::bench::{CASES, markdown, run_case};
+    use trainer::bench::{CASES, CaseSeeds, markdown, run_case};
     if o.epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is warm-up and is not averaged)");
     }
@@ -1147,34 +1152,44 @@ fn cmd_bench_train(
     };
     let ds = load(data, 0.15)?;
     let mut results = Vec::new();
+    let seeds: Vec<u64> = (1..=o.seeds).collect();
     for case in &cases {
         ds.require(case.suite)?;
-        let cfg = TrainConfig {
-            epochs: o.epochs,
-            batch: o.batch,
-            lr: 1e-3,
-            seed: 1,
-            label: format!("burn {}", case.name),
-            progress: !o.json,
-            loss: Loss::Mse, // run_case trains with the case's own loss
-            replicas: o.replicas,
-            bars: None,
-        };
-        let r = run_case(&ds, case, &cfg, torch, exchange)?;
-        eprintln!("{}", r.summary());
-        results.push(r);
+        let mut runs = Vec::new();
+        for &seed in &seeds {
+            let cfg = TrainConfig {
+                epochs: o.epochs,
+                batch: o.batch,
+                lr: 1e-3,
+                seed,
+                label: format!("burn {} seed {seed}", case.name),
+                progress: !o.json,
+                loss: Loss::Mse, // run_case trains with the case's own loss
+                replicas: o.replicas,
+                bars: None,
+            };
+            let r = run_case(&ds, case, &cfg, torch, exchange)?;
+            eprintln!("seed {seed}: {}", r.summary());
+            runs.push(r);
+        }
+        let c = CaseSeeds::new(runs, seeds.clone()).context("no seeds were run")?;
+        eprintln!("{}", c.summary());
+        results.push(c);
     }
+    let first = results.first();
     let summary = serde_json::json!({
         "command": command_line(),
         "machine": machine(),
         "dataset": data.display().to_string(),
         "threads": o.threads,
+        "seeds": seeds,
         "cases": results,
-        "ratio": results.first().map(|r| r.ratio),
-        "burn_s_per_epoch": results.first().map(|r| r.burn.mean_epoch_s),
-        "torch_s_per_epoch": results.first().map(|r| r.torch.mean_epoch_s),
-        "burn_val_loss": results.first().map(|r| r.burn.final_val()),
-        "torch_val_loss": results.first().map(|r| r.torch.final_val()),
+        "ratio": first.map(|c| c.ratio),
+        "burn_s_per_epoch": first.map(|c| c.burn_s_per_epoch),
+        "torch_s_per_epoch": first.map(|c| c.torch_s_per_epoch),
+        "burn_val_loss": first.map(|c| c.burn_val_loss),
+        "torch_val_loss": first.map(|c| c.torch_val_loss),
+        "val_loss_rel": first.map(|c| c.val_loss_rel),
     });
     if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -1249,6 +1264,7 @@ fn main() -> Result<()> {
             epochs,
             batch,
             threads,
+            seeds,
             case,
             python,
             torch_script,
@@ -1260,6 +1276,7 @@ fn main() -> Result<()> {
             data,
             &BenchTrainOpts {
                 epochs: *epochs,
+                seeds: *seeds,
                 batch: *batch,
                 threads: *threads,
                 replicas: replicas.map(|r| r as usize),
