@@ -1,4 +1,5 @@
-//! `trainer bench-train`: burn and PyTorch train the same cascade side by side, in one run.
+//! `trainer bench-train`: burn and PyTorch train the same cascade side by side, in one run, once per
+//! seed.
 //!
 //! Both sides get the same prepared design matrices, the same initial weights (burn's seeded
 //! initialisation, handed to PyTorch), the same row order in every epoch, the same optimiser
@@ -126,7 +127,7 @@ impl CaseResult {
 }
 
 /// One case run once per seed, each seed a full side-by-side run (its own initial weights and row
-/// order on both sides). A single epoch's validation loss moves by 10-25 % from one epoch to the
+/// order on both sides). A single epoch's validation loss moves by up to 25 % from one epoch to the
 /// next on both sides, and the two sides' rounding drifts apart, so one seed's loss comparison is
 /// mostly that noise; the mean over seeds is the framework's.
 #[derive(Debug, Clone, Serialize)]
@@ -149,20 +150,29 @@ pub struct CaseSeeds {
 }
 
 impl CaseSeeds {
-    /// Aggregates the runs of one case (one per seed, same case); `None` for no runs.
+    /// Aggregates the runs of one case, `runs[i]` made with `seeds[i]`; `None` for no runs, or
+    /// runs and seeds of different lengths or cases. A seed whose loss is NaN (diverged) makes the
+    /// means and the range NaN: it is not dropped.
     pub fn new(runs: Vec<CaseResult>, seeds: Vec<u64>) -> Option<CaseSeeds> {
         let first = runs.first()?;
+        if runs.len() != seeds.len() || runs.iter().any(|r| r.name != first.name) {
+            return None;
+        }
         let n = runs.len() as f64;
         let mean = |f: &dyn Fn(&CaseResult) -> f64| runs.iter().map(f).sum::<f64>() / n;
         let burn_s = mean(&|r| r.burn.mean_epoch_s);
         let torch_s = mean(&|r| r.torch.mean_epoch_s);
         let burn_v = mean(&|r| r.burn.final_val());
         let torch_v = mean(&|r| r.torch.final_val());
-        let rel = runs.iter().map(|r| r.val_loss_rel);
-        let range = [
-            rel.clone().fold(f64::INFINITY, f64::min),
-            rel.fold(f64::NEG_INFINITY, f64::max),
-        ];
+        let rel: Vec<f64> = runs.iter().map(|r| r.val_loss_rel).collect();
+        let range = if rel.iter().any(|v| v.is_nan()) {
+            [f64::NAN; 2]
+        } else {
+            [
+                rel.iter().copied().fold(f64::INFINITY, f64::min),
+                rel.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ]
+        };
         Some(CaseSeeds {
             name: first.name.clone(),
             seeds,
@@ -556,28 +566,39 @@ mod tests {
     #[test]
     fn seeds_compare_their_means() {
         let c = CaseSeeds::new(
-            vec![run(6.0, 8.0, 0.09, 0.10), run(8.0, 8.0, 0.22, 0.20)],
+            vec![run(6.0, 8.0, 0.09, 0.10), run(8.0, 16.0, 0.22, 0.20)],
             vec![1, 2],
         )
         .unwrap();
         assert_eq!(c.burn_s_per_epoch, 7.0);
-        assert_eq!(c.torch_s_per_epoch, 8.0);
-        assert_eq!(c.ratio, 7.0 / 8.0);
+        assert_eq!(c.torch_s_per_epoch, 12.0);
+        // 7/12, not the mean of the per-seed ratios (0.75 + 0.5) / 2.
+        assert_eq!(c.ratio, 7.0 / 12.0);
         assert!((c.burn_val_loss - 0.155).abs() < 1e-12);
         assert!((c.torch_val_loss - 0.15).abs() < 1e-12);
         assert!((c.val_loss_rel - (0.155 / 0.15 - 1.0)).abs() < 1e-12);
         assert!((c.val_loss_rel_range[0] + 0.1).abs() < 1e-12);
         assert!((c.val_loss_rel_range[1] - 0.1).abs() < 1e-12);
         assert!(CaseSeeds::new(vec![], vec![]).is_none());
+        assert!(CaseSeeds::new(vec![run(1.0, 1.0, 1.0, 1.0)], vec![1, 2]).is_none());
+        let nan = CaseSeeds::new(
+            vec![run(1.0, 1.0, 1.0, 1.0), run(1.0, 1.0, f64::NAN, 1.0)],
+            vec![1, 2],
+        )
+        .unwrap();
+        assert!(nan.burn_val_loss.is_nan() && nan.val_loss_rel.is_nan());
+        assert!(nan.val_loss_rel_range.iter().all(|v| v.is_nan()));
         let page = markdown(&[c], "cmd", "machine");
-        assert!(
-            page.contains("| c | 1 | 2 | 2 | 7.00 | 8.00 | **0.88** |"),
-            "{page}"
-        );
-        assert!(
-            page.contains("| 2 | 2 | 8.00 | 8.00 | 0.22000 | 0.20000 |"),
-            "{page}"
-        );
+        for row in [
+            // the means
+            "| c | 1 | 2 | 2 | 7.00 | 12.00 | **0.58** | 0.15500 | 0.15000 | **+3.3 %** | -10.0 to +10.0 % |",
+            // seed 2's run
+            "| 2 | 8.00 | 16.00 | 0.50 | 0.22000 | 0.20000 | +10.0 % |",
+            // seed 2's second epoch
+            "| 2 | 2 | 8.00 | 16.00 | 0.22000 | 0.20000 |",
+        ] {
+            assert!(page.contains(row), "{row} missing from\n{page}");
+        }
     }
 
     /// What PyTorch reads is what burn trains: every parameter once, in the cascade's layer order;

@@ -232,8 +232,9 @@ enum Cmd {
         /// Threads for both frameworks (burn: rayon's global pool; PyTorch: set_num_threads).
         #[arg(long, default_value_t = 2)]
         threads: usize,
-        /// Seeds per case (1..=N), each a full side-by-side run; the page and the JSON compare the
-        /// means over seeds (one seed's validation loss is mostly epoch-to-epoch noise).
+        /// Seeds per case (seeds 1..=N, N at most 20), each a full side-by-side run; the page and
+        /// the JSON compare the means over seeds (one seed's validation loss is mostly
+        /// epoch-to-epoch noise).
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=20))]
         seeds: u64,
         /// Cases to run (paper-alpha, shipped-alpha); default all.
@@ -1080,6 +1081,10 @@ fn cmd_bench(
     let v = BenchEpoch {
         batch,
         best_epoch: curves.best_epoch + 1,
+        best_val_loss: curves
+            .val
+            .get(curves.best_epoch)
+            .map_or(f64::NAN, |v| v[0] + v[1]),
         time_to_best_s: curves.epoch_s.iter().take(curves.best_epoch + 1).sum(),
         replicas: curves.replicas,
         command: command_line(),

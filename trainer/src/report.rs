@@ -1323,6 +1323,10 @@ pub struct BenchEpoch {
     pub batch: usize,
     /// The epoch (1-based) with the lowest validation loss; 0 in files from before it was recorded.
     pub best_epoch: usize,
+    /// That lowest validation loss (both heads, as `train` selects); NaN in files from before it
+    /// was recorded.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub best_val_loss: f64,
     pub command: String,
     pub dataset: String,
     pub epoch_s: Vec<f64>,
@@ -1351,6 +1355,7 @@ impl Default for BenchEpoch {
         BenchEpoch {
             batch: 0,
             best_epoch: 0,
+            best_val_loss: f64::NAN,
             command: "?".into(),
             dataset: "?".into(),
             epoch_s: Vec::new(),
