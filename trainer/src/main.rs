@@ -22,6 +22,22 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// `--replicas`, shared by `train`, `bench-epoch` and `bench-train`.
+#[derive(clap::Args, Clone, Copy)]
+struct Replicas {
+    /// Replicas each training batch is split over (1 to 8; default: 2 for a model with a layer of
+    /// 256 or more outputs, else 1, `model::auto_replicas`). Part of what a seed reproduces.
+    #[arg(long = "replicas", value_name = "REPLICAS", value_parser = clap::value_parser!(u64).range(1..=8))]
+    n: Option<u64>,
+}
+
+impl Replicas {
+    /// `TrainConfig::replicas`.
+    fn get(self) -> Option<usize> {
+        self.n.map(|r| r as usize)
+    }
+}
+
 #[derive(clap::Args, Clone)]
 struct TrainArgs {
     /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
@@ -44,10 +60,8 @@ struct TrainArgs {
     /// accuracy tables report).
     #[arg(long, default_value = "mse", value_parser = parse_loss)]
     loss: Loss,
-    /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
-    /// 256 or more outputs, else 1). Part of what a seed reproduces.
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
-    replicas: Option<u64>,
+    #[command(flatten)]
+    replicas: Replicas,
     /// Input features: table1, physics (Table 1 + specific force/ρV² + Mach proxy), dynamics
     /// (physics + short-term deltas of the sensed channels, see trainer/src/features.rs),
     /// egi-dynamics (dynamics + the EGI attitude, climb rate and fuel, the ground velocity in body
@@ -215,10 +229,8 @@ enum Cmd {
         /// Where the measured figures go (JSON; `trainer report --out DIR` includes DIR/bench_epoch.json).
         #[arg(long, default_value = "docs/results/bench_epoch.json")]
         out: PathBuf,
-        /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
-        /// 256 or more outputs, else 1). Part of what a seed reproduces.
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
-        replicas: Option<u64>,
+        #[command(flatten)]
+        replicas: Replicas,
     },
     /// burn against PyTorch on the same cascade, data, initial weights, batches and threads
     /// (run it through scripts/bench-train, which makes the PyTorch venv).
@@ -254,10 +266,8 @@ enum Cmd {
         /// Print exactly one JSON object on stdout.
         #[arg(long)]
         json: bool,
-        /// Replicas each training batch is split over (1 or 2; default: 2 for a model with a layer of
-        /// 256 or more outputs, else 1). Part of what a seed reproduces.
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=8))]
-        replicas: Option<u64>,
+        #[command(flatten)]
+        replicas: Replicas,
     },
     /// Score the model-based air-data filter (estimator_core::filter, EGI suite) on a dataset's
     /// flights, frame by frame as the firmware runs it.
@@ -340,7 +350,7 @@ impl TrainArgs {
             label,
             progress,
             loss: self.loss,
-            replicas: self.replicas.map(|r| r as usize),
+            replicas: self.replicas.get(),
             bars: None,
         }
     }
@@ -1262,7 +1272,7 @@ fn main() -> Result<()> {
             batch,
             out,
             replicas,
-        } => cmd_bench(data, *epochs, *batch, replicas.map(|r| r as usize), out),
+        } => cmd_bench(data, *epochs, *batch, replicas.get(), out),
         Cmd::Baselines { args, gb_rows } => cmd_baselines(args, *gb_rows),
         Cmd::BenchTrain {
             data,
@@ -1284,7 +1294,7 @@ fn main() -> Result<()> {
                 seeds: *seeds,
                 batch: *batch,
                 threads: *threads,
-                replicas: replicas.map(|r| r as usize),
+                replicas: replicas.get(),
                 cases: case,
                 json: *json,
             },

@@ -402,15 +402,11 @@ fn batch_step_split<M: Net>(
     let results: Vec<(f64, f64, f64, GradientsParams)> = bounds
         .par_iter()
         .enumerate()
-        .map(|(k, &(lo_row, hi_row))| {
-            let w = (hi_row - lo_row) as f32 / b as f32;
-            fn rows(v: &[f32], lo: usize, hi: usize, width: usize) -> &[f32] {
-                &v[lo * width..hi * width]
-            }
-            let (l, h) = (lo_row, hi_row);
+        .map(|(k, &(l, h))| {
+            let w = (h - l) as f32 / b as f32;
             let step = |m: &M| {
-                let (x, ym, yo) = (rows(x, l, h, n_in), rows(ym, l, h, 1), rows(yo, l, h, 1));
-                batch_step(m, x, ym, yo, n_in, w, loss, device)
+                let x = &x[l * n_in..h * n_in];
+                batch_step(m, x, &ym[l..h], &yo[l..h], n_in, w, loss, device)
             };
             let (lm, lo, g) = if k == 0 {
                 step(model)
