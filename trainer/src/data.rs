@@ -95,6 +95,18 @@ pub struct Dataset {
     /// The sensor suites every flight carries (manifest `suites`).
     pub suites: Vec<estimator_core::Suite>,
     pub flights: Vec<Flight>,
+    /// Datasets whose training flights were added with [`Dataset::add_training`].
+    pub extra: Vec<ExtraData>,
+}
+
+/// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
+#[derive(Debug, Clone)]
+pub struct ExtraData {
+    pub dir: PathBuf,
+    pub manifest_sha256: String,
+    pub preset: String,
+    /// How many flights it added.
+    pub flights: usize,
 }
 
 /// How many training flights to hold out for validation: every `k`-th one, at least one when there
@@ -161,7 +173,61 @@ impl Dataset {
             preset: manifest.preset.clone(),
             suites: manifest.suites(),
             flights,
+            extra: Vec::new(),
         })
+    }
+
+    /// Adds every training flight of the dataset in `dir` (its test flights are left out) to this
+    /// one's training flights. Validation and test stay this dataset's own flights, so models
+    /// trained with and without the extra flights are selected and scored on the same flights.
+    /// The other dataset must carry every sensor suite this one does, and no flight name may
+    /// repeat (the same name twice would be one flight counted twice, or two flights confused).
+    pub fn add_training(&mut self, dir: &Path) -> Result<()> {
+        let other = Dataset::load_any(dir, 0.0)?;
+        if let Some(s) = self.suites.iter().find(|s| !other.suites.contains(s)) {
+            return Err(Error::DatasetSuite {
+                dir: dir.to_path_buf(),
+                carries: other.suites.iter().map(|s| s.name().to_string()).collect(),
+                suite: s.name(),
+            });
+        }
+        // `load_any` holds one of them out for validation; here they all train.
+        let added: Vec<Flight> = other
+            .flights
+            .into_iter()
+            .filter(|f| f.role != Role::Test)
+            .map(|f| Flight {
+                role: Role::Train,
+                ..f
+            })
+            .collect();
+        if added.is_empty() {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                "no training flight in the manifest to add".into(),
+            ));
+        }
+        if let Some(f) = added
+            .iter()
+            .find(|f| self.flights.iter().any(|g| g.name == f.name))
+        {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                format!(
+                    "flight `{}` is already in {} (add a dataset of other flights)",
+                    f.name,
+                    self.dir.display()
+                ),
+            ));
+        }
+        self.extra.push(ExtraData {
+            dir: dir.to_path_buf(),
+            manifest_sha256: other.manifest_sha256,
+            preset: other.preset,
+            flights: added.len(),
+        });
+        self.flights.extend(added);
+        Ok(())
     }
 
     /// Refuses a dataset that does not carry `suite`'s channels.
@@ -257,6 +323,107 @@ mod tests {
         assert_eq!(v.len(), 3);
         assert!(v.windows(2).all(|w| w[0] < w[1]));
         assert!(v.iter().all(|&i| i < 20));
+    }
+
+    /// A dataset in a fresh directory: `(name, split)` flights of three zero samples each, the
+    /// current format and every suite unless `suites` says otherwise.
+    fn tiny_dataset(tag: &str, flights: &[(&str, Split)], suites: &[&str]) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("trainer-data-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let samples = (0..3)
+            .map(|k| hil_sim::dataset::Sample {
+                time_s: k as f64 * 0.05,
+                truth: Default::default(),
+                sensed: [0.0; CHANNELS],
+            })
+            .collect();
+        let csv = hil_sim::dataset::Flight {
+            name: String::new(),
+            samples,
+            cut: None,
+            zones: None,
+        };
+        let entries = flights
+            .iter()
+            .map(|&(name, split)| {
+                let file = format!("{name}.csv");
+                let sha256 = csv.write_csv(&dir.join(&file)).unwrap();
+                hil_sim::dataset::FlightEntry {
+                    file,
+                    name: name.into(),
+                    split,
+                    profile: "gentle".into(),
+                    seed: 0,
+                    duration_s: 0.1,
+                    samples: 3,
+                    sha256,
+                    cut: None,
+                    zones: None,
+                    faults: Vec::new(),
+                }
+            })
+            .collect();
+        Manifest {
+            format: Manifest::FORMAT,
+            suites: suites.iter().map(|s| s.to_string()).collect(),
+            preset: tag.into(),
+            jsbsim_version: String::new(),
+            git_rev: String::new(),
+            config: serde_json::Value::Null,
+            flights: entries,
+            files: Default::default(),
+        }
+        .write(&dir)
+        .unwrap();
+        dir
+    }
+
+    #[test]
+    fn extra_training_flights_train_and_leave_validation_and_test_alone() {
+        use Split::{Test, Train};
+        let both = ["table1", "egi"];
+        let main = tiny_dataset(
+            "main",
+            &[("a0", Train), ("a1", Train), ("a2", Train), ("at", Test)],
+            &both,
+        );
+        let mut ds = Dataset::load(&main, 0.34).unwrap();
+        let roles =
+            |ds: &Dataset, role| ds.flights(role).map(|f| f.name.clone()).collect::<Vec<_>>();
+        let (val, test) = (roles(&ds, Role::Val), roles(&ds, Role::Test));
+        assert_eq!(val.len(), 1);
+
+        let extra = tiny_dataset(
+            "extra",
+            &[("b0", Train), ("b1", Train), ("bt", Test)],
+            &both,
+        );
+        ds.add_training(&extra).unwrap();
+        // Both of its training flights train (none held out), its test flight is not taken, and
+        // this dataset's validation and test flights are what they were.
+        let train = roles(&ds, Role::Train);
+        assert!(train.contains(&"b0".to_string()) && train.contains(&"b1".to_string()));
+        assert_eq!(train.len(), 4);
+        assert_eq!(roles(&ds, Role::Val), val);
+        assert_eq!(roles(&ds, Role::Test), test);
+        assert_eq!(ds.extra.len(), 1);
+        assert_eq!(
+            (ds.extra[0].flights, ds.extra[0].preset.as_str()),
+            (2, "extra")
+        );
+
+        // The same flights twice, or a dataset without this one's suites, is refused.
+        assert!(matches!(ds.add_training(&extra), Err(Error::Split(..))));
+        let t1 = tiny_dataset("t1", &[("c0", Train)], &["table1"]);
+        assert!(matches!(
+            ds.add_training(&t1),
+            Err(Error::DatasetSuite { suite: "egi", .. })
+        ));
+        assert_eq!(ds.flights.len(), 6);
+        for d in [main, extra, t1] {
+            let _ = std::fs::remove_dir_all(d);
+        }
     }
 
     #[test]

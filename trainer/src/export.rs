@@ -38,6 +38,16 @@ pub fn provenance(
         ds.dir.display(),
         ds.manifest_sha256
     );
+    for e in &ds.extra {
+        let _ = writeln!(
+            s,
+            "plus the {} training flights of {} (preset {}), manifest sha256 {}",
+            e.flights,
+            e.dir.display(),
+            e.preset,
+            e.manifest_sha256
+        );
+    }
     let rows = ds.training_rows();
     if preset == "ci" || rows < PAPER_TRAIN_ROWS {
         let _ = writeln!(

@@ -43,6 +43,11 @@ struct TrainArgs {
     /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
     #[arg(long)]
     data: PathBuf,
+    /// More training flights: every training flight of this dataset (its test flights are left
+    /// out) trains with `--data`'s, while validation and test stay `--data`'s own flights, so runs
+    /// with and without it are selected and scored on the same flights. Repeatable.
+    #[arg(long, value_name = "DIR")]
+    extra_data: Vec<PathBuf>,
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Network sizes: small (CI), medium, large (the largest that fits the target budget),
@@ -365,7 +370,11 @@ impl TrainArgs {
 
     /// The dataset, split by flight, with at least one validation flight, carrying `suite`.
     fn dataset(&self, suite: Suite) -> Result<Dataset> {
-        let ds = load(&self.data, self.val_fraction)?;
+        let mut ds = load(&self.data, self.val_fraction)?;
+        for dir in &self.extra_data {
+            ds.add_training(dir)
+                .with_context(|| format!("adding the training flights of {}", dir.display()))?;
+        }
         ds.require(suite)?;
         if ds.rows(trainer::data::Role::Val) == 0 {
             bail!("no validation flight: the dataset needs at least two training flights");
