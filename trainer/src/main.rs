@@ -285,7 +285,8 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
-        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, gear_norm).
+        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
         /// Print exactly one JSON object.
@@ -586,6 +587,11 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "lift_scale_psd" => c.lift_scale_psd = v,
             "gear_norm" => c.gear_norm = v,
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
+            "r_adapt_tau_s" => c.r_adapt_tau_s = v,
+            "r_adapt_lo_y" => c.r_adapt_range[0][0] = v,
+            "r_adapt_hi_y" => c.r_adapt_range[0][1] = v,
+            "r_adapt_lo_z" => c.r_adapt_range[1][0] = v,
+            "r_adapt_hi_z" => c.r_adapt_range[1][1] = v,
             other => bail!("--tune: unknown key `{other}` (see trainer eval-filter --help)"),
         }
     }

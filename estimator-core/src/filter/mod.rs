@@ -101,6 +101,13 @@ pub struct Config {
     pub min_airspeed_mps: f32,
     /// Landing-gear position the force model assumes, 0 up … 1 down (no channel carries it).
     pub gear_norm: f32,
+    /// Adaptive measurement noise (innovation-based covariance matching): time constant, s, of
+    /// the running mean of each innovation's square, from which the measurement variance is taken
+    /// as that mean less the state's share `(H P Hᵀ)ᵢᵢ`. 0 keeps [`Config::accel_sigma`] fixed.
+    pub r_adapt_tau_s: f32,
+    /// Bounds `[low, high]` of the adapted measurement 1σ of the y and the z specific force, as
+    /// multiples of [`Config::accel_sigma`] (`[1, 1]` keeps that axis fixed).
+    pub r_adapt_range: [[f32; 2]; 2],
 }
 
 /// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
@@ -127,6 +134,11 @@ pub const F16_CONFIG: Config = Config {
     // stock F-16 scripts retract it: every flight the plant flies is gear-down (CDgear 0.027,
     // part of the body side force at sideslip).
     gear_norm: 1.0,
+    // Off: the adaptive y noise improved the filter's own β (training flights 0.162 → 0.130) but
+    // cost its α (0.228 → 0.257), and the hybrid fed with it scored worse on validation (α 0.144
+    // → 0.149, β 0.068 → 0.072; docs/filter.md).
+    r_adapt_tau_s: 0.0,
+    r_adapt_range: [[1.0, 1.0], [1.0, 1.0]],
 };
 
 /// One frame of what the filter reads, in SI units and radians.
@@ -293,6 +305,8 @@ pub struct AirDataFilter {
     turb_settle: u16,
     /// [`Output::nis_mean`]'s running mean.
     nis_mean: f32,
+    /// Running mean of the y and z innovations' squares, (m/s²)² ([`Config::r_adapt_tau_s`]).
+    nu_ms: [f32; 2],
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -461,6 +475,7 @@ impl AirDataFilter {
             turb_ms: 0.0,
             turb_settle: TURBULENCE_SETTLE_STEPS,
             nis_mean: cfg.gate,
+            nu_ms: [0.0; 2],
         };
         f.restart();
         f
@@ -486,6 +501,7 @@ impl AirDataFilter {
         self.gated_run = 0;
         self.turb_ms = 0.0;
         self.last.turbulence_rad = 0.0;
+        self.nu_ms = [sq(c.accel_sigma[0]), sq(c.accel_sigma[1])];
         self.unsettle();
     }
 
@@ -599,18 +615,16 @@ impl AirDataFilter {
             }
         }
         let nu = Vector2::new(f_cg.y - k * f0.y, f_cg.z - k * f0.z);
-        let rm = Matrix2::new(
-            c.accel_sigma[0] * c.accel_sigma[0],
-            0.0,
-            0.0,
-            c.accel_sigma[1] * c.accel_sigma[1],
-        );
-        let s = h * self.p * h.transpose() + rm;
+        let hph = h * self.p * h.transpose();
+        let r = self.measurement_variance(&hph);
+        let rm = Matrix2::new(r[0], 0.0, 0.0, r[1]);
+        let s = hph + rm;
         let s_inv = s.try_inverse()?;
         let nis = (nu.transpose() * s_inv * nu).x;
         if !nis.is_finite() {
             return None;
         }
+        self.track_innovation(&nu, &s, dt);
         if nis > c.gate {
             self.gated_run = self.gated_run.saturating_add(1);
             return Some(nis);
@@ -621,6 +635,46 @@ impl AirDataFilter {
         let ikh = Mat7::identity() - gain * h;
         self.p = ikh * self.p * ikh.transpose() + gain * rm * gain.transpose();
         Some(nis)
+    }
+
+    /// The measurement variance of the y and z specific force this step: [`Config::accel_sigma`]²,
+    /// or with [`Config::r_adapt_tau_s`] the innovations' running mean square less the state's
+    /// share `hph`, within [`Config::r_adapt_range`].
+    fn measurement_variance(&self, hph: &Matrix2<f32>) -> [f32; 2] {
+        let c = &self.cfg;
+        let mut r = [0.0; 2];
+        for (i, ri) in r.iter_mut().enumerate() {
+            let sigma = c.accel_sigma.get(i).copied().unwrap_or(1.0);
+            let nominal = sigma * sigma;
+            *ri = if c.r_adapt_tau_s > 0.0 {
+                let [lo, hi] = c.r_adapt_range.get(i).copied().unwrap_or([1.0, 1.0]);
+                let matched = self.nu_ms.get(i).copied().unwrap_or(nominal)
+                    - hph.get((i, i)).copied().unwrap_or(0.0);
+                // NaN-safe: `max`/`min` return the other operand for a NaN.
+                matched.max(lo * lo * nominal).min(hi * hi * nominal)
+            } else {
+                nominal
+            };
+        }
+        r
+    }
+
+    /// Folds this step's innovation into the running mean squares ([`Config::r_adapt_tau_s`]),
+    /// each square capped at [`Config::gate`] times its predicted variance so one wild sample
+    /// cannot hold the adapted noise up.
+    fn track_innovation(&mut self, nu: &Vector2<f32>, s: &Matrix2<f32>, dt: f32) {
+        let tau = self.cfg.r_adapt_tau_s;
+        if tau <= 0.0 {
+            return;
+        }
+        for (i, ms) in self.nu_ms.iter_mut().enumerate() {
+            let n = nu.get(i).copied().unwrap_or(0.0);
+            let cap = self.cfg.gate * s.get((i, i)).copied().unwrap_or(0.0);
+            let sq = (n * n).min(cap);
+            if sq.is_finite() {
+                running_mean(ms, sq, dt, tau);
+            }
+        }
     }
 
     fn healthy(&self) -> bool {

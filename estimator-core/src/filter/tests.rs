@@ -328,6 +328,61 @@ fn a_dropout_is_flagged_at_once_and_recovered_within_5_s() {
     assert!(back <= 5.0, "recovered after {back} s");
 }
 
+/// The adapted measurement noise: the lower bound when the model fits the IMU exactly, above the
+/// nominal σ (within the upper bound) on the axis whose specific force carries noise the model
+/// does not explain, and exactly the nominal σ when adaptation is off, whatever was flown.
+#[test]
+fn the_adapted_measurement_noise_follows_the_innovations_within_its_bounds() {
+    let w = World {
+        wind: Vector3::new(8.0, -6.0, 0.0),
+        k: 1.0,
+    };
+    let adaptive = Config {
+        r_adapt_tau_s: 2.0,
+        r_adapt_range: [[0.25, 2.0], [0.5, 2.0]],
+        ..cfg()
+    };
+    let bound = |c: &Config, i: usize, j: usize| {
+        let s = c.accel_sigma[i];
+        c.r_adapt_range[i][j] * c.r_adapt_range[i][j] * (s * s)
+    };
+    let nominal = |c: &Config, i: usize| c.accel_sigma[i] * c.accel_sigma[i];
+    // y noise of 1.5 σ RMS (a sine of amplitude 1.5 σ √2 at a frequency the frames alias).
+    let noise = |t: f32, c: &Config| 1.5 * c.accel_sigma[0] * 2f32.sqrt() * libm::sinf(t * 91.7);
+    let run = |c: Config, noisy: bool| {
+        let mut f = AirDataFilter::new(c);
+        let mut t = 0.0;
+        while t < 90.0 {
+            let (mut inp, _) = w.frame(t, &c);
+            if noisy {
+                inp.accel_mps2[1] += noise(t, &c);
+            }
+            let out = f.step(&inp, true);
+            assert!(out.alpha_rad.is_finite() && out.beta_rad.is_finite());
+            let r = f.measurement_variance(&Matrix2::zeros());
+            for (i, ri) in r.iter().enumerate() {
+                assert!(
+                    *ri >= bound(&c, i, 0) && *ri <= bound(&c, i, 1),
+                    "t {t}: {r:?}"
+                );
+            }
+            t += DT;
+        }
+        f.measurement_variance(&Matrix2::zeros())
+    };
+    let clean = run(adaptive, false);
+    assert_eq!(clean, [bound(&adaptive, 0, 0), bound(&adaptive, 1, 0)]);
+    let noisy = run(adaptive, true);
+    assert!(noisy[0] > nominal(&adaptive, 0), "{noisy:?}");
+    assert!(noisy[0] < bound(&adaptive, 0, 1), "{noisy:?}");
+    assert!(noisy[1] < nominal(&adaptive, 1), "{noisy:?}");
+    let off = Config {
+        r_adapt_tau_s: 0.0,
+        ..adaptive
+    };
+    assert_eq!(run(off, true), [nominal(&off, 0), nominal(&off, 1)]);
+}
+
 #[test]
 fn model_and_sensors_that_disagree_are_gated_and_flagged() {
     let w = World {
