@@ -595,6 +595,14 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             other => bail!("--tune: unknown key `{other}` (see trainer eval-filter --help)"),
         }
     }
+    if !(c.r_adapt_tau_s.is_finite() && c.r_adapt_tau_s >= 0.0) {
+        bail!("--tune: r_adapt_tau_s must be 0 (off) or a positive number of seconds");
+    }
+    for [lo, hi] in c.r_adapt_range {
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+            bail!("--tune: r_adapt_lo_* and r_adapt_hi_* need 0 < lo ≤ hi (got {lo}, {hi})");
+        }
+    }
     Ok(c)
 }
 

@@ -307,6 +307,9 @@ pub struct AirDataFilter {
     nis_mean: f32,
     /// Running mean of the y and z innovations' squares, (m/s²)² ([`Config::r_adapt_tau_s`]).
     nu_ms: [f32; 2],
+    /// Time, s, of accepted updates folded into `nu_ms` since the last start, restart or step
+    /// without inputs: the adapted noise applies once it reaches [`Config::r_adapt_tau_s`].
+    r_adapt_age_s: f32,
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -476,6 +479,7 @@ impl AirDataFilter {
             turb_settle: TURBULENCE_SETTLE_STEPS,
             nis_mean: cfg.gate,
             nu_ms: [0.0; 2],
+            r_adapt_age_s: 0.0,
         };
         f.restart();
         f
@@ -512,6 +516,7 @@ impl AirDataFilter {
         self.prev = None;
         self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.nis_mean = self.cfg.gate;
+        self.r_adapt_age_s = 0.0;
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -624,12 +629,14 @@ impl AirDataFilter {
         if !nis.is_finite() {
             return None;
         }
-        self.track_innovation(&nu, &s, dt);
         if nis > c.gate {
             self.gated_run = self.gated_run.saturating_add(1);
             return Some(nis);
         }
         self.gated_run = 0;
+        // Only accepted innovations: a sustained mismatch must stay gated and flagged, not raise
+        // the noise until it passes.
+        self.track_innovation(&nu, &s, dt);
         let gain = self.p * h.transpose() * s_inv;
         self.x += gain * nu;
         let ikh = Mat7::identity() - gain * h;
@@ -639,14 +646,16 @@ impl AirDataFilter {
 
     /// The measurement variance of the y and z specific force this step: [`Config::accel_sigma`]²,
     /// or with [`Config::r_adapt_tau_s`] the innovations' running mean square less the state's
-    /// share `hph`, within [`Config::r_adapt_range`].
+    /// share `hph`, within [`Config::r_adapt_range`]. Until the mean has `r_adapt_tau_s` of
+    /// accepted updates behind it (after a start, restart or outage, while the state's variance is
+    /// still large), the nominal variance.
     fn measurement_variance(&self, hph: &Matrix2<f32>) -> [f32; 2] {
         let c = &self.cfg;
         let mut r = [0.0; 2];
         for (i, ri) in r.iter_mut().enumerate() {
             let sigma = c.accel_sigma.get(i).copied().unwrap_or(1.0);
             let nominal = sigma * sigma;
-            *ri = if c.r_adapt_tau_s > 0.0 {
+            *ri = if c.r_adapt_tau_s > 0.0 && self.r_adapt_age_s >= c.r_adapt_tau_s {
                 let [lo, hi] = c.r_adapt_range.get(i).copied().unwrap_or([1.0, 1.0]);
                 let matched = self.nu_ms.get(i).copied().unwrap_or(nominal)
                     - hph.get((i, i)).copied().unwrap_or(0.0);
@@ -664,9 +673,15 @@ impl AirDataFilter {
     /// cannot hold the adapted noise up.
     fn track_innovation(&mut self, nu: &Vector2<f32>, s: &Matrix2<f32>, dt: f32) {
         let tau = self.cfg.r_adapt_tau_s;
-        if tau <= 0.0 {
+        if tau.is_nan() || tau <= 0.0 {
             return;
         }
+        let dt = if dt.is_finite() {
+            dt.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self.r_adapt_age_s = (self.r_adapt_age_s + dt).min(tau);
         for (i, ms) in self.nu_ms.iter_mut().enumerate() {
             let n = nu.get(i).copied().unwrap_or(0.0);
             let cap = self.cfg.gate * s.get((i, i)).copied().unwrap_or(0.0);

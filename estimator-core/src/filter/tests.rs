@@ -330,7 +330,9 @@ fn a_dropout_is_flagged_at_once_and_recovered_within_5_s() {
 
 /// The adapted measurement noise: the lower bound when the model fits the IMU exactly, above the
 /// nominal σ (within the upper bound) on the axis whose specific force carries noise the model
-/// does not explain, and exactly the nominal σ when adaptation is off, whatever was flown.
+/// does not explain, the state's share taken off, the nominal σ again after a restart, and exactly
+/// the nominal σ when adaptation is off, whatever was flown. The update uses it: a filter that
+/// trusts the lateral accelerometer more ends with a tighter β.
 #[test]
 fn the_adapted_measurement_noise_follows_the_innovations_within_its_bounds() {
     let w = World {
@@ -346,41 +348,65 @@ fn the_adapted_measurement_noise_follows_the_innovations_within_its_bounds() {
         let s = c.accel_sigma[i];
         c.r_adapt_range[i][j] * c.r_adapt_range[i][j] * (s * s)
     };
-    let nominal = |c: &Config, i: usize| c.accel_sigma[i] * c.accel_sigma[i];
+    let nominal = |c: &Config| [0, 1].map(|i| c.accel_sigma[i] * c.accel_sigma[i]);
     // y noise of 1.5 σ RMS (a sine of amplitude 1.5 σ √2 at a frequency the frames alias).
     let noise = |t: f32, c: &Config| 1.5 * c.accel_sigma[0] * 2f32.sqrt() * libm::sinf(t * 91.7);
     let run = |c: Config, noisy: bool| {
         let mut f = AirDataFilter::new(c);
         let mut t = 0.0;
+        let mut last = Output::default();
         while t < 90.0 {
             let (mut inp, _) = w.frame(t, &c);
             if noisy {
                 inp.accel_mps2[1] += noise(t, &c);
             }
-            let out = f.step(&inp, true);
-            assert!(out.alpha_rad.is_finite() && out.beta_rad.is_finite());
-            let r = f.measurement_variance(&Matrix2::zeros());
-            for (i, ri) in r.iter().enumerate() {
-                assert!(
-                    *ri >= bound(&c, i, 0) && *ri <= bound(&c, i, 1),
-                    "t {t}: {r:?}"
+            last = f.step(&inp, true);
+            assert!(last.alpha_rad.is_finite() && last.beta_rad.is_finite());
+            if t < 0.5 * c.r_adapt_tau_s {
+                // Not yet τ of accepted updates behind the mean: nominal.
+                assert_eq!(
+                    f.measurement_variance(&Matrix2::zeros()),
+                    nominal(&c),
+                    "t {t}"
                 );
             }
             t += DT;
         }
-        f.measurement_variance(&Matrix2::zeros())
+        (f, last)
     };
-    let clean = run(adaptive, false);
-    assert_eq!(clean, [bound(&adaptive, 0, 0), bound(&adaptive, 1, 0)]);
-    let noisy = run(adaptive, true);
-    assert!(noisy[0] > nominal(&adaptive, 0), "{noisy:?}");
-    assert!(noisy[0] < bound(&adaptive, 0, 1), "{noisy:?}");
-    assert!(noisy[1] < nominal(&adaptive, 1), "{noisy:?}");
+    let (mut clean, clean_out) = run(adaptive, false);
+    let r = clean.measurement_variance(&Matrix2::zeros());
+    assert_eq!(r, [bound(&adaptive, 0, 0), bound(&adaptive, 1, 0)]);
+    clean.restart();
+    assert_eq!(
+        clean.measurement_variance(&Matrix2::zeros()),
+        nominal(&adaptive)
+    );
+
+    let (noisy, _) = run(adaptive, true);
+    let r = noisy.measurement_variance(&Matrix2::zeros());
+    assert!(r[0] > nominal(&adaptive)[0], "{r:?}");
+    assert!(r[0] < bound(&adaptive, 0, 1), "{r:?}");
+    assert!(r[1] < nominal(&adaptive)[1], "{r:?}");
+    let share = 0.05;
+    let r_less = noisy.measurement_variance(&Matrix2::new(share, 0.0, 0.0, 0.0));
+    assert!((r[0] - r_less[0] - share).abs() < 1e-5, "{r:?} {r_less:?}");
+    assert_eq!(r_less[1], r[1]);
+
     let off = Config {
         r_adapt_tau_s: 0.0,
         ..adaptive
     };
-    assert_eq!(run(off, true), [nominal(&off, 0), nominal(&off, 1)]);
+    let (fixed, fixed_out) = run(off, true);
+    assert_eq!(fixed.measurement_variance(&Matrix2::zeros()), nominal(&off));
+    let (_, fixed_clean_out) = run(off, false);
+    assert!(
+        clean_out.sigma_beta_rad < fixed_clean_out.sigma_beta_rad,
+        "adaptive σβ {} against fixed {}",
+        clean_out.sigma_beta_rad,
+        fixed_clean_out.sigma_beta_rad
+    );
+    assert!(fixed_out.beta_rad.is_finite());
 }
 
 #[test]
