@@ -123,9 +123,13 @@ pub struct CampaignArgs {
     /// Steady wind speed, m/s, `LO:HI` (random direction).
     #[arg(long, value_parser = parse_range)]
     wind_mps: Option<(f64, f64)>,
-    /// MIL-spec turbulence severity, `LO:HI` in 0..7.
-    #[arg(long, value_parser = parse_severity)]
+    /// MIL-spec turbulence severity, `LO:HI` in 0..7, for every profile (default 0:6).
+    #[arg(long, value_parser = parse_severity, conflicts_with = "turbulence_per_profile")]
     turbulence: Option<(u32, u32)>,
+    /// Keep each profile's own turbulence range (gentle 0-3, high-α 0-4, climb 0-5, aggressive
+    /// 2-6) instead of one range for all: the flag envelope of slow flight stays the presets'.
+    #[arg(long)]
+    turbulence_per_profile: bool,
 }
 
 /// A `--fuel-lbs`/`--wind-mps` range that is not `LO:HI` with finite LO ≤ HI.
@@ -165,12 +169,13 @@ impl GenerateArgs {
             || c.flight_min.is_some()
             || c.fuel_lbs.is_some()
             || c.wind_mps.is_some()
-            || c.turbulence.is_some();
+            || c.turbulence.is_some()
+            || c.turbulence_per_profile;
         let mut plan = Plan::new(self.preset, self.flights.seed);
         if self.preset != Preset::Campaign {
             if any {
                 return Err(Error::Usage(
-                    "--hours, --flight-min, --fuel-lbs, --wind-mps and --turbulence go with --preset campaign".into(),
+                    "--hours, --flight-min, --fuel-lbs, --wind-mps and --turbulence[-per-profile] go with --preset campaign".into(),
                 ));
             }
             return Ok(plan);
@@ -189,7 +194,10 @@ impl GenerateArgs {
             k.ranges.steady_wind_fps = (lo / crate::flight::FT_TO_M, hi / crate::flight::FT_TO_M);
         }
         if let Some(t) = c.turbulence {
-            k.ranges.turb_severity = t;
+            k.ranges.turb_severity = Some(t);
+        }
+        if c.turbulence_per_profile {
+            k.ranges.turb_severity = None;
         }
         if !(k.hours > 0.0 && k.flight_min >= 1.0 && k.flight_min <= 120.0) {
             return Err(Error::Usage(

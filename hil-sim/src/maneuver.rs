@@ -1018,7 +1018,7 @@ mod tests {
             ranges: ProfileRanges {
                 fuel_per_tank_lbs: (100.0, 3_400.0),
                 steady_wind_fps: (0.0, 60.0),
-                turb_severity: (2, 7),
+                turb_severity: Some((2, 7)),
             },
         };
         let plan = Plan {
@@ -1056,6 +1056,26 @@ mod tests {
         // A campaign flight's script draws from the campaign's ranges: severity 2..7.
         let m = generate(&f[0].profile(), f[0].seed, "c", 60.0).unwrap();
         assert!(m.script_xml.contains("milspec/severity"));
+
+        // Without a turbulence range, each profile keeps its own; mass and wind still change.
+        let own = Plan {
+            campaign: Some(Campaign {
+                ranges: ProfileRanges {
+                    turb_severity: None,
+                    ..c.ranges.clone()
+                },
+                ..c
+            }),
+            ..plan
+        };
+        let mut kinds = std::collections::BTreeSet::new();
+        for x in &own.flights() {
+            let p = x.profile();
+            assert_eq!(p.turb_severity, Profile::preset(x.profile).turb_severity);
+            assert_eq!(p.fuel_per_tank_lbs, (100.0, 3_400.0));
+            kinds.insert(p.turb_severity);
+        }
+        assert_eq!(kinds.len(), 4, "{kinds:?}");
     }
 
     #[test]
@@ -1286,14 +1306,18 @@ pub enum Preset {
 pub struct ProfileRanges {
     pub fuel_per_tank_lbs: Range,
     pub steady_wind_fps: Range,
-    pub turb_severity: (u32, u32),
+    /// `None`: every profile keeps its own severity range (slow high-α flight stays in lighter
+    /// turbulence than aggressive flight, as in the training presets).
+    pub turb_severity: Option<(u32, u32)>,
 }
 
 impl ProfileRanges {
     pub fn apply(&self, p: &mut Profile) {
         p.fuel_per_tank_lbs = self.fuel_per_tank_lbs;
         p.steady_wind_fps = self.steady_wind_fps;
-        p.turb_severity = self.turb_severity;
+        if let Some(t) = self.turb_severity {
+            p.turb_severity = t;
+        }
     }
 }
 
@@ -1315,7 +1339,7 @@ impl Default for Campaign {
             ranges: ProfileRanges {
                 fuel_per_tank_lbs: (600.0, 3_000.0),
                 steady_wind_fps: (0.0, 40.0),
-                turb_severity: (0, 6),
+                turb_severity: Some((0, 6)),
             },
         }
     }
