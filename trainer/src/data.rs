@@ -184,12 +184,8 @@ impl Dataset {
     /// repeat (the same name twice would be one flight counted twice, or two flights confused).
     pub fn add_training(&mut self, dir: &Path) -> Result<()> {
         let other = Dataset::load_any(dir, 0.0)?;
-        if let Some(s) = self.suites.iter().find(|s| !other.suites.contains(s)) {
-            return Err(Error::DatasetSuite {
-                dir: dir.to_path_buf(),
-                carries: other.suites.iter().map(|s| s.name().to_string()).collect(),
-                suite: s.name(),
-            });
+        for s in &self.suites {
+            other.require(*s)?;
         }
         // `load_any` holds one of them out for validation; here they all train.
         let added: Vec<Flight> = other

@@ -20,6 +20,20 @@ fn metrics_line(m: &FlightMetrics) -> String {
     )
 }
 
+/// The lines of a PROVENANCE text ([`provenance`]) before its split line: the dataset, each
+/// `--extra-data` one and a small-data warning, joined by "; " (what a report names as the
+/// model's training data).
+pub fn provenance_data(provenance: &str) -> String {
+    provenance
+        .lines()
+        .take_while(|l| !l.starts_with(SPLIT_LINE))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The first PROVENANCE line after the data lines.
+const SPLIT_LINE: &str = "split by flight:";
+
 /// PROVENANCE text of a generated model.
 pub fn provenance(
     ds: &Dataset,
@@ -58,7 +72,7 @@ pub fn provenance(
     }
     let _ = writeln!(
         s,
-        "split by flight: train {} flights / {} rows, validation {} / {}, test {} / {}",
+        "{SPLIT_LINE} train {} flights / {} rows, validation {} / {}, test {} / {}",
         ds.flights(Role::Train).count(),
         ds.rows(Role::Train),
         ds.flights(Role::Val).count(),

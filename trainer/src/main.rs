@@ -747,14 +747,9 @@ fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
         out.display(),
         machine(),
         t0.elapsed().as_secs_f64(),
-        // The provenance's data lines: the dataset and any --extra-data it was trained with.
         r.model
             .as_deref()
-            .map(|p| p
-                .lines()
-                .take_while(|l| !l.starts_with("split"))
-                .collect::<Vec<_>>()
-                .join("; "))
+            .map(trainer::export::provenance_data)
             .unwrap_or_else(|| "none compiled in".to_string()),
         trainer::ood::markdown(&r)
     );

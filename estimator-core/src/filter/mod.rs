@@ -505,7 +505,7 @@ impl AirDataFilter {
         self.gated_run = 0;
         self.turb_ms = 0.0;
         self.last.turbulence_rad = 0.0;
-        self.nu_ms = [sq(c.accel_sigma[0]), sq(c.accel_sigma[1])];
+        self.nu_ms = c.accel_sigma.map(sq);
         self.unsettle();
     }
 
@@ -651,19 +651,14 @@ impl AirDataFilter {
     /// still large), the nominal variance.
     fn measurement_variance(&self, hph: &Matrix2<f32>) -> [f32; 2] {
         let c = &self.cfg;
-        let mut r = [0.0; 2];
-        for (i, ri) in r.iter_mut().enumerate() {
-            let sigma = c.accel_sigma.get(i).copied().unwrap_or(1.0);
-            let nominal = sigma * sigma;
-            *ri = if c.r_adapt_tau_s > 0.0 && self.r_adapt_age_s >= c.r_adapt_tau_s {
-                let [lo, hi] = c.r_adapt_range.get(i).copied().unwrap_or([1.0, 1.0]);
-                let matched = self.nu_ms.get(i).copied().unwrap_or(nominal)
-                    - hph.get((i, i)).copied().unwrap_or(0.0);
+        let mut r = c.accel_sigma.map(|s| s * s);
+        if c.r_adapt_tau_s > 0.0 && self.r_adapt_age_s >= c.r_adapt_tau_s {
+            let adapt = r.iter_mut().zip(c.r_adapt_range).zip(self.nu_ms);
+            for (i, ((nominal, [lo, hi]), ms)) in adapt.enumerate() {
+                let matched = ms - hph.get((i, i)).copied().unwrap_or(0.0);
                 // NaN-safe: `max`/`min` return the other operand for a NaN.
-                matched.max(lo * lo * nominal).min(hi * hi * nominal)
-            } else {
-                nominal
-            };
+                *nominal = matched.max(lo * lo * *nominal).min(hi * hi * *nominal);
+            }
         }
         r
     }
