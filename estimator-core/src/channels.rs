@@ -247,13 +247,14 @@ macro_rules! channel_names {
                 }
             }
 
-            /// Names of this channel's delta features over 1, 4, 10 and 20 frames, in the order of
+            /// Names of this channel's delta features over 1, 2, 4, 10 and 20 frames, in the order of
             /// the lags in `features` (which sits above this module and picks one; a test there
             /// checks the suffixes against the lags' frame counts).
-            pub(crate) const fn delta_names(self) -> [&'static str; 4] {
+            pub(crate) const fn delta_names(self) -> [&'static str; 5] {
                 match self {
                     $(Channel::$v => [
                         concat!($c, "_d1"),
+                        concat!($c, "_d2"),
                         concat!($c, "_d4"),
                         concat!($c, "_d10"),
                         concat!($c, "_d20"),

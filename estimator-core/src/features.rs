@@ -70,6 +70,9 @@ pub const FRAME_PERIOD_MS: u32 = 50;
 pub enum Lag {
     /// 1 frame, 50 ms.
     F1,
+    /// 2 frames, 100 ms: with `F1`, the three newest samples that undo the IMU's 2nd-order
+    /// anti-alias filter (a fast side-force change shows up smeared over them).
+    F2,
     /// 4 frames, 200 ms.
     F4,
     /// 10 frames, 500 ms.
@@ -79,8 +82,11 @@ pub enum Lag {
 }
 
 impl Lag {
-    pub const COUNT: usize = 4;
-    pub const ALL: [Lag; Lag::COUNT] = [Lag::F1, Lag::F4, Lag::F10, Lag::F20];
+    pub const COUNT: usize = 5;
+    pub const ALL: [Lag; Lag::COUNT] = [Lag::F1, Lag::F2, Lag::F4, Lag::F10, Lag::F20];
+
+    /// Every lag's bit in [`FeatureValues::short_lags`].
+    pub const ALL_BITS: u8 = (1 << Lag::COUNT) - 1;
 
     pub const fn index(self) -> usize {
         self as usize
@@ -94,6 +100,7 @@ impl Lag {
     pub const fn frames(self) -> u32 {
         match self {
             Lag::F1 => 1,
+            Lag::F2 => 2,
             Lag::F4 => 4,
             Lag::F10 => 10,
             Lag::F20 => 20,
@@ -222,7 +229,7 @@ impl Feature {
 
     /// Position in [`Feature::ALL`] and [`FeatureValues::raw`]. A delta of an EGI channel, not a
     /// candidate, gets a position at or past [`FEATURE_COUNT`] (every reader treats it as absent).
-    // Enum discriminants only: at most 23 + 10 + 22 × 4 + 3, far from overflowing.
+    // Enum discriminants only: at most 23 + 10 + 22 × 5 + 3, far from overflowing.
     #[allow(clippy::arithmetic_side_effects)]
     pub const fn index(self) -> usize {
         match self {
@@ -271,8 +278,9 @@ impl Feature {
             Feature::FilterTurbulence => "filter_turbulence_rad",
             Feature::FilterNisMean => "filter_nis_mean",
             Feature::Delta(c, l) => match c.delta_names() {
-                [d1, d4, d10, d20] => match l {
+                [d1, d2, d4, d10, d20] => match l {
                     Lag::F1 => d1,
+                    Lag::F2 => d2,
                     Lag::F4 => d4,
                     Lag::F10 => d10,
                     Lag::F20 => d20,
@@ -1211,7 +1219,7 @@ mod tests {
     #[test]
     fn empty_history_gives_zero_deltas_and_flags_every_lag() {
         let v = FeatureValues::compute(&ramp(1000), &History::new());
-        assert_eq!(v.short_lags, 0b1111);
+        assert_eq!(v.short_lags, Lag::ALL_BITS);
         for l in Lag::ALL {
             assert_eq!(v.get(Feature::Delta(Channel::GyroQ, l)), 0);
         }
@@ -1266,7 +1274,7 @@ mod tests {
         }
         for t in [0, 5_000, 100_000] {
             let v = FeatureValues::compute(&ramp(t), &h);
-            assert_eq!(v.short_lags, 0b1111, "t={t}");
+            assert_eq!(v.short_lags, Lag::ALL_BITS, "t={t}");
             assert_eq!(v.get(Feature::Delta(Channel::GyroP, Lag::F20)), 0);
         }
     }

@@ -131,10 +131,13 @@ pub const FILTER_FAST_FEATURES: [Feature; 4] = [
     Feature::FilterSigmaBeta,
 ];
 
-fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
+/// The lags of the `dynamics` sets' delta features (every set built on `dynamics` reads these).
+pub const DYNAMICS_LAGS: [Lag; 4] = [Lag::F1, Lag::F4, Lag::F10, Lag::F20];
+
+fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = Feature> + 'a {
     channels
         .iter()
-        .flat_map(|c| Lag::ALL.iter().map(move |l| Feature::Delta(*c, *l)))
+        .flat_map(move |c| lags.iter().map(move |l| Feature::Delta(*c, *l)))
 }
 
 /// A named feature set: `table1`, `physics` (Table 1 + specific force / ρV² + Mach proxy), `dynamics`
@@ -142,7 +145,8 @@ fn deltas(channels: &[Channel]) -> impl Iterator<Item = Feature> + '_ {
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
 /// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
 /// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]: the
-/// shipped set), `egi-hybrid-turb`
+/// shipped set), `egi-hybrid-fast-d2` (egi-hybrid-fast + each angle's dynamics channels' 2-frame
+/// deltas), `egi-hybrid-turb`
 /// (egi-hybrid + the filter's turbulence index), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -252,14 +256,14 @@ impl FeatureSet {
                     .chain(&PHYSICS_ALPHA)
                     .copied()
                     .chain([Feature::Sensor(Channel::GyroQ)])
-                    .chain(deltas(&DYNAMICS_ALPHA_DELTAS))
+                    .chain(deltas(&DYNAMICS_ALPHA_DELTAS, &DYNAMICS_LAGS))
                     .collect(),
                 beta: TABLE1_BETA
                     .iter()
                     .chain(&PHYSICS_BETA)
                     .chain(&DYNAMICS_BETA_EXTRA)
                     .copied()
-                    .chain(deltas(&DYNAMICS_BETA_DELTAS))
+                    .chain(deltas(&DYNAMICS_BETA_DELTAS, &DYNAMICS_LAGS))
                     .collect(),
             }),
             "egi-dynamics" => FeatureSet::parse("dynamics")?.extended(spec, &EGI_ALPHA, &EGI_BETA),
@@ -273,6 +277,14 @@ impl FeatureSet {
                 &FILTER_FAST_FEATURES,
                 &FILTER_FAST_FEATURES,
             ),
+            // egi-hybrid-fast plus each angle's dynamics channels 2 frames back: with the 1-frame
+            // deltas, the three newest samples, enough to undo the IMU's 2nd-order anti-alias
+            // filter (docs/results/beta-floor.md).
+            "egi-hybrid-fast-d2" => {
+                let a: Vec<Feature> = deltas(&DYNAMICS_ALPHA_DELTAS, &[Lag::F2]).collect();
+                let b: Vec<Feature> = deltas(&DYNAMICS_BETA_DELTAS, &[Lag::F2]).collect();
+                FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &a, &b)
+            }
             // egi-hybrid plus the filter's turbulence index: better on the validation flights, but
             // slow to come back after a sensor outage (docs/results/hybrid.md), so not shipped.
             "egi-hybrid-turb" => {
@@ -286,7 +298,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -327,6 +339,25 @@ mod tests {
         let f = FeatureSet::parse("egi-hybrid-fast").unwrap();
         assert_eq!((h.alpha, h.beta), (f.alpha, f.beta));
         assert_eq!(f.name, "egi-hybrid-fast");
+    }
+
+    #[test]
+    fn the_two_frame_deltas_are_only_in_the_set_that_asks_for_them() {
+        let fast = FeatureSet::parse("egi-hybrid-fast").unwrap();
+        let d2 = FeatureSet::parse("egi-hybrid-fast-d2").unwrap();
+        let lag2 = |f: &Feature| matches!(f, Feature::Delta(_, Lag::F2));
+        assert!(!fast.alpha.iter().chain(&fast.beta).any(lag2));
+        assert_eq!(d2.alpha[..fast.alpha.len()], fast.alpha[..]);
+        assert_eq!(d2.beta[..fast.beta.len()], fast.beta[..]);
+        assert_eq!(
+            d2.alpha[fast.alpha.len()..],
+            DYNAMICS_ALPHA_DELTAS.map(|c| Feature::Delta(c, Lag::F2))[..]
+        );
+        assert_eq!(
+            d2.beta[fast.beta.len()..],
+            DYNAMICS_BETA_DELTAS.map(|c| Feature::Delta(c, Lag::F2))[..]
+        );
+        assert_eq!(d2.suite(), Suite::Egi);
     }
 
     #[test]
