@@ -123,7 +123,8 @@ pub const FILTER_SLOW_FEATURES: [Feature; 2] = [Feature::FilterAirspeed, Feature
 /// The filter outputs that are back within a second of a sensor outage: α, β and their 1σ. Its air
 /// speed (through the along-track wind) and lift scale re-converge over tens of seconds when an
 /// outage falls in the first minutes of flight, and a network that reads them inherits that
-/// (docs/results/hybrid.md). The `egi-hybrid-fast` set reads only these.
+/// (docs/results/hybrid.md). The `egi-hybrid-fast` set, and the shipped `egi-hybrid-fast-d2`, read
+/// only these.
 pub const FILTER_FAST_FEATURES: [Feature; 4] = [
     Feature::FilterAlpha,
     Feature::FilterBeta,
@@ -144,9 +145,9 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// (physics + pitch rate for α, longitudinal state for β, and each angle's delta features),
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
 /// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
-/// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]: the
-/// shipped set), `egi-hybrid-fast-d2` (egi-hybrid-fast + each angle's dynamics channels' 2-frame
-/// deltas), `egi-hybrid-turb`
+/// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]),
+/// `egi-hybrid-fast-d2` (egi-hybrid-fast + each angle's dynamics channels' 2-frame deltas: the
+/// shipped set), `egi-hybrid-turb`
 /// (egi-hybrid + the filter's turbulence index), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -330,7 +331,7 @@ mod tests {
 
     #[test]
     fn the_fast_hybrid_is_the_hybrid_without_the_slowly_recovering_filter_outputs() {
-        // The shipped set: the ablation of docs/results/hybrid.md trained the same network as
+        // The base of the shipped set: the ablation of docs/results/hybrid.md trained the same network as
         // `egi-hybrid --without filter_airspeed_mps,filter_lift_scale`, in the same input order.
         let h = FeatureSet::parse("egi-hybrid")
             .unwrap()
