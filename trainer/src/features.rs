@@ -146,8 +146,8 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
 /// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
 /// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]),
-/// `egi-hybrid-fast-d2` (egi-hybrid-fast + each angle's dynamics channels' 2-frame deltas: the
-/// shipped set), `egi-hybrid-turb`
+/// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas: the shipped
+/// set), `egi-hybrid-turb`
 /// (egi-hybrid + the filter's turbulence index), or explicit
 /// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -278,13 +278,13 @@ impl FeatureSet {
                 &FILTER_FAST_FEATURES,
                 &FILTER_FAST_FEATURES,
             ),
-            // egi-hybrid-fast plus each angle's dynamics channels 2 frames back: with the 1-frame
-            // deltas, the three newest samples, enough to undo the IMU's 2nd-order anti-alias
-            // filter (docs/results/beta-floor.md).
+            // egi-hybrid-fast plus the β dynamics channels 2 frames back: with the 1-frame deltas,
+            // the three newest samples, enough to undo the IMU's 2nd-order anti-alias filter
+            // (docs/results/beta-floor.md). β only: the same deltas for α gained nothing on the
+            // validation flights (docs/results/hybrid.md, ninth session).
             "egi-hybrid-fast-d2" => {
-                let a: Vec<Feature> = deltas(&DYNAMICS_ALPHA_DELTAS, &[Lag::F2]).collect();
                 let b: Vec<Feature> = deltas(&DYNAMICS_BETA_DELTAS, &[Lag::F2]).collect();
-                FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &a, &b)
+                FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &[], &b)
             }
             // egi-hybrid plus the filter's turbulence index: better on the validation flights, but
             // slow to come back after a sensor outage (docs/results/hybrid.md), so not shipped.
@@ -348,12 +348,8 @@ mod tests {
         let d2 = FeatureSet::parse("egi-hybrid-fast-d2").unwrap();
         let lag2 = |f: &Feature| matches!(f, Feature::Delta(_, Lag::F2));
         assert!(!fast.alpha.iter().chain(&fast.beta).any(lag2));
-        assert_eq!(d2.alpha[..fast.alpha.len()], fast.alpha[..]);
+        assert_eq!(d2.alpha, fast.alpha);
         assert_eq!(d2.beta[..fast.beta.len()], fast.beta[..]);
-        assert_eq!(
-            d2.alpha[fast.alpha.len()..],
-            DYNAMICS_ALPHA_DELTAS.map(|c| Feature::Delta(c, Lag::F2))[..]
-        );
         assert_eq!(
             d2.beta[fast.beta.len()..],
             DYNAMICS_BETA_DELTAS.map(|c| Feature::Delta(c, Lag::F2))[..]

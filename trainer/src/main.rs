@@ -73,8 +73,8 @@ struct TrainArgs {
     /// axes and the kinematic α/β; needs --suite egi), egi-hybrid (egi-dynamics + the model-based
     /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), egi-hybrid-fast
     /// (egi-dynamics + the filter's α, β and their 1σ, which recover within a second of an
-    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the dynamics channels' 2-frame deltas: the
-    /// shipped set), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or "alpha=a,b,...;beta=c,d,..." with names
+    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas:
+    /// the shipped set), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or "alpha=a,b,...;beta=c,d,..." with names
     /// of estimator_core::Feature.
     #[arg(long, default_value = "table1")]
     features: String,
