@@ -229,7 +229,7 @@ impl Feature {
 
     /// Position in [`Feature::ALL`] and [`FeatureValues::raw`]. A delta of an EGI channel, not a
     /// candidate, gets a position at or past [`FEATURE_COUNT`] (every reader treats it as absent).
-    // Enum discriminants only: at most 23 + 10 + 22 × 5 + 3, far from overflowing.
+    // Enum discriminants only: at most 41 + 22 × 5 + 4 (a delta of the last channel), far from overflowing.
     #[allow(clippy::arithmetic_side_effects)]
     pub const fn index(self) -> usize {
         match self {

@@ -45,8 +45,8 @@ pub const CASES: [Case; 2] = [
     },
     Case {
         name: "shipped-alpha",
-        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid-fast inputs \
-               (the shipped set until 2026-11-24, kept so the timings stay comparable), L1 loss",
+        what: "shipped configuration's α cascade (64-32-16 per part), egi-hybrid-fast inputs, \
+               L1 loss",
         features: "egi-hybrid-fast",
         suite: Suite::Egi,
         size: Size::Medium,
