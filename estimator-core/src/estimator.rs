@@ -76,6 +76,13 @@ impl Flags {
     /// its envelope (`OUT_OF_ENVELOPE` is set too) while the filter reported no flag and its
     /// innovations were consistent ([`filter_alpha_fallback`]). β is still the network's.
     pub const ALPHA_FROM_FILTER: u16 = 1 << 12;
+    /// The network's β and the air-data filter's disagree by more than
+    /// [`BETA_CROSSCHECK_MIN_MDEG`] and [`BETA_CROSSCHECK_SIGMAS`] of the filter's 1σ while the
+    /// filter reports no flag ([`beta_disagrees_with_filter`]): one of the two is wrong by
+    /// degrees. On the validation flights it was mostly the network (a sideslip beyond what it
+    /// was trained on, which the filter's kinematics follow); in heavy turbulence it can be the
+    /// filter. β is still the network's.
+    pub const BETA_DISAGREES: u16 = 1 << 13;
 
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
@@ -312,6 +319,29 @@ pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
     Some((libm::roundf(w) as i32, libm::roundf(mdeg) as i32))
 }
 
+/// [`Flags::BETA_DISAGREES`] needs at least this difference between the network's and the
+/// filter's β, millidegrees. Chosen on the validation flights of `large-egi` with the shipped
+/// networks: 55 of 209,880 frames, 48 of them with the network's β off by more than 1°
+/// (docs/results/hybrid.md, ninth session).
+pub const BETA_CROSSCHECK_MIN_MDEG: i64 = 2_000;
+
+/// ... and at least this many of the filter's β 1σ.
+pub const BETA_CROSSCHECK_SIGMAS: i64 = 3;
+
+/// Whether `beta_mdeg` (the network's β) and the air-data filter's β in `values` disagree
+/// ([`Flags::BETA_DISAGREES`]). Never while the filter has a flag raised (no input, restarted,
+/// gated, low confidence, ...) or has not run (airspeed 0). Integer arithmetic: µrad to
+/// millidegrees as `µrad · 180,000 / 3,141,593`.
+pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> bool {
+    if values.filter_flags != 0 || values.get(Feature::FilterAirspeed) <= 0 {
+        return false;
+    }
+    let mdeg = |urad: i32| i64::from(urad) * 180_000 / 3_141_593;
+    let diff = (i64::from(beta_mdeg) - mdeg(values.get(Feature::FilterBeta))).abs();
+    let sigma = mdeg(values.get(Feature::FilterSigmaBeta)).abs();
+    diff > BETA_CROSSCHECK_MIN_MDEG.max(sigma.saturating_mul(BETA_CROSSCHECK_SIGMAS))
+}
+
 /// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
 /// over its feature list).
 #[derive(Clone, Copy)]
@@ -476,6 +506,12 @@ impl<'m> Estimator<'m> {
         };
         (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD, true);
         (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD, false);
+        if flags & Flags::BETA_HELD == 0
+            && beta.reads_filter
+            && beta_disagrees_with_filter(&values, e.beta_mdeg)
+        {
+            flags |= Flags::BETA_DISAGREES;
+        }
         e.flags = Flags(flags);
         e
     }
@@ -498,6 +534,40 @@ mod tests {
             ..Default::default()
         });
         v
+    }
+
+    #[test]
+    fn beta_disagreement_needs_two_degrees_three_sigma_and_an_unflagged_filter() {
+        // Filter β −0.02 rad = −1145.9 mdeg → −1145 (truncated); 1σ 0 → the 2° floor rules.
+        let v = consistent();
+        assert!(!beta_disagrees_with_filter(&v, -1145 + 2000));
+        assert!(beta_disagrees_with_filter(&v, -1145 + 2001));
+        assert!(!beta_disagrees_with_filter(&v, -1145 - 2000));
+        assert!(beta_disagrees_with_filter(&v, -1145 - 2001));
+        // A 1σ of 0.02 rad (1145 mdeg): 3σ = 3435 mdeg is the bound.
+        let mut w = v;
+        w.raw[Feature::FilterSigmaBeta.index()] = 20_000;
+        assert!(!beta_disagrees_with_filter(&w, -1145 + 3435));
+        assert!(beta_disagrees_with_filter(&w, -1145 + 3436));
+        // Any filter flag, or no filter, and there is no judgement.
+        for bit in 0..8 {
+            let mut f = v;
+            f.filter_flags = 1 << bit;
+            assert!(
+                !beta_disagrees_with_filter(&f, 30_000),
+                "filter flag bit {bit}"
+            );
+        }
+        let none = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        assert!(!beta_disagrees_with_filter(&none, 30_000));
+        // Extreme inputs do not overflow.
+        let mut x = v;
+        x.raw[Feature::FilterBeta.index()] = i32::MIN;
+        x.raw[Feature::FilterSigmaBeta.index()] = i32::MIN;
+        assert!(beta_disagrees_with_filter(&x, i32::MAX));
+        assert!(beta_disagrees_with_filter(&x, i32::MIN));
+        let filter_mdeg = (i64::from(i32::MIN) * 180_000 / 3_141_593) as i32;
+        assert!(!beta_disagrees_with_filter(&x, filter_mdeg));
     }
 
     #[test]

@@ -556,8 +556,13 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
         }
         for c in &e.flagged {
             println!(
-                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter",
-                c.flight, c.not_usable, c.out_of_envelope, c.turbulence, c.alpha_from_filter
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's",
+                c.flight,
+                c.not_usable,
+                c.out_of_envelope,
+                c.turbulence,
+                c.alpha_from_filter,
+                c.beta_disagrees
             );
         }
     }

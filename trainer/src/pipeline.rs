@@ -240,6 +240,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
             out_of_envelope: count(estimator_core::Flags::OUT_OF_ENVELOPE),
             turbulence: count(estimator_core::Flags::TURBULENCE),
             alpha_from_filter: count(estimator_core::Flags::ALPHA_FROM_FILTER),
+            beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
         };
         a.push((
             fl.name.clone(),
@@ -272,6 +273,8 @@ pub struct FlagCounts {
     pub turbulence: usize,
     /// α from the air-data filter (`Flags::ALPHA_FROM_FILTER`).
     pub alpha_from_filter: usize,
+    /// The network's and the filter's β disagree (`Flags::BETA_DISAGREES`).
+    pub beta_disagrees: usize,
 }
 
 /// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.
