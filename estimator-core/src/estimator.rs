@@ -336,9 +336,13 @@ pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> boo
     if values.filter_flags != 0 || values.get(Feature::FilterAirspeed) <= 0 {
         return false;
     }
-    let mdeg = |urad: i32| i64::from(urad) * 180_000 / 3_141_593;
-    let diff = (i64::from(beta_mdeg) - mdeg(values.get(Feature::FilterBeta))).abs();
-    let sigma = mdeg(values.get(Feature::FilterSigmaBeta)).abs();
+    // |µrad| < 2^31, so neither the product nor the difference comes near i64's limits; the
+    // saturating forms only say so to the overflow lint.
+    let mdeg = |urad: i32| i64::from(urad).saturating_mul(180_000) / 3_141_593;
+    let diff = i64::from(beta_mdeg)
+        .saturating_sub(mdeg(values.get(Feature::FilterBeta)))
+        .saturating_abs();
+    let sigma = mdeg(values.get(Feature::FilterSigmaBeta)).saturating_abs();
     diff > BETA_CROSSCHECK_MIN_MDEG.max(sigma.saturating_mul(BETA_CROSSCHECK_SIGMAS))
 }
 
