@@ -16,6 +16,7 @@
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
 //! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
 //! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
+//! | the β network's answer and an unflagged filter's β more than 2° and 3σ apart ([`beta_disagrees_with_filter`]) | β computed (the network's), `BETA_DISAGREES` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
@@ -321,8 +322,8 @@ pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
 
 /// [`Flags::BETA_DISAGREES`] needs at least this difference between the network's and the
 /// filter's β, millidegrees. Chosen on the validation flights of `large-egi` with the shipped
-/// networks: 55 of 209,880 frames, 48 of them with the network's β off by more than 1°
-/// (docs/results/hybrid.md, ninth session).
+/// networks: 113 of 209,880 frames flagged, 72 of them with the network's β off by more than 1°
+/// (of the 55 that carried no other flag, 48; docs/filter.md).
 pub const BETA_CROSSCHECK_MIN_MDEG: i64 = 2_000;
 
 /// ... and at least this many of the filter's β 1σ.
@@ -336,14 +337,17 @@ pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> boo
     if values.filter_flags != 0 || values.get(Feature::FilterAirspeed) <= 0 {
         return false;
     }
-    // |µrad| < 2^31, so neither the product nor the difference comes near i64's limits; the
+    // |µrad| < 2^31, so neither the products nor the difference come near i64's limits; the
     // saturating forms only say so to the overflow lint.
-    let mdeg = |urad: i32| i64::from(urad).saturating_mul(180_000) / 3_141_593;
+    let mdeg = |urad: i64| urad.saturating_mul(180_000) / 3_141_593;
     let diff = i64::from(beta_mdeg)
-        .saturating_sub(mdeg(values.get(Feature::FilterBeta)))
+        .saturating_sub(mdeg(i64::from(values.get(Feature::FilterBeta))))
         .saturating_abs();
-    let sigma = mdeg(values.get(Feature::FilterSigmaBeta)).saturating_abs();
-    diff > BETA_CROSSCHECK_MIN_MDEG.max(sigma.saturating_mul(BETA_CROSSCHECK_SIGMAS))
+    // The multiple of σ is taken in µrad, before the conversion truncates.
+    let sigmas = i64::from(values.get(Feature::FilterSigmaBeta))
+        .saturating_abs()
+        .saturating_mul(BETA_CROSSCHECK_SIGMAS);
+    diff > BETA_CROSSCHECK_MIN_MDEG.max(mdeg(sigmas))
 }
 
 /// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
@@ -548,11 +552,11 @@ mod tests {
         assert!(beta_disagrees_with_filter(&v, -1145 + 2001));
         assert!(!beta_disagrees_with_filter(&v, -1145 - 2000));
         assert!(beta_disagrees_with_filter(&v, -1145 - 2001));
-        // A 1σ of 0.02 rad (1145 mdeg): 3σ = 3435 mdeg is the bound.
+        // A 1σ of 0.02 rad: 3σ = 0.06 rad = 3437.7 mdeg → 3437 is the bound.
         let mut w = v;
         w.raw[Feature::FilterSigmaBeta.index()] = 20_000;
-        assert!(!beta_disagrees_with_filter(&w, -1145 + 3435));
-        assert!(beta_disagrees_with_filter(&w, -1145 + 3436));
+        assert!(!beta_disagrees_with_filter(&w, -1145 + 3437));
+        assert!(beta_disagrees_with_filter(&w, -1145 + 3438));
         // Any filter flag, or no filter, and there is no judgement.
         for bit in 0..8 {
             let mut f = v;
@@ -616,6 +620,58 @@ mod tests {
             turbulence: TurbulenceEnvelope::ANY,
             lift_scale: Envelope::ANY,
         }
+    }
+
+    /// A cascade that reads the filter's β and air speed and answers `beta_mdeg` whatever they are.
+    fn constant_beta_net(beta_mdeg: i32) -> CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> {
+        let one = Norm {
+            center: 0,
+            mult: 1 << 20,
+            shift: 30,
+        };
+        CascadeNet {
+            features: [Feature::FilterBeta, Feature::FilterAirspeed],
+            norm: [one; 2],
+            envelope: [Envelope::ANY; 2],
+            part1: Output(Dense::new([[0, 0]], [0], [Requant::ONE])),
+            mid_norm: one,
+            part2: Output(Dense::new([[0, 0, 0]], [beta_mdeg], [Requant::ONE])),
+            out_range: Envelope::ANY,
+            turbulence: TurbulenceEnvelope::ANY,
+            lift_scale: Envelope::ANY,
+        }
+    }
+
+    #[test]
+    fn a_beta_that_parts_from_a_consistent_filter_is_flagged_and_kept() {
+        // 60 s of a turn at β 1° whose IMU reads the filter's own force model.
+        let frames: Vec<SensorFrame> = crate::filter::tests::consistent_frames(1200).collect();
+        let alpha = filter_net(i32::MAX);
+        let run = |beta_mdeg: i32| {
+            let b = constant_beta_net(beta_mdeg);
+            let mut e = Estimator::new(&alpha, &b);
+            let mut state = FeatureState::new(true);
+            frames
+                .iter()
+                .map(|f| (e.step(f), state.next(f)))
+                .collect::<Vec<_>>()
+        };
+        // A β network that agrees with the filter (the turn flies 1°): never.
+        assert!(
+            run(1_000)
+                .iter()
+                .all(|(e, _)| !e.flags.has(Flags::BETA_DISAGREES))
+        );
+        // One 4° off: flagged on exactly the frames the filter is unflagged, which is most of the
+        // flight once it has converged; β stays the network's.
+        let mut flagged = 0;
+        for (k, (e, values)) in run(5_000).iter().enumerate() {
+            assert_eq!(e.beta_mdeg, 5_000, "frame {k}");
+            let filter_ok = values.filter_flags == 0;
+            assert_eq!(e.flags.has(Flags::BETA_DISAGREES), filter_ok, "frame {k}");
+            flagged += usize::from(filter_ok);
+        }
+        assert!(flagged > 600, "only {flagged} frames flagged");
     }
 
     #[test]
