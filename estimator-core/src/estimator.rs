@@ -602,44 +602,37 @@ mod tests {
         assert_eq!(filter_alpha_fallback(&none), None);
     }
 
-    /// A one-layer cascade reading the filter's α and air speed; `hi` bounds both inputs' envelope.
-    fn filter_net(hi: i32) -> CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> {
+    type TinyNet = CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3>;
+
+    /// A one-layer cascade reading `first` and the filter's air speed: part 1 `w1·x + b1`, part 2
+    /// `w2·(x, mid) + b2`, unscaled; `hi` bounds both inputs' envelope.
+    fn tiny_net(first: Feature, hi: i32, (w1, b1): (i8, i32), (w2, b2): (i8, i32)) -> TinyNet {
         let one = Norm {
             center: 0,
             mult: 1 << 20,
             shift: 30,
         };
         CascadeNet {
-            features: [Feature::FilterAlpha, Feature::FilterAirspeed],
+            features: [first, Feature::FilterAirspeed],
             norm: [one; 2],
             envelope: [Envelope { lo: -hi, hi }; 2],
-            part1: Output(Dense::new([[1, 1]], [7], [Requant::ONE])),
+            part1: Output(Dense::new([[w1, w1]], [b1], [Requant::ONE])),
             mid_norm: one,
-            part2: Output(Dense::new([[1, 1, 1]], [3], [Requant::ONE])),
+            part2: Output(Dense::new([[w2, w2, w2]], [b2], [Requant::ONE])),
             out_range: Envelope::ANY,
             turbulence: TurbulenceEnvelope::ANY,
             lift_scale: Envelope::ANY,
         }
     }
 
-    /// A cascade that reads the filter's β and air speed and answers `beta_mdeg` whatever they are.
-    fn constant_beta_net(beta_mdeg: i32) -> CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3> {
-        let one = Norm {
-            center: 0,
-            mult: 1 << 20,
-            shift: 30,
-        };
-        CascadeNet {
-            features: [Feature::FilterBeta, Feature::FilterAirspeed],
-            norm: [one; 2],
-            envelope: [Envelope::ANY; 2],
-            part1: Output(Dense::new([[0, 0]], [0], [Requant::ONE])),
-            mid_norm: one,
-            part2: Output(Dense::new([[0, 0, 0]], [beta_mdeg], [Requant::ONE])),
-            out_range: Envelope::ANY,
-            turbulence: TurbulenceEnvelope::ANY,
-            lift_scale: Envelope::ANY,
-        }
+    /// Reads the filter's α and air speed.
+    fn filter_net(hi: i32) -> TinyNet {
+        tiny_net(Feature::FilterAlpha, hi, (1, 7), (1, 3))
+    }
+
+    /// Reads the filter's β and air speed and answers `beta_mdeg` whatever they are.
+    fn constant_beta_net(beta_mdeg: i32) -> TinyNet {
+        tiny_net(Feature::FilterBeta, i32::MAX, (0, 0), (0, beta_mdeg))
     }
 
     #[test]
@@ -680,8 +673,7 @@ mod tests {
         let frames: Vec<SensorFrame> = crate::filter::tests::consistent_frames(1200).collect();
         let inside = filter_net(i32::MAX);
         let outside = filter_net(1);
-        let run = |a: &CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3>,
-                   b: &CascadeNet<Output<2, 1>, Output<3, 1>, 2, 3>| {
+        let run = |a: &TinyNet, b: &TinyNet| {
             let mut e = Estimator::new(a, b);
             frames.iter().map(|f| e.step(f)).collect::<Vec<_>>()
         };
