@@ -305,13 +305,10 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 /// `docs/results/ood.md`). Its β rests on the side force, which it follows less well than the
 /// network does even there.
 pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
-    let airspeed_mms = values.get(Feature::FilterAirspeed);
-    if values.filter_flags != 0
-        || airspeed_mms <= 0
-        || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX
-    {
+    if !values.filter_clear() || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX {
         return None;
     }
+    let airspeed_mms = values.get(Feature::FilterAirspeed);
     let rad = |f: Feature| values.get(f) as f32 * 1e-6;
     let (alpha, beta) = (rad(Feature::FilterAlpha), rad(Feature::FilterBeta));
     let w = airspeed_mms as f32 * libm::sinf(alpha) * libm::cosf(beta);
@@ -334,7 +331,7 @@ pub const BETA_CROSSCHECK_SIGMAS: i64 = 3;
 /// gated, low confidence, ...) or has not run (airspeed 0). Integer arithmetic: µrad to
 /// millidegrees as `µrad · 180,000 / 3,141,593`.
 pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> bool {
-    if values.filter_flags != 0 || values.get(Feature::FilterAirspeed) <= 0 {
+    if !values.filter_clear() {
         return false;
     }
     // |µrad| < 2^31, so neither the products nor the difference come near i64's limits; the

@@ -703,6 +703,12 @@ impl FeatureValues {
         self.filter_flags & (crate::filter::flags::NO_INPUT | crate::filter::flags::RESTARTED) == 0
     }
 
+    /// The filter ran and raised no flag this step (inputs present, no restart, no gate run, 1σ
+    /// within its limit, not slow, GPS altitude present): its outputs may stand beside a network's.
+    pub fn filter_clear(&self) -> bool {
+        self.filter_flags == 0 && self.get(Feature::FilterAirspeed) > 0
+    }
+
     /// Writes the air-data filter's outputs into their features (rounded to the feature's LSB;
     /// the filter never returns a non-finite value, and `as` saturates).
     pub fn set_filter(&mut self, out: &crate::filter::Output) {

@@ -571,7 +571,9 @@ impl AirDataFilter {
     }
 
     /// The measurement update; returns the NIS, or `None` when there was nothing to compare.
-    fn update(&mut self, inp: &Input, prev: &Input) -> Option<f32> {
+    /// `step_dt` is [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s), for the adaptive
+    /// noise's running means.
+    fn update(&mut self, inp: &Input, prev: &Input, step_dt: f32) -> Option<f32> {
         let c = self.cfg;
         let dt = inp.dt_s;
         let back = if dt > 0.0 {
@@ -636,7 +638,7 @@ impl AirDataFilter {
         self.gated_run = 0;
         // Only accepted innovations: a sustained mismatch must stay gated and flagged, not raise
         // the noise until it passes.
-        self.track_innovation(&nu, &s, dt);
+        self.track_innovation(&nu, &s, step_dt);
         let gain = self.p * h.transpose() * s_inv;
         self.x += gain * nu;
         let ikh = Mat7::identity() - gain * h;
@@ -665,17 +667,12 @@ impl AirDataFilter {
 
     /// Folds this step's innovation into the running mean squares ([`Config::r_adapt_tau_s`]),
     /// each square capped at [`Config::gate`] times its predicted variance so one wild sample
-    /// cannot hold the adapted noise up.
+    /// cannot hold the adapted noise up. `dt` is the step's, already sanitised by `step`.
     fn track_innovation(&mut self, nu: &Vector2<f32>, s: &Matrix2<f32>, dt: f32) {
         let tau = self.cfg.r_adapt_tau_s;
         if tau.is_nan() || tau <= 0.0 {
             return;
         }
-        let dt = if dt.is_finite() {
-            dt.clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
         self.r_adapt_age_s = (self.r_adapt_age_s + dt).min(tau);
         for (i, ms) in self.nu_ms.iter_mut().enumerate() {
             let n = nu.get(i).copied().unwrap_or(0.0);
@@ -773,7 +770,7 @@ impl AirDataFilter {
             return out;
         }
         let nis = match self.prev {
-            Some(prev) => self.update(inp, &prev),
+            Some(prev) => self.update(inp, &prev, dt),
             None => None,
         };
         if let Some(n) = nis {
