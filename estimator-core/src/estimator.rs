@@ -85,6 +85,25 @@ impl Flags {
     /// filter. β is still the network's.
     pub const BETA_DISAGREES: u16 = 1 << 13;
 
+    /// Every flag bit with its name, in bit order: the names of the estimates CSV's flag columns
+    /// and of the summaries' flag counts.
+    pub const NAMED: [(u16, &'static str); 14] = [
+        (Self::INVALID_INPUT, "invalid_input"),
+        (Self::OUT_OF_ENVELOPE, "out_of_envelope"),
+        (Self::STUCK_SENSOR, "stuck_sensor"),
+        (Self::ALPHA_HELD, "alpha_held"),
+        (Self::BETA_HELD, "beta_held"),
+        (Self::NO_ESTIMATE, "no_estimate"),
+        (Self::NO_MODEL, "no_model"),
+        (Self::HISTORY_SHORT, "history_short"),
+        (Self::SATURATED, "saturated"),
+        (Self::FILTER_DIVERGED, "filter_diverged"),
+        (Self::GPS_SUBSTITUTED, "gps_substituted"),
+        (Self::TURBULENCE, "turbulence"),
+        (Self::ALPHA_FROM_FILTER, "alpha_from_filter"),
+        (Self::BETA_DISAGREES, "beta_disagrees"),
+    ];
+
     pub fn has(self, bit: u16) -> bool {
         self.0 & bit != 0
     }

@@ -474,3 +474,16 @@ fn a_filter_lift_scale_outside_training_flags_a_model_that_does_not_read_it() {
             .has(Flags::OUT_OF_ENVELOPE)
     );
 }
+
+#[test]
+fn every_flag_bit_has_one_distinct_name_in_bit_order() {
+    let bits: Vec<u16> = Flags::NAMED.iter().map(|(b, _)| *b).collect();
+    let expected: Vec<u16> = (0..Flags::NAMED.len()).map(|k| 1u16 << k).collect();
+    assert_eq!(bits, expected);
+    let mut names: Vec<&str> = Flags::NAMED.iter().map(|(_, n)| *n).collect();
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), Flags::NAMED.len());
+    // The next bit is unused: a new flag must be named here.
+    assert_eq!(Flags::BETA_DISAGREES << 1, 1 << Flags::NAMED.len());
+}

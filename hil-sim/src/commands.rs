@@ -15,17 +15,20 @@ pub struct FlyArgs {
     /// JSBSim runscript; its initialize file is taken from beside it, else from the aircraft folder.
     #[arg(long)]
     script: PathBuf,
-    /// Dataset directory to write (created).
-    #[arg(long, default_value = "datasets/fly")]
+    /// Dataset directory to write (a one-flight dataset: CSV, manifest, report and plots).
+    #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Replace --out if it already holds something (only once the new dataset is complete).
+    #[arg(long)]
+    force: bool,
     /// Seed of the sensor error models.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Sensor model parameters (TOML; see docs/sensors.md). Defaults: LN-200-class IMU.
     #[arg(long)]
     sensors: Option<PathBuf>,
-    /// Stop after this many simulated seconds.
-    #[arg(long)]
+    /// Stop after this many simulated seconds (default: the script's end time).
+    #[arg(long, value_parser = crate::cli_values::positive_seconds, allow_hyphen_values = true)]
     max_time_s: Option<f64>,
 }
 
@@ -38,16 +41,19 @@ pub fn fly(a: &FlyArgs) -> Result<()> {
         name: None,
     };
     let started = std::time::Instant::now();
+    let staging = dataset::Staging::begin(&a.out, a.force)?;
+    let dir = staging.path();
     let mut bridge = crate::plant::Plant::spawn()?;
     let version = bridge.jsbsim_version().to_string();
     let flight = fly::fly_script_with(&mut bridge, &a.script, &cfg)?;
     drop(bridge);
-    std::fs::create_dir_all(&a.out).map_err(|source| Error::Io {
-        action: "create the dataset directory",
-        path: a.out.clone(),
-        source,
-    })?;
-    let entry = dataset::write_flight(&a.out, &flight, Split::Test, "script", a.seed)?;
+    if flight.samples.is_empty() {
+        return Err(Error::Usage(format!(
+            "{} gave no samples (does it end before its first 20 Hz sample?)",
+            a.script.display()
+        )));
+    }
+    let entry = dataset::write_flight(dir, &flight, Split::Test, "script", a.seed)?;
     let manifest = Manifest {
         format: Manifest::FORMAT,
         suites: Manifest::written_suites(),
@@ -62,10 +68,12 @@ pub fn fly(a: &FlyArgs) -> Result<()> {
         flights: vec![entry.clone()],
         files: Default::default(),
     };
-    let mpath = manifest.write(&a.out)?;
+    manifest.write(dir)?;
     // The same pictures and dataset.md as `generate` writes (envelope, α/β histograms, time
     // histories, 3-D path and ground track).
-    dataset::report::write_report(&a.out)?;
+    dataset::report::write_report(dir)?;
+    staging.commit()?;
+    let mpath = a.out.join("manifest.json");
     println!(
         "flew {} for {:.1} s ({} samples at 20 Hz) in {:.1} s wall{}",
         a.script.display(),
@@ -93,28 +101,33 @@ pub struct GenerateArgs {
     /// with chosen mass, wind and turbulence ranges (--hours, --fuel-lbs, --wind-mps, --turbulence).
     #[arg(long, value_enum)]
     preset: crate::maneuver::Preset,
-    /// Dataset directory to write (created).
-    #[arg(long)]
+    /// Dataset directory to write. Without --shard the dataset is written under a temporary name
+    /// and moved here when complete.
+    #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Replace --out if it already holds a dataset (only once the new one is complete).
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     flights: FlightsArgs,
     /// Fly only shard K of N (0 ≤ K < N: the flights at plan positions ≡ K mod N) into --out, which
     /// the other shards may share, and leave a shard-K-of-N.json record; a re-run with a complete
-    /// record does nothing. `hil-sim merge --out DIR` then writes the dataset one machine would have.
+    /// record does nothing. `hil-sim merge --dataset DIR` then writes the dataset one machine would
+    /// have.
     #[arg(long)]
     shard: Option<dataset::Shard>,
     #[command(flatten)]
     campaign: CampaignArgs,
 }
 
-/// `--preset campaign` only: its size and the ranges every profile draws from (defaults: 100 h of
+/// `--preset campaign` only: its size (required) and the ranges every profile draws from (defaults:
 /// 20-min flights over the training presets' ranges).
 #[derive(clap::Args)]
 pub struct CampaignArgs {
-    /// Flight-hours of the campaign.
+    /// Flight-hours of the campaign (required with --preset campaign).
     #[arg(long)]
     hours: Option<f64>,
-    /// Length of each flight, minutes.
+    /// Length of each flight, minutes (default 20).
     #[arg(long)]
     flight_min: Option<f64>,
     /// Fuel per main tank, lb, `LO:HI` (mass: empty 17,400 + pilot 230 + 2 × fuel).
@@ -181,8 +194,14 @@ impl GenerateArgs {
             return Ok(plan);
         }
         let mut k = Campaign::default();
-        if let Some(h) = c.hours {
-            k.hours = h;
+        match c.hours {
+            Some(h) => k.hours = h,
+            None => {
+                return Err(Error::Usage(
+                    "--preset campaign needs --hours H: the flight-hours to generate (e.g. --hours 40)"
+                        .into(),
+                ));
+            }
         }
         if let Some(m) = c.flight_min {
             k.flight_min = m;
@@ -219,7 +238,7 @@ pub struct FlightsArgs {
     #[arg(long)]
     sensors: Option<PathBuf>,
     /// Parallel flights (one JSBSim bridge process each).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = crate::cli_values::at_least_one, allow_hyphen_values = true)]
     workers: usize,
 }
 
@@ -231,14 +250,7 @@ fn sensors_of(path: &Option<PathBuf>) -> Result<SensorConfig> {
 }
 
 fn flights_bar(n: usize) -> indicatif::ProgressBar {
-    let pb = indicatif::ProgressBar::new(n as u64);
-    pb.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} flights {msg}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    pb
+    crate::progress::bar(n as u64, "flights")
 }
 
 pub fn generate(a: &GenerateArgs) -> Result<()> {
@@ -246,6 +258,12 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let plan = a.plan()?;
     if let Some(shard) = a.shard {
+        if a.out.join("manifest.json").exists() && !a.force {
+            return Err(Error::Usage(format!(
+                "{} already holds a merged dataset: choose another --out, or pass --force to add shards to it",
+                a.out.display()
+            )));
+        }
         let pb = flights_bar(shard.of(&plan.flights()).len());
         let outcome =
             dataset::generate_shard(&plan, &a.out, &sensors, a.flights.workers, shard, Some(&pb))?;
@@ -261,31 +279,40 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
             ),
         }
         println!(
-            "when every shard is done: hil-sim merge --out {}",
+            "when every shard is done: hil-sim merge --dataset {}",
             a.out.display()
         );
         return Ok(());
     }
+    let staging = dataset::Staging::begin(&a.out, a.force)?;
     let pb = flights_bar(plan.flights().len());
-    let (m, flights) = dataset::generate(&plan, &a.out, &sensors, a.flights.workers, Some(&pb))?;
+    let (m, flights) = dataset::generate(
+        &plan,
+        staging.path(),
+        &sensors,
+        a.flights.workers,
+        Some(&pb),
+    )?;
     pb.finish_and_clear();
-    let report = dataset::report::write_report_of(&a.out, m.clone(), flights)?;
+    let report = dataset::report::write_report_of(staging.path(), m.clone(), flights)?;
+    staging.commit()?;
     summarize(&m, &a.out, "generated", started, report)
 }
 
 #[derive(clap::Args)]
 pub struct MergeArgs {
-    /// The dataset directory the shards wrote into (`generate --shard K/N --out DIR`).
-    #[arg(long)]
-    out: PathBuf,
+    /// The dataset directory the shards were generated into (`generate --shard K/N --out DIR`);
+    /// the merged dataset is written there.
+    #[arg(long, value_name = "DIR")]
+    dataset: PathBuf,
 }
 
 /// `hil-sim merge`: the shards' flights joined into the dataset one machine would have written.
 pub fn merge(a: &MergeArgs) -> Result<()> {
     let started = std::time::Instant::now();
-    let m = dataset::merge(&a.out)?;
-    let report = dataset::report::write_report(&a.out)?;
-    summarize(&m, &a.out, "merged", started, report)
+    let m = dataset::merge(&a.dataset)?;
+    let report = dataset::report::write_report(&a.dataset)?;
+    summarize(&m, &a.dataset, "merged", started, report)
 }
 
 /// Prints what `generate` and `merge` made, with the dataset report's numbers.
@@ -330,7 +357,7 @@ fn summarize(
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Preset to generate and raw-step (the figure is for `paper`).
+    /// Preset to generate and raw-step (docs/results/generate-bench.md measures `paper`).
     #[arg(long, value_enum, default_value = "paper")]
     preset: crate::maneuver::Preset,
     /// Scratch dataset directory (overwritten every repeat).
@@ -340,7 +367,7 @@ pub struct BenchArgs {
     #[command(flatten)]
     flights: FlightsArgs,
     /// Runs of each side (alternating which goes first); the best of each is reported.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = crate::cli_values::at_least_one, allow_hyphen_values = true)]
     repeats: usize,
     /// Print the summary as JSON instead of a table.
     #[arg(long)]

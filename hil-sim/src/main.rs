@@ -27,7 +27,11 @@ enum Cmd {
     Bench(BenchArgs),
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
+    hil_sim::error_text::exit(run())
+}
+
+fn run() -> Result<()> {
     match Cli::parse().cmd {
         Cmd::Run(a) => hil_sim::runner::cli::run(&a).map(|_| ())?,
         Cmd::Fly(a) => hil_sim::commands::fly(&a)?,
@@ -36,4 +40,18 @@ fn main() -> Result<()> {
         Cmd::Bench(a) => hil_sim::commands::bench(&a)?,
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every `hil-sim` command line in README.md and docs/ parses against this CLI: its flags exist
+    /// and its values parse (a line may leave out required flags, as prose does).
+    #[test]
+    fn every_hil_sim_command_in_the_docs_parses() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let (n, bad) =
+            hil_sim::docs_cli::unparsed::<super::Cli>(&root, "hil-sim").expect("reading the docs");
+        assert!(n >= 10, "only {n} hil-sim commands found");
+        assert!(bad.is_empty(), "{}", bad.join("\n"));
+    }
 }

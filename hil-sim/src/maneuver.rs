@@ -101,7 +101,7 @@ impl ProfileKind {
 /// A closed interval to draw uniformly from.
 pub type Range = (f64, f64);
 
-/// Out-of-distribution test cases (issue 15): one condition outside what any training flight
+/// Out-of-distribution test cases: one condition outside what any training flight
 /// sees, on a flight whose maneuvers are otherwise drawn exactly as its in-distribution twin's (the
 /// same seed and the same random draws in the same order; only the case's value replaces the draw).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -1294,10 +1294,12 @@ pub enum Preset {
     Large,
     /// Out-of-distribution test flights, kept apart from every training preset: for the gentle and
     /// the high-α profile, an in-distribution twin (`ood_nominal_<profile>`) and one flight per
-    /// [`OodCase`] (`ood_<case>_<profile>`) with the twin's seed, 6 min each (16 flights).
+    /// case (`ood_<case>_<profile>`: mass 15 % below and above the trained range, 25 m/s wind,
+    /// turbulence severity 7, 15 m/s gusts, a 30 s GPS loss, a stuck accelerometer) with the twin's seed,
+    /// 6 min each (16 flights; docs/results/ood.md).
     Ood,
-    /// A flight campaign of any size: [`Campaign`] sets its flight-hours and the mass, wind and
-    /// turbulence ranges of every profile (`hil-sim generate --preset campaign --hours ...`).
+    /// A flight campaign of any size: its flight-hours and the mass, wind and turbulence ranges of
+    /// every profile (`hil-sim generate --preset campaign --hours H ...`).
     Campaign,
 }
 

@@ -1,4 +1,4 @@
-//! Scripted dropout flights (issue 14): the first 150 s of the stock test flight, flown in JSBSim
+//! Scripted dropout flights: the first 150 s of the stock test flight, flown in JSBSim
 //! with the sensor models, then each sensor fault of `hil_sim::faults` on its own. For the shipped
 //! estimator (the hybrid: network + air-data filter) and for the air-data filter alone:
 //! * through a GPS loss the hybrid keeps computing from the EGI (`GPS_SUBSTITUTED`), within 0.25°
@@ -29,7 +29,7 @@ use estimator_core::{Estimate, Estimator, Feature, FeatureState, Flags, SensorFr
 use hil_sim::faults::{Fault, apply};
 use hil_sim::score::faults::{FaultScore, score};
 
-/// Longest time from the sensor's return to the estimate being back (issue 14).
+/// Longest time from the sensor's return to the estimate being back.
 const BACK_WITHIN_S: f64 = 5.0;
 
 /// The faults, one per run: GPS lost for 30 s, a dead and a stuck channel of each kind the models

@@ -1,4 +1,4 @@
-//! The modules of every crate import each other without cycles (issue 17): a module's data flows
+//! The modules of every crate import each other without cycles: a module's data flows
 //! one way. Each top-level module (a `src/<name>.rs` file or a `src/<name>/` folder) imports another
 //! when its code (not its comments) names `crate::<other>`; a cycle is a strongly connected set of
 //! two or more modules.
@@ -19,7 +19,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// Cycles still to untangle, as (crate, sorted module names). None left: hil-sim's data side
-/// (`dataset`/`maneuver`/`plant`/`sensors`) and `runner`/`score` were untangled in issue 17.
+/// (`dataset`/`maneuver`/`plant`/`sensors`) and `runner`/`score` were untangled to get there.
 const CRATES: [&str; 4] = ["estimator-core", "firmware", "hil-sim", "trainer"];
 
 fn root() -> PathBuf {
@@ -230,7 +230,17 @@ fn no_crate_has_an_import_cycle() {
 }
 
 /// What the trainer may use of hil-sim: the modules built without the `sim` feature.
-const LEAN_HIL_SIM: [&str; 5] = ["dataset", "faults", "flight", "font", "frames"];
+const LEAN_HIL_SIM: [&str; 9] = [
+    "cli_values",
+    "dataset",
+    "docs_cli",
+    "error_text",
+    "faults",
+    "flight",
+    "font",
+    "frames",
+    "progress",
+];
 
 #[test]
 fn the_trainer_reads_datasets_not_the_simulator() {

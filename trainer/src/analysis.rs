@@ -69,6 +69,33 @@ pub fn columns(ds: &Dataset, max_rows: usize) -> (Vec<String>, Vec<Vec<f64>>) {
     (names, cols)
 }
 
+/// The `n` feature columns most correlated (max |ρ|) with the α or β target, in their original
+/// order, followed by every target column: names and the sub-matrix. `names`/`m` are
+/// [`columns`]' and [`spearman_matrix`]'s (features first, then the targets).
+pub fn most_correlated(names: &[String], m: &[Vec<f64>], n: usize) -> (Vec<String>, Vec<Vec<f64>>) {
+    let n_feat = Feature::ALL.len().min(names.len());
+    let target = |t: Target| names.iter().position(|c| c == t.column());
+    let (ia, ib) = (target(Target::AlphaDeg), target(Target::BetaDeg));
+    let score = |i: usize| -> f64 {
+        [ia, ib]
+            .iter()
+            .flatten()
+            .filter_map(|&t| m.get(i).and_then(|row| row.get(t)))
+            .map(|v| if v.is_finite() { v.abs() } else { 0.0 })
+            .fold(0.0, f64::max)
+    };
+    let mut order: Vec<usize> = (0..n_feat).collect();
+    order.sort_by(|&a, &b| score(b).total_cmp(&score(a)));
+    let mut keep: Vec<usize> = order.into_iter().take(n).collect();
+    keep.sort_unstable();
+    keep.extend(n_feat..names.len());
+    let sub = keep
+        .iter()
+        .map(|&i| keep.iter().map(|&j| m[i][j]).collect())
+        .collect();
+    (keep.iter().map(|&i| names[i].clone()).collect(), sub)
+}
+
 /// Spearman matrix of all columns (symmetric, 1 on the diagonal unless a column is constant: NaN).
 pub fn spearman_matrix(cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let r: Vec<Vec<f64>> = cols.iter().map(|c| ranks(c)).collect();

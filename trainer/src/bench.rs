@@ -450,7 +450,7 @@ pub fn run_case(
 /// The benchmark's Markdown page.
 pub fn markdown(results: &[CaseSeeds], command: &str, machine: &str) -> String {
     let mut s = String::from(
-        "# Training speed: burn against PyTorch, side by side (issue 18)\n\n\
+        "# Training speed: burn against PyTorch, side by side\n\n\
          Written by `trainer bench-train` (run it through `scripts/bench-train`, which makes the \
          PyTorch venv and the dataset). Both frameworks train the same cascade from the same initial \
          weights on the same batches in the same order, with Adam (same constants, same per-epoch \

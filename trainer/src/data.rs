@@ -273,6 +273,27 @@ pub fn spread_rows<'a>(flights: &[&'a Flight], max_rows: usize) -> Vec<(&'a Flig
 /// flight) and derives the estimator's inputs from them.
 pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Result<Flight> {
     let csv = hil_sim::dataset::Flight::read_csv(path)?;
+    // Training and scoring need the truth on every row: a NaN would turn every mean into NaN.
+    for (k, s) in csv.samples.iter().enumerate() {
+        let t = &s.truth;
+        for (name, v) in [
+            ("alpha_deg", t.alpha_deg),
+            ("beta_deg", t.beta_deg),
+            ("v_aero_mps", t.v_aero_mps),
+            ("w_aero_mps", t.w_aero_mps),
+            ("qbar_pa", t.qbar_pa),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::Split(
+                    path.to_path_buf(),
+                    format!(
+                        "line {}: the truth column `{name}` is `{v}`; every row of a training or evaluation dataset needs it (regenerate the flight, or drop the row; `hil-sim run --dataset` scores a log without truth)",
+                        k + 2
+                    ),
+                ));
+            }
+        }
+    }
     let mut frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
     let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
     hil_sim::faults::apply(faults, &mut frames, &times);

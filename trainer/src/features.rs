@@ -281,7 +281,7 @@ impl FeatureSet {
             // egi-hybrid-fast plus the β dynamics channels 2 frames back: with the 1-frame deltas,
             // the three newest samples, enough to undo the IMU's 2nd-order anti-alias filter
             // (docs/results/beta-floor.md). β only: the same deltas for α gained nothing on the
-            // validation flights (docs/results/hybrid.md, ninth session).
+            // validation flights (docs/results/hybrid.md, "Alternatives measured and not used").
             "egi-hybrid-fast-d2" => {
                 let b: Vec<Feature> = deltas(&DYNAMICS_BETA_DELTAS, &[Lag::F2]).collect();
                 FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &[], &b)

@@ -19,6 +19,7 @@ pub mod plots;
 pub mod prep;
 pub mod quant;
 pub mod report;
+pub mod saved;
 pub mod sweep;
 
 pub use error::{Error, Result};

@@ -15,8 +15,53 @@ fn parse_loss(s: &str) -> std::result::Result<Loss, String> {
     Loss::parse(s).ok_or_else(|| format!("`{s}`: the loss is mse or l1"))
 }
 
+/// A learning rate: finite and > 0.
+fn learning_rate(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Ok(_) => Err(format!(
+            "`{s}`: the learning rate must be a positive number, e.g. 1e-3"
+        )),
+        Err(_) => Err(format!("`{s}` is not a number")),
+    }
+}
+
+/// The share of training flights held out for validation: strictly between 0 and 1.
+fn fraction(s: &str) -> std::result::Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x > 0.0 && x < 1.0 => Ok(x),
+        Ok(_) => Err(format!(
+            "`{s}`: a fraction strictly between 0 and 1, e.g. 0.15"
+        )),
+        Err(_) => Err(format!("`{s}` is not a number")),
+    }
+}
+
+/// Seeds given as one comma-separated value (`--seeds 1,2,3`).
+#[derive(Clone, Debug)]
+struct Seeds(Vec<u64>);
+
+/// A comma-separated seed list, e.g. `1,2,3` (at least one seed, none repeated).
+fn seed_list(s: &str) -> std::result::Result<Seeds, String> {
+    let seeds = s
+        .split(',')
+        .map(|x| x.trim().parse::<u64>())
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|_| format!("`{s}`: comma-separated whole numbers, e.g. 1,2,3"))?;
+    let mut sorted = seeds.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    if sorted.len() != seeds.len() {
+        return Err(format!("`{s}`: a seed is repeated"));
+    }
+    Ok(Seeds(seeds))
+}
+
 #[derive(Parser)]
-#[command(about = "Train, quantize, export and evaluate the synthetic air data estimator")]
+#[command(
+    version,
+    about = "Train, quantize, export and evaluate the synthetic air data estimator"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -41,29 +86,33 @@ impl Replicas {
 #[derive(clap::Args, Clone)]
 struct TrainArgs {
     /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
-    #[arg(long)]
+    #[arg(long, value_name = "DIR")]
     data: PathBuf,
     /// More training flights: every training flight of this dataset (its test flights are left
     /// out) trains with `--data`'s, while validation and test stay `--data`'s own flights, so runs
     /// with and without it are selected and scored on the same flights. Repeatable.
     #[arg(long, value_name = "DIR")]
     extra_data: Vec<PathBuf>,
+    /// Seed of the weight initialisation, the validation split's draw and the batch order: the
+    /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Network sizes: small (CI), medium, large (the largest that fits the target budget),
-    /// medium-wide-beta (α as medium, β as large: the shipped sizes), or paper.
-    #[arg(long, default_value = "small")]
+    /// Network configuration: small (CI), medium, large (the largest that fits the target
+    /// budget), medium-wide-beta (α as medium, β as large: the shipped configuration), or paper.
+    #[arg(long, default_value = "medium-wide-beta")]
     config: String,
     /// Epochs (default: 40 small, 30 medium, large and paper).
-    #[arg(long)]
+    #[arg(long, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     epochs: Option<usize>,
-    #[arg(long, default_value_t = 256)]
+    /// Mini-batch size, rows.
+    #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     batch: usize,
-    #[arg(long, default_value_t = 1e-3)]
+    /// Adam learning rate.
+    #[arg(long, default_value_t = 1e-3, value_parser = learning_rate, allow_hyphen_values = true)]
     lr: f64,
     /// Training loss of both heads: mse (the paper's) or l1 (mean absolute error, the metric the
-    /// accuracy tables report).
-    #[arg(long, default_value = "mse", value_parser = parse_loss)]
+    /// accuracy tables report; the shipped configuration's).
+    #[arg(long, default_value = "l1", value_parser = parse_loss)]
     loss: Loss,
     #[command(flatten)]
     replicas: Replicas,
@@ -74,22 +123,22 @@ struct TrainArgs {
     /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), egi-hybrid-fast
     /// (egi-dynamics + the filter's α, β and their 1σ, which recover within a second of an
     /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas:
-    /// the shipped set), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or "alpha=a,b,...;beta=c,d,..." with names
-    /// of estimator_core::Feature.
-    #[arg(long, default_value = "table1")]
+    /// the shipped set), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
+    /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
+    #[arg(long, default_value = "egi-hybrid-fast-d2")]
     features: String,
     /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
     /// `filter_airspeed_mps,filter_lift_scale`): an ablation without spelling out the whole list.
     #[arg(long, default_value = "")]
     without: String,
-    /// Sensor suite the models may read: table1 (the paper's inputs, the default: every command
-    /// keeps the meaning it had before the suites) or egi (Table 1 + the embedded GPS/INS attitude
-    /// and velocity and the fuel quantity; needs a dataset of format 4). A feature of a suite the
-    /// run does not have is refused with the suite it needs.
-    #[arg(long, default_value = "table1")]
+    /// Sensor suite the models may read: table1 (the paper's inputs) or egi (Table 1 + the
+    /// embedded GPS/INS attitude and velocity and the fuel quantity, the shipped suite; needs a
+    /// dataset of format 4). A feature of a suite the run does not have is refused with the suite
+    /// it needs.
+    #[arg(long, default_value = "egi")]
     suite: String,
-    /// Fraction of training flights held out (by flight) for validation.
-    #[arg(long, default_value_t = 0.15)]
+    /// Fraction of training flights held out (by flight) for validation, strictly between 0 and 1.
+    #[arg(long, default_value_t = 0.15, value_parser = fraction, allow_hyphen_values = true)]
     val_fraction: f64,
 }
 
@@ -98,17 +147,18 @@ struct TrainArgs {
 struct ReportArgs {
     #[command(flatten)]
     args: TrainArgs,
-    /// Comma-separated seeds of the neural models.
-    #[arg(long, default_value = "1,2")]
-    seeds: String,
+    /// Seeds of the neural models, comma-separated.
+    #[arg(long, default_value = "1,2", value_parser = seed_list)]
+    seeds: Seeds,
     /// Feature set of the ablation against --features ("none": skip).
     #[arg(long, default_value = "physics")]
     ablation: String,
     /// Training rows (evenly subsampled) for gradient boosting.
-    #[arg(long, default_value_t = 40_000)]
+    #[arg(long, default_value_t = 40_000, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     gb_rows: usize,
-    /// Output directory of training.md and the PNGs.
-    #[arg(long, default_value = "docs/results")]
+    /// Output directory of training.md and the PNGs (`--out docs/results` refreshes the committed
+    /// report).
+    #[arg(long, value_name = "DIR", default_value = "out/report")]
     out: PathBuf,
     /// Print exactly one JSON object (the Table-2 numbers) on stdout.
     #[arg(long)]
@@ -128,14 +178,14 @@ struct ReportArgs {
 /// The grid and training settings of `trainer sweep` (the same for every call of one sweep).
 #[derive(clap::Args, Clone)]
 struct SweepGrid {
-    /// Dataset directory.
-    #[arg(long)]
+    /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
+    #[arg(long, value_name = "DIR")]
     data: PathBuf,
-    /// Where the job results and sweep.md go (shared by every job).
-    #[arg(long)]
+    /// Output directory of the job results and sweep.md (shared by every job).
+    #[arg(long, value_name = "DIR", default_value = "out/sweep")]
     out: PathBuf,
-    /// Network sizes (repeat the flag for several): small, medium, large, paper.
-    #[arg(long = "size", default_value = "small")]
+    /// Network configurations (repeat the flag for several), as `trainer train --config`.
+    #[arg(long = "config", default_value = "small")]
     sizes: Vec<String>,
     /// Feature sets (repeat the flag for several), as `trainer train --features`.
     #[arg(long = "features", default_value = "table1")]
@@ -143,17 +193,23 @@ struct SweepGrid {
     /// Sensor suites (repeat the flag for several): table1, egi.
     #[arg(long = "suite", default_value = "table1")]
     suites: Vec<String>,
-    /// Comma-separated seeds.
-    #[arg(long, default_value = "1")]
-    seeds: String,
-    /// Epochs (default: the size's).
-    #[arg(long)]
+    /// Seeds, comma-separated.
+    #[arg(long, default_value = "1", value_parser = seed_list)]
+    seeds: Seeds,
+    /// Epochs (default: the configuration's).
+    #[arg(long, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     epochs: Option<usize>,
-    #[arg(long, default_value_t = 256)]
+    /// Mini-batch size, rows.
+    #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     batch: usize,
-    #[arg(long, default_value_t = 1e-3)]
+    /// Adam learning rate.
+    #[arg(long, default_value_t = 1e-3, value_parser = learning_rate, allow_hyphen_values = true)]
     lr: f64,
-    #[arg(long, default_value_t = 0.15)]
+    /// Training loss of both heads, as `trainer train --loss`.
+    #[arg(long, default_value = "mse", value_parser = parse_loss)]
+    loss: Loss,
+    /// Fraction of training flights held out for validation, strictly between 0 and 1.
+    #[arg(long, default_value_t = 0.15, value_parser = fraction, allow_hyphen_values = true)]
     val_fraction: f64,
 }
 
@@ -174,27 +230,32 @@ struct SweepAction {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Train both cascades, quantize, write weights.rs + test vectors + plots.
+    /// Train both cascades and quantize them; writes plots, summary.json and model.json (the
+    /// int8 model, for `trainer eval --model`) into --out. With --export it also writes the
+    /// weights the estimator compiles in and their test vectors into the source tree.
     Train {
         #[command(flatten)]
         args: TrainArgs,
-        /// Output directory for plots and summary.json.
-        #[arg(long)]
+        /// Output directory of the plots, summary.json and model.json.
+        #[arg(long, value_name = "DIR", default_value = "out/train")]
         out: PathBuf,
+        /// Also export into the source tree (--weights-out, --vectors-out): the next build of
+        /// estimator-core, hil-sim and the firmware carries this model.
+        #[arg(long)]
+        export: bool,
+        /// Where --export writes the generated weights.
         #[arg(long, default_value = "estimator-core/src/model/weights.rs")]
         weights_out: PathBuf,
+        /// Where --export writes the bit-exactness test vectors.
         #[arg(long, default_value = "estimator-core/tests/vectors/shipped.txt")]
         vectors_out: PathBuf,
-        /// Do not write weights.rs / vectors (training and plots only).
-        #[arg(long)]
-        no_export: bool,
     },
     /// Table 2 baselines (linear regression, gradient boosting, plain MLP) on the test flights.
     Baselines {
         #[command(flatten)]
         args: TrainArgs,
         /// Training rows (evenly subsampled) for gradient boosting.
-        #[arg(long, default_value_t = 40_000)]
+        #[arg(long, default_value_t = 40_000, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         gb_rows: usize,
     },
     /// Table 2: every model family for α and β on the same test flights (float and int8), seed
@@ -204,36 +265,43 @@ enum Cmd {
     /// themselves (CSV + markdown + heatmap), and sampled Shapley values of the compiled-in α and β
     /// models' integer path (mean |SHAP| bar charts); writes features.md.
     Features {
-        #[arg(long)]
+        /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
-        #[arg(long, default_value = "docs/results")]
+        /// Output directory of features.md, the CSV and the PNGs (`--out docs/results` refreshes
+        /// the committed page).
+        #[arg(long, value_name = "DIR", default_value = "out/features")]
         out: PathBuf,
         /// Training rows (evenly subsampled) used for the correlations.
-        #[arg(long, default_value_t = 60_000)]
+        #[arg(long, default_value_t = 60_000, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         rows: usize,
         /// SHAP sampling seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// SHAP: test rows explained (evenly spread over the test flights).
-        #[arg(long, default_value_t = 200)]
+        #[arg(long, default_value_t = 200, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         explain: usize,
         /// SHAP: background rows (evenly spread over the training flights).
-        #[arg(long, default_value_t = 32)]
+        #[arg(long, default_value_t = 32, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         background: usize,
         /// SHAP: feature permutations per explained row.
-        #[arg(long, default_value_t = 8)]
+        #[arg(long, default_value_t = 8, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         permutations: usize,
     },
     /// Times training epochs of the paper-size α cascade (512-256-128-64-32 per part).
     BenchEpoch {
-        #[arg(long)]
+        /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
-        #[arg(long, default_value_t = 3)]
+        /// Epochs timed.
+        #[arg(long, default_value_t = 3, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         epochs: usize,
-        #[arg(long, default_value_t = 256)]
+        /// Mini-batch size, rows.
+        #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         batch: usize,
-        /// Where the measured figures go (JSON; `trainer report --out DIR` includes DIR/bench_epoch.json).
-        #[arg(long, default_value = "docs/results/bench_epoch.json")]
+        /// Output directory of bench_epoch.json (`trainer report --out DIR` includes
+        /// DIR/bench_epoch.json in its page).
+        #[arg(long, value_name = "DIR", default_value = "out/bench-epoch")]
         out: PathBuf,
         #[command(flatten)]
         replicas: Replicas,
@@ -241,33 +309,35 @@ enum Cmd {
     /// burn against PyTorch on the same cascade, data, initial weights, batches and threads
     /// (run it through scripts/bench-train, which makes the PyTorch venv).
     BenchTrain {
-        #[arg(long)]
+        /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
-        #[arg(long, default_value_t = 5)]
+        /// Epochs per run (at least 2: the first is warm-up and is not averaged).
+        #[arg(long, default_value_t = 5, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         epochs: usize,
-        #[arg(long, default_value_t = 256)]
+        /// Mini-batch size, rows.
+        #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         batch: usize,
         /// Threads for both frameworks (burn: rayon's global pool; PyTorch: set_num_threads).
-        #[arg(long, default_value_t = 2)]
+        #[arg(long, default_value_t = 2, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
         threads: usize,
-        /// Seeds per case (seeds 1..=N, N at most 20), each a full side-by-side run; the page and
-        /// the JSON compare the means over seeds (one seed's validation loss is mostly
-        /// epoch-to-epoch noise).
-        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=20))]
-        seeds: u64,
+        /// Seeds, comma-separated (at most 20), each a full side-by-side run; the page and the JSON
+        /// compare the means over seeds (one seed's validation loss is mostly epoch-to-epoch noise).
+        #[arg(long, default_value = "1,2,3", value_parser = seed_list)]
+        seeds: Seeds,
         /// Cases to run (paper-alpha, shipped-alpha); default all.
         #[arg(long, value_delimiter = ',')]
         case: Vec<String>,
         /// The benchmark venv's Python (with torch).
         #[arg(long, default_value = ".venv-bench/bin/python")]
         python: PathBuf,
+        /// The PyTorch side of the benchmark.
         #[arg(long, default_value = "scripts/bench/torch_train.py")]
         torch_script: PathBuf,
-        /// Where the exchanged matrices, weights and batch orders go.
-        #[arg(long, default_value = "out/bench-train")]
-        exchange: PathBuf,
-        /// The Markdown page (also DIR/training-speed.json beside it).
-        #[arg(long, default_value = "docs/results/training-speed.md")]
+        /// Output directory of training-speed.md and training-speed.json (`--out docs/results`
+        /// refreshes the committed page); the exchanged matrices, weights and batch orders go to
+        /// DIR/exchange.
+        #[arg(long, value_name = "DIR", default_value = "out/bench-train")]
         out: PathBuf,
         /// Print exactly one JSON object on stdout.
         #[arg(long)]
@@ -275,10 +345,11 @@ enum Cmd {
         #[command(flatten)]
         replicas: Replicas,
     },
-    /// Score the model-based air-data filter (estimator_core::filter, EGI suite) on a dataset's
+    /// Score the model-based air-data filter alone (EGI suite) on a dataset's
     /// flights, frame by frame as the firmware runs it.
     EvalFilter {
-        #[arg(long)]
+        /// Dataset directory (manifest.json + CSVs from `hil-sim generate`), egi suite.
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
         /// Which flights: `test` (the manifest's test flights), `train` or `val` (for tuning: never
         /// tune on `test`).
@@ -299,11 +370,12 @@ enum Cmd {
     /// flights where flags stayed clear through large errors called out; writes ood.md, ood.json
     /// and ood.png.
     Ood {
-        /// The `ood` dataset.
-        #[arg(long)]
+        /// The `ood` dataset (`hil-sim generate --preset ood`).
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
-        /// Where ood.md, ood.json and ood.png go.
-        #[arg(long, default_value = "docs/results")]
+        /// Output directory of ood.md, ood.json and ood.png (`--out docs/results` refreshes the
+        /// committed page).
+        #[arg(long, value_name = "DIR", default_value = "out/ood")]
         out: PathBuf,
         /// Print exactly one JSON object on stdout (the files are written as well).
         #[arg(long)]
@@ -319,10 +391,17 @@ enum Cmd {
         #[command(flatten)]
         action: SweepAction,
     },
-    /// Evaluate the compiled-in model (Estimator::shipped) on the test flights.
+    /// Evaluate the compiled-in estimator (int8, with its flags and fallbacks, as the firmware runs
+    /// it) on a dataset's flights; or, with --model, a model `trainer train` wrote, without
+    /// exporting it.
     Eval {
-        #[arg(long)]
+        /// Dataset directory (manifest.json + CSVs from `hil-sim generate` or `hil-sim fly`).
+        #[arg(long, value_name = "DIR")]
         data: PathBuf,
+        /// A `trainer train --out` directory: evaluate its int8 networks (model.json; the
+        /// networks alone, without the compiled-in estimator's flags and fallbacks).
+        #[arg(long, value_name = "DIR")]
+        model: Option<PathBuf>,
         /// Which flights: `test` (the manifest's test flights), `train` or `val` (to see how the
         /// shipped estimator behaves in distribution, e.g. how often its flags fire).
         #[arg(long, default_value = "test")]
@@ -395,17 +474,17 @@ fn command_line() -> String {
 }
 
 fn print_metrics(label: &str, m: &FlightMetrics) {
-    for (name, x) in &m.per_flight {
+    let rows = m.per_flight.iter().map(|(n, x)| (n.as_str(), x));
+    for (name, x) in rows.chain(std::iter::once(("OVERALL", &m.overall))) {
         println!(
-            "  {label:<6} {name:<24} MAE {:7.3}  RMSE {:7.3}  p95 {:7.3}  max {:7.3}  (n={})",
-            x.mae, x.rmse, x.p95, x.max, x.n
+            "  {label:<6} {name:<24} MAE {}  RMSE {}  p95 {}  max {}  (n={})",
+            x.cell(x.mae, 7),
+            x.cell(x.rmse, 7),
+            x.cell(x.p95, 7),
+            x.cell(x.max, 7),
+            x.n
         );
     }
-    let o = m.overall;
-    println!(
-        "  {label:<6} {:<24} MAE {:7.3}  RMSE {:7.3}  p95 {:7.3}  max {:7.3}  (n={})",
-        "OVERALL", o.mae, o.rmse, o.p95, o.max, o.n
-    );
 }
 
 fn cmd_train(
@@ -413,7 +492,7 @@ fn cmd_train(
     out: &PathBuf,
     weights_out: &Path,
     vectors_out: &Path,
-    no_export: bool,
+    export: bool,
 ) -> Result<()> {
     let size = args.size()?;
     let (suite, fs) = args.suite_features()?;
@@ -472,7 +551,14 @@ fn cmd_train(
         out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    if !no_export {
+    let model =
+        trainer::saved::SavedModel::new(&alpha.q, &beta.q, suite.name(), &prov).write(out)?;
+    println!(
+        "wrote {} (score it with `trainer eval --model {}`)",
+        model.display(),
+        out.display()
+    );
+    if export {
         let hash = write_model(&ds, &alpha, &beta, &prov, weights_out, vectors_out)?;
         println!(
             "wrote {} (sha256 {hash}) and {}",
@@ -493,13 +579,47 @@ fn parse_split(split: &str) -> Result<Role> {
     })
 }
 
+/// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
+/// least one flight in `role`.
+fn load_split(data: &Path, role: Role) -> Result<Dataset> {
+    let ds = Dataset::load_any(data, 0.15)
+        .with_context(|| format!("cannot load the dataset {}", data.display()))?;
+    if ds.flights(role).next().is_none() {
+        let mut have: Vec<&str> = Vec::new();
+        for (r, name) in [
+            (Role::Test, "test"),
+            (Role::Train, "train"),
+            (Role::Val, "val"),
+        ] {
+            if ds.flights(r).next().is_some() {
+                have.push(name);
+            }
+        }
+        bail!(
+            "{} has no {} flight; pass --split {}",
+            data.display(),
+            role_name(role),
+            have.join(" or --split ")
+        );
+    }
+    Ok(ds)
+}
+
+fn role_name(r: Role) -> &'static str {
+    match r {
+        Role::Test => "test",
+        Role::Train => "train",
+        Role::Val => "val",
+    }
+}
+
 fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result<()> {
     let role = parse_split(split)?;
     let suite = match suite {
         Some(s) => parse_suite(s)?,
         None => trainer::pipeline::shipped_suite().unwrap_or(estimator_core::Suite::Table1),
     };
-    let ds = load(data, 0.15)?;
+    let ds = load_split(data, role)?;
     ds.require(suite)?;
     let (Some(prov), Some(needs)) = (
         trainer::pipeline::shipped_provenance(),
@@ -550,8 +670,11 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
             ("β, true |β| ≥ 2°", r.beta_abs_above_2),
         ] {
             println!(
-                "  {name:<18} MAE {:6.3}  p95 {:6.3}  max {:6.3}  (n={})",
-                m.mae, m.p95, m.max, m.n
+                "  {name:<18} MAE {}  p95 {}  max {}  (n={})",
+                m.cell(m.mae, 6),
+                m.cell(m.p95, 6),
+                m.cell(m.max, 6),
+                m.n
             );
         }
         for c in &e.flagged {
@@ -565,6 +688,59 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
                 c.beta_disagrees
             );
         }
+    }
+    Ok(())
+}
+
+/// `trainer eval --model DIR`: a saved model's int8 networks (the integer reference, bit for bit
+/// the estimator's kernels) on a split's flights.
+fn cmd_eval_model(
+    data: &Path,
+    model: &Path,
+    split: &str,
+    suite: Option<&str>,
+    json: bool,
+) -> Result<()> {
+    let role = parse_split(split)?;
+    let (qa, qb, model_suite, prov) = trainer::saved::SavedModel::read(model)?;
+    let model_suite = parse_suite(&model_suite)?;
+    let suite = match suite {
+        Some(s) => parse_suite(s)?,
+        None => model_suite,
+    };
+    if model_suite.channels() & !suite.channels() != 0 {
+        bail!(
+            "the model in {} reads the `{}` sensor suite; pass --suite {}",
+            model.display(),
+            model_suite.name(),
+            model_suite.name()
+        );
+    }
+    let ds = load_split(data, role)?;
+    ds.require(suite)?;
+    let alpha = trainer::pipeline::int8_metrics(&qa, &ds, role);
+    let beta = trainer::pipeline::int8_metrics(&qb, &ds, role);
+    if json {
+        let v = serde_json::json!({
+            "model": model.display().to_string(),
+            "suite": suite.name(),
+            "split": split,
+            "dataset": data.display().to_string(),
+            "manifest_sha256": ds.manifest_sha256,
+            "alpha": alpha, "beta": beta,
+            "provenance": prov,
+        });
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        println!(
+            "model {} (int8 networks, no flags or fallbacks):\n{prov}",
+            model.display()
+        );
+        println!("flights: {split}; sensor suite: {}", suite.name());
+        println!("α (deg):");
+        print_metrics("int8", &alpha);
+        println!("β (deg):");
+        print_metrics("int8", &beta);
     }
     Ok(())
 }
@@ -614,17 +790,16 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
 
 fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     use trainer::sweep::{Grid, JobResult, Scores, merge, write_result};
-    let seeds: Vec<u64> = g
-        .seeds
-        .split(',')
-        .map(|s| s.trim().parse::<u64>())
-        .collect::<std::result::Result<_, _>>()
-        .context("--seeds must be comma-separated integers, e.g. 1,2")?;
+    for c in &g.sizes {
+        Size::parse(c).with_context(|| {
+            format!("--config `{c}`: small, medium, large, medium-wide-beta or paper")
+        })?;
+    }
     let grid = Grid {
         sizes: g.sizes.clone(),
         features: g.features.clone(),
         suites: g.suites.clone(),
-        seeds,
+        seeds: g.seeds.0.clone(),
     };
     let jobs = grid.jobs();
     if action.list {
@@ -682,7 +857,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
             seed: job.seed,
             label: format!("job {k} {}", angle.name()),
             progress: false,
-            loss: Loss::Mse,
+            loss: g.loss,
             replicas: None,
             bars: None,
         };
@@ -860,7 +1035,7 @@ fn cmd_baselines(args: &TrainArgs, gb_rows: usize) -> Result<()> {
 fn cmd_report(r: &ReportArgs) -> Result<()> {
     let (args, seeds, ablation, gb_rows, out, json, shipped_rows) = (
         &r.args,
-        r.seeds.as_str(),
+        r.seeds.0.clone(),
         r.ablation.as_str(),
         r.gb_rows,
         r.out.as_path(),
@@ -870,14 +1045,6 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
     let ood = r.ood.as_deref();
     use trainer::report::{BenchEpoch, ReportConfig, run};
     let size = args.size()?;
-    let seeds: Vec<u64> = seeds
-        .split(',')
-        .map(|s| s.trim().parse::<u64>())
-        .collect::<std::result::Result<_, _>>()
-        .context("--seeds must be comma-separated integers, e.g. 1,2")?;
-    if seeds.is_empty() {
-        bail!("--seeds needs at least one seed");
-    }
     let (suite, features) = args.suite_features()?;
     let ablation = match ablation {
         "none" => None,
@@ -967,6 +1134,9 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
     Ok(())
 }
 
+/// Features in the Spearman heatmap (besides the targets): beyond about 40 labels it is unreadable.
+const HEATMAP_FEATURES: usize = 36;
+
 struct ShapArgs {
     seed: u64,
     explain: usize,
@@ -993,11 +1163,19 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
     }
     let csv_path = out.join("features_spearman.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    // The picture keeps what a reader can read: the targets and the features most correlated with
+    // α or β; the CSV holds the whole matrix.
+    let (shown, sub) = trainer::analysis::most_correlated(&names, &m, HEATMAP_FEATURES);
     trainer::plots::heatmap(
         &out.join("features_spearman.png"),
-        "Spearman rank correlation (training flights)",
-        &names,
-        &m,
+        &format!(
+            "Spearman rank correlation (training flights): the targets and the {} features most correlated with α or β",
+            shown
+                .len()
+                .saturating_sub(names.len() - estimator_core::Feature::ALL.len())
+        ),
+        &shown,
+        &sub,
     )?;
     let head = trainer::report::FeaturesHead {
         dataset: data.display().to_string(),
@@ -1039,7 +1217,7 @@ fn shap_section(ds: &Dataset, out: &Path, a: &ShapArgs) -> Result<String> {
         let feats = net.features().to_vec();
         let f = |v: &estimator_core::FeatureValues| net.run(v).1 as f64 / 1000.0;
         let mut r = rng(a.seed);
-        let pb = indicatif::ProgressBar::new(xs.len() as u64);
+        let pb = hil_sim::progress::bar(xs.len() as u64, "rows");
         pb.set_prefix(format!("SHAP {name}"));
         let mut sum = vec![0.0; feats.len()];
         for x in &xs {
@@ -1143,18 +1321,17 @@ fn cmd_bench(
          {mean:.2} s/epoch (epochs 2..{epochs}; first {:.2} s) → ≈{:.1} s/epoch at 288 000 rows",
         v.first_epoch_s, v.per_epoch_288k_s
     );
-    if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    std::fs::write(out, serde_json::to_string_pretty(&v)?)
-        .with_context(|| format!("writing {}", out.display()))?;
-    eprintln!("wrote {}", out.display());
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let path = out.join("bench_epoch.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&v)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    eprintln!("wrote {}", path.display());
     Ok(())
 }
 
 struct BenchTrainOpts<'a> {
     epochs: usize,
-    seeds: u64,
+    seeds: Vec<u64>,
     batch: usize,
     threads: usize,
     replicas: Option<usize>,
@@ -1166,13 +1343,16 @@ fn cmd_bench_train(
     data: &Path,
     o: &BenchTrainOpts,
     torch: &trainer::bench::Torch,
-    exchange: &Path,
     out: &Path,
 ) -> Result<()> {
     use trainer::bench::{CASES, CaseSeeds, markdown, run_case};
     if o.epochs < 2 {
         bail!("--epochs must be at least 2 (the first epoch is warm-up and is not averaged)");
     }
+    if o.seeds.len() > 20 {
+        bail!("--seeds: at most 20 seeds (got {})", o.seeds.len());
+    }
+    let exchange = &out.join("exchange");
     rayon::ThreadPoolBuilder::new()
         .num_threads(o.threads)
         .build_global()
@@ -1196,7 +1376,7 @@ fn cmd_bench_train(
     };
     let ds = load(data, 0.15)?;
     let mut results = Vec::new();
-    let seeds: Vec<u64> = (1..=o.seeds).collect();
+    let seeds = o.seeds.clone();
     for case in &cases {
         ds.require(case.suite)?;
         let mut runs = Vec::new();
@@ -1235,23 +1415,26 @@ fn cmd_bench_train(
         "torch_val_loss": first.map(|c| c.torch_val_loss),
         "val_loss_rel": first.map(|c| c.val_loss_rel),
     });
-    if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    std::fs::write(out, markdown(&results, &command_line(), &machine()))
-        .with_context(|| format!("writing {}", out.display()))?;
-    let json_path = out.with_extension("json");
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let md_path = out.join("training-speed.md");
+    std::fs::write(&md_path, markdown(&results, &command_line(), &machine()))
+        .with_context(|| format!("writing {}", md_path.display()))?;
+    let json_path = out.join("training-speed.json");
     std::fs::write(&json_path, serde_json::to_string_pretty(&summary)?)
         .with_context(|| format!("writing {}", json_path.display()))?;
     if o.json {
         println!("{summary}");
     } else {
-        eprintln!("wrote {} and {}", out.display(), json_path.display());
+        eprintln!("wrote {} and {}", md_path.display(), json_path.display());
     }
     Ok(())
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
+    hil_sim::error_text::exit(run())
+}
+
+fn run() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
         Cmd::Train {
@@ -1259,10 +1442,18 @@ fn main() -> Result<()> {
             out,
             weights_out,
             vectors_out,
-            no_export,
-        } => cmd_train(args, out, weights_out, vectors_out, *no_export),
+            export,
+        } => cmd_train(args, out, weights_out, vectors_out, *export),
         Cmd::Eval {
             data,
+            model: Some(model),
+            split,
+            suite,
+            json,
+        } => cmd_eval_model(data, model, split, suite.as_deref(), *json),
+        Cmd::Eval {
+            data,
+            model: None,
             split,
             suite,
             json,
@@ -1312,7 +1503,6 @@ fn main() -> Result<()> {
             case,
             python,
             torch_script,
-            exchange,
             out,
             json,
             replicas,
@@ -1320,7 +1510,7 @@ fn main() -> Result<()> {
             data,
             &BenchTrainOpts {
                 epochs: *epochs,
-                seeds: *seeds,
+                seeds: seeds.0.clone(),
                 batch: *batch,
                 threads: *threads,
                 replicas: replicas.get(),
@@ -1332,8 +1522,21 @@ fn main() -> Result<()> {
                 script: torch_script,
                 threads: *threads,
             },
-            exchange,
             out,
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Every `trainer` command line in README.md and docs/ parses against this CLI: its flags exist
+    /// and its values parse (a line may leave out required flags, as prose does).
+    #[test]
+    fn every_trainer_command_in_the_docs_parses() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let (n, bad) =
+            hil_sim::docs_cli::unparsed::<super::Cli>(&root, "trainer").expect("reading the docs");
+        assert!(n >= 10, "only {n} trainer commands found");
+        assert!(bad.is_empty(), "{}", bad.join("\n"));
     }
 }

@@ -2,6 +2,7 @@
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
+#[serde(into = "MetricsJson", from = "MetricsJson")]
 pub struct Metrics {
     pub n: usize,
     pub mae: f64,
@@ -10,7 +11,51 @@ pub struct Metrics {
     pub max: f64,
 }
 
+/// [`Metrics`] as JSON: `null` statistics over no frames (an empty band is not an error of 0).
+#[derive(Serialize, Deserialize)]
+struct MetricsJson {
+    n: usize,
+    mae: Option<f64>,
+    rmse: Option<f64>,
+    p95: Option<f64>,
+    max: Option<f64>,
+}
+
+impl From<Metrics> for MetricsJson {
+    fn from(m: Metrics) -> MetricsJson {
+        let v = |x: f64| (m.n > 0).then_some(x);
+        MetricsJson {
+            n: m.n,
+            mae: v(m.mae),
+            rmse: v(m.rmse),
+            p95: v(m.p95),
+            max: v(m.max),
+        }
+    }
+}
+
+impl From<MetricsJson> for Metrics {
+    fn from(j: MetricsJson) -> Metrics {
+        Metrics {
+            n: j.n,
+            mae: j.mae.unwrap_or(0.0),
+            rmse: j.rmse.unwrap_or(0.0),
+            p95: j.p95.unwrap_or(0.0),
+            max: j.max.unwrap_or(0.0),
+        }
+    }
+}
+
 impl Metrics {
+    /// One statistic for a table cell: `{:w.3}`, or `–` over no frames.
+    pub fn cell(&self, x: f64, width: usize) -> String {
+        if self.n == 0 {
+            format!("{:>width$}", "–")
+        } else {
+            format!("{x:width$.3}")
+        }
+    }
+
     pub fn of(pred: &[f64], truth: &[f64]) -> Metrics {
         let mut e: Vec<f64> = pred.iter().zip(truth).map(|(p, t)| (p - t).abs()).collect();
         let n = e.len();

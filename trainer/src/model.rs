@@ -6,7 +6,7 @@ use burn::nn::{Linear, LinearConfig};
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::activation::relu;
 use burn::tensor::{Device, Tensor, TensorData};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
@@ -568,11 +568,9 @@ fn train_here<M: Net>(
             Some(bars) => bars.add(pb),
             None => pb,
         };
-        pb.set_style(
-            ProgressStyle::with_template("{prefix} [{bar:30}] epoch {pos}/{len} {msg} ({elapsed})")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
+        hil_sim::progress::style(&pb, "epochs");
         pb.set_prefix(cfg.label.clone());
+        hil_sim::progress::log_when_not_a_terminal(&pb, "epochs");
         pb
     } else {
         ProgressBar::hidden()

@@ -1,4 +1,4 @@
-//! Out-of-distribution evaluation (issue 15): every estimator that runs on the target, scored on the
+//! Out-of-distribution evaluation: every estimator that runs on the target, scored on the
 //! `ood` preset's flights (`hil-sim generate --preset ood`) against its own score on each flight's
 //! in-distribution twin (same maneuver seed, nominal conditions), with the failures a user cannot see
 //! called out: frames whose flags are all clear while the error exceeds 2° in α or 1° in β.

@@ -7,14 +7,22 @@ fn perr<E: std::fmt::Display>(e: E) -> Error {
     Error::Plot(e.to_string())
 }
 
-const COLORS: [RGBColor; 6] = [
+/// Ten distinguishable colours (matplotlib's tab10): a chart with up to ten series never repeats one.
+const COLORS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
     RGBColor(214, 39, 40),
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
+
+/// Height of one legend row below the panels, px.
+const LEGEND_ROW: u32 = 22;
 
 /// Tick label with at most 4 significant digits and no float noise ("0.7", "1e-3", "120").
 pub fn fmt_tick(v: f64) -> String {
@@ -48,9 +56,48 @@ pub fn line_panels(
     h: u32,
 ) -> Result<()> {
     hil_sim::font::register();
-    let root = BitMapBackend::new(path, (panel_w * panels.len() as u32, h)).into_drawing_area();
+    // Panels with more than one series share one legend below them, off the data.
+    let legend: Vec<String> = panels
+        .iter()
+        .flat_map(|p| p.4.iter().map(|s| s.name.clone()))
+        .fold(Vec::new(), |mut v, n| {
+            if !v.contains(&n) {
+                v.push(n);
+            }
+            v
+        });
+    let width = panel_w * panels.len() as u32;
+    let per_row = (width / 260).max(1) as usize;
+    let legend_h = if legend.len() > 1 {
+        8 + LEGEND_ROW * legend.len().div_ceil(per_row) as u32
+    } else {
+        0
+    };
+    let root = BitMapBackend::new(path, (width, h + legend_h)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
-    let areas = root.split_evenly((1, panels.len()));
+    let (charts, legend_area) = root.split_vertically(h);
+    for (k, name) in legend.iter().enumerate() {
+        let c = COLORS[k % COLORS.len()];
+        let (x, y) = (
+            20 + 260 * (k % per_row) as i32,
+            6 + (LEGEND_ROW * (k / per_row) as u32) as i32 + LEGEND_ROW as i32 / 2,
+        );
+        legend_area
+            .draw(&PathElement::new([(x, y), (x + 24, y)], c.stroke_width(3)))
+            .map_err(perr)?;
+        legend_area
+            .draw(&Text::new(
+                name.clone(),
+                (x + 30, y - 8),
+                ("sans-serif", 14).into_font(),
+            ))
+            .map_err(perr)?;
+    }
+    let colour_of = |name: &str| {
+        let k = legend.iter().position(|n| n == name).unwrap_or(0);
+        COLORS[k % COLORS.len()]
+    };
+    let areas = charts.split_evenly((1, panels.len()));
     for ((title, xl, yl, logy, series), area) in panels.iter().zip(areas) {
         let pts = series.iter().flat_map(|s| s.points.iter());
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -86,10 +133,11 @@ pub fn line_panels(
                     .y_desc(*yl)
                     .x_label_formatter(&|v| fmt_tick(*v))
                     .y_label_formatter(&|v| fmt_tick(*v))
+                    .light_line_style(WHITE)
                     .draw()
                     .map_err(perr)?;
-                for (k, s) in series.iter().enumerate() {
-                    let c = COLORS[k % COLORS.len()];
+                for s in series.iter() {
+                    let c = colour_of(&s.name);
                     // Dense series (time histories) get thin lines so overlapping ones stay legible.
                     let width = if s.points.len() > 1000 { 1 } else { 2 };
                     chart
@@ -99,16 +147,8 @@ pub fn line_panels(
                             }),
                             c.stroke_width(width),
                         ))
-                        .map_err(perr)?
-                        .label(s.name.clone())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+                        .map_err(perr)?;
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .draw()
-                    .map_err(perr)?;
             }};
         }
         if *logy {

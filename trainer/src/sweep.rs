@@ -1,4 +1,4 @@
-//! Training sweeps (issue 19): a grid of network sizes × feature sets × sensor suites × seeds expanded
+//! Training sweeps: a grid of network sizes × feature sets × sensor suites × seeds expanded
 //! into numbered, independent jobs (`trainer sweep --job K`, one per Slurm array task), each leaving
 //! `job-K.json` in a shared directory, and a merge that gathers them into one report with the seed
 //! spread per configuration. A job that failed, or never left its file, is named in the report.

@@ -11,3 +11,10 @@ pub use generated::*;
 
 /// Whether this build has a model.
 pub const HAS_MODEL: bool = cfg!(estimator_weights);
+
+/// How the compiled-in model was trained (its `PROVENANCE`), `None` in a build without a model.
+#[cfg(estimator_weights)]
+pub const SHIPPED_PROVENANCE: Option<&str> = Some(PROVENANCE);
+/// How the compiled-in model was trained (its `PROVENANCE`), `None` in a build without a model.
+#[cfg(not(estimator_weights))]
+pub const SHIPPED_PROVENANCE: Option<&str> = None;

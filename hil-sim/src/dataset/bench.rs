@@ -1,5 +1,5 @@
 //! `hil-sim bench`: wall time of [`super::generate`] against raw JSBSim stepping of the same
-//! flights, side by side on the same workers (issue 4's target: 4 h of flight in ≤ 30 s on 2 cores).
+//! flights, side by side on the same workers (the target: 4 h of flight in ≤ 30 s on 2 cores).
 //!
 //! Raw stepping is the floor any data generator on JSBSim pays: the same maneuver scripts, loaded
 //! the same way ([`crate::plant::load_f16_script`], one bridge process per flight), run to their end

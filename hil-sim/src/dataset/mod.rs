@@ -38,6 +38,97 @@ pub enum DatasetError {
     },
     #[error("manifest {path}: {message}")]
     Manifest { path: PathBuf, message: String },
+    #[error("{path}: {message}")]
+    TimeBase { path: PathBuf, message: String },
+    #[error(
+        "{path} already exists and is not empty: choose another --out, or pass --force to replace it"
+    )]
+    Exists { path: PathBuf },
+}
+
+/// A dataset directory written under a temporary name beside its final one and renamed into place
+/// only when complete, so that a killed or failed run leaves no half-written dataset at `--out`
+/// (at most a hidden `.NAME.partial` beside it, removed by the next run). An existing, non-empty
+/// `--out` is refused unless `force`, and then replaced only once the new dataset is complete.
+pub struct Staging {
+    out: PathBuf,
+    tmp: PathBuf,
+    force: bool,
+    committed: bool,
+}
+
+impl Staging {
+    pub fn begin(out: &Path, force: bool) -> Result<Staging, DatasetError> {
+        let non_empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some());
+        if non_empty && !force {
+            return Err(DatasetError::Exists {
+                path: out.to_path_buf(),
+            });
+        }
+        let name = out
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "dataset".into());
+        let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
+        let tmp = parent
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
+            .join(format!(".{name}.partial"));
+        let io = |action, path: &Path| {
+            let path = path.to_path_buf();
+            move |source| DatasetError::Io {
+                action,
+                path,
+                source,
+            }
+        };
+        if tmp.exists() {
+            std::fs::remove_dir_all(&tmp).map_err(io("remove the stale", &tmp))?;
+        }
+        std::fs::create_dir_all(&tmp).map_err(io("create", &tmp))?;
+        Ok(Staging {
+            out: out.to_path_buf(),
+            tmp,
+            force,
+            committed: false,
+        })
+    }
+
+    /// Where the dataset is written until [`Staging::commit`].
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Moves the complete dataset to `--out` (replacing an old one under `force`).
+    pub fn commit(mut self) -> Result<(), DatasetError> {
+        let io = |action, path: &Path| {
+            let path = path.to_path_buf();
+            move |source| DatasetError::Io {
+                action,
+                path,
+                source,
+            }
+        };
+        if self.out.exists() {
+            if !self.force && std::fs::read_dir(&self.out).is_ok_and(|mut d| d.next().is_some()) {
+                return Err(DatasetError::Exists {
+                    path: self.out.clone(),
+                });
+            }
+            std::fs::remove_dir_all(&self.out).map_err(io("replace", &self.out))?;
+        }
+        std::fs::rename(&self.tmp, &self.out)
+            .map_err(io("move the finished dataset to", &self.out))?;
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.tmp);
+        }
+    }
 }
 
 /// All CSV column names in file order: time, truth, then one sensed column per channel of every
@@ -47,6 +138,47 @@ pub fn columns() -> Vec<&'static str> {
     c.extend_from_slice(&TRUTH_COLUMNS);
     c.extend(Channel::ALL.iter().map(|c| c.name()));
     c
+}
+
+/// Whether column `k` of [`columns`] is a truth column.
+fn is_truth(k: usize) -> bool {
+    (1..1 + TRUTH_COUNT).contains(&k)
+}
+
+/// A flight's samples must be the estimator's 20 Hz: times strictly increasing, every step one
+/// period (within 5 %). Anything else is refused with what was found; resample the log first.
+pub fn check_time_base(path: &Path, f: &Flight) -> Result<(), DatasetError> {
+    let period = 1.0 / f64::from(crate::flight::SAMPLE_HZ);
+    let bad = |message: String| DatasetError::TimeBase {
+        path: path.to_path_buf(),
+        message,
+    };
+    // Order first: a row out of place also leaves a gap, and the order is what to fix then.
+    for (k, w) in f.samples.windows(2).enumerate() {
+        let (a, b) = (w[0].time_s, w[1].time_s);
+        if !(a.is_finite() && b.is_finite()) {
+            return Err(bad(format!("row {}: time_s is not a number", k + 2)));
+        }
+        if b <= a {
+            return Err(bad(format!(
+                "time_s does not increase at row {} ({a} s, then {b} s): sort the log by time",
+                k + 3
+            )));
+        }
+    }
+    for (k, w) in f.samples.windows(2).enumerate() {
+        let dt = w[1].time_s - w[0].time_s;
+        if (dt - period).abs() > 0.05 * period {
+            return Err(bad(format!(
+                "rows {} and {} are {dt:.4} s apart ({:.1} Hz); the estimator runs at {} Hz: resample the log to a {period} s step",
+                k + 2,
+                k + 3,
+                1.0 / dt,
+                crate::flight::SAMPLE_HZ
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Columns a flight CSV of format 3 lacks (the format-4 truth columns and the EGI sensed columns):
@@ -113,6 +245,17 @@ impl Flight {
     /// columns, none of the format-4 truth columns) reads them as NaN: the EGI channels are then
     /// absent (invalid) in its frames. Some but not all of those columns is an error.
     pub fn read_csv(path: &Path) -> Result<Flight, DatasetError> {
+        Flight::read(path, true)
+    }
+
+    /// Reads a flight log (docs/flight-log.md): `time_s` and every Table 1 sensed column are
+    /// required, the EGI sensed columns all or none, each truth column optional (absent or empty:
+    /// NaN, not scored). An empty sensed cell is a sensor that gave nothing (NaN: sent invalid).
+    pub fn read_log(path: &Path) -> Result<Flight, DatasetError> {
+        Flight::read(path, false)
+    }
+
+    fn read(path: &Path, truth_required: bool) -> Result<Flight, DatasetError> {
         let f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
             action: "open",
             path: path.to_path_buf(),
@@ -142,6 +285,7 @@ impl Flight {
             .enumerate()
             .map(|(k, c)| match find(c) {
                 Err(_) if format3 && since_format_4(k) => Ok(None),
+                Err(_) if !truth_required && is_truth(k) => Ok(None),
                 r => r.map(Some),
             })
             .collect::<Result<_, _>>()?;
@@ -153,6 +297,9 @@ impl Flight {
             for (k, (i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
                 let Some(i) = *i else { continue };
                 let s = rec.get(i).unwrap_or("");
+                if !truth_required && k > 0 && s.trim().is_empty() {
+                    continue; // nothing recorded: NaN
+                }
                 *v = s
                     .trim()
                     .parse::<f64>()

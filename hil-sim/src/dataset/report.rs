@@ -122,7 +122,7 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
         .fold(1.0f64, f64::max);
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            "Flight envelope (blue: training, red: test)",
+            "Flight envelope (blue: training flights, red: test flights, drawn on top)",
             ("sans-serif", 26),
         )
         .margin(15)
@@ -137,8 +137,16 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
         .label_style(("sans-serif", 18))
         .draw()
         .map_err(&e)?;
-    for (f, split) in flights {
-        let color = if *split == Split::Train { TRAIN } else { TEST };
+    // Training points first and faint, test flights on top as a line of larger dots: the test
+    // flights are few and must stay visible in the training cloud.
+    let mut ordered: Vec<&(&Flight, Split)> = flights.iter().collect();
+    ordered.sort_by_key(|(_, split)| *split == Split::Test);
+    for (f, split) in ordered {
+        let (color, size, alpha) = if *split == Split::Train {
+            (TRAIN, 1, 0.25)
+        } else {
+            (TEST, 2, 0.9)
+        };
         chart
             .draw_series(f.samples.iter().step_by(10).map(|s| {
                 Circle::new(
@@ -146,8 +154,8 @@ fn envelope(path: &Path, flights: &[(&Flight, Split)]) -> Result<(), DatasetErro
                         s.truth.mach,
                         s.truth.alt_msl_m / crate::flight::FT_TO_M / 1000.0,
                     ),
-                    1,
-                    color.mix(0.4).filled(),
+                    size,
+                    color.mix(alpha).filled(),
                 )
             }))
             .map_err(&e)?;

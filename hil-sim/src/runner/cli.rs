@@ -23,8 +23,9 @@ pub enum FirmwareKind {
 #[derive(Clone, Debug, clap::Args)]
 #[group(required = true, multiple = false)]
 pub struct Source {
-    /// A recorded flight CSV (dataset format, docs/architecture.md).
-    #[arg(long)]
+    /// A recorded flight CSV at 20 Hz: a dataset's flight, or your own flight log with only the
+    /// sensed columns (truth columns optional, scored where present; docs/flight-log.md).
+    #[arg(long, value_name = "CSV")]
     pub dataset: Option<PathBuf>,
     /// A JSBSim runscript (aircraft f16) flown now, then streamed (generated maneuvers are scripts too).
     #[arg(long)]
@@ -35,9 +36,9 @@ pub struct Source {
 pub struct RunArgs {
     #[command(flatten)]
     pub source: Source,
-    /// Which firmware answers. `--port` implies `serial`.
-    #[arg(long, value_enum, default_value = "host")]
-    pub firmware: FirmwareKind,
+    /// Which firmware answers [default: host; serial with --port].
+    #[arg(long, value_enum)]
+    pub firmware: Option<FirmwareKind>,
     /// Firmware image for --firmware qemu (default: target/thumbv7em-none-eabihf/firmware/firmware).
     #[arg(long)]
     pub elf: Option<PathBuf>,
@@ -79,19 +80,22 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Stop the flight after this many seconds.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli_values::positive_seconds, allow_hyphen_values = true)]
     pub max_time_s: Option<f64>,
-    /// Output directory for estimates.csv, summary.json and plot.png.
-    #[arg(long, default_value = "runs/latest")]
+    /// Output directory of estimates.csv, summary.json and plot.png (docs/flight-log.md).
+    #[arg(long, value_name = "DIR", default_value = "out/run")]
     pub out: PathBuf,
     /// Link model parameters (TOML: baud, latency_ms, jitter_ms, byte_loss, bit_flip, burst_rate,
     /// burst_len); the flags below override it.
     #[arg(long)]
     pub link: Option<PathBuf>,
+    /// Simulated link's baud rate [default: 115200, the board's].
     #[arg(long)]
     pub link_baud: Option<u32>,
+    /// Simulated link's one-way latency, ms [default: 0].
     #[arg(long)]
     pub latency_ms: Option<f64>,
+    /// Simulated link's latency jitter (uniform ± this), ms [default: 0].
     #[arg(long)]
     pub jitter_ms: Option<f64>,
     /// Probability that a byte is lost.
@@ -103,6 +107,7 @@ pub struct RunArgs {
     /// Probability per byte that a noise burst starts.
     #[arg(long)]
     pub burst_rate: Option<f64>,
+    /// Bytes a noise burst corrupts.
     #[arg(long)]
     pub burst_len: Option<u32>,
     /// A scripted sensor fault, KIND[:CHANNEL]@START+DURATION in seconds: gps-loss@300+30,
@@ -164,7 +169,11 @@ fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
 /// Loads or flies the flight.
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
     let mut f = match (&source.dataset, &source.script) {
-        (Some(csv), _) => Flight::read_csv(csv)?,
+        (Some(csv), _) => {
+            let f = Flight::read_log(csv)?;
+            crate::dataset::check_time_base(csv, &f)?;
+            f
+        }
         (None, Some(script)) => crate::fly::fly_script(
             script,
             &crate::fly::FlyConfig {
@@ -184,13 +193,28 @@ pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Fli
     Ok(f)
 }
 
+/// The firmware that answers: `--firmware`, or serial with `--port`; a port with another firmware
+/// is refused rather than ignored.
+pub fn firmware_kind(a: &RunArgs) -> Result<FirmwareKind, RunError> {
+    match (a.firmware, &a.port) {
+        (Some(FirmwareKind::Host | FirmwareKind::Qemu), Some(p)) => Err(RunError::Usage(format!(
+            "--port {} goes with a flashed board (--firmware serial), not --firmware {}: drop one of them",
+            p.display(),
+            if a.firmware == Some(FirmwareKind::Host) {
+                "host"
+            } else {
+                "qemu"
+            }
+        ))),
+        (Some(k), _) => Ok(k),
+        (None, Some(_)) => Ok(FirmwareKind::Serial),
+        (None, None) => Ok(FirmwareKind::Host),
+    }
+}
+
 /// Opens the chosen firmware.
 pub fn open_target(a: &RunArgs) -> Result<Box<dyn Target>, RunError> {
-    let kind = if a.port.is_some() {
-        FirmwareKind::Serial
-    } else {
-        a.firmware
-    };
+    let kind = firmware_kind(a)?;
     Ok(match kind {
         FirmwareKind::Host => Box::new(InProcess::new()),
         FirmwareKind::Qemu => {
@@ -250,14 +274,50 @@ pub fn parse_suite(s: &str) -> Result<estimator_core::Suite, UnknownSuite> {
     estimator_core::Suite::from_name(s).ok_or_else(|| UnknownSuite(s.to_string()))
 }
 
+/// Refuses a suite the compiled-in estimator cannot run on: it would answer every frame with
+/// `INVALID_INPUT` and score none.
+pub fn check_suite(suite: estimator_core::Suite) -> Result<(), RunError> {
+    let shipped = estimator_core::Estimator::shipped();
+    match shipped.suite() {
+        Some(needs) if needs.channels() & !suite.channels() != 0 => Err(RunError::Usage(format!(
+            "the compiled-in estimator reads the `{}` sensor suite, so `--suite {}` frames lack channels it needs: pass --suite {} (or leave --suite out)",
+            needs.name(),
+            suite.name(),
+            needs.name()
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Refuses a fault that starts after the flight's last sample: it would never happen.
+fn check_faults(faults: &[crate::faults::Fault], flight: &Flight) -> Result<(), RunError> {
+    let (first, last) = match (flight.samples.first(), flight.samples.last()) {
+        (Some(a), Some(b)) => (a.time_s, b.time_s),
+        _ => return Ok(()),
+    };
+    for f in faults {
+        if f.start_s > last {
+            return Err(RunError::Usage(format!(
+                "--fault {f} starts at {} s, after the flight's last sample at {last:.2} s (it runs {first:.2}–{last:.2} s): choose a start inside the flight",
+                f.start_s
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The whole `hil-sim run`.
 pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
+    let suite = a.suite.unwrap_or_else(super::shipped_suite);
+    check_suite(suite)?;
+    // A contradictory --port is refused before anything flies.
+    firmware_kind(a)?;
     let cfg = RunConfig {
         link: a.link_config()?,
         seed: a.seed,
         fast: !a.realtime,
         reply_timeout: Duration::from_millis(a.reply_timeout_ms),
-        suite: a.suite.unwrap_or_else(super::shipped_suite),
+        suite,
         ..RunConfig::default()
     };
     if a.source.script.is_some() {
@@ -267,6 +327,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         FirmwareLog::install();
     }
     let flight = flight(&a.source, a.seed, a.max_time_s)?;
+    check_faults(&a.faults, &flight)?;
     let mut faults = a.faults.clone();
     if let Some(csv) = &a.source.dataset {
         let listed = manifest_faults(csv)?;
@@ -313,6 +374,22 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     bar.finish_and_clear();
     drop(target);
     let mut summary = score::summarize(&outcome);
+    summary.provenance = score::Provenance {
+        flight: flight.name.clone(),
+        input: match (&a.source.dataset, &a.source.script) {
+            (Some(p), _) => format!("--dataset {}", p.display()),
+            (None, Some(p)) => format!("--script {}", p.display()),
+            (None, None) => String::new(),
+        },
+        seed: a.seed,
+        suite: suite.name().to_string(),
+        max_time_s: a.max_time_s,
+        faults: faults.iter().map(ToString::to_string).collect(),
+        model: estimator_core::model::SHIPPED_PROVENANCE.map(str::to_string),
+        git_rev: crate::dataset::git_rev(),
+        hil_sim_version: env!("CARGO_PKG_VERSION").to_string(),
+        link: Some(cfg.link.clone()),
+    };
     if !faults.is_empty() {
         let estimates: Vec<_> = outcome
             .records
@@ -364,20 +441,10 @@ impl log::Log for FirmwareLog {
     fn flush(&self) {}
 }
 
-/// Frames sent, ETA and the running scores on stderr; drawn only when stderr is a terminal.
+/// Frames sent, ETA and the running scores on stderr (a bar on a terminal, else a line every few
+/// seconds).
 fn progress_bar(frames: usize) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(frames as u64),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} frames, ETA {eta} {msg}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    bar
+    crate::progress::bar(frames as u64, "frames")
 }
 
 fn progress_message(p: &super::Progress) -> String {

@@ -55,6 +55,9 @@ pub enum RunError {
     Fault(crate::faults::FaultError),
     #[error("cannot write {0}: {1}")]
     Output(PathBuf, String),
+    /// Arguments or inputs that do not go together; the message says what to change.
+    #[error("{0}")]
+    Usage(String),
 }
 
 /// The suite the compiled-in estimator reads (table1 for a build without a model): what a run

@@ -1,6 +1,7 @@
 //! Scores a run: α/β error statistics over the frames that came back with a computed estimate, link
 //! and firmware counters, step timing; writes the per-frame CSV, the JSON summary and a PNG plot.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use estimator_core::Flags;
@@ -61,9 +62,37 @@ impl ErrorStats {
     }
 }
 
+/// What a run's figures are of: the input, the settings and the model (docs/flight-log.md).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Provenance {
+    /// The flight's name (the CSV's or the script's file stem).
+    pub flight: String,
+    /// `--dataset CSV` or `--script XML`, as given.
+    pub input: String,
+    pub seed: u64,
+    /// Sensor suite of the frames sent.
+    pub suite: String,
+    pub max_time_s: Option<f64>,
+    /// Scripted faults (`--fault`, and those the dataset manifest lists for the flight).
+    pub faults: Vec<String>,
+    /// The compiled-in model's training provenance (`None` in a build without a model).
+    pub model: Option<String>,
+    /// `git describe` of the hil-sim build's tree.
+    pub git_rev: String,
+    pub hil_sim_version: String,
+    /// The simulated link's parameters.
+    pub link: Option<crate::link::LinkConfig>,
+}
+
+/// Seconds rounded to the millisecond, as a duration is read.
+pub fn round_ms(s: f64) -> f64 {
+    (s * 1000.0).round() / 1000.0
+}
+
 /// The `--json` object. Angles in degrees; `null` where there is nothing to measure.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    pub provenance: Provenance,
     pub firmware: String,
     pub has_model: bool,
     pub alpha_mae_deg: Option<f64>,
@@ -77,6 +106,11 @@ pub struct Summary {
     pub frames_answered: usize,
     /// Estimates scored: answered and computed (not `NO_MODEL`/`NO_ESTIMATE`).
     pub frames_scored: usize,
+    /// Scored frames with a true α or β in the input (a flight log without truth has none; each
+    /// angle's error statistics are over the frames with its truth).
+    pub frames_with_truth: usize,
+    /// Answered frames carrying each flag (names as in estimates.csv).
+    pub flags: BTreeMap<String, usize>,
     /// Frames with no intact estimate back (lost or corrupted either way): counted, not scored.
     pub frames_lost: usize,
     /// Frames rejected on both sides: firmware `rx_corrupt` plus estimate frames hil-sim rejected.
@@ -132,14 +166,17 @@ fn median(v: &mut [u32]) -> Option<u32> {
 
 pub fn summarize(o: &RunOutcome) -> Summary {
     let scored: Vec<&FrameRecord> = o.records.iter().filter(|r| scorable(r)).collect();
-    // Estimate − truth over the scored records (all of which have a reply).
+    let with_truth = scored
+        .iter()
+        .filter(|r| r.alpha_true_deg.is_finite() || r.beta_true_deg.is_finite())
+        .count();
+    // Estimate − truth over the scored records (all of which have a reply) with a true angle.
     let err = |angle: fn(&FrameRecord) -> (f64, f64)| -> Vec<f64> {
         scored
             .iter()
-            .map(|r| {
-                let (truth, estimate) = angle(r);
-                estimate - truth
-            })
+            .map(|r| angle(r))
+            .filter(|(truth, _)| truth.is_finite())
+            .map(|(truth, estimate)| estimate - truth)
             .collect()
     };
     let a = ErrorStats::of(&err(alpha_deg));
@@ -157,7 +194,15 @@ pub fn summarize(o: &RunOutcome) -> Summary {
     let tmed = median(&mut ticks);
     let instr = source == TickSource::Instructions;
     let fw_corrupt = counter(|h| h.rx_corrupt);
+    let flags = Flags::NAMED
+        .iter()
+        .map(|&(bit, name)| {
+            let n = replies.iter().filter(|r| r.estimate.flags.has(bit)).count();
+            (name.to_string(), n)
+        })
+        .collect();
     Summary {
+        provenance: Provenance::default(),
         firmware: o.target.to_string(),
         has_model: estimator_core::model::HAS_MODEL,
         alpha_mae_deg: a.map(|s| s.mae),
@@ -169,6 +214,8 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         frames_sent: o.records.len(),
         frames_answered: replies.len(),
         frames_scored: scored.len(),
+        frames_with_truth: with_truth,
+        flags,
         frames_lost: o.records.len() - replies.len(),
         frames_corrupt_rejected: fw_corrupt + u64::from(o.downlink_rejected),
         firmware_rx_corrupt: fw_corrupt,
@@ -182,59 +229,110 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         step_instructions_max: tmax.filter(|_| instr),
         step_instructions_median: tmed.filter(|_| instr),
         macs_per_step: estimator_core::Estimator::shipped().macs(),
-        flight_s: o.records.len() as f64 * PERIOD_S,
-        wall_s: o.wall_s,
+        flight_s: round_ms(o.records.len() as f64 * PERIOD_S),
+        wall_s: round_ms(o.wall_s),
         uplink: o.uplink,
         downlink: o.downlink,
         faults: Vec::new(),
     }
 }
 
-/// Per-frame CSV: truth, the estimate as sent (integer fields exactly), step ticks.
-pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error> {
-    let mut w = csv::Writer::from_path(path)?;
-    w.write_record([
+/// An integer count of thousandths (millidegrees, mm/s) as the decimal it is, exactly: `-1234` →
+/// `-1.234`.
+pub fn thousandths(v: i32) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    let a = v.unsigned_abs();
+    format!("{sign}{}.{:03}", a / 1000, a % 1000)
+}
+
+/// The per-frame CSV's header: angles in degrees, velocities in m/s, one 0/1 column per flag.
+pub fn csv_header() -> Vec<String> {
+    let mut h: Vec<String> = [
         "seq",
         "time_s",
         "alpha_true_deg",
         "beta_true_deg",
         "received",
-        "alpha_mdeg",
-        "beta_mdeg",
-        "w_aero_mms",
-        "v_aero_mms",
-        "flags",
-        "step_ticks",
-        "tick_source",
-    ])?;
+        "alpha_deg",
+        "beta_deg",
+        "w_aero_mps",
+        "v_aero_mps",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    h.extend(Flags::NAMED.iter().map(|(_, n)| format!("flag_{n}")));
+    h.extend(["step_ticks".to_string(), "tick_source".to_string()]);
+    h
+}
+
+/// Per-frame CSV: truth (empty where the input has none), the estimate as sent (the integer fields
+/// exactly, as decimals of their unit), each flag, step ticks. Columns: docs/flight-log.md.
+pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error> {
+    let mut w = csv::Writer::from_path(path)?;
+    let header = csv_header();
+    w.write_record(&header)?;
+    let truth = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.6}")
+        } else {
+            String::new()
+        }
+    };
     for r in records {
         let mut row = vec![
             r.seq.to_string(),
             format!("{:.3}", r.time_s),
-            format!("{:.6}", r.alpha_true_deg),
-            format!("{:.6}", r.beta_true_deg),
+            truth(r.alpha_true_deg),
+            truth(r.beta_true_deg),
         ];
         match r.reply {
             Some(f) => {
                 let e = f.estimate;
                 row.extend([
                     "1".to_string(),
-                    e.alpha_mdeg.to_string(),
-                    e.beta_mdeg.to_string(),
-                    e.w_aero_mms.to_string(),
-                    e.v_aero_mms.to_string(),
-                    e.flags.0.to_string(),
+                    thousandths(e.alpha_mdeg),
+                    thousandths(e.beta_mdeg),
+                    thousandths(e.w_aero_mms),
+                    thousandths(e.v_aero_mms),
+                ]);
+                row.extend(
+                    Flags::NAMED
+                        .iter()
+                        .map(|&(bit, _)| u8::from(e.flags.has(bit)).to_string()),
+                );
+                row.extend([
                     f.health.step_ticks.to_string(),
                     format!("{:?}", f.health.tick_source),
                 ]);
             }
             None => row.push("0".to_string()),
         }
-        row.resize(12, String::new());
+        row.resize(header.len(), String::new());
         w.write_record(&row)?;
     }
     w.flush()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thousandths_are_exact_decimals() {
+        assert_eq!(thousandths(0), "0.000");
+        assert_eq!(thousandths(-1234), "-1.234");
+        assert_eq!(thousandths(5), "0.005");
+        assert_eq!(thousandths(-5), "-0.005");
+        assert_eq!(thousandths(i32::MIN), "-2147483.648");
+    }
+
+    #[test]
+    fn durations_round_to_the_millisecond() {
+        assert_eq!(round_ms(0.9999999999999432), 1.0);
+        assert_eq!(round_ms(1200.0000000004), 1200.0);
+    }
 }
 
 pub mod faults;

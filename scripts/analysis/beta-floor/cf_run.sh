@@ -13,7 +13,7 @@ S=$("$PY" -c "print(1503 ^ 0x5e455e455e455e45)")
 SRC=$DATA
 fly() {  # name script [sensors]
   if [ -n "$3" ]; then extra="--sensors $3"; else extra=""; fi
-  nice -n 19 "$HIL_SIM" fly --script "$2" --seed $S --out cf/$1 $extra > cf/$1.fly.log 2>&1
+  nice -n 19 "$HIL_SIM" fly --script "$2" --seed $S --out cf/$1 --force $extra > cf/$1.fly.log 2>&1
   nice -n 19 "$HIL_SIM" run --dataset cf/$1/$(basename "$2" .xml).csv --firmware host --json --out cf/$1/run > cf/$1/run.json 2> cf/$1/run.err
   "$PY" -c "import json;j=json.load(open('cf/$1/run.json'));print('$1', 'beta', round(j['beta_mae_deg'],3), 'alpha', round(j['alpha_mae_deg'],3), 'scored', j['frames_scored'])"
 }

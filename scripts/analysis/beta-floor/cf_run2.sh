@@ -18,7 +18,7 @@ for spec in test_gentle_00:1500 test_high-alpha_01:1501 test_climb-descent_02:15
     mkdir -p cf/script-$v
     sed "s|milspec/severity\" value=\"$own\"|milspec/severity\" value=\"$sev\"|" $SRC/$n.xml > cf/script-$v/$n.xml
     cp $SRC/${n}_init.xml cf/script-$v/
-    nice -n 19 "$HIL_SIM" fly --script cf/script-$v/$n.xml --seed $S --out cf/$v > cf/$v.fly.log 2>&1
+    nice -n 19 "$HIL_SIM" fly --script cf/script-$v/$n.xml --seed $S --out cf/$v --force > cf/$v.fly.log 2>&1
     if [ $sev = $own ]; then cmp cf/$v/$n.csv $SRC/$n.csv; fi
     nice -n 19 "$HIL_SIM" run --dataset cf/$v/$n.csv --firmware host --json --out cf/$v/run > cf/$v/run.json 2> cf/$v/run.err
     "$PY" -c "import json;j=json.load(open('cf/$v/run.json'));print('$v', 'beta', round(j['beta_mae_deg'],3), 'alpha', round(j['alpha_mae_deg'],3), 'frames', j['frames_scored'])"

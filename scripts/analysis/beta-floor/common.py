@@ -75,11 +75,14 @@ def load_estimates(name):
     }
     def num(k, scale):
         return np.array([float(x[k]) * scale if x[k] != "" else np.nan for x in rows])
-    e["alpha_deg"] = num("alpha_mdeg", 1e-3)
-    e["beta_deg"] = num("beta_mdeg", 1e-3)
-    e["v_aero_mps"] = num("v_aero_mms", 1e-3)
-    e["w_aero_mps"] = num("w_aero_mms", 1e-3)
-    e["flags"] = np.array([int(x["flags"]) if x["flags"] != "" else -1 for x in rows])
+    e["alpha_deg"] = num("alpha_deg", 1.0)
+    e["beta_deg"] = num("beta_deg", 1.0)
+    e["v_aero_mps"] = num("v_aero_mps", 1.0)
+    e["w_aero_mps"] = num("w_aero_mps", 1.0)
+    # The flag bits back as one integer (estimates.csv has a 0/1 column per flag, in bit order).
+    flag_cols = [k for k in rows[0] if k.startswith("flag_")] if rows else []
+    e["flags"] = np.array([sum(1 << b for b, k in enumerate(flag_cols) if x[k] == "1")
+                           if x["received"] == "1" else -1 for x in rows])
     return e
 
 

@@ -1,0 +1,420 @@
+//! What a user gets wrong on the command line is refused: a non-zero exit that is not a panic, a
+//! message that names the problem, and nothing half-written. One test per mistake, run against the
+//! built `hil-sim` and `trainer` binaries (beside this test's executable), on a `ci` dataset they
+//! generate.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// A binary of the workspace, built with this test (`target/<profile>/NAME`).
+fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    let dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps");
+    dir.join(name)
+}
+
+fn run(program: &str, args: &[&str]) -> Output {
+    Command::new(bin(program))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .unwrap_or_else(|e| panic!("cannot start {program}: {e}"))
+}
+
+/// Refused: exit code 1 (an error) or 2 (clap's usage error), never 101 (a panic); the message
+/// holds `needle`.
+fn refused(o: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let code = o.status.code();
+    assert!(
+        code == Some(1) || code == Some(2),
+        "exit {code:?}, wanted a refusal; stderr:\n{stderr}"
+    );
+    assert!(
+        stderr.contains(needle),
+        "stderr lacks `{needle}`:\n{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "a panic:\n{stderr}");
+}
+
+fn ok(o: &Output) {
+    assert!(
+        o.status.success(),
+        "exit {:?}; stderr:\n{}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+/// The `ci` preset (5 flights of 3 minutes), generated once for every test here.
+fn ci() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = scratch("ci").join("data");
+        ok(&run(
+            "hil-sim",
+            &["generate", "--preset", "ci", "--out", d.to_str().unwrap()],
+        ));
+        d
+    })
+}
+
+fn test_csv() -> PathBuf {
+    ci().join("test_aggressive_00.csv")
+}
+
+/// The flight CSV with `edit` applied to its rows (header first) and only the columns `keep` says.
+fn rewrite(out: &Path, keep: impl Fn(&str) -> bool, edit: impl Fn(&mut Vec<Vec<String>>)) {
+    let text = std::fs::read_to_string(test_csv()).unwrap();
+    let mut rows: Vec<Vec<String>> = text
+        .lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let cols: Vec<usize> = (0..rows[0].len()).filter(|&i| keep(&rows[0][i])).collect();
+    rows = rows
+        .into_iter()
+        .map(|r| cols.iter().map(|&i| r[i].clone()).collect())
+        .collect();
+    edit(&mut rows);
+    let body: Vec<String> = rows.iter().map(|r| r.join(",")).collect();
+    std::fs::write(out, body.join("\n") + "\n").unwrap();
+}
+
+/// Sensed columns only: time and everything from the first sensor channel on.
+fn sensed_only(h: &str) -> bool {
+    h == "time_s" || !hil_sim::flight::TRUTH_COLUMNS.contains(&h)
+}
+
+#[test]
+fn both_binaries_have_a_version() {
+    for b in ["hil-sim", "trainer"] {
+        let o = run(b, &["--version"]);
+        ok(&o);
+        assert!(String::from_utf8_lossy(&o.stdout).starts_with(b));
+    }
+}
+
+#[test]
+fn fly_refuses_a_duration_that_is_not_positive_and_writes_nothing() {
+    let d = scratch("fly-time");
+    let out = d.join("fly");
+    for bad in ["0", "-5", "nan", "inf"] {
+        let o = run(
+            "hil-sim",
+            &[
+                "fly",
+                "--script",
+                "../flights/f16_test_flight.xml",
+                "--out",
+                out.to_str().unwrap(),
+                "--max-time-s",
+                bad,
+            ],
+        );
+        refused(&o, "positive number of seconds");
+        assert!(!out.exists(), "--max-time-s {bad} left {}", out.display());
+    }
+}
+
+#[test]
+fn a_campaign_needs_its_hours() {
+    let out = scratch("campaign").join("c");
+    let o = run(
+        "hil-sim",
+        &[
+            "generate",
+            "--preset",
+            "campaign",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    refused(&o, "--preset campaign needs --hours");
+    assert!(!out.exists());
+}
+
+#[test]
+fn generate_refuses_to_overwrite_a_dataset_without_force() {
+    let manifest = std::fs::read(ci().join("manifest.json")).unwrap();
+    let o = run(
+        "hil-sim",
+        &[
+            "generate",
+            "--preset",
+            "ci",
+            "--out",
+            ci().to_str().unwrap(),
+        ],
+    );
+    refused(&o, "pass --force to replace it");
+    assert_eq!(std::fs::read(ci().join("manifest.json")).unwrap(), manifest);
+}
+
+#[test]
+fn generate_with_force_replaces_a_dataset_and_leaves_no_partial_directory() {
+    let d = scratch("force");
+    let out = d.join("data");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("stale.txt"), "old").unwrap();
+    ok(&run(
+        "hil-sim",
+        &[
+            "generate",
+            "--preset",
+            "ci",
+            "--seed",
+            "3",
+            "--force",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ));
+    assert!(out.join("manifest.json").is_file());
+    assert!(
+        !out.join("stale.txt").exists(),
+        "the old dataset's files stayed"
+    );
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("data")], "{left:?}");
+}
+
+#[test]
+fn a_killed_generate_leaves_nothing_at_out() {
+    let d = scratch("killed");
+    let out = d.join("data");
+    let mut child = Command::new(bin("hil-sim"))
+        .args(["generate", "--preset", "ci", "--out", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let _ = child.kill();
+    let _ = child.wait();
+    // Killed mid-way: nothing at --out. Finished before the kill: a whole dataset.
+    assert!(
+        !out.exists() || out.join("manifest.json").is_file(),
+        "a half-written dataset at {}",
+        out.display()
+    );
+}
+
+#[test]
+fn run_refuses_a_suite_the_compiled_in_model_cannot_read() {
+    let shipped = estimator_core::Estimator::shipped().suite();
+    if shipped != Some(estimator_core::Suite::Egi) {
+        return; // a table1 model runs on either suite
+    }
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            test_csv().to_str().unwrap(),
+            "--suite",
+            "table1",
+        ],
+    );
+    refused(&o, "pass --suite egi");
+}
+
+#[test]
+fn run_refuses_a_port_with_a_firmware_that_is_not_a_board() {
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            test_csv().to_str().unwrap(),
+            "--firmware",
+            "host",
+            "--port",
+            "/dev/ttyUSB0",
+        ],
+    );
+    refused(&o, "--port /dev/ttyUSB0 goes with a flashed board");
+}
+
+#[test]
+fn run_refuses_a_fault_after_the_flight() {
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            test_csv().to_str().unwrap(),
+            "--fault",
+            "gps-loss@900+10",
+            "--out",
+            scratch("fault").to_str().unwrap(),
+        ],
+    );
+    refused(&o, "after the flight's last sample");
+}
+
+#[test]
+fn run_refuses_a_log_that_is_not_20_hz() {
+    let d = scratch("10hz");
+    let csv = d.join("log.csv");
+    rewrite(&csv, sensed_only, |rows| {
+        let header = rows.remove(0);
+        let every_other: Vec<_> = rows.iter().step_by(2).cloned().collect();
+        *rows = std::iter::once(header).chain(every_other).collect();
+    });
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            csv.to_str().unwrap(),
+            "--out",
+            d.join("run").to_str().unwrap(),
+        ],
+    );
+    refused(&o, "(10.0 Hz); the estimator runs at 20 Hz");
+    assert!(!d.join("run").exists());
+}
+
+#[test]
+fn run_refuses_a_log_whose_time_runs_backwards() {
+    let d = scratch("back");
+    let csv = d.join("log.csv");
+    rewrite(&csv, sensed_only, |rows| rows.swap(10, 11));
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            csv.to_str().unwrap(),
+            "--out",
+            d.join("run").to_str().unwrap(),
+        ],
+    );
+    refused(&o, "time_s does not increase at row 12");
+}
+
+#[test]
+fn a_log_of_sensed_channels_only_runs_and_writes_estimates() {
+    let d = scratch("log");
+    let csv = d.join("my_flight.csv");
+    rewrite(&csv, sensed_only, |_| {});
+    let out = d.join("run");
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            csv.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--json",
+        ],
+    );
+    ok(&o);
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(s["frames_sent"], 3600);
+    assert_eq!(s["frames_with_truth"], 0);
+    assert!(s["alpha_mae_deg"].is_null() && s["beta_mae_deg"].is_null());
+    assert_eq!(s["provenance"]["flight"], "my_flight");
+    let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let mut lines = est.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert!(header.contains(&"alpha_deg") && header.contains(&"flag_turbulence"));
+    let first: Vec<&str> = lines.next().unwrap().split(',').collect();
+    // No truth: empty truth cells, a computed estimate.
+    assert_eq!((first[2], first[3], first[4]), ("", "", "1"));
+    assert!(first[5].parse::<f64>().is_ok());
+}
+
+#[test]
+fn train_refuses_settings_that_cannot_train() {
+    for (flag, needle) in [
+        ("--batch=0", "must be at least 1"),
+        ("--epochs=0", "must be at least 1"),
+        ("--lr=-1", "positive number"),
+        ("--lr=nan", "positive number"),
+        ("--val-fraction=1.5", "strictly between 0 and 1"),
+        ("--val-fraction=0", "strictly between 0 and 1"),
+    ] {
+        let o = run("trainer", &["train", "--data", "no-such-dir", flag]);
+        refused(&o, needle);
+    }
+    let o = run("trainer", &["bench-train", "--data", "d", "--seeds", "3,3"]);
+    refused(&o, "a seed is repeated");
+}
+
+#[test]
+fn a_missing_manifest_is_said_once() {
+    let o = run("trainer", &["eval", "--data", "no-such-dataset"]);
+    refused(&o, "no-such-dataset/manifest.json");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(stderr.matches("No such file").count(), 1, "{stderr}");
+}
+
+#[test]
+fn eval_refuses_a_truth_column_that_is_not_a_number() {
+    let d = scratch("nan-truth");
+    let data = d.join("data");
+    std::fs::create_dir_all(&data).unwrap();
+    for e in std::fs::read_dir(ci()).unwrap().flatten() {
+        std::fs::copy(e.path(), data.join(e.file_name())).unwrap();
+    }
+    let csv = data.join("test_aggressive_00.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let col = lines[0].split(',').position(|h| h == "alpha_deg").unwrap();
+    let mut cells: Vec<&str> = lines[5].split(',').collect();
+    cells[col] = "NaN";
+    lines[5] = cells.join(",");
+    std::fs::write(&csv, lines.join("\n") + "\n").unwrap();
+    let o = run("trainer", &["eval", "--data", data.to_str().unwrap()]);
+    refused(&o, "line 6: the truth column `alpha_deg` is `NaN`");
+}
+
+#[test]
+fn eval_reads_a_one_flight_dataset_from_fly() {
+    let d = scratch("fly-eval");
+    let fly = d.join("fly");
+    ok(&run(
+        "hil-sim",
+        &[
+            "fly",
+            "--script",
+            "../flights/f16_test_flight.xml",
+            "--max-time-s",
+            "20",
+            "--out",
+            fly.to_str().unwrap(),
+        ],
+    ));
+    let o = run(
+        "trainer",
+        &["eval", "--data", fly.to_str().unwrap(), "--json"],
+    );
+    if estimator_core::model::HAS_MODEL {
+        ok(&o);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["alpha"]["overall"]["n"], 400);
+    }
+    let o = run(
+        "trainer",
+        &["eval", "--data", fly.to_str().unwrap(), "--split", "train"],
+    );
+    refused(&o, "has no train flight; pass --split test");
+}

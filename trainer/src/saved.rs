@@ -1,0 +1,247 @@
+//! A trained int8 model as a file (`model.json` in `trainer train --out`): everything the integer
+//! reference path needs, so `trainer eval --model DIR` scores a model without exporting it into the
+//! source tree and rebuilding. The compiled-in form stays `weights.rs` (crate::quant::generate).
+use crate::error::{Error, Result};
+use crate::features::parse_feature;
+use crate::prep::{Angle, Prep};
+use crate::quant::{QCascade, QLayer};
+use estimator_core::normalize::{Envelope, Norm, TURBULENCE_BANDS, TurbulenceEnvelope};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Format of `model.json`; a file of another format is refused by number.
+pub const FORMAT: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+struct Layer {
+    weights: Vec<Vec<i8>>,
+    bias: Vec<i32>,
+    requant: Vec<(i32, u8, i32)>,
+    hidden: bool,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Cascade {
+    angle: Angle,
+    features: Vec<String>,
+    /// `(center, mult, shift)` per input.
+    norm: Vec<(i32, i32, u8)>,
+    envelope: Vec<(i32, i32)>,
+    mid_norm: (i32, i32, u8),
+    out_center: i32,
+    out_sigma: f64,
+    out_range: (i32, i32),
+    turbulence_speed_lo_mms: i32,
+    turbulence_band_mms: i32,
+    turbulence_limit_urad: Vec<i32>,
+    lift_scale: (i32, i32),
+    part1: Vec<Layer>,
+    part2: Vec<Layer>,
+}
+
+/// The saved model: both cascades, the sensor suite they read and the training provenance.
+#[derive(Serialize, Deserialize)]
+pub struct SavedModel {
+    pub format: u32,
+    pub suite: String,
+    pub provenance: String,
+    alpha: Cascade,
+    beta: Cascade,
+}
+
+fn norm(n: &Norm) -> (i32, i32, u8) {
+    (n.center, n.mult, n.shift)
+}
+
+fn unnorm((center, mult, shift): (i32, i32, u8)) -> Norm {
+    Norm {
+        center,
+        mult,
+        shift,
+    }
+}
+
+fn layers(ls: &[QLayer]) -> Vec<Layer> {
+    ls.iter()
+        .map(|l| Layer {
+            weights: l.weights.clone(),
+            bias: l.bias.clone(),
+            requant: l.requant.clone(),
+            hidden: l.hidden,
+        })
+        .collect()
+}
+
+fn unlayers(ls: Vec<Layer>) -> Vec<QLayer> {
+    ls.into_iter()
+        .map(|l| QLayer {
+            weights: l.weights,
+            bias: l.bias,
+            requant: l.requant,
+            hidden: l.hidden,
+        })
+        .collect()
+}
+
+impl Cascade {
+    fn of(q: &QCascade) -> Cascade {
+        let p = &q.prep;
+        Cascade {
+            angle: p.angle,
+            features: p.features.iter().map(|f| f.name().to_string()).collect(),
+            norm: p.norm.iter().map(norm).collect(),
+            envelope: p.envelope.iter().map(|e| (e.lo, e.hi)).collect(),
+            mid_norm: norm(&p.mid_norm),
+            out_center: p.out_center,
+            out_sigma: p.out_sigma,
+            out_range: (p.out_range.lo, p.out_range.hi),
+            turbulence_speed_lo_mms: p.turbulence.speed_lo_mms,
+            turbulence_band_mms: p.turbulence.band_mms,
+            turbulence_limit_urad: p.turbulence.limit_urad.to_vec(),
+            lift_scale: (p.lift_scale.lo, p.lift_scale.hi),
+            part1: layers(&q.part1),
+            part2: layers(&q.part2),
+        }
+    }
+
+    fn into_q(self, path: &Path) -> Result<QCascade> {
+        let bad = |msg: String| Error::Model {
+            path: path.to_path_buf(),
+            msg,
+        };
+        let n = self.features.len();
+        if self.norm.len() != n || self.envelope.len() != n {
+            return Err(bad(format!(
+                "{} features but {} normalisations and {} envelopes",
+                n,
+                self.norm.len(),
+                self.envelope.len()
+            )));
+        }
+        let limit_urad: [i32; TURBULENCE_BANDS] =
+            self.turbulence_limit_urad
+                .try_into()
+                .map_err(|v: Vec<i32>| {
+                    bad(format!(
+                        "{} turbulence bands, this build has {TURBULENCE_BANDS}",
+                        v.len()
+                    ))
+                })?;
+        let features = self
+            .features
+            .iter()
+            .map(|f| parse_feature(f))
+            .collect::<Result<Vec<_>>>()?;
+        let (part1, part2) = (unlayers(self.part1), unlayers(self.part2));
+        // The shapes must chain: part 1 reads the features, every layer the previous one's outputs.
+        for part in [&part1, &part2] {
+            let mut width = None;
+            for l in part.iter() {
+                if l.bias.len() != l.n_out() || l.requant.len() != l.n_out() {
+                    return Err(bad(
+                        "a layer's bias or requantization does not match its outputs".into(),
+                    ));
+                }
+                if let Some(w) = width
+                    && w != l.n_in()
+                {
+                    return Err(bad(format!(
+                        "a layer reads {} inputs after a layer of {w}",
+                        l.n_in()
+                    )));
+                }
+                width = Some(l.n_out());
+            }
+        }
+        if part1.first().map(|l| l.n_in()) != Some(n) {
+            return Err(bad(format!("part 1 does not read the {n} features")));
+        }
+        Ok(QCascade {
+            prep: Prep {
+                angle: self.angle,
+                features,
+                norm: self.norm.into_iter().map(unnorm).collect(),
+                envelope: self
+                    .envelope
+                    .into_iter()
+                    .map(|(lo, hi)| Envelope { lo, hi })
+                    .collect(),
+                mid_norm: unnorm(self.mid_norm),
+                out_center: self.out_center,
+                out_sigma: self.out_sigma,
+                out_range: Envelope {
+                    lo: self.out_range.0,
+                    hi: self.out_range.1,
+                },
+                turbulence: TurbulenceEnvelope {
+                    speed_lo_mms: self.turbulence_speed_lo_mms,
+                    band_mms: self.turbulence_band_mms,
+                    limit_urad,
+                },
+                lift_scale: Envelope {
+                    lo: self.lift_scale.0,
+                    hi: self.lift_scale.1,
+                },
+            },
+            part1,
+            part2,
+        })
+    }
+}
+
+impl SavedModel {
+    pub fn new(alpha: &QCascade, beta: &QCascade, suite: &str, provenance: &str) -> SavedModel {
+        SavedModel {
+            format: FORMAT,
+            suite: suite.to_string(),
+            provenance: provenance.to_string(),
+            alpha: Cascade::of(alpha),
+            beta: Cascade::of(beta),
+        }
+    }
+
+    /// Writes `dir/model.json`.
+    pub fn write(&self, dir: &Path) -> Result<std::path::PathBuf> {
+        let path = dir.join("model.json");
+        let text = serde_json::to_string(self).map_err(|e| Error::Model {
+            path: path.clone(),
+            msg: e.to_string(),
+        })?;
+        std::fs::write(&path, text).map_err(|source| Error::Io {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(path)
+    }
+
+    /// Reads `dir/model.json` into the two cascades (α, β), the suite name and the provenance.
+    pub fn read(dir: &Path) -> Result<(QCascade, QCascade, String, String)> {
+        let path = dir.join("model.json");
+        let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let m: SavedModel = serde_json::from_str(&text).map_err(|e| Error::Model {
+            path: path.clone(),
+            msg: format!("{e} (write it with `trainer train --out DIR`)"),
+        })?;
+        if m.format != FORMAT {
+            return Err(Error::Model {
+                path,
+                msg: format!(
+                    "format {}, this build reads format {FORMAT} (retrain with this build's `trainer train`)",
+                    m.format
+                ),
+            });
+        }
+        let alpha = m.alpha.into_q(&path)?;
+        let beta = m.beta.into_q(&path)?;
+        if alpha.prep.angle != Angle::Alpha || beta.prep.angle != Angle::Beta {
+            return Err(Error::Model {
+                path,
+                msg: "the cascades are not α then β".into(),
+            });
+        }
+        Ok((alpha, beta, m.suite, m.provenance))
+    }
+}
