@@ -3,7 +3,10 @@
 Protocol (one request per stdin line, fields separated by TAB; one framed reply per request on the
 ORIGINAL stdout):
   reply frame = status byte (b'O' ok / b'E' error) + u32 little-endian payload length + payload.
-  On start the bridge sends one frame: b'O' + JSBSim version string, or b'E' + why it cannot run.
+  Started as `python -c SOURCE [AIRCRAFT_DIR]`: with a directory, JSBSim loads aircraft from there
+  (`set_aircraft_path`, as stock JSBSim does), else from the package's own aircraft folder.
+  On start the bridge sends one frame: b'O' + JSBSim version string + '\n' + the absolute path of
+  the f16.xml it will load, or b'E' + why it cannot run.
   load\tSCRIPT\tINITFILE   load a runscript at the dt it declares, exactly as stock JSBSim runs it
                           (INITFILE may be empty: JSBSim looks in the aircraft folder), run the
                           initial conditions; payload = f64 little-endian dt in seconds
@@ -62,12 +65,17 @@ def main():
     except Exception as e:  # the Rust side turns this into "run scripts/bootstrap"
         reply(False, f"cannot import jsbsim with {sys.executable}: {e}".encode())
         return
-    fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
+    root = jsbsim.get_default_root_dir()
+    fdm = jsbsim.FGFDMExec(root)
     fdm.set_debug_level(0)
+    aircraft_dir = sys.argv[1] if len(sys.argv) > 1 and sys.argv[1] else os.path.join(root, "aircraft")
+    if len(sys.argv) > 1 and sys.argv[1]:
+        fdm.set_aircraft_path(os.path.abspath(sys.argv[1]))
     pm = fdm.get_property_manager()
     full = sampler([])
     cycle, steps, width, buf = [full], 0, 0, bytearray(4)
-    reply(True, jsbsim.__version__.encode())
+    xml = os.path.abspath(os.path.join(aircraft_dir, "f16", "f16.xml"))
+    reply(True, (jsbsim.__version__ + "\n" + xml).encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")
         cmd = f[0]

@@ -30,20 +30,25 @@ pub struct FlyArgs {
     /// Stop after this many simulated seconds (default: the script's end time).
     #[arg(long, value_parser = crate::cli_values::positive_seconds, allow_hyphen_values = true)]
     max_time_s: Option<f64>,
+    #[command(flatten)]
+    aircraft: crate::plant::AircraftArgs,
 }
 
 pub fn fly(a: &FlyArgs) -> Result<()> {
     let sensors = sensors_of(&a.sensors)?;
+    let aircraft_dir = a.aircraft.dir()?;
     let cfg = FlyConfig {
         seed: a.seed,
         sensors: sensors.clone(),
         max_time_s: a.max_time_s,
         name: None,
+        aircraft_dir: aircraft_dir.clone(),
     };
     let started = std::time::Instant::now();
     let staging = dataset::Staging::begin(&a.out, a.force)?;
     let dir = staging.path();
-    let mut bridge = crate::plant::Plant::spawn()?;
+    let mut bridge = crate::plant::Plant::spawn_for(aircraft_dir.as_deref())?;
+    let aircraft = dataset::AircraftRecord::of(aircraft_dir.as_deref(), bridge.aircraft_xml())?;
     let version = bridge.jsbsim_version().to_string();
     let flight = fly::fly_script_with(&mut bridge, &a.script, &cfg)?;
     drop(bridge);
@@ -67,6 +72,7 @@ pub fn fly(a: &FlyArgs) -> Result<()> {
         }),
         flights: vec![entry.clone()],
         files: Default::default(),
+        aircraft: Some(aircraft),
     };
     manifest.write(dir)?;
     // The same pictures and dataset.md as `generate` writes (envelope, α/β histograms, time
@@ -108,6 +114,10 @@ pub struct GenerateArgs {
     /// Replace --out if it already holds a dataset (only once the new one is complete).
     #[arg(long)]
     force: bool,
+    /// Fly only the preset's test flights (the same flights as in the whole preset), e.g. to score
+    /// the estimator on another aircraft (--aircraft-dir).
+    #[arg(long)]
+    test_only: bool,
     #[command(flatten)]
     flights: FlightsArgs,
     /// Fly only shard K of N (0 ≤ K < N: the flights at plan positions ≡ K mod N) into --out, which
@@ -185,6 +195,8 @@ impl GenerateArgs {
             || c.turbulence.is_some()
             || c.turbulence_per_profile;
         let mut plan = Plan::new(self.preset, self.flights.seed);
+        plan.aircraft_dir = self.flights.aircraft.dir()?;
+        plan.test_only = self.test_only;
         if self.preset != Preset::Campaign {
             if any {
                 return Err(Error::Usage(
@@ -240,6 +252,8 @@ pub struct FlightsArgs {
     /// Parallel flights (one JSBSim bridge process each).
     #[arg(long, default_value_t = 2, value_parser = crate::cli_values::at_least_one, allow_hyphen_values = true)]
     workers: usize,
+    #[command(flatten)]
+    aircraft: crate::plant::AircraftArgs,
 }
 
 fn sensors_of(path: &Option<PathBuf>) -> Result<SensorConfig> {
@@ -379,9 +393,10 @@ pub fn bench(a: &BenchArgs) -> Result<()> {
     let n = a.preset.plan(a.flights.seed).len();
     // One tick per flight per side per repeat.
     let pb = flights_bar(2 * a.repeats.max(1) * n);
+    let mut plan = crate::maneuver::Plan::new(a.preset, a.flights.seed);
+    plan.aircraft_dir = a.flights.aircraft.dir()?;
     let r = crate::dataset::bench::run(
-        a.preset,
-        a.flights.seed,
+        &plan,
         &a.out,
         &sensors,
         a.flights.workers,

@@ -23,6 +23,9 @@ pub struct FlyConfig {
     pub max_time_s: Option<f64>,
     /// Name stored with the flight (default: the script file stem).
     pub name: Option<String>,
+    /// The JSBSim aircraft directory whose `f16/f16.xml` is flown (`--aircraft-dir`); `None`:
+    /// JSBSim's own F-16.
+    pub aircraft_dir: Option<std::path::PathBuf>,
 }
 
 /// What the sensors see at one step, in SI (surfaces in degrees).
@@ -97,7 +100,7 @@ fn read_plan(s: &InputSchedule) -> ReadPlan {
 /// JSBSim looks in the aircraft folder (where the stock `reset*` files live). A flight that hits the
 /// ground or goes NaN is cut there and says so in [`Flight::cut`].
 pub fn fly_script(script: &Path, cfg: &FlyConfig) -> Result<Flight, PlantError> {
-    let mut plant = Plant::spawn()?;
+    let mut plant = Plant::spawn_for(cfg.aircraft_dir.as_deref())?;
     fly_script_with(&mut plant, script, cfg)
 }
 

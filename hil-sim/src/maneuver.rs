@@ -1022,9 +1022,8 @@ mod tests {
             },
         };
         let plan = Plan {
-            preset: Preset::Campaign,
-            seed: 5,
             campaign: Some(c.clone()),
+            ..Plan::new(Preset::Campaign, 5)
         };
         let f = plan.flights();
         assert_eq!(f.len(), 30);
@@ -1389,6 +1388,14 @@ pub struct Plan {
     pub seed: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub campaign: Option<Campaign>,
+    /// The JSBSim aircraft directory whose `f16/f16.xml` every flight flies (`--aircraft-dir`);
+    /// `None`: JSBSim's own F-16.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aircraft_dir: Option<std::path::PathBuf>,
+    /// Only the preset's test flights (the same flights, seeds and bytes as in the whole preset):
+    /// scoring a model on another aircraft needs nothing else.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub test_only: bool,
 }
 
 impl Plan {
@@ -1397,15 +1404,21 @@ impl Plan {
             preset,
             seed,
             campaign: None,
+            aircraft_dir: None,
+            test_only: false,
         }
     }
 
     /// The planned flights.
     pub fn flights(&self) -> Vec<PlannedFlight> {
-        match (self.preset, &self.campaign) {
+        let mut f = match (self.preset, &self.campaign) {
             (Preset::Campaign, Some(c)) => c.flights(self.seed),
             (p, _) => p.plan(self.seed),
+        };
+        if self.test_only {
+            f.retain(|f| f.split == crate::flight::Split::Test);
         }
+        f
     }
 }
 

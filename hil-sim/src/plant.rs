@@ -41,6 +41,10 @@ pub enum PlantError {
     },
     #[error("{path} is not a JSBSim runscript: {why}")]
     NotAScript { path: PathBuf, why: String },
+    #[error(
+        "{0} is not a JSBSim aircraft directory: it has no f16/f16.xml (make one with scripts/airframe-variant, or copy JSBSim's aircraft/f16 into it)"
+    )]
+    NoAircraft(PathBuf),
     #[error("{path} is a script for aircraft `{aircraft}`; hil-sim only flies the JSBSim `f16`")]
     WrongAircraft { path: PathBuf, aircraft: String },
     #[error("JSBSim rejected {path}: {message}")]
@@ -83,11 +87,48 @@ pub struct Plant {
     stderr_tail: Arc<Mutex<String>>,
     watched: usize,
     version: String,
+    aircraft_xml: PathBuf,
+}
+
+/// A JSBSim aircraft directory as `--aircraft-dir` names it: absolute, holding `f16/f16.xml`.
+pub fn aircraft_dir(dir: &Path) -> Result<PathBuf, PlantError> {
+    let xml = dir.join("f16").join("f16.xml");
+    if !xml.is_file() {
+        return Err(PlantError::NoAircraft(dir.to_path_buf()));
+    }
+    std::path::absolute(dir).map_err(|e| PlantError::BridgeUnavailable {
+        python: python_path(),
+        why: format!("cannot make {} absolute: {e}", dir.display()),
+    })
+}
+
+/// `--aircraft-dir`, on every command that flies.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct AircraftArgs {
+    /// A JSBSim aircraft directory holding f16/f16.xml (and what it includes): the F-16 model to
+    /// fly, loaded as stock JSBSim's set_aircraft_path loads it (scripts/airframe-variant writes
+    /// one) [default: JSBSim's own F-16].
+    #[arg(long = "aircraft-dir", value_name = "DIR")]
+    pub dir: Option<PathBuf>,
+}
+
+impl AircraftArgs {
+    /// The directory, checked and absolute.
+    pub fn dir(&self) -> Result<Option<PathBuf>, PlantError> {
+        self.dir.as_deref().map(aircraft_dir).transpose()
+    }
 }
 
 impl Plant {
-    /// Starts the bridge and waits for its hello (the JSBSim version).
+    /// Starts the bridge on JSBSim's own F-16 and waits for its hello (the JSBSim version).
     pub fn spawn() -> Result<Plant, PlantError> {
+        Plant::spawn_for(None)
+    }
+
+    /// Starts the bridge on the F-16 of a JSBSim aircraft directory (`DIR/f16/f16.xml`, loaded as
+    /// stock JSBSim's `set_aircraft_path(DIR)` loads it), or JSBSim's own with `None`.
+    pub fn spawn_for(aircraft: Option<&Path>) -> Result<Plant, PlantError> {
+        let aircraft = aircraft.map(aircraft_dir).transpose()?;
         let python = python_path();
         let unavailable = |why: String| PlantError::BridgeUnavailable {
             python: python.clone(),
@@ -100,6 +141,7 @@ impl Plant {
             .arg("-u")
             .arg("-c")
             .arg(BRIDGE_SOURCE)
+            .args(aircraft.iter())
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -136,9 +178,15 @@ impl Plant {
             stderr_tail,
             watched: 0,
             version: String::new(),
+            aircraft_xml: PathBuf::new(),
         };
         match plant.read_frame("start") {
-            Ok(v) => plant.version = String::from_utf8_lossy(&v).into_owned(),
+            Ok(v) => {
+                let hello = String::from_utf8_lossy(&v).into_owned();
+                let (version, xml) = hello.split_once('\n').unwrap_or((hello.as_str(), ""));
+                plant.version = version.to_string();
+                plant.aircraft_xml = PathBuf::from(xml);
+            }
             Err(PlantError::Bridge { message, .. }) => return Err(unavailable(message)),
             Err(PlantError::BridgeDied { why, stderr_tail }) => {
                 return Err(unavailable(format!("{why}: {stderr_tail}")));
@@ -151,6 +199,11 @@ impl Plant {
     /// The JSBSim version the bridge imported.
     pub fn jsbsim_version(&self) -> &str {
         &self.version
+    }
+
+    /// The `f16.xml` this bridge loads (JSBSim's own, or `--aircraft-dir`'s).
+    pub fn aircraft_xml(&self) -> &Path {
+        &self.aircraft_xml
     }
 
     fn died(&mut self, why: String) -> PlantError {

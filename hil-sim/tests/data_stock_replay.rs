@@ -4,8 +4,9 @@
 //! `scripts/jsbsim-stock`, which is the pinned `jsbsim` package and nothing else
 //! (`load_script(script, 0.0, initfile)`, `run_ic()`, `run()` to the end). Truth α and β must agree
 //! to 1e-9° at every recorded instant, and the recorded time must be JSBSim's own clock. Covered:
-//! every flight of a generated `ci` dataset, the project's test flight, and the package's own
-//! `scripts/f16_test.xml` (declared at dt 0.00833333, not 1/120: flown at its own rate).
+//! every flight of a generated `ci` dataset, the project's test flight, the package's own
+//! `scripts/f16_test.xml` (declared at dt 0.00833333, not 1/120: flown at its own rate), and
+//! `hil-sim fly --aircraft-dir` on an airframe variant against stock JSBSim with that aircraft path.
 
 use std::path::{Path, PathBuf};
 
@@ -29,10 +30,23 @@ fn tmp(name: &str) -> PathBuf {
 
 /// (sim time, α, β) after every step of a stock run of `script`.
 fn stock_run(script: &Path, initfile: Option<&Path>, out: &Path) -> Vec<[f64; 3]> {
+    stock_run_on(script, initfile, None, out)
+}
+
+/// [`stock_run`] with the aircraft loaded from `aircraft_dir` (`set_aircraft_path`).
+fn stock_run_on(
+    script: &Path,
+    initfile: Option<&Path>,
+    aircraft_dir: Option<&Path>,
+    out: &Path,
+) -> Vec<[f64; 3]> {
     let mut cmd = std::process::Command::new(root().join("scripts/jsbsim-stock"));
     cmd.arg(script);
     if let Some(i) = initfile {
         cmd.arg(i);
+    }
+    if let Some(d) = aircraft_dir {
+        cmd.arg("--aircraft-dir").arg(d);
     }
     // JSBSim's banner and <notify/> lines go to stdout: keep them out of the test log.
     let status = cmd
@@ -148,5 +162,56 @@ fn package_f16_test_script_is_what_stock_jsbsim_flies() {
         // 700 s at dt 0.00833333: the script's own rate, so its clock ends a little past 700 s.
         assert!(n >= 13_999, "{n} samples");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `hil-sim fly --aircraft-dir DIR` flies what stock JSBSim flies with `set_aircraft_path(DIR)`,
+/// records DIR's f16.xml in the manifest, and the variant is not the stock F-16 (else this would
+/// prove nothing).
+#[test]
+fn fly_with_an_aircraft_dir_is_what_stock_jsbsim_flies_with_that_aircraft_path() {
+    let dir = tmp("aircraft-dir");
+    let variant = dir.join("variant");
+    let status = std::process::Command::new(root().join("scripts/airframe-variant"))
+        .arg(root().join("airframes/f16-variants/a-soft-stall.toml"))
+        .arg("--out")
+        .arg(&variant)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "scripts/airframe-variant failed");
+    let script = root().join("flights/f16_test_flight.xml");
+    let init = root().join("flights/f16_cruise_init.xml");
+    let out = dir.join("fly");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_hil-sim"))
+        .args(["fly", "--max-time-s", "300", "--script"])
+        .arg(&script)
+        .arg("--aircraft-dir")
+        .arg(&variant)
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "hil-sim fly --aircraft-dir failed");
+    let m = dataset::Manifest::read(&out).unwrap();
+    let flight = Flight::read_csv(&out.join(&m.flights[0].file)).unwrap();
+    let xml = variant.join("f16/f16.xml");
+    assert_eq!(
+        m.aircraft.as_ref().map(|a| a.f16_xml_sha256.clone()),
+        Some(dataset::sha256_file(&xml).unwrap())
+    );
+    let stock = stock_run_on(&script, Some(&init), Some(&variant), &dir.join("stock.tsv"));
+    assert_eq!(assert_same_truth("variant", &flight, &stock), 6000);
+    // The same script on JSBSim's own F-16 flies another α.
+    let own = stock_run(&script, Some(&init), &dir.join("own.tsv"));
+    let last = flight.samples.last().unwrap();
+    let own_row = own.iter().find(|r| r[0] == last.time_s).unwrap();
+    assert!(
+        (own_row[1] - last.truth.alpha_deg).abs() > 0.01,
+        "the variant flies the stock α ({} vs {})",
+        own_row[1],
+        last.truth.alpha_deg
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

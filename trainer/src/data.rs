@@ -97,6 +97,8 @@ pub struct Dataset {
     pub flights: Vec<Flight>,
     /// Datasets whose training flights were added with [`Dataset::add_training`].
     pub extra: Vec<ExtraData>,
+    /// The aircraft the flights flew (manifest `aircraft`; `None`: JSBSim's own, not recorded).
+    pub aircraft: Option<hil_sim::dataset::AircraftRecord>,
 }
 
 /// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
@@ -174,6 +176,7 @@ impl Dataset {
             suites: manifest.suites(),
             flights,
             extra: Vec::new(),
+            aircraft: manifest.aircraft.clone(),
         })
     }
 
@@ -182,10 +185,27 @@ impl Dataset {
     /// trained with and without the extra flights are selected and scored on the same flights.
     /// The other dataset must carry every sensor suite this one does, and no flight name may
     /// repeat (the same name twice would be one flight counted twice, or two flights confused).
-    pub fn add_training(&mut self, dir: &Path) -> Result<()> {
+    pub fn add_training(&mut self, dir: &Path, mixed_aircraft: bool) -> Result<()> {
         let other = Dataset::load_any(dir, 0.0)?;
         for s in &self.suites {
             other.require(*s)?;
+        }
+        // Flights of two aircraft never train one model silently. A dataset written before the
+        // aircraft was recorded flew JSBSim's own F-16, which a recorded one may name as well.
+        let sha = |d: &Dataset| d.aircraft.as_ref().map(|a| a.f16_xml_sha256.clone());
+        if let (Some(a), Some(b)) = (sha(self), sha(&other))
+            && a != b
+            && !mixed_aircraft
+        {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                format!(
+                    "its flights flew {}, those of {} flew {}: train on one aircraft's flights (or pass --mixed-aircraft to train on several on purpose)",
+                    hil_sim::dataset::AircraftRecord::describe(other.aircraft.as_ref()),
+                    self.dir.display(),
+                    hil_sim::dataset::AircraftRecord::describe(self.aircraft.as_ref())
+                ),
+            ));
         }
         // `load_any` holds one of them out for validation; here they all train.
         let added: Vec<Flight> = other
@@ -390,10 +410,47 @@ mod tests {
             config: serde_json::Value::Null,
             flights: entries,
             files: Default::default(),
+            aircraft: None,
         }
         .write(&dir)
         .unwrap();
         dir
+    }
+
+    /// Sets the `aircraft` of the manifest in `dir`.
+    fn fly_on(dir: &Path, sha: &str) {
+        let mut m = Manifest::read(dir).unwrap();
+        m.aircraft = Some(hil_sim::dataset::AircraftRecord {
+            dir: Some(format!("airframes/{sha}")),
+            f16_xml_sha256: sha.repeat(64 / sha.len()),
+        });
+        m.write(dir).unwrap();
+    }
+
+    #[test]
+    fn flights_of_another_aircraft_are_refused() {
+        use Split::{Test, Train};
+        let both = ["table1", "egi"];
+        let main = tiny_dataset(
+            "air-main",
+            &[("a0", Train), ("a1", Train), ("at", Test)],
+            &both,
+        );
+        fly_on(&main, "a");
+        let other = tiny_dataset("air-other", &[("b0", Train)], &both);
+        fly_on(&other, "b");
+        let same = tiny_dataset("air-same", &[("c0", Train)], &both);
+        fly_on(&same, "a");
+        let mut ds = Dataset::load(&main, 0.34).unwrap();
+        match ds.add_training(&other, false) {
+            Err(Error::Split(_, msg)) => {
+                assert!(msg.contains("train on one aircraft's flights"), "{msg}")
+            }
+            r => panic!("flights of another aircraft were added: {:?}", r.err()),
+        }
+        ds.add_training(&same, false).unwrap();
+        // On purpose (domain randomisation) they are accepted.
+        ds.add_training(&other, true).unwrap();
     }
 
     #[test]
@@ -416,7 +473,7 @@ mod tests {
             &[("b0", Train), ("b1", Train), ("bt", Test)],
             &both,
         );
-        ds.add_training(&extra).unwrap();
+        ds.add_training(&extra, false).unwrap();
         // Both of its training flights train (none held out), its test flight is not taken, and
         // this dataset's validation and test flights are what they were.
         let train = roles(&ds, Role::Train);
@@ -431,10 +488,13 @@ mod tests {
         );
 
         // The same flights twice, or a dataset without this one's suites, is refused.
-        assert!(matches!(ds.add_training(&extra), Err(Error::Split(..))));
+        assert!(matches!(
+            ds.add_training(&extra, false),
+            Err(Error::Split(..))
+        ));
         let t1 = tiny_dataset("t1", &[("c0", Train)], &["table1"]);
         assert!(matches!(
-            ds.add_training(&t1),
+            ds.add_training(&t1, false),
             Err(Error::DatasetSuite { suite: "egi", .. })
         ));
         assert_eq!(ds.flights.len(), 6);

@@ -93,6 +93,10 @@ struct TrainArgs {
     /// with and without it are selected and scored on the same flights. Repeatable.
     #[arg(long, value_name = "DIR")]
     extra_data: Vec<PathBuf>,
+    /// Accept --extra-data flights of other aircraft (manifest `aircraft`) on purpose: training
+    /// on randomised airframes (scripts/airframe-randomise). Without it they are refused.
+    #[arg(long)]
+    mixed_aircraft: bool,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the
     /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
@@ -453,7 +457,7 @@ impl TrainArgs {
     fn dataset(&self, suite: Suite) -> Result<Dataset> {
         let mut ds = load(&self.data, self.val_fraction)?;
         for dir in &self.extra_data {
-            ds.add_training(dir)
+            ds.add_training(dir, self.mixed_aircraft)
                 .with_context(|| format!("adding the training flights of {}", dir.display()))?;
         }
         ds.require(suite)?;
@@ -679,13 +683,14 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
         }
         for c in &e.flagged {
             println!(
-                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's",
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's, {} silent (no flag, error > 2° α or > 1° β)",
                 c.flight,
                 c.not_usable,
                 c.out_of_envelope,
                 c.turbulence,
                 c.alpha_from_filter,
-                c.beta_disagrees
+                c.beta_disagrees,
+                c.silent
             );
         }
     }

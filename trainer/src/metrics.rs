@@ -1,6 +1,10 @@
 //! Error metrics (degrees): MAE, RMSE, 95th percentile and maximum of |error|.
 use serde::{Deserialize, Serialize};
 
+/// An error a flight-control computer would act on if nothing flagged it.
+pub const SILENT_ALPHA_DEG: f64 = 2.0;
+pub const SILENT_BETA_DEG: f64 = 1.0;
+
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
 #[serde(into = "MetricsJson", from = "MetricsJson")]
 pub struct Metrics {

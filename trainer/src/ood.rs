@@ -14,9 +14,7 @@ use crate::data::{Dataset, Role, Target};
 use crate::filter_eval::run_flight;
 use crate::metrics::Metrics;
 
-/// An error a flight-control computer would act on if nothing flagged it.
-pub const SILENT_ALPHA_DEG: f64 = 2.0;
-pub const SILENT_BETA_DEG: f64 = 1.0;
+pub use crate::metrics::{SILENT_ALPHA_DEG, SILENT_BETA_DEG};
 
 /// One estimator's answers on one flight: α, β (degrees) and whether every flag was clear.
 pub struct Answers {

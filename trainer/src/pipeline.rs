@@ -234,6 +234,17 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
         let ans = shipped_answers(fl, suite);
         let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
         let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
+        let (ta, tb) = (
+            fl.truth(Angle::Alpha.target()),
+            fl.truth(Angle::Beta.target()),
+        );
+        let silent = (0..fl.len())
+            .filter(|&i| {
+                ans.flags[i].0 == 0
+                    && ((ans.alpha_deg[i] - ta[i]).abs() > crate::metrics::SILENT_ALPHA_DEG
+                        || (ans.beta_deg[i] - tb[i]).abs() > crate::metrics::SILENT_BETA_DEG)
+            })
+            .count();
         let counts = FlagCounts {
             flight: fl.name.clone(),
             not_usable: held,
@@ -241,6 +252,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
             turbulence: count(estimator_core::Flags::TURBULENCE),
             alpha_from_filter: count(estimator_core::Flags::ALPHA_FROM_FILTER),
             beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
+            silent,
         };
         a.push((
             fl.name.clone(),
@@ -275,6 +287,8 @@ pub struct FlagCounts {
     pub alpha_from_filter: usize,
     /// The network's and the filter's β disagree (`Flags::BETA_DISAGREES`).
     pub beta_disagrees: usize,
+    /// Silent frames: every flag clear and |α error| > 2° or |β error| > 1° (`crate::ood`).
+    pub silent: usize,
 }
 
 /// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.

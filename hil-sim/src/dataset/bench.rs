@@ -66,6 +66,7 @@ pub struct BenchReport {
 pub fn raw_steps(
     dir: &Path,
     m: &Manifest,
+    aircraft_dir: Option<&Path>,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<Vec<u64>, PlantError> {
@@ -74,7 +75,7 @@ pub fn raw_steps(
         workers,
         || tick(progress),
         |f| {
-            let mut plant = Plant::spawn()?;
+            let mut plant = Plant::spawn_for(aircraft_dir)?;
             plant::load_f16_script(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
             let mut steps = 0u64;
             loop {
@@ -117,8 +118,7 @@ fn first_mismatch(flights: &[FlightEntry], steps: &[u64]) -> Option<String> {
 /// Generates `preset` into `out` and raw-steps the same flights, `repeats` times each, alternating
 /// which goes first; then writes the dataset report once and times it.
 pub fn run(
-    preset: crate::maneuver::Preset,
-    seed: u64,
+    plan: &crate::maneuver::Plan,
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
@@ -129,19 +129,13 @@ pub fn run(
     let (mut generate_s, mut raw_s) = (Vec::new(), Vec::new());
     let generate = |times: &mut Vec<f64>| -> Result<(Manifest, Vec<Flight>), GenerateError> {
         let t = Instant::now();
-        let m = super::generate(
-            &crate::maneuver::Plan::new(preset, seed),
-            out,
-            sensors,
-            workers,
-            progress,
-        )?;
+        let m = super::generate(plan, out, sensors, workers, progress)?;
         times.push(t.elapsed().as_secs_f64());
         Ok(m)
     };
     let raw = |m: &Manifest, times: &mut Vec<f64>| -> Result<Vec<u64>, GenerateError> {
         let t = Instant::now();
-        let steps = raw_steps(out, m, workers, progress)?;
+        let steps = raw_steps(out, m, plan.aircraft_dir.as_deref(), workers, progress)?;
         times.push(t.elapsed().as_secs_f64());
         Ok(steps)
     };
@@ -179,8 +173,8 @@ pub fn run(
     let per_4h = |s: f64| s * 4.0 / flight_hours.max(1e-9);
     let per_step = |s: f64| s * 1e6 / (total_steps.max(1) as f64);
     Ok(BenchReport {
-        preset: preset.name().to_string(),
-        seed,
+        preset: plan.preset.name().to_string(),
+        seed: plan.seed,
         workers,
         repeats,
         flights: m.flights.len(),

@@ -5,7 +5,10 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::{DatasetError, FlightEntry, Manifest, git_rev, par_map, sha256_file, write_flight};
+use super::{
+    AircraftRecord, DatasetError, FlightEntry, Manifest, git_rev, par_map, sha256_file,
+    write_flight,
+};
 use crate::flight::Flight;
 use crate::maneuver::{Plan, PlannedFlight};
 
@@ -70,8 +73,16 @@ pub fn generate(
 ) -> Result<(Manifest, Vec<Flight>), GenerateError> {
     create_dir(out)?;
     let planned = plan.flights();
-    let (entries, flights, version) = fly_plan(&planned, out, sensors, workers, progress, true)?;
-    let manifest = assemble(plan, &planned, sensors, entries, version, out)?;
+    let (entries, flights, flown) = fly_plan(
+        &planned,
+        plan.aircraft_dir.as_deref(),
+        out,
+        sensors,
+        workers,
+        progress,
+        true,
+    )?;
+    let manifest = assemble(plan, &planned, sensors, entries, flown, out)?;
     manifest.write(out)?;
     Ok((manifest, flights))
 }
@@ -90,12 +101,13 @@ fn create_dir(out: &Path) -> Result<(), GenerateError> {
 /// the JSBSim version (empty for an empty plan).
 fn fly_plan(
     plan: &[PlannedFlight],
+    aircraft_dir: Option<&Path>,
     out: &Path,
     sensors: &crate::sensors::SensorConfig,
     workers: usize,
     progress: Option<&indicatif::ProgressBar>,
     keep: bool,
-) -> Result<(Vec<FlightEntry>, Vec<Flight>, String), GenerateError> {
+) -> Result<(Vec<FlightEntry>, Vec<Flight>, Flown), GenerateError> {
     use crate::fly::FlyConfig;
     use crate::maneuver;
     let version = std::sync::OnceLock::new();
@@ -112,13 +124,19 @@ fn fly_plan(
                         maneuver::generate_case(&f.profile(), seed, &f.name, f.duration_s, f.ood)?;
                     let script = m.write(out)?;
                     // A fresh bridge per attempt: a failed trim can leave one in any state.
-                    let mut plant = crate::plant::Plant::spawn()?;
-                    version.get_or_init(|| plant.jsbsim_version().to_string());
+                    let mut plant = crate::plant::Plant::spawn_for(aircraft_dir)?;
+                    version.get_or_init(|| {
+                        (
+                            plant.jsbsim_version().to_string(),
+                            plant.aircraft_xml().to_path_buf(),
+                        )
+                    });
                     let cfg = FlyConfig {
                         seed: sensor_seed(seed),
                         sensors: sensors.clone(),
                         max_time_s: None,
                         name: Some(f.name.clone()),
+                        aircraft_dir: aircraft_dir.map(Path::to_path_buf),
                     };
                     match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
                         Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
@@ -149,7 +167,22 @@ fn fly_plan(
         .into_iter()
         .unzip();
     let flights = flights.into_iter().flatten().collect();
-    Ok((entries, flights, version.into_inner().unwrap_or_default()))
+    let flown = match version.into_inner() {
+        Some((jsbsim_version, xml)) => Flown {
+            jsbsim_version,
+            aircraft: Some(AircraftRecord::of(aircraft_dir, &xml)?),
+        },
+        None => Flown::default(),
+    };
+    Ok((entries, flights, flown))
+}
+
+/// What the bridge reported while flying a plan: the JSBSim version and the aircraft flown (empty
+/// and `None` for an empty plan).
+#[derive(Default)]
+struct Flown {
+    jsbsim_version: String,
+    aircraft: Option<AircraftRecord>,
 }
 
 /// The manifest of a whole preset: its flights' entries in plan order, the maneuver files' hashes
@@ -159,7 +192,7 @@ fn assemble(
     plan: &[PlannedFlight],
     sensors: &crate::sensors::SensorConfig,
     flights: Vec<FlightEntry>,
-    jsbsim_version: String,
+    flown: Flown,
     out: &Path,
 ) -> Result<Manifest, GenerateError> {
     use crate::maneuver::{self, Profile};
@@ -189,11 +222,12 @@ fn assemble(
         format: Manifest::FORMAT,
         suites: Manifest::written_suites(),
         preset: spec.preset.name().to_string(),
-        jsbsim_version,
+        jsbsim_version: flown.jsbsim_version,
         git_rev: git_rev(),
         config,
         flights,
         files,
+        aircraft: flown.aircraft,
     })
 }
 
@@ -261,6 +295,9 @@ pub struct ShardRecord {
     pub jsbsim_version: String,
     pub git_rev: String,
     pub flights: Vec<FlightEntry>,
+    /// The aircraft flown (`None`: a record written before it was recorded, or an empty shard).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aircraft: Option<AircraftRecord>,
 }
 
 /// What [`generate_shard`] did.
@@ -298,15 +335,24 @@ pub fn generate_shard(
         }
     }
     let share = shard.of(&plan.flights());
-    let (flights, _, jsbsim_version) = fly_plan(&share, out, sensors, workers, progress, false)?;
+    let (flights, _, flown) = fly_plan(
+        &share,
+        plan.aircraft_dir.as_deref(),
+        out,
+        sensors,
+        workers,
+        progress,
+        false,
+    )?;
     let n = flights.len();
     let record = ShardRecord {
         plan: plan.clone(),
         shard,
         sensors: sensors.clone(),
-        jsbsim_version,
+        jsbsim_version: flown.jsbsim_version,
         git_rev: git_rev(),
         flights,
+        aircraft: flown.aircraft,
     };
     let text =
         serde_json::to_string_pretty(&record).map_err(|e| GenerateError::Shard(e.to_string()))?;
@@ -387,6 +433,11 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
         {
             return Err(differs("JSBSim version"));
         }
+        if let (Some(a), Some(b)) = (&r.aircraft, &first.aircraft)
+            && a.f16_xml_sha256 != b.f16_xml_sha256
+        {
+            return Err(differs("aircraft (f16.xml)"));
+        }
         match seen.get_mut(r.shard.index) {
             Some(s) if !*s => *s = true,
             _ => {
@@ -436,12 +487,15 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
             plan.len()
         )));
     }
-    let version = records
-        .iter()
-        .map(|(_, r)| r.jsbsim_version.clone())
-        .find(|v| !v.is_empty())
-        .unwrap_or_default();
-    let manifest = assemble(&first.plan, &plan, &sensors, flights, version, out)?;
+    let flown = Flown {
+        jsbsim_version: records
+            .iter()
+            .map(|(_, r)| r.jsbsim_version.clone())
+            .find(|v| !v.is_empty())
+            .unwrap_or_default(),
+        aircraft: records.iter().find_map(|(_, r)| r.aircraft.clone()),
+    };
+    let manifest = assemble(&first.plan, &plan, &sensors, flights, flown, out)?;
     manifest.write(out)?;
     for (p, _) in &records {
         std::fs::remove_file(p).map_err(|source| DatasetError::Io {

@@ -378,6 +378,42 @@ pub struct Manifest {
     /// SHA-256 of the other files written with the dataset (maneuver XML, plots), by file name.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub files: std::collections::BTreeMap<String, String>,
+    /// The aircraft every flight flew (absent in datasets written before it was recorded: JSBSim's
+    /// own F-16).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aircraft: Option<AircraftRecord>,
+}
+
+/// Which F-16 model a dataset's flights flew: `dir` the `--aircraft-dir` (none: JSBSim's own
+/// aircraft folder) and the SHA-256 of the `f16/f16.xml` loaded. Datasets of different aircraft
+/// are never mixed silently: the SHA-256 is compared wherever two datasets meet.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AircraftRecord {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dir: Option<String>,
+    pub f16_xml_sha256: String,
+}
+
+impl AircraftRecord {
+    /// The record of the `f16.xml` at `xml` flown from `dir` (`--aircraft-dir`, or none).
+    pub fn of(dir: Option<&Path>, xml: &Path) -> Result<AircraftRecord, DatasetError> {
+        Ok(AircraftRecord {
+            dir: dir.map(|d| d.display().to_string()),
+            f16_xml_sha256: sha256_file(xml)?,
+        })
+    }
+
+    /// How a message names it: the directory (or "JSBSim's own F-16") and the hash's first digits.
+    pub fn describe(r: Option<&AircraftRecord>) -> String {
+        match r {
+            None => "JSBSim's own F-16 (not recorded)".into(),
+            Some(r) => format!(
+                "{} (f16.xml sha256 {})",
+                r.dir.as_deref().unwrap_or("JSBSim's own F-16"),
+                r.f16_xml_sha256.get(..12).unwrap_or(&r.f16_xml_sha256)
+            ),
+        }
+    }
 }
 
 impl Manifest {

@@ -117,6 +117,8 @@ pub struct RunArgs {
     /// compiled-in estimator on the same flight, in-process).
     #[arg(long = "fault")]
     pub faults: Vec<crate::faults::Fault>,
+    #[command(flatten)]
+    pub aircraft: crate::plant::AircraftArgs,
     /// Fast mode: how long to wait for the reply to a frame the link left intact, ms.
     #[arg(long, default_value_t = 10_000)]
     pub reply_timeout_ms: u64,
@@ -166,8 +168,24 @@ fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
     entry.faults().map_err(RunError::Fault)
 }
 
-/// Loads or flies the flight.
+/// Loads or flies the flight (a script on JSBSim's own F-16).
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
+    flight_on(source, None, seed, max_time_s)
+}
+
+/// Loads the flight, or flies its script on the F-16 of `aircraft_dir` (`--aircraft-dir`).
+pub fn flight_on(
+    source: &Source,
+    aircraft_dir: Option<&Path>,
+    seed: u64,
+    max_time_s: Option<f64>,
+) -> Result<Flight, RunError> {
+    if source.dataset.is_some() && aircraft_dir.is_some() {
+        return Err(RunError::Usage(
+            "--aircraft-dir goes with --script: a recorded flight (--dataset) already flew its aircraft"
+                .into(),
+        ));
+    }
     let mut f = match (&source.dataset, &source.script) {
         (Some(csv), _) => {
             let f = Flight::read_log(csv)?;
@@ -179,6 +197,7 @@ pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Fli
             &crate::fly::FlyConfig {
                 seed,
                 max_time_s,
+                aircraft_dir: aircraft_dir.map(Path::to_path_buf),
                 ..Default::default()
             },
         )?,
@@ -326,7 +345,8 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     if a.firmware_log {
         FirmwareLog::install();
     }
-    let flight = flight(&a.source, a.seed, a.max_time_s)?;
+    let aircraft_dir = a.aircraft.dir()?;
+    let flight = flight_on(&a.source, aircraft_dir.as_deref(), a.seed, a.max_time_s)?;
     check_faults(&a.faults, &flight)?;
     let mut faults = a.faults.clone();
     if let Some(csv) = &a.source.dataset {
@@ -381,6 +401,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
             (None, Some(p)) => format!("--script {}", p.display()),
             (None, None) => String::new(),
         },
+        aircraft_dir: aircraft_dir.as_ref().map(|d| d.display().to_string()),
         seed: a.seed,
         suite: suite.name().to_string(),
         max_time_s: a.max_time_s,

@@ -114,7 +114,7 @@ pub fn score(
             let back_after_s = ret.and_then(|r| {
                 (r..end)
                     .find(|&k| k + SETTLED_FRAMES <= end && (k..k + SETTLED_FRAMES).all(back))
-                    .and_then(|k| Some(times_s.get(k)? - times_s.get(r)?))
+                    .and_then(|k| Some(super::round_ms(times_s.get(k)? - times_s.get(r)?)))
             });
             let max_dev = ret.map_or(0.0, |r| (r..end).filter_map(dev).fold(0.0, f64::max));
             FaultScore {

@@ -69,6 +69,8 @@ pub struct Provenance {
     pub flight: String,
     /// `--dataset CSV` or `--script XML`, as given.
     pub input: String,
+    /// `--aircraft-dir` of a flown script (`None`: JSBSim's own F-16, or a recorded flight).
+    pub aircraft_dir: Option<String>,
     pub seed: u64,
     /// Sensor suite of the frames sent.
     pub suite: String,
