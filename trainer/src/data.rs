@@ -193,10 +193,8 @@ impl Dataset {
         // Flights of two aircraft never train one model silently. A dataset written before the
         // aircraft was recorded flew JSBSim's own F-16, which a recorded one may name as well.
         let sha = |d: &Dataset| d.aircraft.as_ref().map(|a| a.f16_xml_sha256.clone());
-        if let (Some(a), Some(b)) = (sha(self), sha(&other))
-            && a != b
-            && !mixed_aircraft
-        {
+        let other_aircraft = matches!((sha(self), sha(&other)), (Some(a), Some(b)) if a != b);
+        if other_aircraft && !mixed_aircraft {
             return Err(Error::Split(
                 dir.to_path_buf(),
                 format!(
@@ -207,13 +205,21 @@ impl Dataset {
                 ),
             ));
         }
-        // `load_any` holds one of them out for validation; here they all train.
+        // `load_any` holds one of them out for validation; here they all train. Another aircraft's
+        // flights are other flights even under the same name: they carry the aircraft's hash.
+        let tag = other
+            .aircraft
+            .as_ref()
+            .filter(|_| other_aircraft)
+            .map(|a| format!("@{}", a.f16_xml_sha256.get(..8).unwrap_or("")))
+            .unwrap_or_default();
         let added: Vec<Flight> = other
             .flights
             .into_iter()
             .filter(|f| f.role != Role::Test)
             .map(|f| Flight {
                 role: Role::Train,
+                name: format!("{}{tag}", f.name),
                 ..f
             })
             .collect();
@@ -449,8 +455,20 @@ mod tests {
             r => panic!("flights of another aircraft were added: {:?}", r.err()),
         }
         ds.add_training(&same, false).unwrap();
-        // On purpose (domain randomisation) they are accepted.
+        // On purpose (domain randomisation) they are accepted, and another aircraft's flight of
+        // the same name is another flight: it carries the aircraft's hash.
         ds.add_training(&other, true).unwrap();
+        let twin = tiny_dataset("air-twin", &[("a0", Train)], &both);
+        fly_on(&twin, "b");
+        ds.add_training(&twin, true).unwrap();
+        let names: Vec<&str> = ds.flights.iter().map(|f| f.name.as_str()).collect();
+        assert!(
+            names.contains(&"a0") && names.contains(&"a0@bbbbbbbb"),
+            "{names:?}"
+        );
+        for d in [main, other, same, twin] {
+            let _ = std::fs::remove_dir_all(d);
+        }
     }
 
     #[test]

@@ -57,6 +57,16 @@ pub struct Staging {
     committed: bool,
 }
 
+/// `DatasetError::Io` of `action` on `path`, for `map_err`.
+fn io(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> DatasetError {
+    let path = path.to_path_buf();
+    move |source| DatasetError::Io {
+        action,
+        path,
+        source,
+    }
+}
+
 impl Staging {
     pub fn begin(out: &Path, force: bool) -> Result<Staging, DatasetError> {
         let non_empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some());
@@ -73,14 +83,6 @@ impl Staging {
         let tmp = parent
             .map_or_else(|| PathBuf::from("."), Path::to_path_buf)
             .join(format!(".{name}.partial"));
-        let io = |action, path: &Path| {
-            let path = path.to_path_buf();
-            move |source| DatasetError::Io {
-                action,
-                path,
-                source,
-            }
-        };
         if tmp.exists() {
             std::fs::remove_dir_all(&tmp).map_err(io("remove the stale", &tmp))?;
         }
@@ -100,14 +102,6 @@ impl Staging {
 
     /// Moves the complete dataset to `--out` (replacing an old one under `force`).
     pub fn commit(mut self) -> Result<(), DatasetError> {
-        let io = |action, path: &Path| {
-            let path = path.to_path_buf();
-            move |source| DatasetError::Io {
-                action,
-                path,
-                source,
-            }
-        };
         if self.out.exists() {
             if !self.force && std::fs::read_dir(&self.out).is_ok_and(|mut d| d.next().is_some()) {
                 return Err(DatasetError::Exists {
