@@ -23,6 +23,8 @@ pub mod progress;
 
 // The simulator and the HIL runner (the `sim` feature, on by default; the trainer builds without it).
 #[cfg(feature = "sim")]
+pub mod boom;
+#[cfg(feature = "sim")]
 pub mod commands;
 #[cfg(feature = "sim")]
 pub mod fly;

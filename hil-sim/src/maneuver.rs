@@ -882,6 +882,154 @@ fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0
     tables
 }
 
+/// The flight-test card's inputs at `scale` (1 = the first pass), from `t0`; returns the tables and
+/// the time the card ends. Each input is a held value on one maneuver channel, back to neutral
+/// after it, with time to settle between inputs: pitch doublet, pitch 3-2-1-1, roll doublet, rudder
+/// doublet, rudder 3-2-1-1, steady-heading sideslips both ways (rudder held, the bank law holding
+/// the wings level), a wind-up turn (60° bank, α target ramped up), a push-over/pull-up and an
+/// accel/decel (full throttle, then idle with the speedbrake).
+fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
+    let mut t = t0;
+    // A doublet: +a for w, −a for w, then neutral; `settle` after.
+    let doublet = |ch: &mut Vec<(f64, f64, f64)>, t: &mut f64, a: f64, w: f64, settle: f64| {
+        ch.push((*t, a, w));
+        ch.push((*t + w, -a, w));
+        ch.push((*t + 2.0 * w, 0.0, settle));
+        *t += 2.0 * w + settle;
+    };
+    // 3-2-1-1 in units of `u` s.
+    let multistep = |ch: &mut Vec<(f64, f64, f64)>, t: &mut f64, a: f64, u: f64, settle: f64| {
+        let mut at = *t;
+        for (n, sign) in [(3.0, 1.0), (2.0, -1.0), (1.0, 1.0), (1.0, -1.0)] {
+            ch.push((at, sign * a, n * u));
+            at += n * u;
+        }
+        ch.push((at, 0.0, settle));
+        *t = at + settle;
+    };
+    doublet(&mut seq.pitch, &mut t, 0.08 * scale, 1.0, 8.0);
+    multistep(&mut seq.pitch, &mut t, 0.06 * scale, 0.4, 8.0);
+    doublet(&mut seq.roll, &mut t, 0.12 * scale, 1.0, 8.0);
+    doublet(&mut seq.rudder, &mut t, 0.25 * scale, 1.0, 8.0);
+    multistep(&mut seq.rudder, &mut t, 0.2 * scale, 0.5, 8.0);
+    for sign in [1.0, -1.0] {
+        seq.rudder.push((t, sign * 0.35 * scale, 12.0));
+        seq.rudder.push((t + 12.0, 0.0, 8.0));
+        t += 20.0;
+    }
+    // Wind-up turn: bank to 60°, α target from 4° up to 5° + 4°·scale; wings level first, then
+    // back to the pitch attitude (leaving α hold while banked pulls the nose through).
+    seq.bank.push((t, 60.0, 24.0));
+    seq.mode.push((t + 3.0, 1.0, 27.0));
+    seq.alpha.push((t + 3.0, 4.0, 5.0));
+    seq.alpha.push((t + 8.0, 5.0 + 4.0 * scale, 14.0));
+    seq.alpha.push((t + 22.0, 3.0, 8.0));
+    seq.bank.push((t + 24.0, 0.0, 21.0));
+    seq.mode.push((t + 30.0, 0.0, 15.0));
+    t += 45.0;
+    // Push-over/pull-up: offsets to the altitude-holding pitch attitude.
+    seq.theta.push((t, 8.0 * scale, 8.0));
+    seq.theta.push((t + 8.0, -6.0 * scale, 8.0));
+    seq.theta.push((t + 16.0, 0.0, 14.0));
+    t += 30.0;
+    // Accel/decel: the speed hold off, full throttle, then idle with the speedbrake.
+    seq.hold.push((t, 0.0, 50.0));
+    seq.throttle.push((t, 1.0, 25.0));
+    seq.throttle.push((t + 25.0, 0.0, 25.0));
+    seq.speedbrake.push((t + 25.0, 1.0, 25.0));
+    seq.hold.push((t + 50.0, 1.0, 15.0));
+    seq.speedbrake.push((t + 50.0, 0.0, 15.0));
+    t + 65.0
+}
+
+/// The card's held values per channel (`(t, value, hold)`, as [`schedule`] takes them).
+#[derive(Default)]
+struct CardSeq {
+    pitch: Vec<(f64, f64, f64)>,
+    roll: Vec<(f64, f64, f64)>,
+    rudder: Vec<(f64, f64, f64)>,
+    mode: Vec<(f64, f64, f64)>,
+    alpha: Vec<(f64, f64, f64)>,
+    theta: Vec<(f64, f64, f64)>,
+    bank: Vec<(f64, f64, f64)>,
+    throttle: Vec<(f64, f64, f64)>,
+    speedbrake: Vec<(f64, f64, f64)>,
+    /// 1: the throttle holds the test point's speed; 0: `throttle` is the throttle.
+    hold: Vec<(f64, f64, f64)>,
+}
+
+/// The flight-test card flown twice (the second pass with 1.5× the inputs) as maneuver tables, at
+/// `point`: between inputs the pitch attitude holds its altitude and the throttle its speed, as a
+/// test pilot re-trims before each input.
+fn card_tables(duration_s: f64, point: &TestPoint) -> String {
+    let mut seq = CardSeq::default();
+    let end = card_inputs(1.0, COMMANDS_START_S + 10.0, &mut seq);
+    card_inputs(1.5, end + 10.0, &mut seq);
+    let keep = |v: Vec<(f64, f64, f64)>| -> Vec<(f64, f64, f64)> {
+        v.into_iter().filter(|(t, _, _)| *t < duration_s).collect()
+    };
+    let mut tables = String::new();
+    for (prop, initial) in [
+        ("maneuver/card-theta-offset-deg", 0.0),
+        ("maneuver/card-throttle", 0.6),
+        ("maneuver/card-speed-hold", 1.0),
+    ] {
+        let _ = writeln!(
+            tables,
+            "    <property value=\"{initial}\"> {prop} </property>"
+        );
+    }
+    for (prop, initial, v, ramp) in [
+        ("maneuver/alpha-mode", 0.0, keep(seq.mode), 0.0),
+        ("maneuver/card-theta-offset-deg", 0.0, keep(seq.theta), 2.0),
+        ("maneuver/alpha-target-deg", 5.0, keep(seq.alpha), 3.0),
+        ("maneuver/bank-target-deg", 0.0, keep(seq.bank), 3.0),
+        ("maneuver/pitch-stick", 0.0, keep(seq.pitch), 0.05),
+        ("maneuver/roll-stick", 0.0, keep(seq.roll), 0.05),
+        ("maneuver/rudder", 0.0, keep(seq.rudder), 0.1),
+        ("maneuver/card-throttle", 0.6, keep(seq.throttle), 1.0),
+        ("maneuver/card-speed-hold", 1.0, keep(seq.hold), 0.0),
+        ("maneuver/speedbrake", 0.0, keep(seq.speedbrake), 0.0),
+    ] {
+        tables.push_str(&schedule(prop, initial, &v, ramp));
+    }
+    // θ target: 2° plus the card's offset plus 0.4° per 100 ft below the test point (±5°).
+    law(
+        &mut tables,
+        "card: pitch attitude holding the test point's altitude, plus the card's offset",
+        "maneuver/theta-target-deg",
+        &format!(
+            "          <sum><value>2</value><property>maneuver/card-theta-offset-deg</property>{}</sum>\n",
+            clamp(
+                -5.0,
+                5.0,
+                &format!(
+                    "<product><value>0.004</value><difference><value>{}</value><property>position/h-sl-ft</property></difference></product>",
+                    point.alt_ft
+                )
+            )
+        ),
+    );
+    // Throttle: the test point's speed (0.02 per knot about 0.5), or the card's own.
+    law(
+        &mut tables,
+        "card: throttle holding the test point's speed, or the card's accel/decel",
+        "maneuver/throttle",
+        &format!(
+            "          <sum><product><property>maneuver/card-speed-hold</property>{}</product><product><difference><value>1</value><property>maneuver/card-speed-hold</property></difference><property>maneuver/card-throttle</property></product></sum>\n",
+            clamp(
+                0.0,
+                1.0,
+                &format!(
+                    "<sum><value>0.5</value><product><value>0.02</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
+                    point.vc_kts
+                )
+            )
+        ),
+    );
+    tables
+}
+
 /// 1-cosine gusts in random directions, each a timed event.
 fn gusts(
     s: &mut String,
@@ -949,6 +1097,19 @@ pub fn generate_case(
     duration_s: f64,
     ood: Option<OodCase>,
 ) -> Result<Maneuver, ManeuverError> {
+    generate_planned(profile, seed, name, duration_s, ood, None)
+}
+
+/// [`generate_case`], or with `card` the flight-test card's inputs in place of the random commands
+/// (the random draws of the initial state, mass, wind and gusts happen as for any flight).
+pub fn generate_planned(
+    profile: &Profile,
+    seed: u64,
+    name: &str,
+    duration_s: f64,
+    ood: Option<OodCase>,
+    card: Option<&TestPoint>,
+) -> Result<Maneuver, ManeuverError> {
     if name.is_empty()
         || !name
             .chars()
@@ -970,7 +1131,11 @@ pub fn generate_case(
     fuel_and_trim(&mut s, fuel, mass.as_ref());
     wind(&mut s, p, &mut rng, ood);
     // The command tables go before the laws that read them (JSBSim runs the events in file order).
-    s.push_str(&command_tables(p, &mut rng, duration_s, throttle0));
+    if let Some(point) = card {
+        s.push_str(&card_tables(duration_s, point));
+    } else {
+        s.push_str(&command_tables(p, &mut rng, duration_s, throttle0));
+    }
     zone_laws(&mut s, p);
     control_laws(&mut s, p);
     gusts(&mut s, p, &mut rng, duration_s, ood);
@@ -1300,6 +1465,13 @@ pub enum Preset {
     /// A flight campaign of any size: its flight-hours and the mass, wind and turbulence ranges of
     /// every profile (`hil-sim generate --preset campaign --hours H ...`).
     Campaign,
+    /// Flight-test cards for calibration, 28 min in calm air: at three altitude/speed points, pitch,
+    /// roll and rudder doublets, 3-2-1-1 multisteps, steady-heading sideslips, a wind-up turn, a
+    /// push-over/pull-up and an accel/decel, flown twice; each flight records the flight-test nose
+    /// boom (α/β vanes, pitot-static) in NAME.boom.csv (docs/sensors.md).
+    #[value(name = "flight-test")]
+    #[serde(rename = "flight-test")]
+    FlightTest,
 }
 
 /// The mass, wind and turbulence ranges a campaign gives every profile in place of its own.
@@ -1375,6 +1547,7 @@ impl Campaign {
                     duration_s: self.flight_min * 60.0,
                     ood: None,
                     ranges: Some(self.ranges.clone()),
+                    card: None,
                 }
             })
             .collect()
@@ -1436,7 +1609,37 @@ pub struct PlannedFlight {
     /// Ranges that replace the profile's own (`campaign` preset only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ranges: Option<ProfileRanges>,
+    /// The flight-test card's test point (`flight-test` preset only): the card's inputs instead of
+    /// random ones, in calm air, at this altitude and speed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub card: Option<TestPoint>,
 }
+
+/// A flight-test point: trimmed start altitude and calibrated airspeed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TestPoint {
+    pub alt_ft: f64,
+    pub vc_kts: f64,
+}
+
+/// The `flight-test` preset's test points: low and slow, medium, high (three altitude/speed points).
+pub const TEST_POINTS: [TestPoint; 3] = [
+    TestPoint {
+        alt_ft: 8_000.0,
+        vc_kts: 280.0,
+    },
+    TestPoint {
+        alt_ft: 18_000.0,
+        vc_kts: 350.0,
+    },
+    TestPoint {
+        alt_ft: 28_000.0,
+        vc_kts: 320.0,
+    },
+];
+
+/// Length of one test point's flight (the card flown twice, the second time with larger inputs), s.
+pub const CARD_FLIGHT_S: f64 = 560.0;
 
 impl PlannedFlight {
     /// The profile this flight is drawn from, with the campaign's ranges if it has them.
@@ -1444,6 +1647,17 @@ impl PlannedFlight {
         let mut p = Profile::preset(self.profile);
         if let Some(r) = &self.ranges {
             r.apply(&mut p);
+        }
+        if let Some(c) = &self.card {
+            // A flight test is flown at its point in calm air, at a mid-range mass.
+            p.init_alt_ft = (c.alt_ft, c.alt_ft);
+            p.init_vc_kts = (c.vc_kts, c.vc_kts);
+            p.fuel_per_tank_lbs = (1_800.0, 1_800.0);
+            p.turb_severity = (0, 0);
+            p.steady_wind_fps = (0.0, 0.0);
+            p.gust_fps = (0.0, 0.0);
+            p.gust_interval_s = (1e9, 1e9);
+            p.throttle = (0.6, 0.6);
         }
         p
     }
@@ -1469,6 +1683,7 @@ impl PlannedFlight {
             duration_s: draw(rng, len).round(),
             ood: None,
             ranges: None,
+            card: None,
         }
     }
 }
@@ -1481,6 +1696,7 @@ impl Preset {
             Preset::Large => "large",
             Preset::Ood => "ood",
             Preset::Campaign => "campaign",
+            Preset::FlightTest => "flight-test",
         }
     }
 
@@ -1496,6 +1712,26 @@ impl Preset {
         }
         if self == Preset::Campaign {
             return Campaign::default().flights(base_seed);
+        }
+        if self == Preset::FlightTest {
+            return TEST_POINTS
+                .iter()
+                .enumerate()
+                .map(|(k, c)| PlannedFlight {
+                    name: format!(
+                        "flighttest_{:02}kft_{:.0}kts",
+                        (c.alt_ft / 1000.0).round(),
+                        c.vc_kts
+                    ),
+                    split: Split::Test,
+                    profile: ProfileKind::Gentle,
+                    seed: base_seed.wrapping_mul(1000).wrapping_add(800 + k as u64),
+                    duration_s: CARD_FLIGHT_S,
+                    ood: None,
+                    ranges: None,
+                    card: Some(*c),
+                })
+                .collect();
         }
         if self == Preset::Large {
             // Paper's plan untouched, then 12 more per profile from their own random stream.
@@ -1524,12 +1760,14 @@ impl Preset {
             Range,
         ) = match self {
             // (Large, Ood and Campaign returned above.)
-            Preset::Paper | Preset::Large | Preset::Ood | Preset::Campaign => (
-                PAPER_PER_PROFILE,
-                PAPER_TRAIN_LEN,
-                &ProfileKind::ALL,
-                (360.0, 420.0),
-            ),
+            Preset::Paper | Preset::Large | Preset::Ood | Preset::Campaign | Preset::FlightTest => {
+                (
+                    PAPER_PER_PROFILE,
+                    PAPER_TRAIN_LEN,
+                    &ProfileKind::ALL,
+                    (360.0, 420.0),
+                )
+            }
             Preset::Ci => (
                 1,
                 (180.0, 180.0),
@@ -1553,6 +1791,7 @@ impl Preset {
                 duration_s: draw(&mut rng, test_len).round(),
                 ood: None,
                 ranges: None,
+                card: None,
             });
         }
         out
@@ -1579,6 +1818,7 @@ impl Preset {
                     duration_s: OOD_LEN_S,
                     ood,
                     ranges: None,
+                    card: None,
                 });
             }
         }

@@ -184,3 +184,52 @@ fn shards_merge_into_the_one_machine_dataset() {
         );
     }
 }
+
+/// The `flight-test` preset: three test points, at most 30 minutes, flown whole, each with the
+/// nose boom's record beside its CSV (hashed in the manifest, one row per sample, close to truth).
+#[test]
+fn flight_test_preset_flies_its_cards_and_records_the_boom() {
+    let dir = std::env::temp_dir().join(format!("hil-data-ft-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (m, flights) = dataset::generate(
+        &Plan::new(Preset::FlightTest, 1),
+        &dir,
+        &SensorConfig::default(),
+        2,
+        None,
+    )
+    .unwrap();
+    assert_eq!(m.flights.len(), 3);
+    let minutes: f64 = m.flights.iter().map(|f| f.duration_s).sum::<f64>() / 60.0;
+    assert!(minutes <= 30.0, "{minutes} min of flight tests");
+    assert!(
+        m.config.get("boom").is_some(),
+        "the boom's parameters are in the manifest"
+    );
+    for (e, fl) in m.flights.iter().zip(&flights) {
+        assert!(e.cut.is_none(), "{}: {:?}", e.name, e.cut);
+        let boom = e.boom.as_ref().unwrap();
+        assert_eq!(
+            dataset::sha256_file(&dir.join(&boom.file)).unwrap(),
+            boom.sha256
+        );
+        let rec = hil_sim::boom::read_csv(&dir.join(&boom.file)).unwrap();
+        assert_eq!(rec.len(), fl.samples.len());
+        let close = rec
+            .iter()
+            .zip(&fl.samples)
+            .filter(|(b, s)| (b.alpha_deg - s.truth.alpha_deg).abs() < 1.0)
+            .count();
+        assert!(
+            close * 100 >= rec.len() * 99,
+            "{}: {close} of {}",
+            e.name,
+            rec.len()
+        );
+        // The card's inputs are there: both rudder doublet halves, the wind-up turn's 60° bank.
+        let xml = std::fs::read_to_string(dir.join(format!("{}.xml", e.name))).unwrap();
+        assert!(xml.contains("maneuver/card-speed-hold"), "{}", e.name);
+        assert!(xml.contains(" 60.0000\n"), "{}: no 60° bank", e.name);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

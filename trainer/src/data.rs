@@ -404,6 +404,7 @@ mod tests {
                     cut: None,
                     zones: None,
                     faults: Vec::new(),
+                    boom: None,
                 }
             })
             .collect();

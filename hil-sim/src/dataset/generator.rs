@@ -120,8 +120,14 @@ fn fly_plan(
                 let mut attempt = 0;
                 loop {
                     let seed = redraw_seed(f.seed, attempt);
-                    let m =
-                        maneuver::generate_case(&f.profile(), seed, &f.name, f.duration_s, f.ood)?;
+                    let m = maneuver::generate_planned(
+                        &f.profile(),
+                        seed,
+                        &f.name,
+                        f.duration_s,
+                        f.ood,
+                        f.card.as_ref(),
+                    )?;
                     let script = m.write(out)?;
                     // A fresh bridge per attempt: a failed trim can leave one in any state.
                     let mut plant = crate::plant::Plant::spawn_for(aircraft_dir)?;
@@ -150,6 +156,9 @@ fn fly_plan(
                                 .iter()
                                 .map(|s| s.to_string())
                                 .collect();
+                            if f.card.is_some() {
+                                entry.boom = Some(write_boom(out, &flight, sensor_seed(seed))?);
+                            }
                             break Ok((entry, keep.then_some(flight)));
                         }
                     }
@@ -175,6 +184,28 @@ fn fly_plan(
         None => Flown::default(),
     };
     Ok((entries, flights, flown))
+}
+
+/// Writes the flight-test nose boom's record of `flight` beside its CSV (`NAME.boom.csv`).
+fn write_boom(out: &Path, flight: &Flight, seed: u64) -> Result<super::RecordFile, GenerateError> {
+    let samples = crate::boom::record(flight, &crate::boom::BoomConfig::default(), seed);
+    let file = format!("{}.boom.csv", flight.name);
+    let path = out.join(&file);
+    let f = std::fs::File::create(&path).map_err(|source| DatasetError::Io {
+        action: "create",
+        path: path.clone(),
+        source,
+    })?;
+    crate::boom::write_csv(std::io::BufWriter::new(f), &samples).map_err(|e| {
+        DatasetError::Csv {
+            path: path.clone(),
+            message: e.to_string(),
+        }
+    })?;
+    Ok(super::RecordFile {
+        sha256: sha256_file(&path)?,
+        file,
+    })
 }
 
 /// What the bridge reported while flying a plan: the JSBSim version and the aircraft flown (empty
@@ -213,6 +244,11 @@ fn assemble(
         "profiles": crate::maneuver::ProfileKind::ALL.iter().map(|k| Profile::preset(*k)).collect::<Vec<_>>(),
         "sensors": sensors,
     });
+    // A flight test says how its boom measures.
+    if plan.iter().any(|f| f.card.is_some()) {
+        config["boom"] = serde_json::to_value(crate::boom::BoomConfig::default())
+            .map_err(|e| GenerateError::Shard(e.to_string()))?;
+    }
     // Only a campaign says what it was asked for (the other presets' manifests stay as they were).
     if let Some(c) = &spec.campaign {
         config["campaign"] =

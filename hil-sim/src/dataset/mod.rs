@@ -347,6 +347,16 @@ pub struct FlightEntry {
     /// The CSV holds what the healthy sensors measured; a reader applies these on the frames.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub faults: Vec<String>,
+    /// The flight-test nose boom's record, `NAME.boom.csv` (`flight-test` preset only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub boom: Option<RecordFile>,
+}
+
+/// A file written beside a flight's CSV, with its SHA-256.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RecordFile {
+    pub file: String,
+    pub sha256: String,
 }
 
 impl FlightEntry {
@@ -659,6 +669,7 @@ pub fn write_flight(
         cut: flight.cut.clone(),
         zones: flight.zones,
         faults: Vec::new(),
+        boom: None,
     })
 }
 

@@ -1,0 +1,315 @@
+//! The flight-test nose boom: α and β vanes and a pitot-static probe on a boom ahead of the nose,
+//! as a flight-test aircraft carries for calibration (NASA TM-104316, Haering; Parameswaran,
+//! Jategaonkar & Press 2005). Recorded only in `flight-test` datasets, beside each flight's CSV as
+//! `NAME.boom.csv`; never a channel of a sensor frame, so never an input of the estimator.
+//!
+//! Each channel, at the 20 Hz samples (docs/sensors.md, "Flight-test nose boom"):
+//! the local flow at the boom (α − q·x/V, β + r·x/V: the boom is x ahead of the CG), times one plus
+//! the installation's calibration residual (the part of the upwash/sidewash or position-error
+//! calibration that is left), plus a per-flight misalignment bias, through a first-order lag, plus
+//! white noise, quantized to the resolution.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha12Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::flight::{Flight, SAMPLE_HZ};
+
+/// One boom channel's error model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChannelErrors {
+    /// White noise, 1σ (channel units).
+    pub noise: f64,
+    /// Quantization step (channel units).
+    pub resolution: f64,
+    /// First-order lag time constant, s (vane dynamics, pneumatic lag).
+    pub lag_s: f64,
+    /// Calibration residual: the measurement is the local value times (1 + this).
+    pub scale_residual: f64,
+    /// Misalignment / zero shift, 1σ of a per-flight constant (channel units).
+    pub bias_sigma: f64,
+}
+
+/// The boom's parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BoomConfig {
+    /// How far ahead of the CG the vanes are, m.
+    pub arm_m: f64,
+    /// α vane, degrees.
+    pub alpha: ChannelErrors,
+    /// β vane, degrees.
+    pub beta: ChannelErrors,
+    /// True airspeed from the pitot-static probe, m/s.
+    pub tas: ChannelErrors,
+}
+
+impl Default for BoomConfig {
+    fn default() -> Self {
+        let vane = ChannelErrors {
+            noise: 0.05,
+            resolution: 0.02,
+            lag_s: 0.05,
+            scale_residual: 0.01,
+            bias_sigma: 0.1,
+        };
+        BoomConfig {
+            arm_m: 6.0,
+            alpha: vane,
+            beta: vane,
+            tas: ChannelErrors {
+                noise: 0.3,
+                resolution: 0.1,
+                lag_s: 0.1,
+                scale_residual: 0.005,
+                bias_sigma: 0.5,
+            },
+        }
+    }
+}
+
+/// One boom sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoomSample {
+    pub time_s: f64,
+    pub alpha_deg: f64,
+    pub beta_deg: f64,
+    pub tas_mps: f64,
+}
+
+/// The CSV header of `NAME.boom.csv`.
+pub const COLUMNS: [&str; 4] = ["time_s", "boom_alpha_deg", "boom_beta_deg", "boom_tas_mps"];
+
+struct Channel {
+    e: ChannelErrors,
+    bias: f64,
+    a: f64,
+    state: Option<f64>,
+}
+
+impl Channel {
+    fn new(e: ChannelErrors, rng: &mut ChaCha12Rng) -> Channel {
+        let z: f64 = StandardNormal.sample(rng);
+        let dt = 1.0 / f64::from(SAMPLE_HZ);
+        Channel {
+            e,
+            bias: e.bias_sigma * z,
+            a: if e.lag_s > 0.0 {
+                (-dt / e.lag_s).exp()
+            } else {
+                0.0
+            },
+            state: None,
+        }
+    }
+
+    fn step(&mut self, local: f64, rng: &mut ChaCha12Rng) -> f64 {
+        let x = local * (1.0 + self.e.scale_residual) + self.bias;
+        let y = match self.state {
+            Some(s) => self.a * s + (1.0 - self.a) * x,
+            None => x,
+        };
+        self.state = Some(y);
+        let n: f64 = StandardNormal.sample(rng);
+        let m = y + self.e.noise * n;
+        if self.e.resolution > 0.0 {
+            (m / self.e.resolution).round() * self.e.resolution
+        } else {
+            m
+        }
+    }
+}
+
+/// What the boom recorded over `flight` (one sample per flight sample), for sensor seed `seed`.
+pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
+    let mut rng = ChaCha12Rng::seed_from_u64(seed ^ 0x626f_6f6d_2d76_616e);
+    let mut alpha = Channel::new(cfg.alpha, &mut rng);
+    let mut beta = Channel::new(cfg.beta, &mut rng);
+    let mut tas = Channel::new(cfg.tas, &mut rng);
+    flight
+        .samples
+        .iter()
+        .map(|s| {
+            let t = &s.truth;
+            let v = t.vt_mps.max(1.0);
+            let local_alpha = t.alpha_deg - (t.q_true_rps * cfg.arm_m / v).to_degrees();
+            let local_beta = t.beta_deg + (t.r_true_rps * cfg.arm_m / v).to_degrees();
+            BoomSample {
+                time_s: s.time_s,
+                alpha_deg: alpha.step(local_alpha, &mut rng),
+                beta_deg: beta.step(local_beta, &mut rng),
+                tas_mps: tas.step(t.vt_mps, &mut rng),
+            }
+        })
+        .collect()
+}
+
+/// Writes `samples` as CSV bytes.
+pub fn write_csv<W: std::io::Write>(w: W, samples: &[BoomSample]) -> Result<(), csv::Error> {
+    let mut wr = csv::Writer::from_writer(w);
+    wr.write_record(COLUMNS)?;
+    for s in samples {
+        wr.write_record([
+            s.time_s.to_string(),
+            s.alpha_deg.to_string(),
+            s.beta_deg.to_string(),
+            s.tas_mps.to_string(),
+        ])?;
+    }
+    wr.flush()?;
+    Ok(())
+}
+
+/// A `NAME.boom.csv` that does not read.
+#[derive(Debug, thiserror::Error)]
+pub enum BoomError {
+    #[error("{path}: {message}")]
+    Csv {
+        path: std::path::PathBuf,
+        message: String,
+    },
+    #[error("{path}: missing column `{column}` (is this a flight-test dataset's NAME.boom.csv?)")]
+    MissingColumn {
+        path: std::path::PathBuf,
+        column: &'static str,
+    },
+}
+
+/// Reads a `NAME.boom.csv` (columns by name).
+pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
+    let err = |message: String| BoomError::Csv {
+        path: path.to_path_buf(),
+        message,
+    };
+    let mut rd = csv::Reader::from_path(path).map_err(|e| err(e.to_string()))?;
+    let header = rd.headers().map_err(|e| err(e.to_string()))?.clone();
+    let idx: Vec<usize> = COLUMNS
+        .iter()
+        .map(|c| {
+            header
+                .iter()
+                .position(|h| h == *c)
+                .ok_or_else(|| BoomError::MissingColumn {
+                    path: path.to_path_buf(),
+                    column: c,
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let mut out = Vec::new();
+    for rec in rd.records() {
+        let rec = rec.map_err(|e| err(e.to_string()))?;
+        let v: Vec<f64> = idx
+            .iter()
+            .map(|&i| rec.get(i).unwrap_or("").trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| err(format!("line {}: {e}", out.len() + 2)))?;
+        out.push(BoomSample {
+            time_s: v[0],
+            alpha_deg: v[1],
+            beta_deg: v[2],
+            tas_mps: v[3],
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flight::{Sample, Truth};
+
+    fn flight(n: usize, truth: impl Fn(usize) -> Truth) -> Flight {
+        Flight {
+            name: "t".into(),
+            samples: (0..n)
+                .map(|k| Sample {
+                    time_s: k as f64 / 20.0,
+                    truth: truth(k),
+                    sensed: [0.0; estimator_core::CHANNELS],
+                })
+                .collect(),
+            cut: None,
+            zones: None,
+        }
+    }
+
+    fn quiet() -> BoomConfig {
+        let c = ChannelErrors {
+            noise: 0.0,
+            resolution: 0.0,
+            lag_s: 0.0,
+            scale_residual: 0.0,
+            bias_sigma: 0.0,
+        };
+        BoomConfig {
+            arm_m: 6.0,
+            alpha: c,
+            beta: c,
+            tas: c,
+        }
+    }
+
+    #[test]
+    fn an_ideal_boom_reads_the_local_flow_at_the_boom() {
+        let f = flight(3, |_| Truth {
+            alpha_deg: 5.0,
+            beta_deg: 1.0,
+            vt_mps: 200.0,
+            q_true_rps: 0.1,
+            r_true_rps: -0.05,
+            ..Truth::default()
+        });
+        let b = record(&f, &quiet(), 1);
+        // Pitching up, the nose sees the air from above: α − q·x/V; yawing left, β + r·x/V.
+        assert!((b[2].alpha_deg - (5.0 - (0.1f64 * 6.0 / 200.0).to_degrees())).abs() < 1e-12);
+        assert!((b[2].beta_deg - (1.0 + (-0.05f64 * 6.0 / 200.0).to_degrees())).abs() < 1e-12);
+        assert_eq!(b[2].tas_mps, 200.0);
+    }
+
+    #[test]
+    fn residual_lag_and_resolution_act_as_specified() {
+        let mut cfg = quiet();
+        cfg.alpha.scale_residual = 0.02;
+        cfg.alpha.lag_s = 0.05;
+        cfg.alpha.resolution = 0.02;
+        // A step from 0 to 10° after the first sample.
+        let f = flight(40, |k| Truth {
+            alpha_deg: if k == 0 { 0.0 } else { 10.0 },
+            vt_mps: 200.0,
+            ..Truth::default()
+        });
+        let b = record(&f, &cfg, 1);
+        let a = (-0.05f64 / 0.05).exp();
+        // One sample after the step: the lag's first response, on the 0.02° grid.
+        let want = (10.2 * (1.0 - a) / 0.02).round() * 0.02;
+        assert!(
+            (b[1].alpha_deg - want).abs() < 1e-9,
+            "{} vs {want}",
+            b[1].alpha_deg
+        );
+        // Settled: 10° × 1.02.
+        assert!((b[39].alpha_deg - 10.2).abs() < 1e-9, "{}", b[39].alpha_deg);
+        assert!(
+            b.iter()
+                .all(|s| ((s.alpha_deg / 0.02).round() * 0.02 - s.alpha_deg).abs() < 1e-9)
+        );
+    }
+
+    #[test]
+    fn the_same_seed_records_the_same_and_the_csv_round_trips() {
+        let f = flight(50, |k| Truth {
+            alpha_deg: k as f64 * 0.1,
+            beta_deg: -0.5,
+            vt_mps: 180.0,
+            ..Truth::default()
+        });
+        let cfg = BoomConfig::default();
+        let (a, b) = (record(&f, &cfg, 7), record(&f, &cfg, 7));
+        assert_eq!(a, b);
+        assert_ne!(a, record(&f, &cfg, 8));
+        let dir = std::env::temp_dir().join(format!("boom-{}.csv", std::process::id()));
+        write_csv(std::fs::File::create(&dir).unwrap(), &a).unwrap();
+        assert_eq!(read_csv(&dir).unwrap(), a);
+        let _ = std::fs::remove_file(dir);
+    }
+}
