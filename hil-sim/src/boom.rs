@@ -9,11 +9,15 @@
 //! calibration that is left), plus a per-flight misalignment bias, through a first-order lag, plus
 //! white noise, quantized to the resolution.
 
+#[cfg(feature = "sim")]
 use rand::SeedableRng;
+#[cfg(feature = "sim")]
 use rand_chacha::ChaCha12Rng;
+#[cfg(feature = "sim")]
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
+#[cfg(feature = "sim")]
 use crate::flight::{Flight, SAMPLE_HZ};
 
 /// One boom channel's error model.
@@ -80,6 +84,7 @@ pub struct BoomSample {
 /// The CSV header of `NAME.boom.csv`.
 pub const COLUMNS: [&str; 4] = ["time_s", "boom_alpha_deg", "boom_beta_deg", "boom_tas_mps"];
 
+#[cfg(feature = "sim")]
 struct Channel {
     e: ChannelErrors,
     bias: f64,
@@ -87,6 +92,7 @@ struct Channel {
     state: Option<f64>,
 }
 
+#[cfg(feature = "sim")]
 impl Channel {
     fn new(e: ChannelErrors, rng: &mut ChaCha12Rng) -> Channel {
         let z: f64 = StandardNormal.sample(rng);
@@ -121,6 +127,7 @@ impl Channel {
 }
 
 /// What the boom recorded over `flight` (one sample per flight sample), for sensor seed `seed`.
+#[cfg(feature = "sim")]
 pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
     let mut rng = ChaCha12Rng::seed_from_u64(seed ^ 0x626f_6f6d_2d76_616e);
     let mut alpha = Channel::new(cfg.alpha, &mut rng);
@@ -213,7 +220,7 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
     Ok(out)
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "sim"))]
 mod tests {
     use super::*;
     use crate::flight::{Sample, Truth};

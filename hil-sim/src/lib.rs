@@ -10,6 +10,7 @@
 //! depends on.
 
 // Flight records and the dataset on disk: what the trainer reads, with no simulator behind it.
+pub mod boom;
 pub mod cli_values;
 pub mod dataset;
 pub mod docs_cli;
@@ -22,8 +23,6 @@ pub mod frames;
 pub mod progress;
 
 // The simulator and the HIL runner (the `sim` feature, on by default; the trainer builds without it).
-#[cfg(feature = "sim")]
-pub mod boom;
 #[cfg(feature = "sim")]
 pub mod commands;
 #[cfg(feature = "sim")]

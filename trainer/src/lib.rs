@@ -6,6 +6,7 @@ pub mod adam;
 pub mod analysis;
 pub mod baselines;
 pub mod bench;
+pub mod calibrate;
 pub mod data;
 pub mod error;
 pub mod export;

@@ -395,6 +395,22 @@ enum Cmd {
         #[command(flatten)]
         action: SweepAction,
     },
+    /// Flight-test calibration: from a `flight-test` dataset's production sensors and nose boom
+    /// (never its truth columns), check the boom against the inertial data and identify the lift
+    /// and side-force scales of the aircraft against the model the estimator knows (equation
+    /// error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
+    /// spec of the calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
+    Calibrate {
+        /// The flight-test dataset (`hil-sim generate --preset flight-test`).
+        #[arg(long, value_name = "DIR")]
+        flight_test: PathBuf,
+        /// Output directory.
+        #[arg(long, value_name = "DIR", default_value = "out/calibration")]
+        out: PathBuf,
+        /// Print exactly one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Evaluate the compiled-in estimator (int8, with its flags and fallbacks, as the firmware runs
     /// it) on a dataset's flights; or, with --model, a model `trainer train` wrote, without
     /// exporting it.
@@ -746,6 +762,35 @@ fn cmd_eval_model(
         print_metrics("int8", &alpha);
         println!("β (deg):");
         print_metrics("int8", &beta);
+    }
+    Ok(())
+}
+
+fn cmd_calibrate(ft: &Path, out: &Path, json: bool) -> Result<()> {
+    let t0 = std::time::Instant::now();
+    let c = trainer::calibrate::calibrate(ft)
+        .with_context(|| format!("calibrating from {}", ft.display()))?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let text = serde_json::to_string_pretty(&c)?;
+    std::fs::write(out.join("calibration.json"), &text)?;
+    let spec = trainer::calibrate::spec_toml(&c, ft);
+    std::fs::write(out.join("aircraft.toml"), spec)?;
+    let md =
+        trainer::calibrate::markdown(&c, &command_line(), &machine(), t0.elapsed().as_secs_f64());
+    std::fs::write(out.join("calibration.md"), md)?;
+    if json {
+        println!("{}", serde_json::to_string(&c)?);
+    } else {
+        let (l, s) = (&c.lift.params[0].1, &c.side.params[0].1);
+        println!(
+            "lift scale {:.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights); wrote {}/calibration.md, calibration.json, aircraft.toml",
+            l.value,
+            l.std_error,
+            s.value,
+            s.std_error,
+            c.flights.len(),
+            out.display()
+        );
     }
     Ok(())
 }
@@ -1469,6 +1514,11 @@ fn run() -> Result<()> {
             tune,
             json,
         } => cmd_eval_filter(data, split, tune, *json),
+        Cmd::Calibrate {
+            flight_test,
+            out,
+            json,
+        } => cmd_calibrate(flight_test, out, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
         Cmd::Report(r) => cmd_report(r),

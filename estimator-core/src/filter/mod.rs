@@ -417,6 +417,28 @@ fn flaperon_right_deg(inp: &Input, mach: f32) -> f32 {
     right.clamp(-1.0, 1.0) * per
 }
 
+/// The surfaces the aero model reads for a frame's input at α and Mach: the channels' positions,
+/// the LEF as the flight-control system schedules it and the right flaperon from the mix (what
+/// the filter's force model and the flight-test calibration evaluate the model with).
+pub fn surfaces(inp: &Input, alpha_rad: f32, mach: f32, gear_norm: f32) -> Surfaces {
+    Surfaces {
+        elevator_deg: inp.elevator_deg,
+        aileron_deg: inp.aileron_deg,
+        rudder_deg: inp.rudder_deg,
+        lef_deg: lef_schedule_deg(alpha_rad, mach),
+        flaperon_left_deg: inp.flaperon_left_deg,
+        flaperon_right_deg: flaperon_right_deg(inp, mach),
+        speedbrake_deg: inp.speedbrake_deg,
+        gear_norm,
+    }
+}
+
+/// The input's EGI velocity (at the CG) in body axes, m/s: the air velocity in calm air.
+pub fn body_velocity(inp: &Input) -> [f32; 3] {
+    let v = c_bn(inp.euler_rad) * Vector3::from(inp.vel_ned_mps);
+    [v.x, v.y, v.z]
+}
+
 /// Specific force at the CG per unit lift scale, body axes, for a body air velocity; `None` when the
 /// model cannot be evaluated there.
 #[allow(clippy::too_many_arguments)]
@@ -446,16 +468,7 @@ fn model_force(
         r_rps: gyro[2],
         h_over_b: AirState::NO_GROUND_EFFECT,
     };
-    let s = Surfaces {
-        elevator_deg: inp.elevator_deg,
-        aileron_deg: inp.aileron_deg,
-        rudder_deg: inp.rudder_deg,
-        lef_deg: lef_schedule_deg(alpha, mach),
-        flaperon_left_deg: inp.flaperon_left_deg,
-        flaperon_right_deg: flaperon_right_deg(inp, mach),
-        speedbrake_deg: inp.speedbrake_deg,
-        gear_norm,
-    };
+    let s = surfaces(inp, alpha, mach, gear_norm);
     let c = F16.coefficients(&air, &s);
     if !c.valid {
         return None;

@@ -1,0 +1,106 @@
+//! Flight-test calibration reads only what a flight-test aircraft records, and finds a variant's
+//! scales: a flight-test dataset flown on variant C (lift × 0.94, side force × 1.10), calibrated
+//! with and without its truth columns.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps")
+        .join(name)
+}
+
+fn ok(cmd: &mut Command) {
+    let o = cmd.output().expect("start");
+    assert!(
+        o.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn calibration(ft: &Path, out: &Path) -> serde_json::Value {
+    ok(Command::new(bin("trainer"))
+        .args(["calibrate", "--flight-test"])
+        .arg(ft)
+        .arg("--out")
+        .arg(out));
+    serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn calibration_reads_no_truth_and_finds_the_variants_scales() {
+    let dir = std::env::temp_dir().join(format!("calibrate-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let aircraft = dir.join("c");
+    ok(Command::new(root().join("scripts/airframe-variant"))
+        .arg(root().join("airframes/f16-variants/c-pure-scales.toml"))
+        .arg("--out")
+        .arg(&aircraft));
+    let ft = dir.join("ft");
+    ok(Command::new(bin("hil-sim"))
+        .args(["generate", "--preset", "flight-test", "--out"])
+        .arg(&ft)
+        .arg("--aircraft-dir")
+        .arg(&aircraft));
+    let with_truth = calibration(&ft, &dir.join("cal"));
+
+    // The same dataset with every truth column deleted from every flight CSV.
+    let stripped = dir.join("ft-no-truth");
+    std::fs::create_dir_all(&stripped).unwrap();
+    for e in std::fs::read_dir(&ft).unwrap().flatten() {
+        let p = e.path();
+        let name = e.file_name().to_string_lossy().into_owned();
+        let is_flight = name.ends_with(".csv") && !name.ends_with(".boom.csv");
+        if !is_flight {
+            std::fs::copy(&p, stripped.join(&name)).unwrap();
+            continue;
+        }
+        let text = std::fs::read_to_string(&p).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let keep: Vec<usize> = (0..header.len())
+            .filter(|&i| !hil_sim::flight::TRUTH_COLUMNS.contains(&header[i]))
+            .collect();
+        assert!(keep.len() < header.len(), "{name} had truth columns");
+        let mut out = String::new();
+        for l in std::iter::once(header.join(",")).chain(lines.map(str::to_string)) {
+            let cells: Vec<&str> = l.split(',').collect();
+            let row: Vec<&str> = keep.iter().map(|&i| cells[i]).collect();
+            out.push_str(&row.join(","));
+            out.push('\n');
+        }
+        std::fs::write(stripped.join(&name), out).unwrap();
+    }
+    let without = calibration(&stripped, &dir.join("cal-no-truth"));
+    assert_eq!(with_truth, without, "the calibration read a truth column");
+
+    let k = |fit: &str, name: &str| {
+        with_truth[fit]["params"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p[0] == name)
+            .unwrap()[1]["value"]
+            .as_f64()
+            .unwrap()
+    };
+    let (k_lift, k_side) = (k("lift", "k_lift"), k("side", "k_side"));
+    assert!(
+        (k_lift / 0.94 - 1.0).abs() < 0.02,
+        "lift scale {k_lift}, truth 0.94"
+    );
+    assert!(
+        (k_side / 1.10 - 1.0).abs() < 0.05,
+        "side-force scale {k_side}, truth 1.10"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,541 @@
+//! Flight-test calibration of the aircraft model: from what a flight-test aircraft records (the
+//! production sensors of every frame and the nose boom's vanes and pitot-static, `NAME.boom.csv`),
+//! never from simulator truth, identify how the real aircraft's forces differ from the model's.
+//!
+//! Two steps (docs/calibration.md):
+//! 1. **Data compatibility.** The boom's α, β and airspeed against the inertial data: in calm air
+//!    the EGI ground velocity, turned into body axes by the EGI attitude, is the air velocity, so
+//!    `boom = (1 + s)·kinematic + b` per channel (after removing the rotation-induced flow at the
+//!    boom, q·x/V and r·x/V) gives each channel's scale and zero shift; the boom is corrected with
+//!    them.
+//! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
+//!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
+//!    `f_y = k_Y·f_y,side + k_D·f_y,drag + b_y` and
+//!    `f_z = k_L·f_z,lift + k_D·f_z,drag + k_Y·f_z,side + b_z`, each model part computed from the
+//!    wind-axis coefficients, the constants b taking the accelerometers' bias and misalignment.
+//!    k_L (lift) is observable in the normal force, k_Y (side force) in the lateral force. Drag is
+//!    not identified: along body x the unknown thrust adds to it, and without a thrust model k_D is
+//!    held at 1. Only quasi-steady frames enter both steps.
+//!
+//! Standard errors are least squares' σ²(XᵀX)⁻¹ inflated for the residuals' autocorrelation
+//! (effective sample size n·(1 − ρ₁)/(1 + ρ₁), ρ₁ the lag-1 autocorrelation).
+
+use crate::error::{Error, Result};
+use estimator_core::SensorFrame;
+use estimator_core::aero::{AirState, F16, Surfaces};
+use estimator_core::filter::{self, F16_CONFIG, Input};
+use serde::Serialize;
+use std::path::Path;
+
+/// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
+const MIN_QBAR_PA: f64 = 5_000.0;
+/// Frames beyond this α (deg) are left out (the vanes and the model's stall region).
+const MAX_ALPHA_DEG: f64 = 20.0;
+/// Only quasi-steady frames enter the force equations: the boom's vane lag, the IMU's anti-alias
+/// filter and the surfaces' sampling delay the signals differently, so during a fast input
+/// (a doublet's edge) they disagree. Angular acceleration below this, rad/s²…
+const MAX_OMEGA_DOT_RPS2: f64 = 0.05;
+/// …and boom α and β changing by less than this per frame, deg.
+const MAX_ANGLE_STEP_DEG: f64 = 0.05;
+
+/// One identified parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    pub value: f64,
+    /// 1σ, inflated for residual autocorrelation.
+    pub std_error: f64,
+}
+
+/// A regression's fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Fit {
+    pub params: Vec<(String, Estimate)>,
+    pub rows: usize,
+    /// Residual RMS, in the regression's units.
+    pub residual_rms: f64,
+    /// Share of the variance explained.
+    pub r2: f64,
+    /// Lag-1 autocorrelation of the residuals.
+    pub rho1: f64,
+}
+
+/// What `trainer calibrate` identified.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Calibration {
+    pub flights: Vec<String>,
+    /// Boom α: `boom = (1 + scale)·kinematic + bias` (deg).
+    pub boom_alpha: Fit,
+    pub boom_beta: Fit,
+    /// Boom airspeed against the inertial speed (m/s).
+    pub boom_tas: Fit,
+    /// Lateral specific force, m/s²: k_Y (side force scale).
+    pub side: Fit,
+    /// Normal specific force, m/s²: k_L (lift scale).
+    pub lift: Fit,
+}
+
+/// Least squares `y ≈ X·θ` (columns of `x`), with the autocorrelation-inflated standard errors.
+pub fn least_squares(names: &[&str], x: &[Vec<f64>], y: &[f64]) -> Option<Fit> {
+    let p = x.len();
+    let n = y.len();
+    if p == 0 || n <= p + 2 || x.iter().any(|c| c.len() != n) {
+        return None;
+    }
+    // Normal equations, solved by Gauss-Jordan with partial pivoting (p ≤ 3 here).
+    let mut a = vec![vec![0.0; p + 1 + p]; p];
+    for i in 0..p {
+        for j in 0..p {
+            a[i][j] = x[i].iter().zip(&x[j]).map(|(u, v)| u * v).sum();
+        }
+        a[i][p] = x[i].iter().zip(y).map(|(u, v)| u * v).sum();
+        a[i][p + 1 + i] = 1.0;
+    }
+    for c in 0..p {
+        let piv = (c..p).max_by(|&r, &s| a[r][c].abs().total_cmp(&a[s][c].abs()))?;
+        if a[piv][c].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(c, piv);
+        let d = a[c][c];
+        for v in a[c].iter_mut() {
+            *v /= d;
+        }
+        for r in 0..p {
+            if r != c {
+                let f = a[r][c];
+                let row_c = a[c].clone();
+                for (v, w) in a[r].iter_mut().zip(&row_c) {
+                    *v -= f * w;
+                }
+            }
+        }
+    }
+    let theta: Vec<f64> = (0..p).map(|i| a[i][p]).collect();
+    let resid: Vec<f64> = (0..n)
+        .map(|k| y[k] - (0..p).map(|i| theta[i] * x[i][k]).sum::<f64>())
+        .collect();
+    let rss: f64 = resid.iter().map(|r| r * r).sum();
+    let mean = y.iter().sum::<f64>() / n as f64;
+    let tss: f64 = y.iter().map(|v| (v - mean) * (v - mean)).sum();
+    let rho1 = {
+        let num: f64 = resid.windows(2).map(|w| w[0] * w[1]).sum();
+        if rss > 0.0 {
+            (num / rss).clamp(-0.99, 0.99)
+        } else {
+            0.0
+        }
+    };
+    let n_eff = (n as f64 * (1.0 - rho1) / (1.0 + rho1)).max(p as f64 + 1.0);
+    let sigma2 = rss / (n_eff - p as f64).max(1.0);
+    let params = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            (
+                name.to_string(),
+                Estimate {
+                    value: theta[i],
+                    std_error: (sigma2 * a[i][p + 1 + i]).max(0.0).sqrt(),
+                },
+            )
+        })
+        .collect();
+    Some(Fit {
+        params,
+        rows: n,
+        residual_rms: (rss / n as f64).sqrt(),
+        r2: if tss > 0.0 { 1.0 - rss / tss } else { 0.0 },
+        rho1,
+    })
+}
+
+impl Fit {
+    /// The value of parameter `name` (0 when absent).
+    pub fn get(&self, name: &str) -> f64 {
+        self.params
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0.0, |(_, e)| e.value)
+    }
+}
+
+/// One frame's quantities for both steps.
+struct Row {
+    /// Angular acceleration magnitude and the boom angles' change from the previous frame.
+    omega_dot: f64,
+    angle_step: f64,
+    alpha_kin: f64,
+    beta_kin: f64,
+    tas_kin: f64,
+    boom_alpha: f64,
+    boom_beta: f64,
+    boom_tas: f64,
+    inp: Input,
+    f_cg: [f64; 3],
+    gyro: [f32; 3],
+}
+
+/// The rows of one flight: frames with every channel the filter needs, and the boom.
+fn rows(frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
+    let cfg = F16_CONFIG;
+    let arm = cfg.lever_arm_m;
+    let mut out = Vec::new();
+    let mut prev: Option<Input> = None;
+    for (k, f) in frames.iter().enumerate() {
+        let dt = if k == 0 {
+            0.05
+        } else {
+            (times[k] - times[k - 1]) as f32
+        };
+        let Some(inp) = Input::from_frame(f, dt, arm) else {
+            prev = None;
+            continue;
+        };
+        let Some(p) = prev.replace(inp) else { continue };
+        let (Some(b), Some(bp)) = (boom.get(k), k.checked_sub(1).and_then(|j| boom.get(j))) else {
+            continue;
+        };
+        // Specific force at the CG: the IMU's, less the lever arm's ω̇ × r and ω × (ω × r).
+        let w = inp.gyro_rps.map(f64::from);
+        let wp = p.gyro_rps.map(f64::from);
+        let wd = [0, 1, 2].map(|i| (w[i] - wp[i]) / f64::from(dt.max(1e-3)));
+        let r = arm.map(f64::from);
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let (wdr, wwr) = (cross(wd, r), cross(w, cross(w, r)));
+        let f_cg = [0, 1, 2].map(|i| f64::from(inp.accel_mps2[i]) - wdr[i] - wwr[i]);
+        // Body velocity from the EGI: calm air, so it is the air velocity.
+        let vb = filter::body_velocity(&inp).map(f64::from);
+        let v = (vb[0] * vb[0] + vb[1] * vb[1] + vb[2] * vb[2]).sqrt();
+        if v < 30.0 {
+            continue;
+        }
+        out.push(Row {
+            omega_dot: (wd[0] * wd[0] + wd[1] * wd[1] + wd[2] * wd[2]).sqrt(),
+            angle_step: (b[0] - bp[0]).abs().max((b[1] - bp[1]).abs()),
+            alpha_kin: vb[2].atan2(vb[0]).to_degrees(),
+            beta_kin: (vb[1] / v).clamp(-1.0, 1.0).asin().to_degrees(),
+            tas_kin: v,
+            boom_alpha: b[0],
+            boom_beta: b[1],
+            boom_tas: b[2],
+            inp,
+            f_cg,
+            gyro: inp.gyro_rps,
+        });
+    }
+    out
+}
+
+/// A frame whose inputs change slowly enough for differently lagged signals to agree.
+fn quasi_steady(r: &Row) -> bool {
+    r.omega_dot <= MAX_OMEGA_DOT_RPS2 && r.angle_step <= MAX_ANGLE_STEP_DEG
+}
+
+/// Runs both steps on the flights of a flight-test dataset.
+pub fn calibrate(dir: &Path) -> Result<Calibration> {
+    let m = hil_sim::dataset::Manifest::read(dir)?;
+    let arm_m = hil_sim::boom::BoomConfig::default().arm_m;
+    let mut all = Vec::new();
+    let mut names = Vec::new();
+    for e in &m.flights {
+        let Some(b) = &e.boom else { continue };
+        let csv = hil_sim::dataset::Flight::read_log(&dir.join(&e.file))?;
+        let boom = hil_sim::boom::read_csv(&dir.join(&b.file))
+            .map_err(|err| Error::Split(dir.to_path_buf(), err.to_string()))?;
+        if boom.len() != csv.samples.len() {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                format!(
+                    "{}: {} boom rows for {} samples",
+                    b.file,
+                    boom.len(),
+                    csv.samples.len()
+                ),
+            ));
+        }
+        let frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
+        let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
+        let bm: Vec<[f64; 3]> = boom
+            .iter()
+            .map(|s| [s.alpha_deg, s.beta_deg, s.tas_mps])
+            .collect();
+        all.extend(rows(&frames, &times, &bm));
+        names.push(e.name.clone());
+    }
+    if all.is_empty() {
+        return Err(Error::Split(
+            dir.to_path_buf(),
+            "no flight with a nose-boom record (NAME.boom.csv): generate one with `hil-sim generate --preset flight-test`".into(),
+        ));
+    }
+    let fit = |names: &[&str], x: Vec<Vec<f64>>, y: Vec<f64>, what: &str| {
+        least_squares(names, &x, &y).ok_or_else(|| {
+            Error::Numeric(format!("{what}: the flight-test data do not determine it (too few frames, or no excitation)"))
+        })
+    };
+    // 1. Data compatibility: the boom's rotation-induced flow removed, then scale and zero shift,
+    // on the quasi-steady frames (the vane lag against the EGI is noise in the regressor there
+    // otherwise, and would pull the scale toward 0).
+    let arm_a = |r: &Row| (f64::from(r.gyro[1]) * arm_m / r.tas_kin).to_degrees();
+    let arm_b = |r: &Row| (f64::from(r.gyro[2]) * arm_m / r.tas_kin).to_degrees();
+    let steady: Vec<&Row> = all.iter().filter(|r| quasi_steady(r)).collect();
+    let ones = vec![1.0; steady.len()];
+    let boom_alpha = fit(
+        &["scale", "bias_deg"],
+        vec![steady.iter().map(|r| r.alpha_kin).collect(), ones.clone()],
+        steady.iter().map(|r| r.boom_alpha + arm_a(r)).collect(),
+        "boom α",
+    )?;
+    let boom_beta = fit(
+        &["scale", "bias_deg"],
+        vec![steady.iter().map(|r| r.beta_kin).collect(), ones.clone()],
+        steady.iter().map(|r| r.boom_beta - arm_b(r)).collect(),
+        "boom β",
+    )?;
+    let boom_tas = fit(
+        &["scale", "bias_mps"],
+        vec![steady.iter().map(|r| r.tas_kin).collect(), ones],
+        steady.iter().map(|r| r.boom_tas).collect(),
+        "boom airspeed",
+    )?;
+    // 2. Equation error at the corrected boom's air data.
+    let (sa, ba) = (boom_alpha.get("scale"), boom_alpha.get("bias_deg"));
+    let (sb, bb) = (boom_beta.get("scale"), boom_beta.get("bias_deg"));
+    let (sv, bv) = (boom_tas.get("scale"), boom_tas.get("bias_mps"));
+    let mut x_side = vec![Vec::new(), Vec::new()];
+    let mut y_side = Vec::new();
+    let mut x_lift = vec![Vec::new(), Vec::new(), Vec::new()];
+    let mut y_lift = Vec::new();
+    for r in &all {
+        let alpha = ((r.boom_alpha + arm_a(r) - ba) / sa).to_radians();
+        let beta = ((r.boom_beta - arm_b(r) - bb) / sb).to_radians();
+        let tas = (r.boom_tas - bv) / sv;
+        let (rho, a_sound) = filter::isa(r.inp.alt_m);
+        let qbar = 0.5 * f64::from(rho) * tas * tas;
+        if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG || !quasi_steady(r) {
+            continue;
+        }
+        let mach = tas / f64::from(a_sound);
+        let Some(parts) = force_parts(&r.inp, r.gyro, alpha, beta, tas, mach, rho) else {
+            continue;
+        };
+        // Specific force per unit scale of each axis, body y and z.
+        x_side[0].push(parts.side[1]);
+        x_side[1].push(parts.drag[1]);
+        y_side.push(r.f_cg[1] - parts.drag[1]);
+        x_lift[0].push(parts.lift[2]);
+        x_lift[1].push(parts.side[2]);
+        x_lift[2].push(parts.drag[2]);
+        y_lift.push(r.f_cg[2]);
+    }
+    // Drag is not identified (thrust along x is unknown): its part is held at the model's.
+    // Each force equation carries a constant: the accelerometer's bias and misalignment (a
+    // milliradian moves 0.01 m/s² of the normal force into y) would otherwise bias the scale.
+    let n_rows = y_side.len();
+    let side = fit(
+        &["k_side", "bias_mps2"],
+        vec![x_side.swap_remove(0), vec![1.0; n_rows]],
+        y_side,
+        "side force",
+    )?;
+    let k_y = side.get("k_side");
+    let y_l: Vec<f64> = y_lift
+        .iter()
+        .zip(&x_lift[1])
+        .zip(&x_lift[2])
+        .map(|((y, s), d)| y - k_y * s - d)
+        .collect();
+    let lift = fit(
+        &["k_lift", "bias_mps2"],
+        vec![x_lift.swap_remove(0), vec![1.0; n_rows]],
+        y_l,
+        "lift",
+    )?;
+    Ok(Calibration {
+        flights: names,
+        boom_alpha,
+        boom_beta,
+        boom_tas,
+        side,
+        lift,
+    })
+}
+
+/// Body-axis specific force (m/s²) of each wind axis of the model: drag, side force, lift.
+struct Parts {
+    drag: [f64; 3],
+    side: [f64; 3],
+    lift: [f64; 3],
+}
+
+fn force_parts(
+    inp: &Input,
+    gyro: [f32; 3],
+    alpha: f64,
+    beta: f64,
+    tas: f64,
+    mach: f64,
+    rho: f32,
+) -> Option<Parts> {
+    let cfg = F16_CONFIG;
+    let air = AirState {
+        alpha_rad: alpha as f32,
+        beta_rad: beta as f32,
+        mach: mach as f32,
+        tas_mps: tas as f32,
+        p_rps: gyro[0],
+        q_rps: gyro[1],
+        r_rps: gyro[2],
+        h_over_b: AirState::NO_GROUND_EFFECT,
+    };
+    let s: Surfaces = filter::surfaces(inp, alpha as f32, mach as f32, cfg.gear_norm);
+    let c = F16.coefficients(&air, &s);
+    if !c.valid {
+        return None;
+    }
+    let s_m2 = f64::from(F16.wing_area_ft2) * 0.3048 * 0.3048;
+    let mass = f64::from(cfg.empty_mass_kg) + f64::from(inp.fuel_kg.max(0.0));
+    let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
+    let (sa, ca, sb, cb) = (alpha.sin(), alpha.cos(), beta.sin(), beta.cos());
+    // Wind to body (JSBSim's Tw2b) of (−D, Y, −L): x forward, y right, z down.
+    let drag = -f64::from(c.wind.drag) * qs_m;
+    let side = f64::from(c.wind.side) * qs_m;
+    let lift = -f64::from(c.wind.lift) * qs_m;
+    Some(Parts {
+        drag: [ca * cb * drag, sb * drag, sa * cb * drag],
+        side: [-ca * sb * side, cb * side, -sa * sb * side],
+        lift: [-sa * lift, 0.0, ca * lift],
+    })
+}
+
+/// The calibrated aircraft as a `scripts/airframe-variant` spec: the model the estimator knows,
+/// with the identified scales.
+pub fn spec_toml(c: &Calibration, ft: &Path) -> String {
+    let (l, s) = (c.lift.get("k_lift"), c.side.get("k_side"));
+    format!(
+        "name = \"calibrated\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, side force x {s:.5} (equation error; drag not identified).\"\n\
+         [axes]\nLIFT = {l:.5}\nSIDE = {s:.5}\n",
+        ft.display(),
+        c.flights.len()
+    )
+}
+
+/// `calibration.md`: the identified parameters with their standard errors and the fits.
+pub fn markdown(c: &Calibration, command: &str, machine: &str, seconds: f64) -> String {
+    let mut m = String::from("# Flight-test calibration (generated by `trainer calibrate`)\n\n");
+    m.push_str(&format!(
+        "Command: `{command}`  \nMachine: {machine}; {seconds:.1} s. Flights: {}.\n\n",
+        c.flights.join(", ")
+    ));
+    m.push_str(
+        "| step | parameter | value | 1σ | frames | residual RMS | R² | ρ₁ |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for (step, f) in [
+        ("boom α vs inertial α, deg", &c.boom_alpha),
+        ("boom β vs inertial β, deg", &c.boom_beta),
+        ("boom airspeed vs inertial, m/s", &c.boom_tas),
+        ("lateral specific force, m/s²", &c.side),
+        ("normal specific force, m/s²", &c.lift),
+    ] {
+        for (name, e) in &f.params {
+            m.push_str(&format!(
+                "| {step} | {name} | {:.5} | {:.5} | {} | {:.4} | {:.5} | {:.3} |\n",
+                e.value, e.std_error, f.rows, f.residual_rms, f.r2, f.rho1
+            ));
+        }
+    }
+    m.push_str(
+        "\nThe boom's scale and bias are its calibration against the inertial data (scale 1 + s: \
+         1.0 means none); the lift and side-force scales multiply the model's LIFT and SIDE axes \
+         in aircraft.toml. Drag is not identified: along body x the engine's thrust adds to it.\n",
+    );
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn least_squares_recovers_a_line_and_its_uncertainty_grows_with_correlated_noise() {
+        let x: Vec<f64> = (0..200).map(|k| k as f64 * 0.1).collect();
+        let y: Vec<f64> = x.iter().map(|v| 2.0 * v + 1.0).collect();
+        let f = least_squares(&["a", "b"], &[x.clone(), vec![1.0; 200]], &y).unwrap();
+        assert!((f.get("a") - 2.0).abs() < 1e-9 && (f.get("b") - 1.0).abs() < 1e-9);
+        // Slowly varying (correlated) errors: a larger 1σ than white errors of the same size.
+        let white: Vec<f64> = (0..200)
+            .map(|k| if k % 2 == 0 { 0.1 } else { -0.1 })
+            .collect();
+        let slow: Vec<f64> = (0..200)
+            .map(|k| if (k / 20) % 2 == 0 { 0.1 } else { -0.1 })
+            .collect();
+        let se = |e: &[f64]| {
+            let y: Vec<f64> = x.iter().zip(e).map(|(v, e)| 2.0 * v + e).collect();
+            least_squares(&["a"], std::slice::from_ref(&x), &y)
+                .unwrap()
+                .params[0]
+                .1
+                .std_error
+        };
+        assert!(
+            se(&slow) > 3.0 * se(&white),
+            "{} vs {}",
+            se(&slow),
+            se(&white)
+        );
+    }
+
+    #[test]
+    fn the_force_parts_add_up_to_the_model_body_force() {
+        let inp = Input {
+            dt_s: 0.05,
+            euler_rad: [0.1, 0.05, 1.0],
+            vel_ned_mps: [150.0, 20.0, -5.0],
+            alt_m: 5000.0,
+            gyro_rps: [0.05, 0.02, -0.01],
+            accel_mps2: [0.0, 0.0, -9.8],
+            elevator_deg: -2.0,
+            aileron_deg: 1.0,
+            rudder_deg: 2.0,
+            flaperon_left_deg: 1.0,
+            tef_deg: 0.0,
+            speedbrake_deg: 0.0,
+            fuel_kg: 2000.0,
+        };
+        let (alpha, beta, tas) = (0.08, 0.03, 160.0);
+        let (rho, a) = filter::isa(inp.alt_m);
+        let mach = tas / f64::from(a);
+        let p = force_parts(&inp, inp.gyro_rps, alpha, beta, tas, mach, rho).unwrap();
+        let air = AirState {
+            alpha_rad: alpha as f32,
+            beta_rad: beta as f32,
+            mach: mach as f32,
+            tas_mps: tas as f32,
+            p_rps: 0.05,
+            q_rps: 0.02,
+            r_rps: -0.01,
+            h_over_b: AirState::NO_GROUND_EFFECT,
+        };
+        let gear = F16_CONFIG.gear_norm;
+        let c = F16.coefficients(
+            &air,
+            &filter::surfaces(&inp, alpha as f32, mach as f32, gear),
+        );
+        let s_m2 = f64::from(F16.wing_area_ft2) * 0.3048 * 0.3048;
+        let mass = f64::from(F16_CONFIG.empty_mass_kg) + 2000.0;
+        let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
+        let body = [c.body.x, c.body.y, c.body.z];
+        for (i, b) in body.iter().enumerate() {
+            let sum = p.drag[i] + p.side[i] + p.lift[i];
+            let want = f64::from(*b) * qs_m;
+            assert!((sum - want).abs() < 1e-3, "axis {i}: {sum} vs {want}");
+        }
+    }
+}
