@@ -5,8 +5,9 @@
 //! Two steps (docs/calibration.md):
 //! 1. **Data compatibility.** The boom's α, β and airspeed against the inertial data: in calm air
 //!    the EGI ground velocity, turned into body axes by the EGI attitude, is the air velocity, so
-//!    `boom = (1 + s)·kinematic + b` per channel (after removing the rotation-induced flow at the
-//!    boom, q·x/V and r·x/V) gives each channel's scale and zero shift; the boom is corrected with
+//!    `kinematic = g·boom + o_flight` per angle (after removing the rotation-induced flow at the
+//!    boom, q·x/V and r·x/V; the boom, the more precise, is the regressor) gives each vane's gain
+//!    and per-flight offset, and `boom = (1 + s)·v + b` the airspeed's; the boom is corrected with
 //!    them.
 //! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
 //!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
@@ -63,7 +64,7 @@ pub struct Fit {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Calibration {
     pub flights: Vec<String>,
-    /// Boom α: `boom = (1 + scale)·kinematic + bias` (deg).
+    /// Boom α: `kinematic = gain·boom + offset_deg_k` (deg; one offset per flight k).
     pub boom_alpha: Fit,
     pub boom_beta: Fit,
     /// Boom airspeed against the inertial speed (m/s).
@@ -161,6 +162,8 @@ impl Fit {
 
 /// One frame's quantities for both steps.
 struct Row {
+    /// Index of the flight the frame belongs to.
+    flight: usize,
     /// Angular acceleration magnitude and the boom angles' change from the previous frame.
     omega_dot: f64,
     angle_step: f64,
@@ -176,7 +179,7 @@ struct Row {
 }
 
 /// The rows of one flight: frames with every channel the filter needs, and the boom.
-fn rows(frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
+fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
     let cfg = F16_CONFIG;
     let arm = cfg.lever_arm_m;
     let mut out = Vec::new();
@@ -216,6 +219,7 @@ fn rows(frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
             continue;
         }
         out.push(Row {
+            flight,
             omega_dot: (wd[0] * wd[0] + wd[1] * wd[1] + wd[2] * wd[2]).sqrt(),
             angle_step: (b[0] - bp[0]).abs().max((b[1] - bp[1]).abs()),
             alpha_kin: vb[2].atan2(vb[0]).to_degrees(),
@@ -265,7 +269,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             .iter()
             .map(|s| [s.alpha_deg, s.beta_deg, s.tas_mps])
             .collect();
-        all.extend(rows(&frames, &times, &bm));
+        all.extend(rows(names.len(), &frames, &times, &bm));
         names.push(e.name.clone());
     }
     if all.is_empty() {
@@ -284,20 +288,41 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     // otherwise, and would pull the scale toward 0).
     let arm_a = |r: &Row| (f64::from(r.gyro[1]) * arm_m / r.tas_kin).to_degrees();
     let arm_b = |r: &Row| (f64::from(r.gyro[2]) * arm_m / r.tas_kin).to_degrees();
+    // The kinematic angles carry the EGI's slow attitude and heading errors (0.03°, 0.08° rms,
+    // time constants of 5-10 min), larger than the vanes' noise: the kinematic angle is regressed
+    // on the boom's (the precise variable as the regressor, so the gain is not attenuated), with
+    // one offset per flight for the slow part. The corrected boom angle is gain·boom + offset.
     let steady: Vec<&Row> = all.iter().filter(|r| quasi_steady(r)).collect();
-    let ones = vec![1.0; steady.len()];
+    let per_flight = |boom: &dyn Fn(&Row) -> f64| -> Vec<Vec<f64>> {
+        let mut x = vec![steady.iter().map(|r| boom(r)).collect::<Vec<f64>>()];
+        for k in 0..names.len() {
+            x.push(
+                steady
+                    .iter()
+                    .map(|r| f64::from(u8::from(r.flight == k)))
+                    .collect(),
+            );
+        }
+        x
+    };
+    let offset_names: Vec<String> = (0..names.len())
+        .map(|k| format!("offset_deg_{k}"))
+        .collect();
+    let mut angle_names = vec!["gain"];
+    angle_names.extend(offset_names.iter().map(String::as_str));
     let boom_alpha = fit(
-        &["scale", "bias_deg"],
-        vec![steady.iter().map(|r| r.alpha_kin).collect(), ones.clone()],
-        steady.iter().map(|r| r.boom_alpha + arm_a(r)).collect(),
+        &angle_names,
+        per_flight(&|r| r.boom_alpha + arm_a(r)),
+        steady.iter().map(|r| r.alpha_kin).collect(),
         "boom α",
     )?;
     let boom_beta = fit(
-        &["scale", "bias_deg"],
-        vec![steady.iter().map(|r| r.beta_kin).collect(), ones.clone()],
-        steady.iter().map(|r| r.boom_beta - arm_b(r)).collect(),
+        &angle_names,
+        per_flight(&|r| r.boom_beta - arm_b(r)),
+        steady.iter().map(|r| r.beta_kin).collect(),
         "boom β",
     )?;
+    let ones = vec![1.0; steady.len()];
     let boom_tas = fit(
         &["scale", "bias_mps"],
         vec![steady.iter().map(|r| r.tas_kin).collect(), ones],
@@ -305,16 +330,17 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         "boom airspeed",
     )?;
     // 2. Equation error at the corrected boom's air data.
-    let (sa, ba) = (boom_alpha.get("scale"), boom_alpha.get("bias_deg"));
-    let (sb, bb) = (boom_beta.get("scale"), boom_beta.get("bias_deg"));
+    let (ga, gb) = (boom_alpha.get("gain"), boom_beta.get("gain"));
     let (sv, bv) = (boom_tas.get("scale"), boom_tas.get("bias_mps"));
     let mut x_side = vec![Vec::new(), Vec::new()];
     let mut y_side = Vec::new();
     let mut x_lift = vec![Vec::new(), Vec::new(), Vec::new()];
     let mut y_lift = Vec::new();
     for r in &all {
-        let alpha = ((r.boom_alpha + arm_a(r) - ba) / sa).to_radians();
-        let beta = ((r.boom_beta - arm_b(r) - bb) / sb).to_radians();
+        let oa = boom_alpha.get(&format!("offset_deg_{}", r.flight));
+        let ob = boom_beta.get(&format!("offset_deg_{}", r.flight));
+        let alpha = (ga * (r.boom_alpha + arm_a(r)) + oa).to_radians();
+        let beta = (gb * (r.boom_beta - arm_b(r)) + ob).to_radians();
         let tas = (r.boom_tas - bv) / sv;
         let (rho, a_sound) = filter::isa(r.inp.alt_m);
         let qbar = 0.5 * f64::from(rho) * tas * tas;
@@ -438,8 +464,8 @@ pub fn markdown(c: &Calibration, command: &str, machine: &str, seconds: f64) -> 
         "| step | parameter | value | 1σ | frames | residual RMS | R² | ρ₁ |\n|---|---|---|---|---|---|---|---|\n",
     );
     for (step, f) in [
-        ("boom α vs inertial α, deg", &c.boom_alpha),
-        ("boom β vs inertial β, deg", &c.boom_beta),
+        ("inertial α vs boom α, deg", &c.boom_alpha),
+        ("inertial β vs boom β, deg", &c.boom_beta),
         ("boom airspeed vs inertial, m/s", &c.boom_tas),
         ("lateral specific force, m/s²", &c.side),
         ("normal specific force, m/s²", &c.lift),
@@ -452,9 +478,10 @@ pub fn markdown(c: &Calibration, command: &str, machine: &str, seconds: f64) -> 
         }
     }
     m.push_str(
-        "\nThe boom's scale and bias are its calibration against the inertial data (scale 1 + s: \
-         1.0 means none); the lift and side-force scales multiply the model's LIFT and SIDE axes \
-         in aircraft.toml. Drag is not identified: along body x the engine's thrust adds to it.\n",
+        "\nThe vanes' gain and per-flight offsets and the airspeed's scale and bias are the boom's \
+         calibration against the inertial data (gain and scale 1: none); the lift and side-force \
+         scales multiply the model's LIFT and SIDE axes in aircraft.toml. Drag is not identified: \
+         along body x the engine's thrust adds to it.\n",
     );
     m
 }
