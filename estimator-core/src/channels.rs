@@ -224,6 +224,11 @@ impl Suite {
         self.channels() & c.bit() != 0
     }
 
+    /// Whether frames of this suite carry every channel a model reading `needs` reads.
+    pub const fn delivers(self, needs: Suite) -> bool {
+        needs.channels() & !self.channels() == 0
+    }
+
     /// The smallest suite carrying every channel of `mask`, or `None` if no suite does.
     pub const fn covering(mask: u32) -> Option<Suite> {
         if mask & !Suite::Table1.channels() == 0 {

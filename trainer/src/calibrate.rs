@@ -23,7 +23,6 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{AirState, F16, Surfaces};
 use estimator_core::filter::{self, F16_CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
@@ -175,7 +174,6 @@ struct Row {
     boom_tas: f64,
     inp: Input,
     f_cg: [f64; 3],
-    gyro: [f32; 3],
 }
 
 /// The rows of one flight: frames with every channel the filter needs, and the boom.
@@ -198,20 +196,15 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
         let (Some(b), Some(bp)) = (boom.get(k), k.checked_sub(1).and_then(|j| boom.get(j))) else {
             continue;
         };
-        // Specific force at the CG: the IMU's, less the lever arm's ω̇ × r and ω × (ω × r).
-        let w = inp.gyro_rps.map(f64::from);
-        let wp = p.gyro_rps.map(f64::from);
-        let wd = [0, 1, 2].map(|i| (w[i] - wp[i]) / f64::from(dt.max(1e-3)));
-        let r = arm.map(f64::from);
-        let cross = |a: [f64; 3], b: [f64; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
-        let (wdr, wwr) = (cross(wd, r), cross(w, cross(w, r)));
-        let f_cg = [0, 1, 2].map(|i| f64::from(inp.accel_mps2[i]) - wdr[i] - wwr[i]);
+        // Specific force at the CG, as the filter moves it from the IMU.
+        let f = filter::specific_force_cg(&inp, &p, arm);
+        let omega_dot = inp
+            .gyro_rps
+            .iter()
+            .zip(p.gyro_rps)
+            .map(|(w, wp)| f64::from((w - wp) / dt.max(1e-3)).powi(2))
+            .sum::<f64>()
+            .sqrt();
         // Body velocity from the EGI: calm air, so it is the air velocity.
         let vb = filter::body_velocity(&inp).map(f64::from);
         let v = (vb[0] * vb[0] + vb[1] * vb[1] + vb[2] * vb[2]).sqrt();
@@ -220,7 +213,7 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
         }
         out.push(Row {
             flight,
-            omega_dot: (wd[0] * wd[0] + wd[1] * wd[1] + wd[2] * wd[2]).sqrt(),
+            omega_dot,
             angle_step: (b[0] - bp[0]).abs().max((b[1] - bp[1]).abs()),
             alpha_kin: vb[2].atan2(vb[0]).to_degrees(),
             beta_kin: (vb[1] / v).clamp(-1.0, 1.0).asin().to_degrees(),
@@ -229,8 +222,7 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
             boom_beta: b[1],
             boom_tas: b[2],
             inp,
-            f_cg,
-            gyro: inp.gyro_rps,
+            f_cg: [f.x, f.y, f.z].map(f64::from),
         });
     }
     out
@@ -286,8 +278,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     // 1. Data compatibility: the boom's rotation-induced flow removed, then scale and zero shift,
     // on the quasi-steady frames (the vane lag against the EGI is noise in the regressor there
     // otherwise, and would pull the scale toward 0).
-    let arm_a = |r: &Row| (f64::from(r.gyro[1]) * arm_m / r.tas_kin).to_degrees();
-    let arm_b = |r: &Row| (f64::from(r.gyro[2]) * arm_m / r.tas_kin).to_degrees();
+    let arm_a = |r: &Row| (f64::from(r.inp.gyro_rps[1]) * arm_m / r.tas_kin).to_degrees();
+    let arm_b = |r: &Row| (f64::from(r.inp.gyro_rps[2]) * arm_m / r.tas_kin).to_degrees();
     // The kinematic angles carry the EGI's slow attitude and heading errors (0.03°, 0.08° rms,
     // time constants of 5-10 min), larger than the vanes' noise: the kinematic angle is regressed
     // on the boom's (the precise variable as the regressor, so the gain is not attenuated), with
@@ -332,7 +324,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     // 2. Equation error at the corrected boom's air data.
     let (ga, gb) = (boom_alpha.get("gain"), boom_beta.get("gain"));
     let (sv, bv) = (boom_tas.get("scale"), boom_tas.get("bias_mps"));
-    let mut x_side = vec![Vec::new(), Vec::new()];
+    let mut x_side = Vec::new();
     let mut y_side = Vec::new();
     let mut x_lift = vec![Vec::new(), Vec::new(), Vec::new()];
     let mut y_lift = Vec::new();
@@ -348,12 +340,11 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             continue;
         }
         let mach = tas / f64::from(a_sound);
-        let Some(parts) = force_parts(&r.inp, r.gyro, alpha, beta, tas, mach, rho) else {
+        let Some(parts) = force_parts(&r.inp, alpha, beta, tas, mach, rho) else {
             continue;
         };
         // Specific force per unit scale of each axis, body y and z.
-        x_side[0].push(parts.side[1]);
-        x_side[1].push(parts.drag[1]);
+        x_side.push(parts.side[1]);
         y_side.push(r.f_cg[1] - parts.drag[1]);
         x_lift[0].push(parts.lift[2]);
         x_lift[1].push(parts.side[2]);
@@ -366,7 +357,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let n_rows = y_side.len();
     let side = fit(
         &["k_side", "bias_mps2"],
-        vec![x_side.swap_remove(0), vec![1.0; n_rows]],
+        vec![x_side, vec![1.0; n_rows]],
         y_side,
         "side force",
     )?;
@@ -400,34 +391,21 @@ struct Parts {
     lift: [f64; 3],
 }
 
-fn force_parts(
-    inp: &Input,
-    gyro: [f32; 3],
-    alpha: f64,
-    beta: f64,
-    tas: f64,
-    mach: f64,
-    rho: f32,
-) -> Option<Parts> {
+fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32) -> Option<Parts> {
     let cfg = F16_CONFIG;
-    let air = AirState {
-        alpha_rad: alpha as f32,
-        beta_rad: beta as f32,
-        mach: mach as f32,
-        tas_mps: tas as f32,
-        p_rps: gyro[0],
-        q_rps: gyro[1],
-        r_rps: gyro[2],
-        h_over_b: AirState::NO_GROUND_EFFECT,
-    };
-    let s: Surfaces = filter::surfaces(inp, alpha as f32, mach as f32, cfg.gear_norm);
-    let c = F16.coefficients(&air, &s);
+    let c = filter::model_coefficients(
+        inp,
+        inp.gyro_rps,
+        alpha as f32,
+        beta as f32,
+        mach as f32,
+        tas as f32,
+        cfg.gear_norm,
+    );
     if !c.valid {
         return None;
     }
-    let s_m2 = f64::from(F16.wing_area_ft2) * 0.3048 * 0.3048;
-    let mass = f64::from(cfg.empty_mass_kg) + f64::from(inp.fuel_kg.max(0.0));
-    let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
+    let qs_m = f64::from(filter::qs_over_m(rho, tas as f32, cfg.mass_kg(inp.fuel_kg)));
     let (sa, ca, sb, cb) = (alpha.sin(), alpha.cos(), beta.sin(), beta.cos());
     // Wind to body (JSBSim's Tw2b) of (−D, Y, −L): x forward, y right, z down.
     let drag = -f64::from(c.wind.drag) * qs_m;
@@ -489,6 +467,7 @@ pub fn markdown(c: &Calibration, command: &str, machine: &str, seconds: f64) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use estimator_core::aero::{AirState, F16};
 
     #[test]
     fn least_squares_recovers_a_line_and_its_uncertainty_grows_with_correlated_noise() {
@@ -539,7 +518,7 @@ mod tests {
         let (alpha, beta, tas) = (0.08, 0.03, 160.0);
         let (rho, a) = filter::isa(inp.alt_m);
         let mach = tas / f64::from(a);
-        let p = force_parts(&inp, inp.gyro_rps, alpha, beta, tas, mach, rho).unwrap();
+        let p = force_parts(&inp, alpha, beta, tas, mach, rho).unwrap();
         let air = AirState {
             alpha_rad: alpha as f32,
             beta_rad: beta as f32,

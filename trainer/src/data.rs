@@ -25,6 +25,24 @@ pub enum Role {
     Test,
 }
 
+impl Role {
+    pub const ALL: [Role; 3] = [Role::Test, Role::Train, Role::Val];
+
+    /// The `--split` name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Role::Train => "train",
+            Role::Val => "val",
+            Role::Test => "test",
+        }
+    }
+
+    /// The role a `--split` name names.
+    pub fn from_name(name: &str) -> Option<Role> {
+        Role::ALL.into_iter().find(|r| r.name() == name)
+    }
+}
+
 /// Truth columns used as targets (the intermediate in SI; converted to mm/s and millidegrees by users).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Target {
@@ -301,14 +319,8 @@ pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Res
     let csv = hil_sim::dataset::Flight::read_csv(path)?;
     // Training and scoring need the truth on every row: a NaN would turn every mean into NaN.
     for (k, s) in csv.samples.iter().enumerate() {
-        let t = &s.truth;
-        for (name, v) in [
-            ("alpha_deg", t.alpha_deg),
-            ("beta_deg", t.beta_deg),
-            ("v_aero_mps", t.v_aero_mps),
-            ("w_aero_mps", t.w_aero_mps),
-            ("qbar_pa", t.qbar_pa),
-        ] {
+        let targets = Target::ALL.map(|t| (t.column(), t.of(&s.truth)));
+        for (name, v) in targets.into_iter().chain([("qbar_pa", s.truth.qbar_pa)]) {
             if !v.is_finite() {
                 return Err(Error::Split(
                     path.to_path_buf(),

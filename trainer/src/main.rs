@@ -591,12 +591,20 @@ fn cmd_train(
 
 /// The flights a `--split` names.
 fn parse_split(split: &str) -> Result<Role> {
-    Ok(match split {
-        "test" => Role::Test,
-        "train" => Role::Train,
-        "val" => Role::Val,
-        other => bail!("--split must be test, train or val, not `{other}`"),
-    })
+    Role::from_name(split)
+        .with_context(|| format!("--split must be test, train or val, not `{split}`"))
+}
+
+/// Refuses frames of `suite` for a model that reads `needs` (`what` names the model).
+fn require_suite(what: &str, needs: Suite, suite: Suite) -> Result<()> {
+    if !suite.delivers(needs) {
+        bail!(
+            "{what} reads the `{}` sensor suite; pass --suite {}",
+            needs.name(),
+            needs.name()
+        );
+    }
+    Ok(())
 }
 
 /// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
@@ -605,32 +613,19 @@ fn load_split(data: &Path, role: Role) -> Result<Dataset> {
     let ds = Dataset::load_any(data, 0.15)
         .with_context(|| format!("cannot load the dataset {}", data.display()))?;
     if ds.flights(role).next().is_none() {
-        let mut have: Vec<&str> = Vec::new();
-        for (r, name) in [
-            (Role::Test, "test"),
-            (Role::Train, "train"),
-            (Role::Val, "val"),
-        ] {
-            if ds.flights(r).next().is_some() {
-                have.push(name);
-            }
-        }
+        let have: Vec<&str> = Role::ALL
+            .into_iter()
+            .filter(|r| ds.flights(*r).next().is_some())
+            .map(Role::name)
+            .collect();
         bail!(
             "{} has no {} flight; pass --split {}",
             data.display(),
-            role_name(role),
+            role.name(),
             have.join(" or --split ")
         );
     }
     Ok(ds)
-}
-
-fn role_name(r: Role) -> &'static str {
-    match r {
-        Role::Test => "test",
-        Role::Train => "train",
-        Role::Val => "val",
-    }
 }
 
 fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result<()> {
@@ -649,13 +644,7 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
             "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
         );
     };
-    if needs.channels() & !suite.channels() != 0 {
-        bail!(
-            "the compiled-in model reads the `{}` sensor suite; pass --suite {}",
-            needs.name(),
-            needs.name()
-        );
-    }
+    require_suite("the compiled-in model", needs, suite)?;
     let e = eval_shipped(&ds, role, suite);
     if json {
         let v = serde_json::json!({
@@ -729,14 +718,11 @@ fn cmd_eval_model(
         Some(s) => parse_suite(s)?,
         None => model_suite,
     };
-    if model_suite.channels() & !suite.channels() != 0 {
-        bail!(
-            "the model in {} reads the `{}` sensor suite; pass --suite {}",
-            model.display(),
-            model_suite.name(),
-            model_suite.name()
-        );
-    }
+    require_suite(
+        &format!("the model in {}", model.display()),
+        model_suite,
+        suite,
+    )?;
     let ds = load_split(data, role)?;
     ds.require(suite)?;
     let alpha = trainer::pipeline::int8_metrics(&qa, &ds, role);

@@ -5,6 +5,32 @@ use serde::{Deserialize, Serialize};
 pub const SILENT_ALPHA_DEG: f64 = 2.0;
 pub const SILENT_BETA_DEG: f64 = 1.0;
 
+/// Silent frames of one flight: every flag clear (`clear`) while |α error| > [`SILENT_ALPHA_DEG`]
+/// or |β error| > [`SILENT_BETA_DEG`]. Returns their count and the longest run of them, frames.
+pub fn silent_frames(
+    alpha: (&[f64], &[f64]),
+    beta: (&[f64], &[f64]),
+    clear: impl Fn(usize) -> bool,
+) -> (usize, usize) {
+    let (mut count, mut run, mut longest) = (0, 0, 0);
+    for (i, ((a, ta), (b, tb))) in alpha
+        .0
+        .iter()
+        .zip(alpha.1)
+        .zip(beta.0.iter().zip(beta.1))
+        .enumerate()
+    {
+        if clear(i) && ((a - ta).abs() > SILENT_ALPHA_DEG || (b - tb).abs() > SILENT_BETA_DEG) {
+            count += 1;
+            run += 1;
+            longest = usize::max(longest, run);
+        } else {
+            run = 0;
+        }
+    }
+    (count, longest)
+}
+
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
 #[serde(into = "MetricsJson", from = "MetricsJson")]
 pub struct Metrics {

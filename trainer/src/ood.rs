@@ -128,19 +128,10 @@ pub fn score(ds: &Dataset, est: &Estimator) -> EstimatorScores {
         let ta = fl.truth(Target::AlphaDeg);
         let tb = fl.truth(Target::BetaDeg);
         let (case, profile) = case_and_profile(&fl.name);
-        let mut silent = 0usize;
-        let (mut run, mut longest) = (0usize, 0usize);
-        for i in 0..fl.len() {
-            let ea = (ans.alpha_deg[i] - ta[i]).abs();
-            let eb = (ans.beta_deg[i] - tb[i]).abs();
-            if ans.clear[i] && (ea > SILENT_ALPHA_DEG || eb > SILENT_BETA_DEG) {
-                silent += 1;
-                run += 1;
-                longest = longest.max(run);
-            } else {
-                run = 0;
-            }
-        }
+        let (silent, longest) =
+            crate::metrics::silent_frames((&ans.alpha_deg, ta), (&ans.beta_deg, tb), |i| {
+                ans.clear.get(i).copied().unwrap_or(false)
+            });
         let n = fl.len().max(1) as f64;
         flights.push(FlightScore {
             flight: fl.name.clone(),

@@ -238,13 +238,10 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
             fl.truth(Angle::Alpha.target()),
             fl.truth(Angle::Beta.target()),
         );
-        let silent = (0..fl.len())
-            .filter(|&i| {
-                ans.flags[i].0 == 0
-                    && ((ans.alpha_deg[i] - ta[i]).abs() > crate::metrics::SILENT_ALPHA_DEG
-                        || (ans.beta_deg[i] - tb[i]).abs() > crate::metrics::SILENT_BETA_DEG)
-            })
-            .count();
+        let (silent, _) =
+            crate::metrics::silent_frames((&ans.alpha_deg, ta), (&ans.beta_deg, tb), |i| {
+                ans.flags.get(i).is_some_and(|f| f.0 == 0)
+            });
         let counts = FlagCounts {
             flight: fl.name.clone(),
             not_usable: held,

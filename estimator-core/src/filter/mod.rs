@@ -114,6 +114,13 @@ pub struct Config {
 /// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
 /// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
 /// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
+impl Config {
+    /// The aircraft's mass for a fuel-gauge reading: the empty mass (with the pilot) plus the fuel.
+    pub fn mass_kg(&self, fuel_kg: f32) -> f32 {
+        self.empty_mass_kg + fuel_kg.max(0.0)
+    }
+}
+
 pub const F16_CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],
     mean_wind_sigma0: [15.0, 15.0, 1.0],
@@ -439,6 +446,54 @@ pub fn body_velocity(inp: &Input) -> [f32; 3] {
     [v.x, v.y, v.z]
 }
 
+/// The force model's coefficients for a frame's input at an air-data point (α, β in rad, Mach, true
+/// airspeed in m/s), with the gyro's body rates as the aero rates (calm air), the surfaces of
+/// [`surfaces`] and no ground effect: what the filter and the flight-test calibration evaluate.
+#[allow(clippy::too_many_arguments)]
+pub fn model_coefficients(
+    inp: &Input,
+    gyro: [f32; 3],
+    alpha_rad: f32,
+    beta_rad: f32,
+    mach: f32,
+    tas_mps: f32,
+    gear_norm: f32,
+) -> aero::Coefficients {
+    let air = AirState {
+        alpha_rad,
+        beta_rad,
+        mach,
+        tas_mps,
+        p_rps: gyro[0],
+        q_rps: gyro[1],
+        r_rps: gyro[2],
+        h_over_b: AirState::NO_GROUND_EFFECT,
+    };
+    F16.coefficients(&air, &surfaces(inp, alpha_rad, mach, gear_norm))
+}
+
+/// Dynamic pressure times the wing area over the mass: the specific force (m/s²) of a unit force
+/// coefficient at density `rho` (kg/m³) and true airspeed `tas_mps`.
+pub fn qs_over_m(rho: f32, tas_mps: f32, mass_kg: f32) -> f32 {
+    let s_m2 = F16.wing_area_ft2 * 0.3048 * 0.3048;
+    0.5 * rho * tas_mps * tas_mps * s_m2 / mass_kg
+}
+
+/// Specific force at the CG, body axes (m/s²): the IMU's, less ω̇ × r and ω × (ω × r) for the
+/// lever arm r, with ω̇ the gyro change since `prev` over `inp.dt_s` (zero for a non-positive dt).
+pub fn specific_force_cg(inp: &Input, prev: &Input, lever_arm_m: [f32; 3]) -> Vector3<f32> {
+    let dt = inp.dt_s;
+    let w = Vector3::from(inp.gyro_rps);
+    let w_prev = Vector3::from(prev.gyro_rps);
+    let w_dot = if dt > 0.0 {
+        (w - w_prev) / dt
+    } else {
+        Vector3::zeros()
+    };
+    let r = Vector3::from(lever_arm_m);
+    Vector3::from(inp.accel_mps2) - w_dot.cross(&r) - w.cross(&w.cross(&r))
+}
+
 /// Specific force at the CG per unit lift scale, body axes, for a body air velocity; `None` when the
 /// model cannot be evaluated there.
 #[allow(clippy::too_many_arguments)]
@@ -458,24 +513,11 @@ fn model_force(
     let alpha = libm::atan2f(vb.z, vb.x);
     let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
     let mach = v / a_sound;
-    let air = AirState {
-        alpha_rad: alpha,
-        beta_rad: beta,
-        mach,
-        tas_mps: v,
-        p_rps: gyro[0],
-        q_rps: gyro[1],
-        r_rps: gyro[2],
-        h_over_b: AirState::NO_GROUND_EFFECT,
-    };
-    let s = surfaces(inp, alpha, mach, gear_norm);
-    let c = F16.coefficients(&air, &s);
+    let c = model_coefficients(inp, gyro, alpha, beta, mach, v, gear_norm);
     if !c.valid {
         return None;
     }
-    let s_m2 = F16.wing_area_ft2 * 0.3048 * 0.3048;
-    let qs_m = 0.5 * rho * v * v * s_m2 / mass_kg;
-    Some(Vector3::new(c.body.x, c.body.y, c.body.z) * qs_m)
+    Some(Vector3::new(c.body.x, c.body.y, c.body.z) * qs_over_m(rho, v, mass_kg))
 }
 
 impl AirDataFilter {
@@ -596,17 +638,8 @@ impl AirDataFilter {
         };
         let u = inp.toward(prev, back);
         let (rho, a_sound) = isa(u.alt_m);
-        let mass = c.empty_mass_kg + inp.fuel_kg.max(0.0);
-        // Specific force at the CG: f_cg = f_imu − ω̇ × r − ω × (ω × r).
-        let w = Vector3::from(inp.gyro_rps);
-        let w_prev = Vector3::from(prev.gyro_rps);
-        let w_dot = if dt > 0.0 {
-            (w - w_prev) / dt
-        } else {
-            Vector3::zeros()
-        };
-        let r = Vector3::from(c.lever_arm_m);
-        let f_cg = Vector3::from(inp.accel_mps2) - w_dot.cross(&r) - w.cross(&w.cross(&r));
+        let mass = c.mass_kg(inp.fuel_kg);
+        let f_cg = specific_force_cg(inp, prev, c.lever_arm_m);
 
         let cbn = c_bn(u.euler_rad);
         let vb = cbn * (Vector3::from(u.vel_ned_mps) - self.wind());

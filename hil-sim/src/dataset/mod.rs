@@ -57,6 +57,11 @@ pub struct Staging {
     committed: bool,
 }
 
+/// Whether `dir` is a directory with at least one entry.
+fn holds_something(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_some())
+}
+
 /// `DatasetError::Io` of `action` on `path`, for `map_err`.
 fn io(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> DatasetError {
     let path = path.to_path_buf();
@@ -69,8 +74,7 @@ fn io(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> Datas
 
 impl Staging {
     pub fn begin(out: &Path, force: bool) -> Result<Staging, DatasetError> {
-        let non_empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some());
-        if non_empty && !force {
+        if holds_something(out) && !force {
             return Err(DatasetError::Exists {
                 path: out.to_path_buf(),
             });
@@ -103,7 +107,7 @@ impl Staging {
     /// Moves the complete dataset to `--out` (replacing an old one under `force`).
     pub fn commit(mut self) -> Result<(), DatasetError> {
         if self.out.exists() {
-            if !self.force && std::fs::read_dir(&self.out).is_ok_and(|mut d| d.next().is_some()) {
+            if !self.force && holds_something(&self.out) {
                 return Err(DatasetError::Exists {
                     path: self.out.clone(),
                 });

@@ -216,24 +216,22 @@ pub fn flight_on(
 /// is refused rather than ignored.
 pub fn firmware_kind(a: &RunArgs) -> Result<FirmwareKind, RunError> {
     match (a.firmware, &a.port) {
-        (Some(FirmwareKind::Host | FirmwareKind::Qemu), Some(p)) => Err(RunError::Usage(format!(
-            "--port {} goes with a flashed board (--firmware serial), not --firmware {}: drop one of them",
-            p.display(),
-            if a.firmware == Some(FirmwareKind::Host) {
-                "host"
-            } else {
-                "qemu"
-            }
-        ))),
+        (Some(k @ (FirmwareKind::Host | FirmwareKind::Qemu)), Some(p)) => {
+            Err(RunError::Usage(format!(
+                "--port {} goes with a flashed board (--firmware serial), not --firmware {}: drop one of them",
+                p.display(),
+                clap::ValueEnum::to_possible_value(&k)
+                    .map_or_else(String::new, |v| v.get_name().to_string())
+            )))
+        }
         (Some(k), _) => Ok(k),
         (None, Some(_)) => Ok(FirmwareKind::Serial),
         (None, None) => Ok(FirmwareKind::Host),
     }
 }
 
-/// Opens the chosen firmware.
-pub fn open_target(a: &RunArgs) -> Result<Box<dyn Target>, RunError> {
-    let kind = firmware_kind(a)?;
+/// Opens the firmware `kind` ([`firmware_kind`]).
+pub fn open_target(a: &RunArgs, kind: FirmwareKind) -> Result<Box<dyn Target>, RunError> {
     Ok(match kind {
         FirmwareKind::Host => Box::new(InProcess::new()),
         FirmwareKind::Qemu => {
@@ -298,7 +296,7 @@ pub fn parse_suite(s: &str) -> Result<estimator_core::Suite, UnknownSuite> {
 pub fn check_suite(suite: estimator_core::Suite) -> Result<(), RunError> {
     let shipped = estimator_core::Estimator::shipped();
     match shipped.suite() {
-        Some(needs) if needs.channels() & !suite.channels() != 0 => Err(RunError::Usage(format!(
+        Some(needs) if !suite.delivers(needs) => Err(RunError::Usage(format!(
             "the compiled-in estimator reads the `{}` sensor suite, so `--suite {}` frames lack channels it needs: pass --suite {} (or leave --suite out)",
             needs.name(),
             suite.name(),
@@ -330,7 +328,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     let suite = a.suite.unwrap_or_else(super::shipped_suite);
     check_suite(suite)?;
     // A contradictory --port is refused before anything flies.
-    firmware_kind(a)?;
+    let kind = firmware_kind(a)?;
     let cfg = RunConfig {
         link: a.link_config()?,
         seed: a.seed,
@@ -382,7 +380,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
     for (s, f) in samples.iter_mut().zip(frames) {
         s.frame = f;
     }
-    let mut target = open_target(a)?;
+    let mut target = open_target(a, kind)?;
     let bar = progress_bar(samples.len());
     let outcome = super::run_with_progress(target.as_mut(), &samples, &cfg, &mut |p| {
         // indicatif redraws at most 20 times a second; the message is rebuilt once per flight second.
@@ -409,7 +407,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         model: estimator_core::model::SHIPPED_PROVENANCE.map(str::to_string),
         git_rev: crate::dataset::git_rev(),
         hil_sim_version: env!("CARGO_PKG_VERSION").to_string(),
-        link: Some(cfg.link.clone()),
+        link: cfg.link.clone(),
     };
     if !faults.is_empty() {
         let estimates: Vec<_> = outcome

@@ -83,7 +83,7 @@ pub struct Provenance {
     pub git_rev: String,
     pub hil_sim_version: String,
     /// The simulated link's parameters.
-    pub link: Option<crate::link::LinkConfig>,
+    pub link: crate::link::LinkConfig,
 }
 
 /// Seconds rounded to the millisecond, as a duration is read.
