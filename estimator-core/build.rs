@@ -1,17 +1,22 @@
-//! Chooses the weights file that `src/model/mod.rs` compiles in.
+//! Chooses the generated files the crate compiles in.
 //!
-//! Default: `src/model/weights.rs`, written by `trainer train` and committed. `ESTIMATOR_WEIGHTS=/abs/path.rs`
-//! builds against another export (CI trains a small model and checks it end to end without touching the
-//! shipped weights).
+//! * Weights, in `src/model/mod.rs`. Default: `src/model/weights.rs`, written by `trainer train` and
+//!   committed. `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small
+//!   model and checks it end to end without touching the shipped weights).
+//! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/f16_tables.rs`,
+//!   written by `scripts/extract-aero` from JSBSim's F-16 and committed.
+//!   `ESTIMATOR_AERO=/abs/path/f16_tables.rs` builds against the tables of another aircraft
+//!   directory (`scripts/calibrate` builds the calibrated estimator this way).
 // Host build step, not flight code: a panic here is a failed build with a message.
 #![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
 
 fn main() {
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
+    aero_tables(&manifest);
     println!("cargo:rerun-if-env-changed=ESTIMATOR_WEIGHTS");
-    let default =
-        PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("src/model/weights.rs");
+    let default = manifest.join("src/model/weights.rs");
     let path = match std::env::var_os("ESTIMATOR_WEIGHTS") {
         Some(p) if !p.is_empty() => PathBuf::from(p),
         _ => default,
@@ -28,4 +33,21 @@ fn main() {
             path.display()
         );
     }
+}
+
+/// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
+/// (the filter has no model without them), with the variable named.
+fn aero_tables(manifest: &std::path::Path) {
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_AERO");
+    let path = match std::env::var_os("ESTIMATOR_AERO") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => manifest.join("src/aero/f16_tables.rs"),
+    };
+    assert!(
+        path.is_absolute() && path.is_file(),
+        "ESTIMATOR_AERO: {} is not an absolute path to a file written by scripts/extract-aero",
+        path.display()
+    );
+    println!("cargo:rerun-if-changed={}", path.display());
+    println!("cargo:rustc-env=ESTIMATOR_AERO_FILE={}", path.display());
 }

@@ -1,6 +1,6 @@
 //! Flight-test calibration reads only what a flight-test aircraft records, and finds a variant's
 //! scales: a flight-test dataset flown on variant C (lift × 0.94, side force × 1.10), calibrated
-//! with and without its truth columns.
+//! with and without its truth columns, against the same card flown on the model (JSBSim's F-16).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,10 +26,12 @@ fn ok(cmd: &mut Command) {
     );
 }
 
-fn calibration(ft: &Path, out: &Path) -> serde_json::Value {
+fn calibration(ft: &Path, model: &Path, out: &Path) -> serde_json::Value {
     ok(Command::new(bin("trainer"))
         .args(["calibrate", "--flight-test"])
         .arg(ft)
+        .arg("--model-flight-test")
+        .arg(model)
         .arg("--out")
         .arg(out));
     serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap()
@@ -51,7 +53,11 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         .arg(&ft)
         .arg("--aircraft-dir")
         .arg(&aircraft));
-    let with_truth = calibration(&ft, &dir.join("cal"));
+    let model = dir.join("model-ft");
+    ok(Command::new(bin("hil-sim"))
+        .args(["generate", "--preset", "flight-test", "--out"])
+        .arg(&model));
+    let with_truth = calibration(&ft, &model, &dir.join("cal"));
 
     // The same dataset with every truth column deleted from every flight CSV.
     let stripped = dir.join("ft-no-truth");
@@ -80,27 +86,24 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         }
         std::fs::write(stripped.join(&name), out).unwrap();
     }
-    let without = calibration(&stripped, &dir.join("cal-no-truth"));
+    let without = calibration(&stripped, &model, &dir.join("cal-no-truth"));
     assert_eq!(with_truth, without, "the calibration read a truth column");
 
-    let k = |fit: &str, name: &str| {
-        with_truth[fit]["params"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p[0] == name)
-            .unwrap()[1]["value"]
-            .as_f64()
-            .unwrap()
-    };
-    let (k_lift, k_side) = (k("lift", "k_lift"), k("side", "k_side"));
-    assert!(
-        (k_lift / 0.94 - 1.0).abs() < 0.02,
-        "lift scale {k_lift}, truth 0.94"
-    );
-    assert!(
-        (k_side / 1.10 - 1.0).abs() < 0.05,
-        "side-force scale {k_side}, truth 1.10"
-    );
+    // Within 2 % (lift) and 5 % (side force) of the truth, and the error inside 2σ.
+    for (axis, truth, tolerance) in [("lift", 0.94, 0.02), ("side", 1.10, 0.05)] {
+        let e = &with_truth["scales"][axis];
+        let (k, se) = (
+            e["value"].as_f64().unwrap(),
+            e["std_error"].as_f64().unwrap(),
+        );
+        assert!(
+            (k / truth - 1.0).abs() < tolerance,
+            "{axis} scale {k}, truth {truth}"
+        );
+        assert!(
+            (k - truth).abs() <= 2.0 * se,
+            "{axis} scale {k} ± {se}: the 1σ does not cover the error to the truth {truth}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -117,6 +117,8 @@ pub struct Dataset {
     pub extra: Vec<ExtraData>,
     /// The aircraft the flights flew (manifest `aircraft`; `None`: JSBSim's own, not recorded).
     pub aircraft: Option<hil_sim::dataset::AircraftRecord>,
+    /// The datasets whose test flights replaced this one's ([`Dataset::test_on`]).
+    pub test_from: Vec<ExtraData>,
 }
 
 /// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
@@ -194,6 +196,7 @@ impl Dataset {
             suites: manifest.suites(),
             flights,
             extra: Vec::new(),
+            test_from: Vec::new(),
             aircraft: manifest.aircraft.clone(),
         })
     }
@@ -267,6 +270,57 @@ impl Dataset {
             flights: added.len(),
         });
         self.flights.extend(added);
+        Ok(())
+    }
+
+    /// Scores on the test flights of the dataset at `dir` instead of this one's: the flights of the
+    /// aircraft really flown, when the model trains on another one's (a calibrated aircraft, its
+    /// airframe's flight-tested variant). Training and validation flights stay this dataset's. The
+    /// first call drops this dataset's test flights, later ones add more; each flight is named
+    /// `DATASET/FLIGHT` after its dataset's directory.
+    pub fn test_on(&mut self, dir: &Path) -> Result<()> {
+        let other = Dataset::load_any(dir, 0.0)?;
+        for s in &self.suites {
+            other.require(*s)?;
+        }
+        let label = dir.file_name().map_or_else(
+            || dir.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let tests: Vec<Flight> = other
+            .flights
+            .into_iter()
+            .filter(|f| f.role == Role::Test)
+            .map(|f| Flight {
+                name: format!("{label}/{}", f.name),
+                ..f
+            })
+            .collect();
+        if tests.is_empty() {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                "no test flight in the manifest to score on".into(),
+            ));
+        }
+        if let Some(f) = tests
+            .iter()
+            .find(|f| self.flights.iter().any(|g| g.name == f.name))
+        {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                format!("test flight `{}` is given twice", f.name),
+            ));
+        }
+        if self.test_from.is_empty() {
+            self.flights.retain(|f| f.role != Role::Test);
+        }
+        self.test_from.push(ExtraData {
+            dir: dir.to_path_buf(),
+            manifest_sha256: other.manifest_sha256,
+            preset: other.preset,
+            flights: tests.len(),
+        });
+        self.flights.extend(tests);
         Ok(())
     }
 

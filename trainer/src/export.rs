@@ -80,6 +80,16 @@ pub fn provenance(
         ds.flights(Role::Test).count(),
         ds.rows(Role::Test)
     );
+    for t in &ds.test_from {
+        let _ = writeln!(
+            s,
+            "test flights: the {} of {} (preset {}), manifest sha256 {}",
+            t.flights,
+            t.dir.display(),
+            t.preset,
+            t.manifest_sha256
+        );
+    }
     let _ = writeln!(
         s,
         "seed: {seed}; features: {feature_set}; sensor suite: {}",

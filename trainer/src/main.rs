@@ -97,6 +97,12 @@ struct TrainArgs {
     /// on randomised airframes (scripts/airframe-randomise). Without it they are refused.
     #[arg(long)]
     mixed_aircraft: bool,
+    /// Score on this dataset's test flights instead of --data's (its training flights are not
+    /// used), named `DATASET/FLIGHT`: the airframe really flown, when the model trains on another
+    /// aircraft's flights, e.g. a calibrated aircraft's (scripts/calibrate) scored on the variant
+    /// it was calibrated for. Repeatable: the test flights of every one.
+    #[arg(long, value_name = "DIR")]
+    test_data: Vec<PathBuf>,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the
     /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
@@ -404,6 +410,11 @@ enum Cmd {
         /// The flight-test dataset (`hil-sim generate --preset flight-test`).
         #[arg(long, value_name = "DIR")]
         flight_test: PathBuf,
+        /// The same test card flown in simulation on the model the estimator knows (`hil-sim
+        /// generate --preset flight-test` with the flight test's seed): the identification's own
+        /// bias on the model's aircraft, divided out of the scales. Its sensors and boom only.
+        #[arg(long, value_name = "DIR")]
+        model_flight_test: Option<PathBuf>,
         /// Output directory.
         #[arg(long, value_name = "DIR", default_value = "out/calibration")]
         out: PathBuf,
@@ -475,6 +486,10 @@ impl TrainArgs {
         for dir in &self.extra_data {
             ds.add_training(dir, self.mixed_aircraft)
                 .with_context(|| format!("adding the training flights of {}", dir.display()))?;
+        }
+        for dir in &self.test_data {
+            ds.test_on(dir)
+                .with_context(|| format!("taking the test flights of {}", dir.display()))?;
         }
         ds.require(suite)?;
         if ds.rows(trainer::data::Role::Val) == 0 {
@@ -752,29 +767,41 @@ fn cmd_eval_model(
     Ok(())
 }
 
-fn cmd_calibrate(ft: &Path, out: &Path, json: bool) -> Result<()> {
+fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> Result<()> {
     let t0 = std::time::Instant::now();
     let c = trainer::calibrate::calibrate(ft)
         .with_context(|| format!("calibrating from {}", ft.display()))?;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let text = serde_json::to_string_pretty(&c)?;
-    std::fs::write(out.join("calibration.json"), &text)?;
-    let spec = trainer::calibrate::spec_toml(&c, ft);
-    std::fs::write(out.join("aircraft.toml"), spec)?;
+    let model_card = model_ft
+        .map(|d| {
+            trainer::calibrate::calibrate(d)
+                .with_context(|| format!("identifying the model card {}", d.display()))
+        })
+        .transpose()?;
+    let r = trainer::calibrate::Report::new(c, model_card);
+    let spec = trainer::calibrate::spec_toml(&r.scales, &r.flight_test, ft, model_ft.is_some());
     let md =
-        trainer::calibrate::markdown(&c, &command_line(), &machine(), t0.elapsed().as_secs_f64());
+        trainer::calibrate::markdown(&r, &command_line(), &machine(), t0.elapsed().as_secs_f64());
+    let text = serde_json::to_string_pretty(&r)?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::write(out.join("calibration.json"), &text)?;
+    std::fs::write(out.join("aircraft.toml"), spec)?;
     std::fs::write(out.join("calibration.md"), md)?;
     if json {
-        println!("{}", serde_json::to_string(&c)?);
+        println!("{}", serde_json::to_string(&r)?);
     } else {
-        let (l, s) = (&c.lift.params[0].1, &c.side.params[0].1);
+        let (l, s) = (&r.scales.lift, &r.scales.side);
         println!(
-            "lift scale {:.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights); wrote {}/calibration.md, calibration.json, aircraft.toml",
+            "lift scale {:.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
             l.value,
             l.std_error,
             s.value,
             s.std_error,
-            c.flights.len(),
+            r.flight_test.flights.len(),
+            if r.model_card.is_some() {
+                ", over the model card's"
+            } else {
+                ""
+            },
             out.display()
         );
     }
@@ -1502,9 +1529,10 @@ fn run() -> Result<()> {
         } => cmd_eval_filter(data, split, tune, *json),
         Cmd::Calibrate {
             flight_test,
+            model_flight_test,
             out,
             json,
-        } => cmd_calibrate(flight_test, out, *json),
+        } => cmd_calibrate(flight_test, model_flight_test.as_deref(), out, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
         Cmd::Report(r) => cmd_report(r),

@@ -2,7 +2,8 @@
 //! and their body-axis components, with their slopes in α and β for a model-based filter.
 //!
 //! The model itself is data in [`f16_tables`], generated from the `jsbsim` package's
-//! `aircraft/f16/f16.xml` by `scripts/extract-aero` and never edited by hand. This module only knows
+//! `aircraft/f16/f16.xml` (or, with `ESTIMATOR_AERO`, from another aircraft directory) by
+//! `scripts/extract-aero` and never edited by hand. This module only knows
 //! how JSBSim evaluates such data:
 //! * every term of an axis is a product of factors ([`Factor`]): constants, state and surface
 //!   values ([`Var`]) and table lookups ([`Table1`], [`Table2`]); JSBSim's `qbar·Sw` is divided out;
@@ -15,8 +16,12 @@
 //! positive) give all-zero coefficients with `valid == false`; NaN or ±Inf never comes out.
 //! `hil-sim/tests/aero_model_parity.rs` checks the result against JSBSim's own terms and forces.
 
+/// The tables: `f16_tables.rs` beside this file, or the file `ESTIMATOR_AERO` names at build time
+/// (`build.rs`; `scripts/calibrate` builds a calibrated aircraft's tables this way).
 #[rustfmt::skip]
-pub mod f16_tables;
+pub mod f16_tables {
+    include!(env!("ESTIMATOR_AERO_FILE"));
+}
 
 pub use f16_tables::F16;
 
