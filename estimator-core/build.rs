@@ -18,7 +18,16 @@ fn main() {
     println!("cargo:rerun-if-env-changed=ESTIMATOR_WEIGHTS");
     let default = manifest.join("src/model/weights.rs");
     let path = match std::env::var_os("ESTIMATOR_WEIGHTS") {
-        Some(p) if !p.is_empty() => PathBuf::from(p),
+        Some(p) if !p.is_empty() => {
+            let p = PathBuf::from(p);
+            // Asked for by name: a missing file is a failed build, not a build without a model.
+            assert!(
+                p.is_absolute() && p.is_file(),
+                "ESTIMATOR_WEIGHTS: {} is not an absolute path to a weights file written by trainer train --export",
+                p.display()
+            );
+            p
+        }
         _ => default,
     };
     println!("cargo:rerun-if-changed={}", path.display());

@@ -379,6 +379,17 @@ enum Cmd {
     /// flights (`hil-sim generate --preset ood`), each against its in-distribution twin, with the
     /// flights where flags stayed clear through large errors called out; writes ood.md, ood.json
     /// and ood.png.
+    /// Draw grouped horizontal bars from a JSON description, for the scripts' reports
+    /// (scripts/calibration-accuracy): `{"series": [..], "panels": [{"title": .., "xlabel": ..,
+    /// "rows": [[label, [value per series]], ..]}, ..]}`.
+    Bars {
+        /// The JSON description.
+        #[arg(long, value_name = "FILE")]
+        spec: PathBuf,
+        /// The PNG to write.
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+    },
     Ood {
         /// The `ood` dataset (`hil-sim generate --preset ood`).
         #[arg(long, value_name = "DIR")]
@@ -977,6 +988,50 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     }
 }
 
+#[derive(serde::Deserialize)]
+struct BarsSpec {
+    series: Vec<String>,
+    panels: Vec<BarsPanel>,
+}
+
+#[derive(serde::Deserialize)]
+struct BarsPanel {
+    title: String,
+    xlabel: String,
+    rows: Vec<(String, Vec<f64>)>,
+}
+
+fn cmd_bars(spec: &Path, out: &Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(spec).with_context(|| format!("cannot read {}", spec.display()))?;
+    let s: BarsSpec = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected {{\"series\": [..], \"panels\": [{{\"title\", \"xlabel\", \"rows\": [[label, [values]]]}}]}}",
+            spec.display()
+        )
+    })?;
+    if let Some(p) = s
+        .panels
+        .iter()
+        .find(|p| p.rows.iter().any(|r| r.1.len() != s.series.len()))
+    {
+        bail!(
+            "{}: panel `{}` has a row without one value per series ({})",
+            spec.display(),
+            p.title,
+            s.series.len()
+        );
+    }
+    let panels: Vec<trainer::plots::BarPanel> = s
+        .panels
+        .iter()
+        .map(|p| (p.title.clone(), p.xlabel.as_str(), p.rows.clone()))
+        .collect();
+    trainer::plots::grouped_bar_panels(out, &panels, &s.series)
+        .with_context(|| format!("cannot draw {}", out.display()))?;
+    Ok(())
+}
+
 fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
     let t0 = std::time::Instant::now();
     let ds = Dataset::load_any(data, 0.0)
@@ -1534,6 +1589,7 @@ fn run() -> Result<()> {
             json,
         } => cmd_calibrate(flight_test, model_flight_test.as_deref(), out, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
+        Cmd::Bars { spec, out } => cmd_bars(spec, out),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
         Cmd::Report(r) => cmd_report(r),
         Cmd::Features {

@@ -215,11 +215,13 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
 pub type BarPanel<'a> = (String, &'a str, Vec<(String, Vec<f64>)>);
 
 /// Panels of horizontal grouped bars side by side; a row's NaN value draws no bar. Rows are drawn
-/// top-down in the given order, with a legend of `series`.
+/// top-down in the given order, with a legend of `series` in empty rows above them.
 pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -> Result<()> {
     hil_sim::font::register();
     let rows = panels.iter().map(|p| p.2.len()).max().unwrap_or(0);
-    let h = 110 + 30 * rows as u32;
+    // Rows of 30 px kept free at the top for the legend (20 px per series).
+    let legend_rows = (series.len() * 20).div_ceil(30);
+    let h = 110 + 30 * (rows + legend_rows) as u32;
     let root = BitMapBackend::new(path, (620 * panels.len() as u32, h)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
     let k = series.len().max(1);
@@ -238,13 +240,13 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(190)
-            .build_cartesian_2d(0.0..max * 1.15, (0..n).into_segmented())
+            .build_cartesian_2d(0.0..max * 1.15, (0..n + legend_rows).into_segmented())
             .map_err(perr)?;
         chart
             .configure_mesh()
             .x_desc(*xl)
             .x_label_formatter(&|v| fmt_tick(*v))
-            .y_labels(n)
+            .y_labels(n + legend_rows)
             .y_label_formatter(&|v| reversed_label(&names, v))
             .draw()
             .map_err(perr)?;
@@ -281,7 +283,7 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
             .configure_series_labels()
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
+            .position(SeriesLabelPosition::UpperRight)
             .draw()
             .map_err(perr)?;
     }
