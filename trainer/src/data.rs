@@ -131,6 +131,18 @@ pub struct ExtraData {
     pub flights: usize,
 }
 
+impl ExtraData {
+    /// `DIR (preset P), manifest sha256 H`: where its flights came from, for a PROVENANCE.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} (preset {}), manifest sha256 {}",
+            self.dir.display(),
+            self.preset,
+            self.manifest_sha256
+        )
+    }
+}
+
 /// How many training flights to hold out for validation: every `k`-th one, at least one when there
 /// are two or more training flights.
 pub fn validation_indices(n_train: usize, fraction: f64) -> Vec<usize> {
@@ -244,25 +256,18 @@ impl Dataset {
                 ..f
             })
             .collect();
-        if added.is_empty() {
-            return Err(Error::Split(
-                dir.to_path_buf(),
-                "no training flight in the manifest to add".into(),
-            ));
-        }
-        if let Some(f) = added
-            .iter()
-            .find(|f| self.flights.iter().any(|g| g.name == f.name))
-        {
-            return Err(Error::Split(
-                dir.to_path_buf(),
+        self.check_new(
+            dir,
+            &added,
+            "no training flight in the manifest to add",
+            |f| {
                 format!(
                     "flight `{}` is already in {} (add a dataset of other flights)",
                     f.name,
                     self.dir.display()
-                ),
-            ));
-        }
+                )
+            },
+        )?;
         self.extra.push(ExtraData {
             dir: dir.to_path_buf(),
             manifest_sha256: other.manifest_sha256,
@@ -296,21 +301,12 @@ impl Dataset {
                 ..f
             })
             .collect();
-        if tests.is_empty() {
-            return Err(Error::Split(
-                dir.to_path_buf(),
-                "no test flight in the manifest to score on".into(),
-            ));
-        }
-        if let Some(f) = tests
-            .iter()
-            .find(|f| self.flights.iter().any(|g| g.name == f.name))
-        {
-            return Err(Error::Split(
-                dir.to_path_buf(),
-                format!("test flight `{}` is given twice", f.name),
-            ));
-        }
+        self.check_new(
+            dir,
+            &tests,
+            "no test flight in the manifest to score on",
+            |f| format!("test flight `{}` is given twice", f.name),
+        )?;
         if self.test_from.is_empty() {
             self.flights.retain(|f| f.role != Role::Test);
         }
@@ -322,6 +318,27 @@ impl Dataset {
         });
         self.flights.extend(tests);
         Ok(())
+    }
+
+    /// Refuses flights from `dir` to join this dataset when there are none (`none` says which) or
+    /// when one has the name of a flight already here (`clash` says so).
+    fn check_new(
+        &self,
+        dir: &Path,
+        flights: &[Flight],
+        none: &str,
+        clash: impl Fn(&Flight) -> String,
+    ) -> Result<()> {
+        if flights.is_empty() {
+            return Err(Error::Split(dir.to_path_buf(), none.into()));
+        }
+        match flights
+            .iter()
+            .find(|f| self.flights.iter().any(|g| g.name == f.name))
+        {
+            Some(f) => Err(Error::Split(dir.to_path_buf(), clash(f))),
+            None => Ok(()),
+        }
     }
 
     /// Refuses a dataset that does not carry `suite`'s channels.

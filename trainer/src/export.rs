@@ -55,11 +55,9 @@ pub fn provenance(
     for e in &ds.extra {
         let _ = writeln!(
             s,
-            "plus the {} training flights of {} (preset {}), manifest sha256 {}",
+            "plus the {} training flights of {}",
             e.flights,
-            e.dir.display(),
-            e.preset,
-            e.manifest_sha256
+            e.describe()
         );
     }
     let rows = ds.training_rows();
@@ -81,14 +79,7 @@ pub fn provenance(
         ds.rows(Role::Test)
     );
     for t in &ds.test_from {
-        let _ = writeln!(
-            s,
-            "test flights: the {} of {} (preset {}), manifest sha256 {}",
-            t.flights,
-            t.dir.display(),
-            t.preset,
-            t.manifest_sha256
-        );
+        let _ = writeln!(s, "test flights: the {} of {}", t.flights, t.describe());
     }
     let _ = writeln!(
         s,
