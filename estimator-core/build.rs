@@ -15,22 +15,11 @@ use std::path::PathBuf;
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     aero_tables(&manifest);
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_WEIGHTS");
-    let default = manifest.join("src/model/weights.rs");
-    let path = match std::env::var_os("ESTIMATOR_WEIGHTS") {
-        Some(p) if !p.is_empty() => {
-            let p = PathBuf::from(p);
-            // Asked for by name: a missing file is a failed build, not a build without a model.
-            assert!(
-                p.is_absolute() && p.is_file(),
-                "ESTIMATOR_WEIGHTS: {} is not an absolute path to a weights file written by trainer train --export",
-                p.display()
-            );
-            p
-        }
-        _ => default,
-    };
-    println!("cargo:rerun-if-changed={}", path.display());
+    let path = chosen(
+        "ESTIMATOR_WEIGHTS",
+        manifest.join("src/model/weights.rs"),
+        "a weights file written by trainer train --export",
+    );
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
     if path.is_file() {
         println!("cargo:rustc-cfg=estimator_weights");
@@ -44,19 +33,39 @@ fn main() {
     }
 }
 
+/// The file the variable `var` names, or `default`; rebuilt when either changes. A file asked for
+/// by name must exist (a failed build, not a build without it); `what` says what it should be.
+fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
+    println!("cargo:rerun-if-env-changed={var}");
+    let path = match std::env::var_os(var) {
+        Some(p) if !p.is_empty() => {
+            let p = PathBuf::from(p);
+            assert!(
+                p.is_absolute() && p.is_file(),
+                "{var}: {} is not an absolute path to {what}",
+                p.display()
+            );
+            p
+        }
+        _ => default,
+    };
+    println!("cargo:rerun-if-changed={}", path.display());
+    path
+}
+
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
 /// (the filter has no model without them), with the variable named.
 fn aero_tables(manifest: &std::path::Path) {
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_AERO");
-    let path = match std::env::var_os("ESTIMATOR_AERO") {
-        Some(p) if !p.is_empty() => PathBuf::from(p),
-        _ => manifest.join("src/aero/f16_tables.rs"),
-    };
+    let path = chosen(
+        "ESTIMATOR_AERO",
+        manifest.join("src/aero/f16_tables.rs"),
+        "a file written by scripts/extract-aero",
+    );
+    // The committed default must be there too: the filter has no model without it.
     assert!(
-        path.is_absolute() && path.is_file(),
-        "ESTIMATOR_AERO: {} is not an absolute path to a file written by scripts/extract-aero",
+        path.is_file(),
+        "{} is missing: run scripts/extract-aero",
         path.display()
     );
-    println!("cargo:rerun-if-changed={}", path.display());
     println!("cargo:rustc-env=ESTIMATOR_AERO_FILE={}", path.display());
 }

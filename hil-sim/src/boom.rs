@@ -20,8 +20,8 @@ use serde::{Deserialize, Serialize};
 #[cfg(feature = "sim")]
 use crate::flight::{Flight, SAMPLE_HZ};
 
-/// One boom channel's error model.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// One boom channel's error model (`Default`: an ideal channel).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ChannelErrors {
     /// White noise, 1σ (channel units).
     pub noise: f64,
@@ -117,12 +117,7 @@ impl Channel {
         };
         self.state = Some(y);
         let n: f64 = StandardNormal.sample(rng);
-        let m = y + self.e.noise * n;
-        if self.e.resolution > 0.0 {
-            (m / self.e.resolution).round() * self.e.resolution
-        } else {
-            m
-        }
+        crate::sensors::quantize(y + self.e.noise * n, self.e.resolution)
     }
 }
 
@@ -241,13 +236,7 @@ mod tests {
     }
 
     fn quiet() -> BoomConfig {
-        let c = ChannelErrors {
-            noise: 0.0,
-            resolution: 0.0,
-            lag_s: 0.0,
-            scale_residual: 0.0,
-            bias_sigma: 0.0,
-        };
+        let c = ChannelErrors::default();
         BoomConfig {
             arm_m: 6.0,
             alpha: c,

@@ -1759,7 +1759,7 @@ impl Preset {
             &[ProfileKind],
             Range,
         ) = match self {
-            // (Large, Ood and Campaign returned above.)
+            // (Large, Ood, Campaign and FlightTest returned above.)
             Preset::Paper | Preset::Large | Preset::Ood | Preset::Campaign | Preset::FlightTest => {
                 (
                     PAPER_PER_PROFILE,

@@ -675,7 +675,7 @@ fn through_triad(e: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
     out
 }
 
-fn quantize(v: f64, q: f64) -> f64 {
+pub(crate) fn quantize(v: f64, q: f64) -> f64 {
     if q > 0.0 { (v / q).round() * q } else { v }
 }
 

@@ -97,17 +97,6 @@ pub struct Scales {
     pub side: Estimate,
 }
 
-/// The aircraft's scales relative to the model: a flight test's over the same card flown on the
-/// model (the identification's own bias divided out).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Corrected {
-    pub scales: Scales,
-    /// The flight test's scales, as identified.
-    pub flight_test: Scales,
-    /// The model card's scales: the identification's bias on the model's own aircraft.
-    pub model_card: Scales,
-}
-
 impl Scales {
     /// `self / model`, the 1σ by the delta method (independent flights).
     pub fn over(&self, model: &Scales) -> Scales {
@@ -153,36 +142,27 @@ pub fn least_squares(names: &[&str], x: &[Vec<f64>], y: &[f64]) -> Option<Fit> {
     if p == 0 || n <= p + 2 || x.iter().any(|c| c.len() != n) {
         return None;
     }
-    // Normal equations, solved by Gauss-Jordan with partial pivoting (p ≤ 3 here).
-    let mut a = vec![vec![0.0; p + 1 + p]; p];
+    // Normal equations (p ≤ 3 here), solved by the baselines' Cholesky; (XᵀX)⁻¹'s diagonal, for
+    // the standard errors, by solving against each unit vector.
+    let mut xtx = vec![0.0; p * p];
     for i in 0..p {
         for j in 0..p {
-            a[i][j] = x[i].iter().zip(&x[j]).map(|(u, v)| u * v).sum();
-        }
-        a[i][p] = x[i].iter().zip(y).map(|(u, v)| u * v).sum();
-        a[i][p + 1 + i] = 1.0;
-    }
-    for c in 0..p {
-        let piv = (c..p).max_by(|&r, &s| a[r][c].abs().total_cmp(&a[s][c].abs()))?;
-        if a[piv][c].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(c, piv);
-        let d = a[c][c];
-        for v in a[c].iter_mut() {
-            *v /= d;
-        }
-        for r in 0..p {
-            if r != c {
-                let f = a[r][c];
-                let row_c = a[c].clone();
-                for (v, w) in a[r].iter_mut().zip(&row_c) {
-                    *v -= f * w;
-                }
-            }
+            xtx[i * p + j] = x[i].iter().zip(&x[j]).map(|(u, v)| u * v).sum();
         }
     }
-    let theta: Vec<f64> = (0..p).map(|i| a[i][p]).collect();
+    let xty: Vec<f64> = x
+        .iter()
+        .map(|c| c.iter().zip(y).map(|(u, v)| u * v).sum())
+        .collect();
+    let solve = |b: Vec<f64>| crate::baselines::cholesky_solve(xtx.clone(), b, p).ok();
+    let theta = solve(xty)?;
+    let inv_diag = (0..p)
+        .map(|i| {
+            let mut e = vec![0.0; p];
+            e[i] = 1.0;
+            solve(e).map(|col| col[i])
+        })
+        .collect::<Option<Vec<f64>>>()?;
     let resid: Vec<f64> = (0..n)
         .map(|k| y[k] - (0..p).map(|i| theta[i] * x[i][k]).sum::<f64>())
         .collect();
@@ -207,7 +187,7 @@ pub fn least_squares(names: &[&str], x: &[Vec<f64>], y: &[f64]) -> Option<Fit> {
                 name.to_string(),
                 Estimate {
                     value: theta[i],
-                    std_error: (sigma2 * a[i][p + 1 + i]).max(0.0).sqrt(),
+                    std_error: (sigma2 * inv_diag[i]).max(0.0).sqrt(),
                 },
             )
         })
@@ -308,7 +288,13 @@ fn quasi_steady(r: &Row) -> bool {
 /// Runs both steps on the flights of a flight-test dataset.
 pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
-    let arm_m = hil_sim::boom::BoomConfig::default().arm_m;
+    // The boom's arm as the dataset recorded it (`config.boom`).
+    let arm_m = m
+        .config
+        .get("boom")
+        .and_then(|b| b.get("arm_m"))
+        .and_then(serde_json::Value::as_f64)
+        .unwrap_or(hil_sim::boom::BoomConfig::default().arm_m);
     let mut all = Vec::new();
     let mut names = Vec::new();
     for e in &m.flights {
@@ -397,9 +383,15 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let (ga, gb) = (boom_alpha.get("gain"), boom_beta.get("gain"));
     let (sv, bv) = (boom_tas.get("scale"), boom_tas.get("bias_mps"));
     let mut eq = Vec::new();
+    let offsets = |fit: &Fit| -> Vec<f64> {
+        (0..names.len())
+            .map(|k| fit.get(&format!("offset_deg_{k}")))
+            .collect()
+    };
+    let (off_a, off_b) = (offsets(&boom_alpha), offsets(&boom_beta));
     for r in &all {
-        let oa = boom_alpha.get(&format!("offset_deg_{}", r.flight));
-        let ob = boom_beta.get(&format!("offset_deg_{}", r.flight));
+        let oa = off_a.get(r.flight).copied().unwrap_or(0.0);
+        let ob = off_b.get(r.flight).copied().unwrap_or(0.0);
         let alpha = (ga * (r.boom_alpha + arm_a(r)) + oa).to_radians();
         let beta = (gb * (r.boom_beta - arm_b(r)) + ob).to_radians();
         let tas = (r.boom_tas - bv) / sv;

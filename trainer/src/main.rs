@@ -375,10 +375,6 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// Out-of-distribution table: the shipped estimator and the filter alone on the `ood` preset's
-    /// flights (`hil-sim generate --preset ood`), each against its in-distribution twin, with the
-    /// flights where flags stayed clear through large errors called out; writes ood.md, ood.json
-    /// and ood.png.
     /// Draw grouped horizontal bars from a JSON description, for the scripts' reports
     /// (scripts/calibration-accuracy): `{"series": [..], "panels": [{"title": .., "xlabel": ..,
     /// "rows": [[label, [value per series]], ..]}, ..]}`.
@@ -390,6 +386,10 @@ enum Cmd {
         #[arg(long, value_name = "FILE")]
         out: PathBuf,
     },
+    /// Out-of-distribution table: the shipped estimator and the filter alone on the `ood` preset's
+    /// flights (`hil-sim generate --preset ood`), each against its in-distribution twin, with the
+    /// flights where flags stayed clear through large errors called out; writes ood.md, ood.json
+    /// and ood.png.
     Ood {
         /// The `ood` dataset (`hil-sim generate --preset ood`).
         #[arg(long, value_name = "DIR")]

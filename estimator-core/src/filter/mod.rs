@@ -110,16 +110,17 @@ pub struct Config {
     pub r_adapt_range: [[f32; 2]; 2],
 }
 
-/// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
-/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
-/// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
-/// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 impl Config {
     /// The aircraft's mass for a fuel-gauge reading: the empty mass (with the pilot) plus the fuel.
     pub fn mass_kg(&self, fuel_kg: f32) -> f32 {
         self.empty_mass_kg + fuel_kg.max(0.0)
     }
 }
+
+/// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
+/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
+/// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
+/// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 
 pub const F16_CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],

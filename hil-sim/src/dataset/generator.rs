@@ -157,7 +157,7 @@ fn fly_plan(
                                 .map(|s| s.to_string())
                                 .collect();
                             if f.card.is_some() {
-                                entry.boom = Some(write_boom(out, &flight, sensor_seed(seed))?);
+                                entry.boom = Some(write_boom(out, &flight, cfg.seed)?);
                             }
                             break Ok((entry, keep.then_some(flight)));
                         }
@@ -191,19 +191,14 @@ fn write_boom(out: &Path, flight: &Flight, seed: u64) -> Result<super::RecordFil
     let samples = crate::boom::record(flight, &crate::boom::BoomConfig::default(), seed);
     let file = format!("{}.boom.csv", flight.name);
     let path = out.join(&file);
-    let f = std::fs::File::create(&path).map_err(|source| DatasetError::Io {
-        action: "create",
+    // Hashed on the way out, as the flight CSVs are.
+    let mut hashed = super::Hashing::create(&path)?;
+    crate::boom::write_csv(&mut hashed, &samples).map_err(|e| DatasetError::Csv {
         path: path.clone(),
-        source,
-    })?;
-    crate::boom::write_csv(std::io::BufWriter::new(f), &samples).map_err(|e| {
-        DatasetError::Csv {
-            path: path.clone(),
-            message: e.to_string(),
-        }
+        message: e.to_string(),
     })?;
     Ok(super::RecordFile {
-        sha256: sha256_file(&path)?,
+        sha256: hashed.hex(),
         file,
     })
 }

@@ -221,15 +221,7 @@ impl Flight {
     /// Writes the flight as a CSV file; returns the file's SHA-256 (lowercase hex), hashed on the
     /// way out rather than read back.
     pub fn write_csv(&self, path: &Path) -> Result<String, DatasetError> {
-        let f = std::fs::File::create(path).map_err(|source| DatasetError::Io {
-            action: "create",
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let mut hashed = Hashing {
-            inner: std::io::BufWriter::new(f),
-            hash: Sha256::new(),
-        };
+        let mut hashed = Hashing::create(path)?;
         self.write_csv_to(&mut hashed)
             .map_err(|e| DatasetError::Csv {
                 path: path.to_path_buf(),
@@ -561,6 +553,22 @@ pub fn par_map<T: Sync, R: Send>(
 struct Hashing<W> {
     inner: W,
     hash: Sha256,
+}
+
+impl Hashing<std::io::BufWriter<std::fs::File>> {
+    /// A buffered file at `path`, hashed as it is written.
+    fn create(path: &Path) -> Result<Self, DatasetError> {
+        let f = std::fs::File::create(path).map_err(io("create", path))?;
+        Ok(Hashing {
+            inner: std::io::BufWriter::new(f),
+            hash: Sha256::new(),
+        })
+    }
+
+    /// The SHA-256 of everything written, lowercase hex.
+    fn hex(self) -> String {
+        hex(self.hash)
+    }
 }
 
 impl<W: Write> Write for Hashing<W> {
