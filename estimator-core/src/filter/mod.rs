@@ -121,7 +121,6 @@ impl Config {
 /// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
 /// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
 /// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
-
 pub const F16_CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],
     mean_wind_sigma0: [15.0, 15.0, 1.0],
