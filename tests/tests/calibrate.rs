@@ -89,8 +89,13 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     let without = calibration(&stripped, &model, &dir.join("cal-no-truth"));
     assert_eq!(with_truth, without, "the calibration read a truth column");
 
-    // Within 2 % (lift) and 5 % (side force) of the truth, and the error inside 2σ.
-    for (axis, truth, tolerance) in [("lift", 0.94, 0.02), ("side", 1.10, 0.05)] {
+    // Within 2 % (lift) and 5 % (side force, the flap terms) of the truth, and the error inside
+    // 2σ: C scales the whole lift axis, flaps included, and has no lift offset.
+    for (axis, truth, tolerance) in [
+        ("lift", 0.94, 0.02),
+        ("flap", 0.94, 0.05),
+        ("side", 1.10, 0.05),
+    ] {
         let e = &with_truth["scales"][axis];
         let (k, se) = (
             e["value"].as_f64().unwrap(),
@@ -105,5 +110,14 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
             "{axis} scale {k} ± {se}: the 1σ does not cover the error to the truth {truth}"
         );
     }
+    let offset = &with_truth["scales"]["offset"];
+    let (o, se) = (
+        offset["value"].as_f64().unwrap(),
+        offset["std_error"].as_f64().unwrap(),
+    );
+    assert!(
+        o.abs() < 0.005 && o.abs() <= 2.0 * se,
+        "lift offset {o} ± {se}, truth 0"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

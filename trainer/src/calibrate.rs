@@ -35,6 +35,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
+use estimator_core::aero::{AirState, F16 as F16_MODEL, Factor, Point, Term, Var};
 use estimator_core::filter::{self, F16_CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
@@ -82,23 +83,30 @@ pub struct Calibration {
     pub boom_tas: Fit,
     /// Lateral specific force, m/s²: k_Y (side force scale).
     pub side: Fit,
-    /// Normal specific force, m/s²: k_L (lift scale).
+    /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
-    /// The lift and side-force scales of each flight alone (flight, k_L, k_Y).
-    pub per_flight: Vec<(String, f64, f64)>,
+    /// The corrections identified from each flight alone.
+    pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
     pub scales: Scales,
 }
 
-/// The lift and side-force scales with their 1σ.
+/// The identified aerodynamic corrections with their 1σ.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Scales {
+    /// The lift terms not driven by the trailing-edge flaps, × this.
     pub lift: Estimate,
+    /// The lift terms driven by the trailing-edge flaps ([`flap_lift_terms`]), × this.
+    pub flap: Estimate,
+    /// A lift-coefficient offset ΔC_L added to the lift axis.
+    pub offset: Estimate,
+    /// The side-force axis, × this.
     pub side: Estimate,
 }
 
 impl Scales {
-    /// `self / model`, the 1σ by the delta method (independent flights).
+    /// `self` corrected by the same card flown on the model: the scales divided by the model
+    /// card's, the offset less the model card's; the 1σ by the delta method (independent flights).
     pub fn over(&self, model: &Scales) -> Scales {
         let ratio = |a: Estimate, b: Estimate| Estimate {
             value: a.value / b.value,
@@ -108,9 +116,24 @@ impl Scales {
         };
         Scales {
             lift: ratio(self.lift, model.lift),
+            flap: ratio(self.flap, model.flap),
+            offset: Estimate {
+                value: self.offset.value - model.offset.value,
+                std_error: self.offset.std_error.hypot(model.offset.std_error),
+            },
             side: ratio(self.side, model.side),
         }
     }
+}
+
+/// The corrections identified from one flight alone.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PerFlight {
+    pub flight: String,
+    pub lift: f64,
+    pub flap: f64,
+    pub offset: f64,
+    pub side: f64,
 }
 
 /// A fit's parameter `name` with its 1σ raised to `spread`'s standard deviation over √n (the
@@ -415,26 +438,27 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         Error::Numeric("lift and side force: the flight-test data do not determine them (too few quasi-steady frames, or no excitation)".into())
     })?;
     // Each flight alone: the scatter of its scales is the honest part of the 1σ.
-    let per_flight: Vec<(String, f64, f64)> = names
+    let per_flight: Vec<PerFlight> = names
         .iter()
         .enumerate()
         .filter_map(|(k, name)| {
             let rows: Vec<&EqRow> = eq.iter().filter(|r| r.flight == k).collect();
             let (s, l) = force_fits(&rows)?;
-            Some((name.clone(), l.get("k_lift"), s.get("k_side")))
+            Some(PerFlight {
+                flight: name.clone(),
+                lift: l.get("k_lift"),
+                flap: l.get("k_flap"),
+                offset: l.get("offset_cl"),
+                side: s.get("k_side"),
+            })
         })
         .collect();
+    let spread = |f: fn(&PerFlight) -> f64| per_flight.iter().map(f).collect::<Vec<_>>();
     let scales = Scales {
-        lift: with_scatter(
-            &lift,
-            "k_lift",
-            &per_flight.iter().map(|f| f.1).collect::<Vec<_>>(),
-        ),
-        side: with_scatter(
-            &side,
-            "k_side",
-            &per_flight.iter().map(|f| f.2).collect::<Vec<_>>(),
-        ),
+        lift: with_scatter(&lift, "k_lift", &spread(|f| f.lift)),
+        flap: with_scatter(&lift, "k_flap", &spread(|f| f.flap)),
+        offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
+        side: with_scatter(&side, "k_side", &spread(|f| f.side)),
     };
     Ok(Calibration {
         flights: names,
@@ -456,10 +480,13 @@ struct EqRow {
 }
 
 /// The side-force fit, then the lift fit with the side force at its scale:
-/// `f_y − drag_y = k_Y·side_y + b_y`, `f_z − k_Y·side_z − drag_z = k_L·lift_z + b_z`.
+/// `f_y − drag_y = k_Y·side_y + b_y`,
+/// `f_z − k_Y·side_z − drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
 /// Drag is not identified (thrust along x is unknown): its part is held at the model's. Each force
 /// equation carries a constant: the accelerometer's bias and misalignment (a milliradian moves
-/// 0.01 m/s² of the normal force into y) would otherwise bias the scale.
+/// 0.01 m/s² of the normal force into y) would otherwise bias the scale. The lift offset ΔC_L is
+/// told apart from that constant by dynamic pressure (the test points span 3:1 in it), and from
+/// k_L because in quasi-steady flight the lift carries the weight at every speed while q varies.
 fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
     let ones = vec![1.0; rows.len()];
     let side = least_squares(
@@ -472,8 +499,13 @@ fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
     )?;
     let k_y = side.get("k_side");
     let lift = least_squares(
-        &["k_lift", "bias_mps2"],
-        &[rows.iter().map(|r| r.parts.lift[2]).collect(), ones],
+        &["k_lift", "k_flap", "offset_cl", "bias_mps2"],
+        &[
+            rows.iter().map(|r| r.parts.lift[2]).collect(),
+            rows.iter().map(|r| r.parts.flap[2]).collect(),
+            rows.iter().map(|r| r.parts.unit_lift[2]).collect(),
+            ones,
+        ],
         &rows
             .iter()
             .map(|r| r.f_cg[2] - k_y * r.parts.side[2] - r.parts.drag[2])
@@ -482,11 +514,28 @@ fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
     Some((side, lift))
 }
 
-/// Body-axis specific force (m/s²) of each wind axis of the model: drag, side force, lift.
+/// Body-axis specific force (m/s²) of each wind axis of the model: drag, side force, and lift
+/// split into its trailing-edge-flap terms and the rest; and that of a unit lift coefficient.
 struct Parts {
     drag: [f64; 3],
     side: [f64; 3],
+    /// The lift terms not driven by the trailing-edge flaps.
     lift: [f64; 3],
+    /// The lift terms driven by the trailing-edge flaps ([`flap_lift_terms`]).
+    flap: [f64; 3],
+    /// A lift coefficient of 1: the regressor of a lift offset ΔC_L.
+    unit_lift: [f64; 3],
+}
+
+/// The model's lift terms driven by the trailing-edge flaps (a factor `fcs/flaperon-mix-rad`).
+/// Their scale is a parameter of its own: the flaps are scheduled with α and speed, so an error
+/// in their lift changes the lift slope, which neither the axis scale nor an offset describes.
+pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
+    F16_MODEL.lift.iter().filter(|t| {
+        t.factors
+            .iter()
+            .any(|f| matches!(f, Factor::Var(Var::FlaperonMixRad)))
+    })
 }
 
 fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32) -> Option<Parts> {
@@ -503,35 +552,72 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
     if !c.valid {
         return None;
     }
+    let air = AirState {
+        alpha_rad: alpha as f32,
+        beta_rad: beta as f32,
+        mach: mach as f32,
+        tas_mps: tas as f32,
+        p_rps: inp.gyro_rps[0],
+        q_rps: inp.gyro_rps[1],
+        r_rps: inp.gyro_rps[2],
+        h_over_b: AirState::NO_GROUND_EFFECT,
+    };
+    let s = filter::surfaces(inp, alpha as f32, mach as f32, cfg.gear_norm);
+    let point = Point::new(&F16_MODEL, &air, &s)?;
+    let flap_cl = flap_lift_terms()
+        .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
+        .sum::<Option<f64>>()?;
     let qs_m = f64::from(filter::qs_over_m(rho, tas as f32, cfg.mass_kg(inp.fuel_kg)));
     let (sa, ca, sb, cb) = (alpha.sin(), alpha.cos(), beta.sin(), beta.cos());
     // Wind to body (JSBSim's Tw2b) of (−D, Y, −L): x forward, y right, z down.
     let drag = -f64::from(c.wind.drag) * qs_m;
     let side = f64::from(c.wind.side) * qs_m;
-    let lift = -f64::from(c.wind.lift) * qs_m;
+    let lift_body = |cl: f64| [-sa * (-cl * qs_m), 0.0, ca * (-cl * qs_m)];
     Some(Parts {
         drag: [ca * cb * drag, sb * drag, sa * cb * drag],
         side: [-ca * sb * side, cb * side, -sa * sb * side],
-        lift: [-sa * lift, 0.0, ca * lift],
+        lift: lift_body(f64::from(c.wind.lift) - flap_cl),
+        flap: lift_body(flap_cl),
+        unit_lift: lift_body(1.0),
     })
 }
 
 /// The calibrated aircraft as a `scripts/airframe-variant` spec: the model the estimator knows,
-/// with the identified scales.
+/// with the identified corrections. The axis scales multiply every term of their axis; the flap
+/// terms carry their own scale over the lift axis's, and the offset joins the lift axis's first term.
 pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -> String {
-    let (l, s) = (scales.lift.value, scales.side.value);
+    let (l, f, o, s) = (
+        scales.lift.value,
+        scales.flap.value,
+        scales.offset.value,
+        scales.side.value,
+    );
     let how = if corrected {
         "equation error, over the same card flown on the model; drag not identified"
     } else {
         "equation error; drag not identified"
     };
-    format!(
+    let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, side force x {s:.5} ({how}).\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {s:.5} ({how}).\"\n\
          [axes]\nLIFT = {l:.5}\nSIDE = {s:.5}\n",
         ft.display(),
         c.flights.len()
-    )
+    );
+    for term in flap_lift_terms() {
+        t.push_str(&format!(
+            "[coefficients.\"{}\"]\nscale = {:.5}\n",
+            term.name,
+            f / l
+        ));
+    }
+    if let Some(first) = F16_MODEL.lift.first() {
+        t.push_str(&format!(
+            "[coefficients.\"{}\"]\noffset = {o:.5}\n",
+            first.name
+        ));
+    }
+    t
 }
 
 /// What `trainer calibrate` writes to calibration.json: the flight test's identification, the model
@@ -543,6 +629,10 @@ pub struct Report {
     pub flight_test: Calibration,
     /// The same card flown on the model: the identification's own bias.
     pub model_card: Option<Calibration>,
+    /// The model's lift terms the flap-lift scale applies to (JSBSim function names).
+    pub flap_terms: Vec<String>,
+    /// The lift term the offset joins.
+    pub offset_term: Option<String>,
 }
 
 impl Report {
@@ -555,6 +645,8 @@ impl Report {
             scales,
             flight_test,
             model_card,
+            flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
+            offset_term: F16_MODEL.lift.first().map(|t| t.name.to_string()),
         }
     }
 }
@@ -567,19 +659,33 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         "Command: `{command}`  \nMachine: {machine}; {seconds:.1} s. Flights: {}.\n\n",
         c.flights.join(", ")
     ));
+    let e = |e: &Estimate| format!("{:.4} ± {:.4}", e.value, e.std_error);
     let row = |what: &str, s: &Scales| {
         format!(
-            "| {what} | {:.4} ± {:.4} | {:.4} ± {:.4} |\n",
-            s.lift.value, s.lift.std_error, s.side.value, s.side.std_error
+            "| {what} | {} | {} | {} | {} |\n",
+            e(&s.lift),
+            e(&s.flap),
+            e(&s.offset),
+            e(&s.side)
         )
     };
-    m.push_str("| scales (± 1σ) | lift | side force |\n|---|---|---|\n");
+    m.push_str(
+        "| corrections (± 1σ) | lift scale | flap-lift scale | lift offset ΔC_L | side-force scale |\n|---|---|---|---|---|\n",
+    );
     m.push_str(&row("flight test", &c.scales));
     if let Some(mc) = &r.model_card {
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
-    m.push_str("\nFlight by flight (lift / side force):\n\n| flight | flight test |");
+    let f = |p: &PerFlight| {
+        format!(
+            "{:.4} / {:.4} / {:+.4} / {:.4}",
+            p.lift, p.flap, p.offset, p.side
+        )
+    };
+    m.push_str(
+        "\nFlight by flight (lift scale / flap-lift scale / lift offset / side-force scale):\n\n| flight | flight test |",
+    );
     if r.model_card.is_some() {
         m.push_str(" model card |");
     }
@@ -588,10 +694,10 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     } else {
         "\n|---|---|\n"
     });
-    for (k, (name, l, sd)) in c.per_flight.iter().enumerate() {
-        m.push_str(&format!("| {name} | {l:.4} / {sd:.4} |"));
-        if let Some((_, ml, ms)) = r.model_card.as_ref().and_then(|mc| mc.per_flight.get(k)) {
-            m.push_str(&format!(" {ml:.4} / {ms:.4} |"));
+    for (k, p) in c.per_flight.iter().enumerate() {
+        m.push_str(&format!("| {} | {} |", p.flight, f(p)));
+        if let Some(mp) = r.model_card.as_ref().and_then(|mc| mc.per_flight.get(k)) {
+            m.push_str(&format!(" {} |", f(mp)));
         }
         m.push('\n');
     }
@@ -616,8 +722,9 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     m.push_str(
         "\nThe vanes' gain and per-flight offsets and the airspeed's scale and bias are the boom's \
          calibration against the inertial data (gain and scale 1: none); the lift and side-force \
-         scales multiply the model's LIFT and SIDE axes in aircraft.toml. Drag is not identified: \
-         along body x the engine's thrust adds to it.\n",
+         scales multiply the model's LIFT and SIDE axes in aircraft.toml, the flap-lift scale the \
+         lift terms driven by the trailing-edge flaps, and the offset joins the lift axis. Drag is \
+         not identified: along body x the engine's thrust adds to it.\n",
     );
     m
 }
@@ -697,9 +804,14 @@ mod tests {
         let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
         let body = [c.body.x, c.body.y, c.body.z];
         for (i, b) in body.iter().enumerate() {
-            let sum = p.drag[i] + p.side[i] + p.lift[i];
+            let sum = p.drag[i] + p.side[i] + p.lift[i] + p.flap[i];
             let want = f64::from(*b) * qs_m;
             assert!((sum - want).abs() < 1e-3, "axis {i}: {sum} vs {want}");
         }
+        // The flap terms are a part of the lift (this point has flaperon deflection), and the
+        // unit lift points along the lift with qS/m.
+        assert!(p.flap[2].abs() > 1e-3);
+        let unit = (p.unit_lift[0].powi(2) + p.unit_lift[2].powi(2)).sqrt();
+        assert!((unit - qs_m).abs() < 1e-6 * qs_m, "{unit} vs {qs_m}");
     }
 }

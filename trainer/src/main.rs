@@ -414,8 +414,8 @@ enum Cmd {
     },
     /// Flight-test calibration: from a `flight-test` dataset's production sensors and nose boom
     /// (never its truth columns), check the boom against the inertial data and identify the lift
-    /// and side-force scales of the aircraft against the model the estimator knows (equation
-    /// error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
+    /// scale, the flap-lift scale, a lift offset and the side-force scale of the aircraft against
+    /// the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
     /// spec of the calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
     Calibrate {
         /// The flight-test dataset (`hil-sim generate --preset flight-test`).
@@ -800,11 +800,20 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
     if json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
-        let (l, s) = (&r.scales.lift, &r.scales.side);
+        let (l, f, o, s) = (
+            &r.scales.lift,
+            &r.scales.flap,
+            &r.scales.offset,
+            &r.scales.side,
+        );
         println!(
-            "lift scale {:.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
+            "lift scale {:.4} ± {:.4}, flap-lift scale {:.4} ± {:.4}, lift offset {:+.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
             l.value,
             l.std_error,
+            f.value,
+            f.std_error,
+            o.value,
+            o.std_error,
             s.value,
             s.std_error,
             r.flight_test.flights.len(),

@@ -565,7 +565,8 @@ impl Hashing<std::io::BufWriter<std::fs::File>> {
         })
     }
 
-    /// The SHA-256 of everything written, lowercase hex.
+    /// The SHA-256 of everything written, lowercase hex (the generator's boom records).
+    #[cfg(feature = "sim")]
     fn hex(self) -> String {
         hex(self.hash)
     }
