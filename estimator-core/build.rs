@@ -3,6 +3,8 @@
 //! * Weights, in `src/model/mod.rs`. Default: `src/model/weights.rs`, written by `trainer train` and
 //!   committed. `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small
 //!   model and checks it end to end without touching the shipped weights).
+//! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/sigma.rs`, written by
+//!   `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against another fit.
 //! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/f16_tables.rs`,
 //!   written by `scripts/extract-aero` from JSBSim's F-16 and committed.
 //!   `ESTIMATOR_AERO=/abs/path/f16_tables.rs` builds against the tables of another aircraft
@@ -15,6 +17,7 @@ use std::path::PathBuf;
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     aero_tables(&manifest);
+    sigma_weights(&manifest);
     let path = chosen(
         "ESTIMATOR_WEIGHTS",
         manifest.join("src/model/weights.rs"),
@@ -51,6 +54,22 @@ fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
     };
     println!("cargo:rerun-if-changed={}", path.display());
     path
+}
+
+/// `ESTIMATOR_SIGMA_FILE`: the estimate's 1σ weights `src/model/mod.rs` includes. Committed;
+/// a missing file is a failed build (every estimate carries a 1σ).
+fn sigma_weights(manifest: &std::path::Path) {
+    let path = chosen(
+        "ESTIMATOR_SIGMA",
+        manifest.join("src/model/sigma.rs"),
+        "a file written by trainer fit-sigma",
+    );
+    assert!(
+        path.is_file(),
+        "{} is missing: run `trainer fit-sigma` (or git checkout it)",
+        path.display()
+    );
+    println!("cargo:rustc-env=ESTIMATOR_SIGMA_FILE={}", path.display());
 }
 
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build

@@ -27,6 +27,7 @@ use crate::features::{Feature, FeatureState, FeatureValues, VELOCITY_SOURCES};
 use crate::filter;
 use crate::nn::{Aligned, Layer};
 use crate::normalize::{Envelope, Norm, TurbulenceEnvelope};
+use crate::uncertainty::{self, SIGMA_UNKNOWN};
 
 pub use crate::health::STUCK_FRAMES;
 
@@ -85,6 +86,14 @@ impl Flags {
     /// filter. β is still the network's.
     pub const BETA_DISAGREES: u16 = 1 << 13;
 
+    /// The flags that say an angle was computed from less than training saw (the 1σ's `Caution`
+    /// term, [`crate::uncertainty::Term::Caution`]).
+    pub const CAUTIONS: u16 = Self::HISTORY_SHORT
+        | Self::FILTER_DIVERGED
+        | Self::GPS_SUBSTITUTED
+        | Self::ALPHA_FROM_FILTER
+        | Self::BETA_DISAGREES;
+
     /// Every flag bit with its name, in bit order: the names of the estimates CSV's flag columns
     /// and of the summaries' flag counts.
     pub const NAMED: [(u16, &'static str); 14] = [
@@ -130,6 +139,11 @@ pub struct Estimate {
     /// Part 1 of the β cascade: body y air-relative velocity, mm/s.
     pub v_aero_mms: i32,
     pub flags: Flags,
+    /// 1σ of α, millidegrees ([`crate::uncertainty`]); [`crate::uncertainty::SIGMA_UNKNOWN`] when
+    /// α was not computed from this frame (held, or no estimate).
+    pub sigma_alpha_mdeg: u16,
+    /// 1σ of β, millidegrees, as for α.
+    pub sigma_beta_mdeg: u16,
 }
 
 impl Estimate {
@@ -399,6 +413,10 @@ pub struct Estimator<'m> {
     last_beta: Option<(i32, i32)>,
     /// Past frames for the deltas, and the air-data filter when a model reads its outputs.
     state: FeatureState,
+    /// The 1σ terms of α and β of the last step ([`Estimator::sigma_terms`]).
+    terms: [[u32; uncertainty::TERMS]; 2],
+    /// The running mean of each angle's disagreement with the filter ([`uncertainty::track`]).
+    slow: [u32; 2],
 }
 
 impl<'m> Estimator<'m> {
@@ -415,6 +433,8 @@ impl<'m> Estimator<'m> {
             last_alpha: None,
             last_beta: None,
             state: FeatureState::new(needs_filter(alpha) || needs_filter(beta)),
+            terms: [[0; uncertainty::TERMS]; 2],
+            slow: [0; 2],
         }
     }
 
@@ -450,12 +470,22 @@ impl<'m> Estimator<'m> {
         *self = Self::with(self.alpha.map(|m| m.net), self.beta.map(|m| m.net));
     }
 
+    /// The 1σ terms of α and β in the last step (`[alpha, beta]`, each in
+    /// [`uncertainty::Term::ALL`] order; zero for an angle that was not computed): what
+    /// `trainer fit-sigma` fits the weights on.
+    pub fn sigma_terms(&self) -> [[u32; uncertainty::TERMS]; 2] {
+        self.terms
+    }
+
     pub fn step(&mut self, frame: &SensorFrame) -> Estimate {
         let mut e = Estimate {
             seq: frame.seq,
             time_ms: frame.time_ms,
+            sigma_alpha_mdeg: SIGMA_UNKNOWN,
+            sigma_beta_mdeg: SIGMA_UNKNOWN,
             ..Estimate::default()
         };
+        self.terms = [[0; uncertainty::TERMS]; 2];
         let (Some(alpha), Some(beta)) = (self.alpha, self.beta) else {
             e.flags.0 = Flags::NO_MODEL | Flags::NO_ESTIMATE;
             return e;
@@ -537,6 +567,44 @@ impl<'m> Estimator<'m> {
             flags |= Flags::BETA_DISAGREES;
         }
         e.flags = Flags(flags);
+        // The 1σ of each computed angle; a held or missing one has none.
+        let weights = &crate::model::SIGMA;
+        let indicators = uncertainty::Indicators {
+            out_of_envelope: flags & Flags::OUT_OF_ENVELOPE != 0,
+            turbulent: flags & Flags::TURBULENCE != 0,
+            caution: flags & Flags::CAUTIONS != 0,
+        };
+        for (k, (angle, held, value, sigma)) in [
+            (
+                uncertainty::Angle::Alpha,
+                Flags::ALPHA_HELD,
+                e.alpha_mdeg,
+                &mut e.sigma_alpha_mdeg,
+            ),
+            (
+                uncertainty::Angle::Beta,
+                Flags::BETA_HELD,
+                e.beta_mdeg,
+                &mut e.sigma_beta_mdeg,
+            ),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            // A missing angle is held too (`NO_ESTIMATE` comes with its held flag).
+            if flags & held != 0 {
+                continue;
+            }
+            let Some(slow) = self.slow.get_mut(k) else {
+                continue;
+            };
+            let t = uncertainty::terms(angle, &values, value, indicators, *slow);
+            *sigma = uncertainty::sigma(weights.of(angle), &t);
+            uncertainty::track(slow, &t);
+            if let Some(slot) = self.terms.get_mut(k) {
+                *slot = t;
+            }
+        }
         e
     }
 }

@@ -40,6 +40,7 @@ pub mod health;
 pub mod model;
 pub mod nn;
 pub mod normalize;
+pub mod uncertainty;
 pub mod wire;
 
 pub use channels::{CHANNELS, Channel, SensorFrame, Suite};

@@ -248,6 +248,14 @@ fn extreme_raw_values_never_panic() {
         };
         let out = e.step(&f);
         assert!(out.alpha_mdeg.abs() <= 90_000);
+        // Every 1σ is a defined value: none for a held angle, at most SIGMA_MAX otherwise.
+        for (held, sigma) in [
+            (Flags::ALPHA_HELD, out.sigma_alpha_mdeg),
+            (Flags::BETA_HELD, out.sigma_beta_mdeg),
+        ] {
+            let unknown = estimator_core::uncertainty::SIGMA_UNKNOWN;
+            assert_eq!(out.flags.has(held), sigma == unknown, "{out:?}");
+        }
     }
 }
 
@@ -341,6 +349,16 @@ fn a_model_reading_egi_channels_is_held_on_table1_frames() {
             .has(Flags::INVALID_INPUT | Flags::ALPHA_HELD | Flags::NO_ESTIMATE)
     );
     assert_eq!((out.alpha_mdeg, out.w_aero_mms), (0, 0));
+    // A held or missing angle has no 1σ; the live one has one.
+    assert_eq!(
+        out.sigma_alpha_mdeg,
+        estimator_core::uncertainty::SIGMA_UNKNOWN
+    );
+    assert!(out.sigma_beta_mdeg < estimator_core::uncertainty::SIGMA_UNKNOWN);
+    assert_eq!(
+        fresh.sigma_terms()[0],
+        [0; estimator_core::uncertainty::TERMS]
+    );
 }
 
 #[test]

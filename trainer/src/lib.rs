@@ -22,5 +22,6 @@ pub mod quant;
 pub mod report;
 pub mod saved;
 pub mod sweep;
+pub mod uncertainty;
 
 pub use error::{Error, Result};

@@ -433,6 +433,34 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
+    /// Fit the weights of the estimate's 1σ (estimator-core's `uncertainty`) for the compiled-in
+    /// estimator, on flights none of its networks trained on: writes the generated sigma.rs the
+    /// estimator compiles in, and prints the coverage on those flights.
+    FitSigma {
+        /// Datasets whose every flight is stepped (repeatable; e.g. randomised airframes from
+        /// scripts/airframe-randomise and JSBSim's own F-16). None of their flights may have
+        /// trained the compiled-in networks.
+        #[arg(long, value_name = "DIR", required = true)]
+        data: Vec<PathBuf>,
+        /// Fit on every N-th frame (the errors of neighbouring frames are nearly the same); the
+        /// coverage is reported on every frame.
+        #[arg(long, default_value_t = 5)]
+        every: usize,
+        /// The generated file to write.
+        #[arg(
+            long,
+            value_name = "FILE",
+            default_value = "estimator-core/src/model/sigma.rs"
+        )]
+        out: PathBuf,
+        /// Also write every row (dataset, angle, the terms, the 1σ of the weights compiled in, the
+        /// error; millidegrees) as CSV, to study which terms follow the error.
+        #[arg(long, value_name = "CSV")]
+        rows: Option<PathBuf>,
+        /// Print exactly one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Evaluate the compiled-in estimator (int8, with its flags and fallbacks, as the firmware runs
     /// it) on a dataset's flights; or, with --model, a model `trainer train` wrote, without
     /// exporting it.
@@ -682,6 +710,7 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
             "alpha": e.alpha, "beta": e.beta,
             "regimes": e.regimes,
             "flagged": e.flagged,
+            "sigma": {"alpha": e.sigma[0], "beta": e.sigma[1]},
             "provenance": prov,
         });
         println!("{}", serde_json::to_string(&v)?);
@@ -774,6 +803,120 @@ fn cmd_eval_model(
         print_metrics("int8", &alpha);
         println!("β (deg):");
         print_metrics("int8", &beta);
+    }
+    Ok(())
+}
+
+fn cmd_fit_sigma(
+    data: &[PathBuf],
+    every: usize,
+    out: &Path,
+    rows_csv: Option<&Path>,
+    json: bool,
+) -> Result<()> {
+    use trainer::uncertainty::{Rows, fit, rust_file};
+    if every == 0 {
+        bail!("--every must be at least 1");
+    }
+    let (Some(prov), Some(suite)) = (
+        trainer::pipeline::shipped_provenance(),
+        trainer::pipeline::shipped_suite(),
+    ) else {
+        bail!(
+            "this build has no compiled-in model: the 1σ is fitted for one (run `trainer train` first)"
+        );
+    };
+    let mut datasets = Vec::new();
+    for d in data {
+        let ds = Dataset::load_any(d, 0.15)
+            .with_context(|| format!("cannot load the dataset {}", d.display()))?;
+        ds.require(suite)?;
+        datasets.push(ds);
+    }
+    let all = |ds: &Dataset| Role::ALL.into_iter().flat_map(|r| ds.flights(r)).count();
+    let flights: usize = datasets.iter().map(all).sum();
+    let bar = indicatif::ProgressBar::new(flights as u64);
+    hil_sim::progress::style(&bar, "flights");
+    hil_sim::progress::log_when_not_a_terminal(&bar, "flights");
+    let mut rows: [Rows; 2] = Default::default();
+    let mut per_dataset: Vec<[Rows; 2]> = Vec::new();
+    for ds in &datasets {
+        let mut mine: [Rows; 2] = Default::default();
+        for fl in Role::ALL.into_iter().flat_map(|r| ds.flights(r)) {
+            let ans = trainer::pipeline::shipped_answers(fl, suite);
+            let [a, b] = trainer::pipeline::sigma_rows(
+                &ans,
+                [
+                    fl.truth(trainer::data::Target::AlphaDeg),
+                    fl.truth(trainer::data::Target::BetaDeg),
+                ],
+            );
+            mine[0].extend(a);
+            mine[1].extend(b);
+            bar.inc(1);
+        }
+        rows[0].extend(mine[0].clone());
+        rows[1].extend(mine[1].clone());
+        per_dataset.push(mine);
+    }
+    bar.finish_and_clear();
+    let (alpha, beta) = (fit(&rows[0].every(every))?, fit(&rows[1].every(every))?);
+    let names: Vec<String> = data.iter().map(|d| d.display().to_string()).collect();
+    if let Some(path) = rows_csv {
+        trainer::uncertainty::write_rows(path, &names, &per_dataset)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    // Each dataset's coverage under the fitted weights: the fit pools them, a user flies one.
+    let each: Vec<serde_json::Value> = names
+        .iter()
+        .zip(&per_dataset)
+        .map(|(name, [a, b])| {
+            let cov = |r: &Rows, w| trainer::uncertainty::coverage_with(w, r);
+            serde_json::json!({"data": name, "alpha": cov(a, &alpha.weights), "beta": cov(b, &beta.weights)})
+        })
+        .collect();
+    let first_line = prov.lines().next().unwrap_or("");
+    let (ca, cb) = (
+        trainer::uncertainty::coverage_with(&alpha.weights, &rows[0]),
+        trainer::uncertainty::coverage_with(&beta.weights, &rows[1]),
+    );
+    let provenance = format!(
+        "command: {}\nflights: {flights} (every flight of {}; fitted on every {every}th frame)\nestimator: {first_line}\n\
+         alpha: {} frames, 1σ median {:.3} deg, within 1σ {:.1} %, within 2σ {:.1} %\n\
+         beta: {} frames, 1σ median {:.3} deg, within 1σ {:.1} %, within 2σ {:.1} %\n",
+        command_line(),
+        names.join(", "),
+        ca.frames,
+        ca.median_sigma_deg,
+        100.0 * ca.within_1sigma,
+        100.0 * ca.within_2sigma,
+        cb.frames,
+        cb.median_sigma_deg,
+        100.0 * cb.within_1sigma,
+        100.0 * cb.within_2sigma,
+    );
+    let text = rust_file(&alpha, &beta, &provenance);
+    let tmp = out.with_extension("rs.tmp");
+    std::fs::write(&tmp, &text).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, out).with_context(|| format!("writing {}", out.display()))?;
+    if json {
+        let v = serde_json::json!({"alpha": alpha, "beta": beta, "flights": flights, "datasets": each, "out": out.display().to_string()});
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        print!("{provenance}");
+        println!("within 2σ, dataset by dataset (α / β):");
+        for e in &each {
+            println!(
+                "  {}: {:.1} % / {:.1} %",
+                e["data"].as_str().unwrap_or(""),
+                100.0 * e["alpha"]["within_2sigma"].as_f64().unwrap_or(f64::NAN),
+                100.0 * e["beta"]["within_2sigma"].as_f64().unwrap_or(f64::NAN)
+            );
+        }
+        println!(
+            "wrote {}: rebuild (cargo build --release) for the estimator to carry it",
+            out.display()
+        );
     }
     Ok(())
 }
@@ -1591,6 +1734,13 @@ fn run() -> Result<()> {
             tune,
             json,
         } => cmd_eval_filter(data, split, tune, *json),
+        Cmd::FitSigma {
+            data,
+            every,
+            out,
+            rows,
+            json,
+        } => cmd_fit_sigma(data, *every, out, rows.as_deref(), *json),
         Cmd::Calibrate {
             flight_test,
             model_flight_test,

@@ -219,6 +219,8 @@ pub struct ShippedEval {
     /// Frames whose estimate was held or missing, out of envelope, or in turbulence beyond the
     /// trained envelope, per flight.
     pub flagged: Vec<FlagCounts>,
+    /// How often the error lay within the estimate's 1σ and 2σ, over the computed frames.
+    pub sigma: [crate::uncertainty::Coverage; 2],
     pub provenance: Option<&'static str>,
 }
 
@@ -230,8 +232,18 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
     let mut a = Vec::new();
     let mut b = Vec::new();
     let mut flagged = Vec::new();
+    let mut rows: [crate::uncertainty::Rows; 2] = Default::default();
     for fl in ds.flights(role) {
         let ans = shipped_answers(fl, suite);
+        let [ra, rb] = sigma_rows(
+            &ans,
+            [
+                fl.truth(Angle::Alpha.target()),
+                fl.truth(Angle::Beta.target()),
+            ],
+        );
+        rows[0].extend(ra);
+        rows[1].extend(rb);
         let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
         let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
         let (ta, tb) = (
@@ -268,6 +280,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
         beta: FlightMetrics::of(&b),
         regimes: crate::metrics::Regimes::of(&a, &b),
         flagged,
+        sigma: rows.map(|r| r.coverage()),
         provenance: shipped_provenance(),
     }
 }
@@ -288,11 +301,14 @@ pub struct FlagCounts {
     pub silent: usize,
 }
 
-/// What an estimator answered on one flight, frame by frame: α, β (degrees) and the flags.
+/// What an estimator answered on one flight, frame by frame: α, β (degrees), the flags, each
+/// angle's 1σ (millidegrees, `SIGMA_UNKNOWN` when held) and the terms it was computed from.
 pub struct FlightAnswers {
     pub alpha_deg: Vec<f64>,
     pub beta_deg: Vec<f64>,
     pub flags: Vec<estimator_core::Flags>,
+    pub sigma_mdeg: Vec<[u16; 2]>,
+    pub sigma_terms: Vec<[[u32; estimator_core::uncertainty::TERMS]; 2]>,
 }
 
 /// A fresh `Estimator::shipped()` stepped over `fl`'s frames as a sender of `suite` delivers them,
@@ -303,14 +319,40 @@ pub fn shipped_answers(fl: &Flight, suite: Suite) -> FlightAnswers {
         alpha_deg: Vec::with_capacity(fl.len()),
         beta_deg: Vec::with_capacity(fl.len()),
         flags: Vec::with_capacity(fl.len()),
+        sigma_mdeg: Vec::with_capacity(fl.len()),
+        sigma_terms: Vec::with_capacity(fl.len()),
     };
     for f in &fl.frames {
         let e = est.step(&f.restricted_to(suite));
         a.alpha_deg.push(e.alpha_deg());
         a.beta_deg.push(e.beta_deg());
         a.flags.push(e.flags);
+        a.sigma_mdeg.push([e.sigma_alpha_mdeg, e.sigma_beta_mdeg]);
+        a.sigma_terms.push(est.sigma_terms());
     }
     a
+}
+
+/// The 1σ rows of one flight's answers ([`crate::uncertainty::Rows`], α then β): every frame
+/// whose angle was computed, with its error against `truth` (degrees).
+pub fn sigma_rows(ans: &FlightAnswers, truth: [&[f64]; 2]) -> [crate::uncertainty::Rows; 2] {
+    let mut rows: [crate::uncertainty::Rows; 2] = Default::default();
+    for (k, (rows, truth)) in rows.iter_mut().zip(truth).enumerate() {
+        let est = if k == 0 {
+            &ans.alpha_deg
+        } else {
+            &ans.beta_deg
+        };
+        for (i, (e, t)) in est.iter().zip(truth).enumerate() {
+            let (Some(s), Some(terms)) = (ans.sigma_mdeg.get(i), ans.sigma_terms.get(i)) else {
+                continue;
+            };
+            if s[k] != estimator_core::uncertainty::SIGMA_UNKNOWN {
+                rows.push(terms[k], s[k], (e - t) * 1000.0);
+            }
+        }
+    }
+    rows
 }
 
 /// The smallest sensor suite the compiled-in model reads, if this build has one (the estimator's

@@ -1,5 +1,6 @@
-//! The compiled-in model: `weights.rs`, written by `trainer train`, never edited by hand.
-//! `ESTIMATOR_WEIGHTS=/path/weights.rs` at build time selects another export (see `build.rs`).
+//! The compiled-in model: `weights.rs`, written by `trainer train`, and `sigma.rs`, written by
+//! `trainer fit-sigma`, never edited by hand. `ESTIMATOR_WEIGHTS=/path/weights.rs` and
+//! `ESTIMATOR_SIGMA=/path/sigma.rs` at build time select others (see `build.rs`).
 
 #[cfg(estimator_weights)]
 mod generated {
@@ -8,6 +9,14 @@ mod generated {
 }
 #[cfg(estimator_weights)]
 pub use generated::*;
+
+/// The weights of the estimate's 1σ (`src/model/sigma.rs`, written by `trainer fit-sigma`;
+/// `ESTIMATOR_SIGMA=/path/sigma.rs` selects another fit, see `build.rs`).
+mod sigma {
+    #![allow(clippy::all, clippy::unreadable_literal)]
+    include!(env!("ESTIMATOR_SIGMA_FILE"));
+}
+pub use sigma::{SIGMA, SIGMA_PROVENANCE};
 
 /// Whether this build has a model.
 pub const HAS_MODEL: bool = cfg!(estimator_weights);

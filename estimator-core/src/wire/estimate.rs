@@ -14,16 +14,19 @@
 //! 31              deadline_misses    u32    steps that overran their 50 ms period so far
 //! 35              rx_overruns        u32    received bytes dropped before the frame decoder saw them
 //!                                           (receive queue full, UART overrun) so far   [version 2]
+//! 39              sigma_alpha        u16    1σ of alpha, millidegrees; 65535: none (held)  [version 4]
+//! 41              sigma_beta         u16    1σ of beta, millidegrees; 65535: none (held)   [version 4]
 //! ```
 //! The header's seq and time echo the sensor frame answered. Version 1 of the wire format had no
-//! `rx_overruns` (a 35-byte payload); such a frame is refused as [`Error::Version`], never misread.
+//! `rx_overruns` (a 35-byte payload), versions 2 and 3 no 1σ (39 bytes); such a frame is refused
+//! as [`Error::Version`], never misread.
 
 use super::{
     Error, HEADER_LEN, Kind, check_header, emit_header, header_of, read_u16, read_u32, write,
 };
 use crate::estimator::{Estimate, Flags};
 
-pub const PAYLOAD_LEN: usize = 39;
+pub const PAYLOAD_LEN: usize = 43;
 pub const BODY_LEN: usize = HEADER_LEN + PAYLOAD_LEN;
 
 mod field {
@@ -45,6 +48,8 @@ mod field {
     pub const RX_LOST: Range<usize> = at(27, 4);
     pub const DEADLINE_MISSES: Range<usize> = at(31, 4);
     pub const RX_OVERRUNS: Range<usize> = at(35, 4);
+    pub const SIGMA_ALPHA: Range<usize> = at(39, 2);
+    pub const SIGMA_BETA: Range<usize> = at(41, 2);
 }
 
 /// What `step_ticks` counts.
@@ -137,6 +142,8 @@ impl EstimateFrame {
             w_aero_mms: p.u32(field::W_AERO) as i32,
             v_aero_mms: p.u32(field::V_AERO) as i32,
             flags: Flags(p.flags()),
+            sigma_alpha_mdeg: read_u16(body, field::SIGMA_ALPHA),
+            sigma_beta_mdeg: read_u16(body, field::SIGMA_BETA),
         };
         let src = body.get(field::TICK_SOURCE.start).copied().unwrap_or(0);
         let health = Health {
@@ -158,6 +165,8 @@ impl EstimateFrame {
         write(body, field::W_AERO, &e.w_aero_mms.to_le_bytes());
         write(body, field::V_AERO, &e.v_aero_mms.to_le_bytes());
         write(body, field::FLAGS, &e.flags.0.to_le_bytes());
+        write(body, field::SIGMA_ALPHA, &e.sigma_alpha_mdeg.to_le_bytes());
+        write(body, field::SIGMA_BETA, &e.sigma_beta_mdeg.to_le_bytes());
         write(body, field::STEP_TICKS, &h.step_ticks.to_le_bytes());
         write(body, field::TICK_SOURCE, &[h.tick_source as u8]);
         write(body, field::RX_CORRUPT, &h.rx_corrupt.to_le_bytes());
@@ -193,6 +202,8 @@ mod tests {
                 w_aero_mms: -12_000,
                 v_aero_mms: 345,
                 flags: Flags(Flags::OUT_OF_ENVELOPE | Flags::BETA_HELD),
+                sigma_alpha_mdeg: 412,
+                sigma_beta_mdeg: crate::uncertainty::SIGMA_UNKNOWN,
             },
             health: Health {
                 step_ticks: 812_345,
@@ -219,16 +230,21 @@ mod tests {
         let mut f = EstimateFrame::default();
         f.health.deadline_misses = 0x0102_0304;
         f.health.rx_overruns = 0x0506_0708;
+        f.estimate.sigma_alpha_mdeg = 0x0a0b;
+        f.estimate.sigma_beta_mdeg = 0x0c0d;
         let mut body = [0u8; BODY_LEN];
         f.emit(&mut body);
         assert_eq!(body[0], super::super::VERSION);
         assert_eq!(&body[8 + 31..8 + 35], &0x0102_0304u32.to_le_bytes());
         assert_eq!(&body[8 + 35..8 + 39], &0x0506_0708u32.to_le_bytes());
-        assert_eq!(BODY_LEN, 8 + 39);
+        assert_eq!(&body[8 + 39..8 + 41], &0x0a0bu16.to_le_bytes());
+        assert_eq!(&body[8 + 41..8 + 43], &0x0c0du16.to_le_bytes());
+        assert_eq!(BODY_LEN, 8 + 43);
     }
 
-    /// Version 1 estimate frames were 4 bytes shorter (no `rx_overruns`): one must be refused as a
-    /// version mismatch, not read with this layout nor reported as merely truncated.
+    /// Version 1 estimate frames were 8 bytes shorter (no `rx_overruns`, no 1σ), versions 2 and 3
+    /// 4 bytes (no 1σ): one must be refused as a version mismatch, not read with this layout nor
+    /// reported as merely truncated.
     #[test]
     fn a_frame_of_another_version_is_refused_as_such() {
         let f = EstimateFrame::default();
@@ -238,7 +254,10 @@ mod tests {
         v1[0] = 1;
         assert_eq!(EstimateFrame::parse(&v1[..8 + 35]), Err(Error::Version(1)));
         assert_eq!(EstimateFrame::parse(&v1), Err(Error::Version(1)));
-        for other in [2, 4] {
+        let mut v3 = body;
+        v3[0] = 3;
+        assert_eq!(EstimateFrame::parse(&v3[..8 + 39]), Err(Error::Version(3)));
+        for other in [2, 3, 5] {
             let mut v = body;
             v[0] = other;
             assert_eq!(EstimateFrame::parse(&v), Err(Error::Version(other)));
@@ -254,7 +273,7 @@ mod tests {
         assert_eq!(got, [Err(Error::Version(1))]);
         assert_eq!(
             std::format!("{}", Error::Version(1)),
-            "wire format version 1, but this build speaks version 3"
+            "wire format version 1, but this build speaks version 4"
         );
     }
 }

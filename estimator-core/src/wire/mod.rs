@@ -23,16 +23,18 @@
 //! | 1 | first format: sensor payload 50 bytes, estimate payload 35 bytes |
 //! | 2 | estimate frames carry `rx_overruns` (payload 39 bytes); sensor frames unchanged |
 //! | 3 | sensor suites: kind 3 `SensorEgi` (the 50-byte sensor payload + EGI attitude, velocity, fuel and their validity: 78 bytes) next to kind 1 `Sensor` (the Table 1 suite, layout unchanged); estimate frames unchanged |
+//! | 4 | estimate frames carry the 1σ of α and β (payload 43 bytes); sensor frames unchanged |
 //!
-//! A receiver of version 3 takes both sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
-//! a kind-1 frame decodes with the EGI channels marked invalid. Frames of version 2 (same kind-1 and
-//! estimate layouts, but no kind 3) are refused as `Error::Version(2)`, like any other version.
+//! A receiver of version 4 takes both sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
+//! a kind-1 frame decodes with the EGI channels marked invalid. Frames of versions 2 and 3 (same
+//! sensor layouts, estimates without a 1σ) are refused as `Error::Version(v)`, like any other
+//! version.
 
 pub mod estimate;
 pub mod sensor;
 
 /// Wire format version carried in every header (the table in the module docs).
-pub const VERSION: u8 = 3;
+pub const VERSION: u8 = 4;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0;
 /// Header length.
@@ -357,7 +359,7 @@ mod tests {
             assert_eq!(results, [Err(Error::Version(2))]);
             let text = std::format!("{}", Error::Version(2));
             assert!(
-                text.contains("version 2") && text.contains("version 3"),
+                text.contains("version 2") && text.contains("version 4"),
                 "{text}"
             );
         }

@@ -4,8 +4,9 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use estimator_core::Flags;
+use estimator_core::uncertainty::SIGMA_UNKNOWN;
 use estimator_core::wire::estimate::TickSource;
+use estimator_core::{Estimate, Flags};
 use serde::Serialize;
 
 use crate::link::LinkStats;
@@ -103,6 +104,9 @@ pub struct Summary {
     pub beta_rmse_deg: Option<f64>,
     pub alpha_max_abs_err_deg: Option<f64>,
     pub beta_max_abs_err_deg: Option<f64>,
+    /// Share of the frames with truth and a 1σ whose |error| ≤ 2σ (95 % is the design point).
+    pub alpha_within_2sigma: Option<f64>,
+    pub beta_within_2sigma: Option<f64>,
     pub frames_sent: usize,
     /// Estimates received intact.
     pub frames_answered: usize,
@@ -183,6 +187,20 @@ pub fn summarize(o: &RunOutcome) -> Summary {
     };
     let a = ErrorStats::of(&err(alpha_deg));
     let b = ErrorStats::of(&err(beta_deg));
+    // |estimate − truth| ≤ 2σ over the scored records with a true angle and a 1σ.
+    let within_2sigma = |angle: fn(&FrameRecord) -> (f64, f64), sigma: fn(&Estimate) -> u16| {
+        let pairs: Vec<bool> = scored
+            .iter()
+            .filter_map(|r| {
+                let (truth, estimate) = angle(r);
+                let s = sigma(&r.reply?.estimate);
+                (truth.is_finite() && s != SIGMA_UNKNOWN)
+                    .then(|| (estimate - truth).abs() <= 2e-3 * f64::from(s))
+            })
+            .collect();
+        (!pairs.is_empty())
+            .then(|| pairs.iter().filter(|&&b| b).count() as f64 / pairs.len() as f64)
+    };
     let replies: Vec<_> = o.records.iter().filter_map(|r| r.reply).collect();
     // The firmware's health counters only grow: the largest is the latest.
     let counter = |f: fn(&estimator_core::wire::estimate::Health) -> u32| {
@@ -213,6 +231,8 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         beta_rmse_deg: b.map(|s| s.rmse),
         alpha_max_abs_err_deg: a.map(|s| s.max),
         beta_max_abs_err_deg: b.map(|s| s.max),
+        alpha_within_2sigma: within_2sigma(alpha_deg, |e| e.sigma_alpha_mdeg),
+        beta_within_2sigma: within_2sigma(beta_deg, |e| e.sigma_beta_mdeg),
         frames_sent: o.records.len(),
         frames_answered: replies.len(),
         frames_scored: scored.len(),
@@ -239,6 +259,15 @@ pub fn summarize(o: &RunOutcome) -> Summary {
     }
 }
 
+/// A 1σ in millidegrees as degrees, exactly; empty when the angle has none (held).
+fn sigma_cell(mdeg: u16) -> String {
+    if mdeg == SIGMA_UNKNOWN {
+        String::new()
+    } else {
+        thousandths(i32::from(mdeg))
+    }
+}
+
 /// An integer count of thousandths (millidegrees, mm/s) as the decimal it is, exactly: `-1234` →
 /// `-1.234`.
 pub fn thousandths(v: i32) -> String {
@@ -259,6 +288,8 @@ pub fn csv_header() -> Vec<String> {
         "beta_deg",
         "w_aero_mps",
         "v_aero_mps",
+        "sigma_alpha_deg",
+        "sigma_beta_deg",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -297,6 +328,8 @@ pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), csv::Error>
                     thousandths(e.beta_mdeg),
                     thousandths(e.w_aero_mms),
                     thousandths(e.v_aero_mms),
+                    sigma_cell(e.sigma_alpha_mdeg),
+                    sigma_cell(e.sigma_beta_mdeg),
                 ]);
                 row.extend(
                     Flags::NAMED

@@ -1,0 +1,335 @@
+//! The 1σ of each estimate: how far the angle is likely off, from what this step saw.
+//!
+//! An estimate's error grows with what the networks cannot see in training: turbulence beyond
+//! the filter's, an airframe that is not the model (the filter's lift scale leaves 1, the network
+//! and the filter part ways), a filter that is unsure or inconsistent, a clamped input. Each of
+//! those is a [`Term`], an integer in millidegrees (≥ 0) computed from the step's features and
+//! flags, and
+//!
+//! ```text
+//! σ² = Σₖ (wₖ · tₖ / 256)²        (millidegrees², integer)
+//! ```
+//!
+//! with one weight per term and angle ([`Coefficients`], Q8). The weights are not chosen by hand:
+//! `trainer fit-sigma` fits them (Gaussian likelihood, then one common factor for 95 % of the
+//! frames within 2σ) on flights no network trained on, of randomised airframes and of JSBSim's
+//! own, and writes `src/model/sigma.rs` (docs/results/uncertainty.md). A held or missing angle
+//! has no 1σ: [`SIGMA_UNKNOWN`].
+//!
+//! Integer arithmetic throughout: every term is clamped to [`TERM_MAX`], so each product fits 64
+//! bits and their sum saturates; no input panics.
+
+use crate::features::{Feature, FeatureValues};
+
+/// The 1σ of an angle that was not computed this step (held, or no estimate).
+pub const SIGMA_UNKNOWN: u16 = u16::MAX;
+/// The largest 1σ reported for a computed angle, millidegrees.
+pub const SIGMA_MAX: u16 = u16::MAX - 1;
+/// Every term is clamped to this, millidegrees (1000°).
+pub const TERM_MAX: u32 = 1_000_000;
+/// An indicator term's size when it is set: one degree.
+const ONE_DEG: u32 = 1_000;
+/// [`Feature::FilterNisMean`] of a consistent filter (the measurement's 2 degrees of freedom),
+/// in its 1e-3 units.
+const NIS_CONSISTENT: i64 = 2_000;
+
+/// What the 1σ of an angle is made of. Every term is in millidegrees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(usize)]
+pub enum Term {
+    /// Always one degree: the error floor of the networks in calm air.
+    Base,
+    /// The air-data filter's own 1σ of this angle.
+    FilterSigma,
+    /// |this angle − the filter's|, when the filter is clear ([`FeatureValues::filter_clear`]).
+    Disagreement,
+    /// The disagreement's running mean over about 25 s ([`track`]): a network and a filter that
+    /// part ways for long do so because the airframe is not the model they know, not by noise.
+    SlowDisagreement,
+    /// The filter's turbulence index.
+    Turbulence,
+    /// |lift scale − 1| · |filter α|: the α the lift model misses on an airframe unlike the model.
+    LiftMismatch,
+    /// |this angle|: a force derivative that is not the model's (5–15 % on a real airframe) errs
+    /// in proportion to the angle it is read from.
+    Magnitude,
+    /// The filter's 2-s NIS mean above that of a consistent filter, in its 1e-3 units over 10.
+    NisExcess,
+    /// One degree when the filter is not clear (no filter, restarted, gated, unsure, slow).
+    FilterUnclear,
+    /// One degree with `OUT_OF_ENVELOPE` ([`Indicators::out_of_envelope`]).
+    OutOfEnvelope,
+    /// One degree with `TURBULENCE` ([`Indicators::turbulent`]).
+    Turbulent,
+    /// One degree with any other caution ([`Indicators::caution`]).
+    Caution,
+}
+
+/// How many terms there are.
+pub const TERMS: usize = 12;
+
+impl Term {
+    /// Every term, in index order.
+    pub const ALL: [Term; TERMS] = [
+        Term::Base,
+        Term::FilterSigma,
+        Term::Disagreement,
+        Term::SlowDisagreement,
+        Term::Turbulence,
+        Term::LiftMismatch,
+        Term::Magnitude,
+        Term::NisExcess,
+        Term::FilterUnclear,
+        Term::OutOfEnvelope,
+        Term::Turbulent,
+        Term::Caution,
+    ];
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            Term::Base => "base",
+            Term::FilterSigma => "filter_sigma",
+            Term::Disagreement => "disagreement",
+            Term::SlowDisagreement => "slow_disagreement",
+            Term::Turbulence => "turbulence",
+            Term::LiftMismatch => "lift_mismatch",
+            Term::Magnitude => "magnitude",
+            Term::NisExcess => "nis_excess",
+            Term::FilterUnclear => "filter_unclear",
+            Term::OutOfEnvelope => "out_of_envelope",
+            Term::Turbulent => "turbulent",
+            Term::Caution => "caution",
+        }
+    }
+}
+
+/// What the estimate's flags say, as the indicator terms read it (the estimator fills it in from
+/// its `Flags`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Indicators {
+    /// `OUT_OF_ENVELOPE`.
+    pub out_of_envelope: bool,
+    /// `TURBULENCE`.
+    pub turbulent: bool,
+    /// `HISTORY_SHORT`, `FILTER_DIVERGED`, `GPS_SUBSTITUTED`, `ALPHA_FROM_FILTER` or
+    /// `BETA_DISAGREES`.
+    pub caution: bool,
+}
+
+/// Which angle a 1σ is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Angle {
+    Alpha,
+    Beta,
+}
+
+/// The weights of both angles' terms, Q8 (256 = 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Coefficients {
+    pub alpha: [u16; TERMS],
+    pub beta: [u16; TERMS],
+}
+
+impl Coefficients {
+    pub const fn of(&self, angle: Angle) -> &[u16; TERMS] {
+        match angle {
+            Angle::Alpha => &self.alpha,
+            Angle::Beta => &self.beta,
+        }
+    }
+}
+
+/// µrad to millidegrees, magnitude, clamped to [`TERM_MAX`].
+fn urad_to_mdeg(urad: i32) -> u32 {
+    let v = i64::from(urad).saturating_abs().saturating_mul(180_000) / 3_141_593;
+    clamp_term(v)
+}
+
+fn clamp_term(v: i64) -> u32 {
+    // In [0, TERM_MAX], so the conversion is exact.
+    u32::try_from(v.clamp(0, i64::from(TERM_MAX))).unwrap_or(TERM_MAX)
+}
+
+/// Frames over which [`track`] averages, as a power of two: 2⁹ = 512 frames, 25.6 s at 20 Hz.
+pub const SLOW_SHIFT: u32 = 9;
+
+/// Updates `slow` (millidegrees), the running mean of the disagreement term, with this step's
+/// `terms`: an exponential mean over 2^[`SLOW_SHIFT`] frames of the steps where the filter was
+/// clear; held otherwise.
+pub fn track(slow: &mut u32, terms: &[u32; TERMS]) {
+    let unclear = terms
+        .get(Term::FilterUnclear as usize)
+        .copied()
+        .unwrap_or(0);
+    let Some(&d) = terms.get(Term::Disagreement as usize) else {
+        return;
+    };
+    if unclear == 0 {
+        // Both in [0, TERM_MAX]: no overflow in i64, and the result stays in [0, TERM_MAX].
+        let (s, d) = (i64::from(*slow), i64::from(d));
+        *slow = clamp_term(s.saturating_add(d.saturating_sub(s) >> SLOW_SHIFT));
+    }
+}
+
+/// The terms of `angle` whose computed value is `angle_mdeg`, from the step's features, what the
+/// estimate's flags say and the disagreement's running mean `slow_mdeg` ([`track`], before this
+/// step).
+pub fn terms(
+    angle: Angle,
+    values: &FeatureValues,
+    angle_mdeg: i32,
+    flags: Indicators,
+    slow_mdeg: u32,
+) -> [u32; TERMS] {
+    let (filter_angle, filter_sigma) = match angle {
+        Angle::Alpha => (Feature::FilterAlpha, Feature::FilterSigmaAlpha),
+        Angle::Beta => (Feature::FilterBeta, Feature::FilterSigmaBeta),
+    };
+    let clear = values.filter_clear();
+    let filter_mdeg = i64::from(values.get(filter_angle)).saturating_mul(180_000) / 3_141_593;
+    let disagreement = if clear {
+        clamp_term(
+            i64::from(angle_mdeg)
+                .saturating_sub(filter_mdeg)
+                .saturating_abs(),
+        )
+    } else {
+        0
+    };
+    let alpha_mdeg = i64::from(urad_to_mdeg(values.get(Feature::FilterAlpha)));
+    // Lift scale in 1e-4: |scale − 1| · |α|.
+    let lift_mismatch = if values.get(Feature::FilterAirspeed) > 0 {
+        clamp_term(
+            i64::from(values.get(Feature::FilterLiftScale))
+                .saturating_sub(10_000)
+                .saturating_abs()
+                .saturating_mul(alpha_mdeg)
+                / 10_000,
+        )
+    } else {
+        0
+    };
+    let nis_excess = if values.get(Feature::FilterAirspeed) > 0 {
+        clamp_term(
+            i64::from(values.get(Feature::FilterNisMean)).saturating_sub(NIS_CONSISTENT) / 10,
+        )
+    } else {
+        0
+    };
+    let on = |set: bool| if set { ONE_DEG } else { 0 };
+    let mut t = [0u32; TERMS];
+    for (slot, term) in t.iter_mut().zip(Term::ALL) {
+        *slot = match term {
+            Term::Base => ONE_DEG,
+            Term::FilterSigma => urad_to_mdeg(values.get(filter_sigma)),
+            Term::Disagreement => disagreement,
+            Term::SlowDisagreement => slow_mdeg.min(TERM_MAX),
+            Term::Turbulence => urad_to_mdeg(values.get(Feature::FilterTurbulence)),
+            Term::LiftMismatch => lift_mismatch,
+            Term::Magnitude => clamp_term(i64::from(angle_mdeg).saturating_abs()),
+            Term::NisExcess => nis_excess,
+            Term::FilterUnclear => on(!clear),
+            Term::OutOfEnvelope => on(flags.out_of_envelope),
+            Term::Turbulent => on(flags.turbulent),
+            Term::Caution => on(flags.caution),
+        };
+    }
+    t
+}
+
+/// The 1σ, millidegrees, of `terms` weighted by `weights` (Q8): at most [`SIGMA_MAX`].
+pub fn sigma(weights: &[u16; TERMS], terms: &[u32; TERMS]) -> u16 {
+    let sum = weights.iter().zip(terms).fold(0u64, |acc, (&w, &t)| {
+        // ≤ 65,535 · 1,000,000 / 256 < 2^28: its square is below 2^56, and the sum saturates
+        // (the saturating forms only say so to the overflow lint).
+        let p = u64::from(w).saturating_mul(u64::from(t.min(TERM_MAX))) >> 8;
+        acc.saturating_add(p.saturating_mul(p))
+    });
+    u16::try_from(sum.isqrt()).map_or(SIGMA_MAX, |s| s.min(SIGMA_MAX))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{History, SensorFrame};
+
+    #[test]
+    fn sigma_is_the_root_sum_of_squares_of_the_weighted_terms() {
+        let mut w = [0u16; TERMS];
+        let mut t = [0u32; TERMS];
+        // 1.5 × 2000 and 0.5 × 8000 mdeg: √(3000² + 4000²) = 5000.
+        (w[0], t[0]) = (384, 2_000);
+        (w[3], t[3]) = (128, 8_000);
+        assert_eq!(sigma(&w, &t), 5_000);
+        assert_eq!(sigma(&[0; TERMS], &t), 0);
+    }
+
+    #[test]
+    fn the_largest_weights_and_terms_saturate_below_unknown() {
+        assert_eq!(sigma(&[u16::MAX; TERMS], &[u32::MAX; TERMS]), SIGMA_MAX);
+        assert_ne!(SIGMA_MAX, SIGMA_UNKNOWN);
+    }
+
+    #[test]
+    fn without_a_filter_only_the_base_and_the_filter_unclear_term_are_set() {
+        let v = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        for angle in [Angle::Alpha, Angle::Beta] {
+            let t = terms(angle, &v, 1_234, Indicators::default(), 0);
+            let mut want = [0u32; TERMS];
+            want[Term::Base as usize] = ONE_DEG;
+            want[Term::FilterUnclear as usize] = ONE_DEG;
+            want[Term::Magnitude as usize] = 1_234;
+            assert_eq!(t, want);
+        }
+        let t = terms(
+            Angle::Beta,
+            &v,
+            0,
+            Indicators {
+                out_of_envelope: true,
+                caution: true,
+                ..Indicators::default()
+            },
+            7,
+        );
+        assert_eq!(t[Term::SlowDisagreement as usize], 7);
+        assert_eq!(t[Term::OutOfEnvelope as usize], ONE_DEG);
+        assert_eq!(t[Term::Caution as usize], ONE_DEG);
+        assert_eq!(t[Term::Turbulent as usize], 0);
+    }
+
+    #[test]
+    fn a_clear_filter_gives_the_disagreement_and_the_lift_mismatch() {
+        let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
+        v.set_filter(&crate::filter::Output {
+            alpha_rad: 0.1,
+            beta_rad: -0.02,
+            sigma_alpha_rad: 0.004,
+            airspeed_mps: 150.0,
+            lift_scale: 1.1,
+            nis_mean: 2.5,
+            ..Default::default()
+        });
+        assert!(v.filter_clear());
+        // Filter α 0.1 rad = 5729 mdeg; the network says 6229.
+        let t = terms(Angle::Alpha, &v, 6_229, Indicators::default(), 0);
+        assert_eq!(t[Term::Disagreement as usize], 500);
+        assert_eq!(t[Term::FilterSigma as usize], 229);
+        // |1.1 − 1| × 5729 mdeg.
+        assert_eq!(t[Term::LiftMismatch as usize], 572);
+        assert_eq!(t[Term::NisExcess as usize], 50);
+        assert_eq!(t[Term::FilterUnclear as usize], 0);
+        assert_eq!(t[Term::Magnitude as usize], 6_229);
+        // The running mean moves 1/512 of the way per clear step, and holds otherwise.
+        let mut slow = 0;
+        track(&mut slow, &t);
+        assert_eq!(slow, 0); // 500 / 512 rounds down
+        slow = 1_000;
+        track(&mut slow, &t);
+        assert_eq!(slow, 1_000 - 1); // (500 − 1000) >> 9 = −1 (arithmetic shift)
+        let mut unclear = t;
+        unclear[Term::FilterUnclear as usize] = ONE_DEG;
+        track(&mut slow, &unclear);
+        assert_eq!(slow, 999);
+    }
+}
