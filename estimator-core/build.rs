@@ -59,32 +59,31 @@ fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
 /// `ESTIMATOR_SIGMA_FILE`: the estimate's 1σ weights `src/model/mod.rs` includes. Committed;
 /// a missing file is a failed build (every estimate carries a 1σ).
 fn sigma_weights(manifest: &std::path::Path) {
-    let path = chosen(
+    required(
+        manifest,
         "ESTIMATOR_SIGMA",
-        manifest.join("src/model/sigma.rs"),
+        "src/model/sigma.rs",
         "a file written by trainer fit-sigma",
+        "run scripts/fit-sigma (or git checkout it)",
     );
-    assert!(
-        path.is_file(),
-        "{} is missing: run `trainer fit-sigma` (or git checkout it)",
-        path.display()
-    );
-    println!("cargo:rustc-env=ESTIMATOR_SIGMA_FILE={}", path.display());
 }
 
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
 /// (the filter has no model without them), with the variable named.
 fn aero_tables(manifest: &std::path::Path) {
-    let path = chosen(
+    required(
+        manifest,
         "ESTIMATOR_AERO",
-        manifest.join("src/aero/f16_tables.rs"),
+        "src/aero/f16_tables.rs",
         "a file written by scripts/extract-aero",
+        "run scripts/extract-aero",
     );
-    // The committed default must be there too: the filter has no model without it.
-    assert!(
-        path.is_file(),
-        "{} is missing: run scripts/extract-aero",
-        path.display()
-    );
-    println!("cargo:rustc-env=ESTIMATOR_AERO_FILE={}", path.display());
+}
+
+/// A generated file the crate cannot build without: [`chosen`] by `var` or the committed
+/// `default`, which must exist too (`remedy` says how to make it); its path goes to `var`_FILE.
+fn required(manifest: &std::path::Path, var: &str, default: &str, what: &str, remedy: &str) {
+    let path = chosen(var, manifest.join(default), what);
+    assert!(path.is_file(), "{} is missing: {remedy}", path.display());
+    println!("cargo:rustc-env={var}_FILE={}", path.display());
 }

@@ -123,8 +123,8 @@ impl Flags {
     }
 }
 
-/// One estimate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// One estimate. Its `Default` is all zero with no 1σ ([`SIGMA_UNKNOWN`]): nothing was computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate {
     /// Sequence number and time of the sensor frame it answers.
@@ -144,6 +144,22 @@ pub struct Estimate {
     pub sigma_alpha_mdeg: u16,
     /// 1σ of β, millidegrees, as for α.
     pub sigma_beta_mdeg: u16,
+}
+
+impl Default for Estimate {
+    fn default() -> Self {
+        Estimate {
+            seq: 0,
+            time_ms: 0,
+            alpha_mdeg: 0,
+            beta_mdeg: 0,
+            w_aero_mms: 0,
+            v_aero_mms: 0,
+            flags: Flags::default(),
+            sigma_alpha_mdeg: SIGMA_UNKNOWN,
+            sigma_beta_mdeg: SIGMA_UNKNOWN,
+        }
+    }
 }
 
 impl Estimate {
@@ -415,8 +431,8 @@ pub struct Estimator<'m> {
     state: FeatureState,
     /// The 1σ terms of α and β of the last step ([`Estimator::sigma_terms`]).
     terms: [[u32; uncertainty::TERMS]; 2],
-    /// The running mean of each angle's disagreement with the filter ([`uncertainty::track`]).
-    slow: [u32; 2],
+    /// The running mean of each angle's disagreement with the filter.
+    slow: [uncertainty::SlowMean; 2],
 }
 
 impl<'m> Estimator<'m> {
@@ -434,7 +450,7 @@ impl<'m> Estimator<'m> {
             last_beta: None,
             state: FeatureState::new(needs_filter(alpha) || needs_filter(beta)),
             terms: [[0; uncertainty::TERMS]; 2],
-            slow: [0; 2],
+            slow: [uncertainty::SlowMean::default(); 2],
         }
     }
 
@@ -481,8 +497,6 @@ impl<'m> Estimator<'m> {
         let mut e = Estimate {
             seq: frame.seq,
             time_ms: frame.time_ms,
-            sigma_alpha_mdeg: SIGMA_UNKNOWN,
-            sigma_beta_mdeg: SIGMA_UNKNOWN,
             ..Estimate::default()
         };
         self.terms = [[0; uncertainty::TERMS]; 2];
@@ -569,6 +583,8 @@ impl<'m> Estimator<'m> {
         e.flags = Flags(flags);
         // The 1σ of each computed angle; a held or missing one has none.
         let weights = &crate::model::SIGMA;
+        // The flags are the frame's, shared by both angles (as the flags field is): a clamp or a
+        // caution of either model raises both angles' indicator terms.
         let indicators = uncertainty::Indicators {
             out_of_envelope: flags & Flags::OUT_OF_ENVELOPE != 0,
             turbulent: flags & Flags::TURBULENCE != 0,
@@ -598,9 +614,9 @@ impl<'m> Estimator<'m> {
             let Some(slow) = self.slow.get_mut(k) else {
                 continue;
             };
-            let t = uncertainty::terms(angle, &values, value, indicators, *slow);
+            let t = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
             *sigma = uncertainty::sigma(weights.of(angle), &t);
-            uncertainty::track(slow, &t);
+            slow.track(&t);
             if let Some(slot) = self.terms.get_mut(k) {
                 *slot = t;
             }

@@ -43,7 +43,7 @@ pub enum Term {
     FilterSigma,
     /// |this angle − the filter's|, when the filter is clear ([`FeatureValues::filter_clear`]).
     Disagreement,
-    /// The disagreement's running mean over about 25 s ([`track`]): a network and a filter that
+    /// The disagreement's running mean over about 25 s ([`SlowMean`]): a network and a filter that
     /// part ways for long do so because the airframe is not the model they know, not by noise.
     SlowDisagreement,
     /// The filter's turbulence index.
@@ -153,27 +153,44 @@ fn clamp_term(v: i64) -> u32 {
 /// Frames over which [`track`] averages, as a power of two: 2⁹ = 512 frames, 25.6 s at 20 Hz.
 pub const SLOW_SHIFT: u32 = 9;
 
-/// Updates `slow` (millidegrees), the running mean of the disagreement term, with this step's
-/// `terms`: an exponential mean over 2^[`SLOW_SHIFT`] frames of the steps where the filter was
-/// clear; held otherwise.
-pub fn track(slow: &mut u32, terms: &[u32; TERMS]) {
-    let unclear = terms
-        .get(Term::FilterUnclear as usize)
-        .copied()
-        .unwrap_or(0);
-    let Some(&d) = terms.get(Term::Disagreement as usize) else {
-        return;
-    };
-    if unclear == 0 {
-        // Both in [0, TERM_MAX]: no overflow in i64, and the result stays in [0, TERM_MAX].
-        let (s, d) = (i64::from(*slow), i64::from(d));
-        *slow = clamp_term(s.saturating_add(d.saturating_sub(s) >> SLOW_SHIFT));
+/// The running mean of the disagreement term over 2^[`SLOW_SHIFT`] frames, of the steps where the
+/// filter was clear. It is kept scaled by 2^[`SLOW_SHIFT`] so that a small disagreement moves it
+/// too (an unscaled integer mean would not move for a disagreement below 512 mdeg).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct SlowMean {
+    scaled: u32,
+}
+
+impl SlowMean {
+    /// The mean, millidegrees.
+    pub fn mdeg(self) -> u32 {
+        self.scaled >> SLOW_SHIFT
+    }
+
+    /// Folds in this step's `terms` (held when the filter was not clear).
+    pub fn track(&mut self, terms: &[u32; TERMS]) {
+        let unclear = terms
+            .get(Term::FilterUnclear as usize)
+            .copied()
+            .unwrap_or(0);
+        let Some(&d) = terms.get(Term::Disagreement as usize) else {
+            return;
+        };
+        if unclear == 0 {
+            // d ≤ TERM_MAX = 10⁶, so the scaled mean stays below 10⁶ · 2⁹ < 2³²; the saturating
+            // forms only say so to the overflow lint.
+            let decay = self.scaled >> SLOW_SHIFT;
+            self.scaled = self
+                .scaled
+                .saturating_sub(decay)
+                .saturating_add(d.min(TERM_MAX));
+        }
     }
 }
 
 /// The terms of `angle` whose computed value is `angle_mdeg`, from the step's features, what the
-/// estimate's flags say and the disagreement's running mean `slow_mdeg` ([`track`], before this
-/// step).
+/// estimate's flags say and the disagreement's running mean `slow_mdeg` ([`SlowMean`], before
+/// this step).
 pub fn terms(
     angle: Angle,
     values: &FeatureValues,
@@ -320,16 +337,19 @@ mod tests {
         assert_eq!(t[Term::NisExcess as usize], 50);
         assert_eq!(t[Term::FilterUnclear as usize], 0);
         assert_eq!(t[Term::Magnitude as usize], 6_229);
-        // The running mean moves 1/512 of the way per clear step, and holds otherwise.
-        let mut slow = 0;
-        track(&mut slow, &t);
-        assert_eq!(slow, 0); // 500 / 512 rounds down
-        slow = 1_000;
-        track(&mut slow, &t);
-        assert_eq!(slow, 1_000 - 1); // (500 − 1000) >> 9 = −1 (arithmetic shift)
+        // The running mean moves 1/512 of the way per clear step, even for a small disagreement,
+        // reaches it, and holds while the filter is not clear.
+        let mut slow = SlowMean::default();
+        slow.track(&t);
+        assert_eq!(slow, SlowMean { scaled: 500 });
+        for _ in 0..20 * 512 {
+            slow.track(&t);
+        }
+        assert_eq!(slow.mdeg(), 499);
         let mut unclear = t;
         unclear[Term::FilterUnclear as usize] = ONE_DEG;
-        track(&mut slow, &unclear);
-        assert_eq!(slow, 999);
+        let before = slow;
+        slow.track(&unclear);
+        assert_eq!(slow, before);
     }
 }

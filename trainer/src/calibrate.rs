@@ -528,8 +528,8 @@ struct Parts {
 }
 
 /// The model's lift terms driven by the trailing-edge flaps (a factor `fcs/flaperon-mix-rad`).
-/// Their scale is a parameter of its own: the flaps are scheduled with α and speed, so an error
-/// in their lift changes the lift slope, which neither the axis scale nor an offset describes.
+/// Their scale is a parameter of its own: in JSBSim's F-16 the trailing-edge flap cancels in the
+/// mix, which follows the aileron, so their lift is unlike either the axis scale or an offset.
 pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
     F16_MODEL.lift.iter().filter(|t| {
         t.factors

@@ -682,6 +682,20 @@ fn load_split(data: &Path, role: Role) -> Result<Dataset> {
     Ok(ds)
 }
 
+/// The compiled-in model's provenance and the sensor suite it reads, or the error that says how to
+/// get one.
+fn compiled_in_model() -> Result<(&'static str, Suite)> {
+    match (
+        trainer::pipeline::shipped_provenance(),
+        trainer::pipeline::shipped_suite(),
+    ) {
+        (Some(prov), Some(suite)) => Ok((prov, suite)),
+        _ => bail!(
+            "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
+        ),
+    }
+}
+
 fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result<()> {
     let role = parse_split(split)?;
     let suite = match suite {
@@ -690,14 +704,7 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
     };
     let ds = load_split(data, role)?;
     ds.require(suite)?;
-    let (Some(prov), Some(needs)) = (
-        trainer::pipeline::shipped_provenance(),
-        trainer::pipeline::shipped_suite(),
-    ) else {
-        bail!(
-            "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
-        );
-    };
+    let (prov, needs) = compiled_in_model()?;
     require_suite("the compiled-in model", needs, suite)?;
     let e = eval_shipped(&ds, role, suite);
     if json {
@@ -710,7 +717,8 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
             "alpha": e.alpha, "beta": e.beta,
             "regimes": e.regimes,
             "flagged": e.flagged,
-            "sigma": {"alpha": e.sigma[0], "beta": e.sigma[1]},
+            "sigma": {"alpha": e.sigma[0], "beta": e.sigma[1],
+                      "fitted_for_this_model": estimator_core::model::sigma_fitted_for_this_model()},
             "provenance": prov,
         });
         println!("{}", serde_json::to_string(&v)?);
@@ -724,6 +732,20 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
         print_metrics("int8", &e.alpha);
         println!("β (deg):");
         print_metrics("int8", &e.beta);
+        for (name, c) in [("α", &e.sigma[0]), ("β", &e.sigma[1])] {
+            println!(
+                "{name} within 1σ / 2σ: {:.1} % / {:.1} % of {} frames (median 1σ {:.3}°)",
+                100.0 * c.within_1sigma,
+                100.0 * c.within_2sigma,
+                c.frames,
+                c.median_sigma_deg
+            );
+        }
+        if !estimator_core::model::sigma_fitted_for_this_model() {
+            println!(
+                "note: the 1σ weights were fitted for other networks (scripts/fit-sigma refits them)"
+            );
+        }
         let r = &e.regimes;
         for (name, m) in [
             ("α, true α < 5°", r.alpha_below_5),
@@ -818,14 +840,7 @@ fn cmd_fit_sigma(
     if every == 0 {
         bail!("--every must be at least 1");
     }
-    let (Some(prov), Some(suite)) = (
-        trainer::pipeline::shipped_provenance(),
-        trainer::pipeline::shipped_suite(),
-    ) else {
-        bail!(
-            "this build has no compiled-in model: the 1σ is fitted for one (run `trainer train` first)"
-        );
-    };
+    let (prov, suite) = compiled_in_model()?;
     let mut datasets = Vec::new();
     for d in data {
         let ds = Dataset::load_any(d, 0.15)
@@ -895,7 +910,7 @@ fn cmd_fit_sigma(
         100.0 * cb.within_1sigma,
         100.0 * cb.within_2sigma,
     );
-    let text = rust_file(&alpha, &beta, &provenance);
+    let text = rust_file(&alpha, &beta, &provenance, prov);
     let tmp = out.with_extension("rs.tmp");
     std::fs::write(&tmp, &text).with_context(|| format!("writing {}", tmp.display()))?;
     std::fs::rename(&tmp, out).with_context(|| format!("writing {}", out.display()))?;

@@ -334,7 +334,7 @@ pub fn shipped_answers(fl: &Flight, suite: Suite) -> FlightAnswers {
 }
 
 /// The 1σ rows of one flight's answers ([`crate::uncertainty::Rows`], α then β): every frame
-/// whose angle was computed, with its error against `truth` (degrees).
+/// whose angle was computed and has a truth, with its error against `truth` (degrees).
 pub fn sigma_rows(ans: &FlightAnswers, truth: [&[f64]; 2]) -> [crate::uncertainty::Rows; 2] {
     let mut rows: [crate::uncertainty::Rows; 2] = Default::default();
     for (k, (rows, truth)) in rows.iter_mut().zip(truth).enumerate() {
@@ -347,7 +347,7 @@ pub fn sigma_rows(ans: &FlightAnswers, truth: [&[f64]; 2]) -> [crate::uncertaint
             let (Some(s), Some(terms)) = (ans.sigma_mdeg.get(i), ans.sigma_terms.get(i)) else {
                 continue;
             };
-            if s[k] != estimator_core::uncertainty::SIGMA_UNKNOWN {
+            if s[k] != estimator_core::uncertainty::SIGMA_UNKNOWN && t.is_finite() {
                 rows.push(terms[k], s[k], (e - t) * 1000.0);
             }
         }

@@ -199,8 +199,9 @@ pub fn fit(rows: &Rows) -> Result<AngleFit> {
     })
 }
 
-/// The generated `sigma.rs` of both angles' fits.
-pub fn rust_file(alpha: &AngleFit, beta: &AngleFit, provenance: &str) -> String {
+/// The generated `sigma.rs` of both angles' fits, for the networks whose `PROVENANCE` is
+/// `model`.
+pub fn rust_file(alpha: &AngleFit, beta: &AngleFit, provenance: &str, model: &str) -> String {
     let arr = |w: &[u16; TERMS]| w.iter().map(u16::to_string).collect::<Vec<_>>().join(", ");
     let names = Term::ALL.map(Term::name).join(", ");
     let c = Coefficients {
@@ -214,10 +215,13 @@ pub fn rust_file(alpha: &AngleFit, beta: &AngleFit, provenance: &str) -> String 
          pub const SIGMA: crate::uncertainty::Coefficients = crate::uncertainty::Coefficients {{\n    \
          alpha: [{}],\n    beta: [{}],\n}};\n\n\
          /// How [`SIGMA`] was fitted.\n\
-         pub const SIGMA_PROVENANCE: &str = {:?};\n",
+         pub const SIGMA_PROVENANCE: &str = {:?};\n\n\
+         /// The `PROVENANCE` of the networks [`SIGMA`] was fitted for.\n\
+         pub const SIGMA_MODEL_PROVENANCE: &str = {:?};\n",
         arr(&c.alpha),
         arr(&c.beta),
-        provenance
+        provenance,
+        model
     )
 }
 

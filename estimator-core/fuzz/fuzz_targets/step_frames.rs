@@ -23,5 +23,9 @@ fuzz_target!(|data: &[u8]| {
         }
         // Held angles are never computed from this frame; live ones lie in the training range.
         assert!(out.alpha_mdeg.abs() <= 90_000 && out.beta_mdeg.abs() <= 90_000, "{out:?}");
+        // A held angle has no 1σ; a computed one has one, at most SIGMA_MAX.
+        let unknown = estimator_core::uncertainty::SIGMA_UNKNOWN;
+        assert_eq!(out.flags.has(Flags::ALPHA_HELD), out.sigma_alpha_mdeg == unknown, "{out:?}");
+        assert_eq!(out.flags.has(Flags::BETA_HELD), out.sigma_beta_mdeg == unknown, "{out:?}");
     }
 });

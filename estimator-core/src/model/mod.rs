@@ -16,7 +16,14 @@ mod sigma {
     #![allow(clippy::all, clippy::unreadable_literal)]
     include!(env!("ESTIMATOR_SIGMA_FILE"));
 }
-pub use sigma::{SIGMA, SIGMA_PROVENANCE};
+pub use sigma::{SIGMA, SIGMA_MODEL_PROVENANCE, SIGMA_PROVENANCE};
+
+/// Whether the compiled-in 1σ weights were fitted for the compiled-in networks. A build with other
+/// weights (`ESTIMATOR_WEIGHTS`) keeps the committed fit, whose 1σ is then not that model's: refit
+/// with `scripts/fit-sigma` after `--install`ing another estimator.
+pub fn sigma_fitted_for_this_model() -> bool {
+    SHIPPED_PROVENANCE == Some(SIGMA_MODEL_PROVENANCE)
+}
 
 /// Whether this build has a model.
 pub const HAS_MODEL: bool = cfg!(estimator_weights);
@@ -27,3 +34,16 @@ pub const SHIPPED_PROVENANCE: Option<&str> = Some(PROVENANCE);
 /// How the compiled-in model was trained (its `PROVENANCE`), `None` in a build without a model.
 #[cfg(not(estimator_weights))]
 pub const SHIPPED_PROVENANCE: Option<&str> = None;
+
+#[cfg(test)]
+mod tests {
+    /// The committed `sigma.rs` belongs to the committed `weights.rs` (a retrained or installed
+    /// estimator needs `scripts/fit-sigma`).
+    #[test]
+    fn the_sigma_weights_were_fitted_for_the_compiled_in_networks() {
+        assert!(
+            super::sigma_fitted_for_this_model(),
+            "src/model/sigma.rs was fitted for other networks: run scripts/fit-sigma"
+        );
+    }
+}
