@@ -345,7 +345,7 @@ mod tests {
         for _ in 0..20 * 512 {
             slow.track(&t);
         }
-        assert_eq!(slow.mdeg(), 499);
+        assert_eq!(slow.mdeg(), 500);
         let mut unclear = t;
         unclear[Term::FilterUnclear as usize] = ONE_DEG;
         let before = slow;

@@ -356,7 +356,7 @@ mod tests {
         b[1] = Kind::Sensor as u8;
         assert_eq!(SensorFrame::parse(&b), Err(Error::TooLong));
         // Another version is refused as such whatever the kind and length.
-        for v in [1, 2, 4, 255] {
+        for v in [1, 2, 3, 5, 255] {
             b[0] = v;
             b[1] = Kind::SensorEgi as u8;
             assert_eq!(SensorFrame::parse(&b), Err(Error::Version(v)));
