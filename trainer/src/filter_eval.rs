@@ -18,6 +18,9 @@ pub struct FlagShare {
     /// Mean 1σ of α and β the filter reported, degrees (to set beside the measured error).
     pub mean_sigma_alpha_deg: f64,
     pub mean_sigma_beta_deg: f64,
+    /// The lift and side-force scales the filter had learned at the flight's last frame.
+    pub final_lift_scale: f64,
+    pub final_side_scale: f64,
 }
 
 /// What [`eval_filter`] measures.
@@ -101,6 +104,8 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
                 .map(|o| f64::from(o.sigma_beta_rad).to_degrees())
                 .sum::<f64>()
                 / n,
+            final_lift_scale: out.last().map_or(f64::NAN, |o| f64::from(o.lift_scale)),
+            final_side_scale: out.last().map_or(f64::NAN, |o| f64::from(o.side_scale)),
         });
     }
     FilterEval {

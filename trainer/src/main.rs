@@ -367,7 +367,7 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
-        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
@@ -1010,6 +1010,8 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "lift_scale_psd" => c.lift_scale_psd = v,
             "gear_norm" => c.gear_norm = v,
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
+            "side_scale_psd" => c.side_scale_psd = v,
+            "side_scale_sigma0" => c.side_scale_sigma0 = v,
             "r_adapt_tau_s" => c.r_adapt_tau_s = v,
             "r_adapt_lo_y" => c.r_adapt_range[0][0] = v,
             "r_adapt_hi_y" => c.r_adapt_range[0][1] = v,
@@ -1243,7 +1245,8 @@ fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
 fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<()> {
     use trainer::filter_eval::eval_filter;
     let role = parse_split(split)?;
-    let ds = load(data, 0.15)?;
+    // Any dataset with flights of that split (a test-only one from `generate --test-only` too).
+    let ds = load_split(data, role)?;
     let cfg = filter_config(tune)?;
     let e = eval_filter(&ds, role, cfg);
     if json {
@@ -1270,14 +1273,16 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
         print_metrics("β trusted", &e.beta_trusted);
         for s in &e.flags {
             println!(
-                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°",
+                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}",
                 s.flight,
                 100.0 * s.no_input,
                 100.0 * s.gated,
                 100.0 * s.low_confidence,
                 s.restarted,
                 s.mean_sigma_alpha_deg,
-                s.mean_sigma_beta_deg
+                s.mean_sigma_beta_deg,
+                s.final_lift_scale,
+                s.final_side_scale
             );
         }
     }

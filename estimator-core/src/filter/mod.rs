@@ -40,9 +40,10 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 use crate::aero::{self, AirState, F16, Surfaces};
 use crate::channels::{Channel, SensorFrame, Suite};
 
-/// Number of states.
-pub const STATES: usize = 7;
+/// Number of states: mean wind (3), gust (3), lift scale, side-force scale.
+pub const STATES: usize = 8;
 const K: usize = 6;
+const KY: usize = 7;
 
 type Vec7 = SVector<f32, STATES>;
 type Mat7 = SMatrix<f32, STATES, STATES>;
@@ -78,9 +79,13 @@ pub struct Config {
     /// Gust: correlation time, s, and steady-state 1σ, m/s.
     pub gust_tau_s: f32,
     pub gust_sigma: f32,
-    /// Lift scale: random-walk PSD (1/s) and initial 1σ.
+    /// Lift scale: random-walk PSD (1/s) and initial 1σ. It scales the whole model force.
     pub lift_scale_psd: f32,
     pub lift_scale_sigma0: f32,
+    /// Side-force scale, on top of the lift scale on the lateral force only: random-walk PSD
+    /// (1/s) and initial 1σ. Both 0 (the default) hold it at 1: the filter of seven states.
+    pub side_scale_psd: f32,
+    pub side_scale_sigma0: f32,
     /// Measurement 1σ of the y and z specific force at the CG, m/s² (model error dominates).
     pub accel_sigma: [f32; 2],
     /// Normalised-innovation gate (χ², 2 degrees of freedom).
@@ -128,6 +133,8 @@ pub const F16_CONFIG: Config = Config {
     gust_sigma: 2.0,
     lift_scale_psd: 1e-6,
     lift_scale_sigma0: 0.05,
+    side_scale_psd: 0.0,
+    side_scale_sigma0: 0.0,
     accel_sigma: [0.8, 1.5],
     gate: 25.0,
     gate_run: 20,
@@ -274,6 +281,8 @@ pub struct Output {
     pub airspeed_mps: f32,
     /// Lift scale (≈ 1).
     pub lift_scale: f32,
+    /// Side-force scale (1 unless [`Config::side_scale_sigma0`] lets it move).
+    pub side_scale: f32,
     /// 1σ of α and β from the covariance, rad.
     pub sigma_alpha_rad: f32,
     pub sigma_beta_rad: f32,
@@ -544,8 +553,10 @@ impl AirDataFilter {
     pub fn restart(&mut self) {
         let c = &self.cfg;
         self.x = Vec7::zeros();
-        if let Some(k) = self.x.get_mut(K) {
-            *k = 1.0;
+        for i in [K, KY] {
+            if let Some(k) = self.x.get_mut(i) {
+                *k = 1.0;
+            }
         }
         let sq = |v: f32| v * v;
         self.p = Mat7::from_diagonal(&Vec7::from([
@@ -556,6 +567,7 @@ impl AirDataFilter {
             sq(c.gust_sigma),
             sq(c.gust_sigma),
             sq(c.lift_scale_sigma0),
+            sq(c.side_scale_sigma0),
         ]));
         self.gated_run = 0;
         self.turb_ms = 0.0;
@@ -606,10 +618,15 @@ impl AirDataFilter {
         self.x.get(K).copied().unwrap_or(1.0)
     }
 
+    /// The side-force scale (1 unless [`Config::side_scale_sigma0`] lets it move).
+    pub fn side_scale(&self) -> f32 {
+        self.x.get(KY).copied().unwrap_or(1.0)
+    }
+
     fn predict(&mut self, dt: f32) {
         let c = &self.cfg;
         let phi = libm::expf(-dt / c.gust_tau_s);
-        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0]));
+        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0, 1.0]));
         let gust_q = c.gust_sigma * c.gust_sigma * (1.0 - phi * phi);
         let [qn, qe, qd] = c.mean_wind_psd;
         let q = Mat7::from_diagonal(&Vec7::from([
@@ -620,6 +637,7 @@ impl AirDataFilter {
             gust_q,
             gust_q,
             c.lift_scale_psd * dt,
+            c.side_scale_psd * dt,
         ]));
         self.x = f * self.x;
         self.p = f * self.p * f.transpose() + q;
@@ -656,18 +674,26 @@ impl AirDataFilter {
             let fj = model_force(&vj, &u, inp.gyro_rps, rho, a_sound, mass, c.gear_norm)?;
             dfdvb.set_column(j, &((fj - f0) / D));
         }
+        let ky = self.side_scale();
         let dhdw = -(dfdvb * cbn) * k;
-        // Rows: the y and z specific force. Mean wind and gust enter alike; k scales the model.
+        // Rows: the y and z specific force. Mean wind and gust enter alike; k scales the model,
+        // ky its lateral force on top.
         let mut h = Mat27::zeros();
-        for (row, axis) in [(0usize, 1usize), (1, 2)] {
-            let d = dhdw.row(axis);
+        for (row, axis, side) in [(0usize, 1usize, ky), (1, 2, 1.0)] {
+            let d = dhdw.row(axis) * side;
             h.fixed_view_mut::<1, 3>(row, 0).copy_from(&d);
             h.fixed_view_mut::<1, 3>(row, 3).copy_from(&d);
+            let f = f0.get(axis).copied().unwrap_or(0.0);
             if let Some(e) = h.get_mut((row, K)) {
-                *e = f0.get(axis).copied().unwrap_or(0.0);
+                *e = side * f;
+            }
+            if row == 0
+                && let Some(e) = h.get_mut((row, KY))
+            {
+                *e = k * f;
             }
         }
-        let nu = Vector2::new(f_cg.y - k * f0.y, f_cg.z - k * f0.z);
+        let nu = Vector2::new(f_cg.y - k * ky * f0.y, f_cg.z - k * f0.z);
         let hph = h * self.p * h.transpose();
         let r = self.measurement_variance(&hph);
         let rm = Matrix2::new(r[0], 0.0, 0.0, r[1]);
@@ -737,8 +763,11 @@ impl AirDataFilter {
             .iter()
             .take(6)
             .all(|v| *v >= 0.0 && *v <= self.cfg.max_wind_var);
-        let k = self.lift_scale();
-        var_ok && self.x.iter().all(|v| v.is_finite()) && (0.5..=1.5).contains(&k)
+        let (k, ky) = (self.lift_scale(), self.side_scale());
+        var_ok
+            && self.x.iter().all(|v| v.is_finite())
+            && (0.5..=1.5).contains(&k)
+            && (0.5..=1.5).contains(&ky)
     }
 
     /// One step on a sensor frame; `dt_s` is the time since the previous frame.
@@ -890,6 +919,7 @@ impl AirDataFilter {
             wind_ned_mps: [wind.x, wind.y, wind.z],
             airspeed_mps: v,
             lift_scale: self.lift_scale(),
+            side_scale: self.side_scale(),
             sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
             sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
             nis,

@@ -277,6 +277,38 @@ fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model
 }
 
 #[test]
+fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
+    // The lateral force 15 % above the model's, through a turn in a steady wind.
+    let w = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.0,
+    };
+    let learning = Config {
+        side_scale_psd: 1e-6,
+        side_scale_sigma0: 0.1,
+        ..cfg()
+    };
+    let run = |c: Config| {
+        let mut f = AirDataFilter::new(c);
+        let mut t = 0.0;
+        while t < 900.0 {
+            let (mut inp, _) = w.frame(t, &c);
+            inp.accel_mps2[1] *= 1.15;
+            f.step(&inp, true);
+            t += DT;
+        }
+        f.side_scale()
+    };
+    assert_eq!(
+        run(cfg()),
+        1.0,
+        "the default filter holds the side-force scale"
+    );
+    let ky = run(learning);
+    assert!((ky - 1.15).abs() < 0.03, "side-force scale {ky}");
+}
+
+#[test]
 fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
     // 4 % more force per unit of model coefficient than mass and model predict.
     let w = World {
