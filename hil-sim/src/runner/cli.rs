@@ -522,6 +522,14 @@ fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
     ] {
         let _ = writeln!(t, "  {name:<16} {:>9} {:>9}", deg(a), deg(b));
     }
+    let pct = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{:.1} %", 100.0 * v));
+    let _ = writeln!(
+        t,
+        "  {:<16} {:>9} {:>9}",
+        "within 2σ",
+        pct(s.alpha_within_2sigma),
+        pct(s.beta_within_2sigma)
+    );
     let _ = writeln!(
         t,
         "  {:<16} {} sent, {} answered, {} scored, {} lost, {} rejected as corrupt",
