@@ -18,6 +18,7 @@ fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     aero_tables(&manifest);
     sigma_weights(&manifest);
+    filter_side_scale();
     let path = chosen(
         "ESTIMATOR_WEIGHTS",
         manifest.join("src/model/weights.rs"),
@@ -54,6 +55,22 @@ fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
     };
     println!("cargo:rerun-if-changed={}", path.display());
     path
+}
+
+/// `ESTIMATOR_FILTER_SIDE_SCALE=on` builds the air-data filter with its side-force scale learning
+/// (`filter::F16_CONFIG`), for networks trained and evaluated with it (docs/filter.md); unset or
+/// `off`, the shipped filter. Anything else is a failed build.
+fn filter_side_scale() {
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_SIDE_SCALE");
+    println!("cargo::rustc-check-cfg=cfg(filter_side_scale)");
+    let v = std::env::var("ESTIMATOR_FILTER_SIDE_SCALE").unwrap_or_default();
+    assert!(
+        matches!(v.as_str(), "" | "on" | "off"),
+        "ESTIMATOR_FILTER_SIDE_SCALE must be on or off, not `{v}`"
+    );
+    if v == "on" {
+        println!("cargo:rustc-cfg=filter_side_scale");
+    }
 }
 
 /// `ESTIMATOR_SIGMA_FILE`: the estimate's 1σ weights `src/model/mod.rs` includes. Committed;
