@@ -383,9 +383,7 @@ pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> boo
     if !values.filter_clear() {
         return false;
     }
-    // |µrad| < 2^31, so neither the products nor the difference come near i64's limits; the
-    // saturating forms only say so to the overflow lint.
-    let mdeg = |urad: i64| urad.saturating_mul(180_000) / 3_141_593;
+    let mdeg = crate::features::urad_to_mdeg;
     let diff = i64::from(beta_mdeg)
         .saturating_sub(mdeg(i64::from(values.get(Feature::FilterBeta))))
         .saturating_abs();
@@ -590,7 +588,7 @@ impl<'m> Estimator<'m> {
             turbulent: flags & Flags::TURBULENCE != 0,
             caution: flags & Flags::CAUTIONS != 0,
         };
-        for (k, (angle, held, value, sigma)) in [
+        let angles = [
             (
                 uncertainty::Angle::Alpha,
                 Flags::ALPHA_HELD,
@@ -603,23 +601,18 @@ impl<'m> Estimator<'m> {
                 e.beta_mdeg,
                 &mut e.sigma_beta_mdeg,
             ),
-        ]
-        .into_iter()
-        .enumerate()
+        ];
+        for ((angle, held, value, sigma), (slow, terms)) in angles
+            .into_iter()
+            .zip(self.slow.iter_mut().zip(self.terms.iter_mut()))
         {
             // A missing angle is held too (`NO_ESTIMATE` comes with its held flag).
             if flags & held != 0 {
                 continue;
             }
-            let Some(slow) = self.slow.get_mut(k) else {
-                continue;
-            };
-            let t = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
-            *sigma = uncertainty::sigma(weights.of(angle), &t);
-            slow.track(&t);
-            if let Some(slot) = self.terms.get_mut(k) {
-                *slot = t;
-            }
+            *terms = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
+            *sigma = uncertainty::sigma(weights.of(angle), terms);
+            slow.track(terms);
         }
         e
     }

@@ -117,6 +117,13 @@ impl Lag {
 /// flagged out of envelope.
 pub const MIN_SPEED_MMS: i32 = 20_000;
 
+/// An angle feature in µrad as millidegrees, `µrad · 180,000 / 3,141,593` (truncated toward 0).
+/// For any feature value (|µrad| < 2³¹) the product is far inside i64; the saturating form only
+/// says so to the overflow lint.
+pub fn urad_to_mdeg(urad: i64) -> i64 {
+    urad.saturating_mul(180_000) / 3_141_593
+}
+
 /// GPS speeds are clamped to this (mm/s, ≈ Mach 6) before squaring, so `ρV²` cannot overflow i64.
 pub const MAX_SPEED_MMS: i32 = 2_000_000;
 

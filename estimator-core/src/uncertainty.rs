@@ -19,7 +19,7 @@
 //! Integer arithmetic throughout: every term is clamped to [`TERM_MAX`], so each product fits 64
 //! bits and their sum saturates; no input panics.
 
-use crate::features::{Feature, FeatureValues};
+use crate::features::{Feature, FeatureValues, urad_to_mdeg as mdeg};
 
 /// The 1σ of an angle that was not computed this step (held, or no estimate).
 pub const SIGMA_UNKNOWN: u16 = u16::MAX;
@@ -141,8 +141,7 @@ impl Coefficients {
 
 /// µrad to millidegrees, magnitude, clamped to [`TERM_MAX`].
 fn urad_to_mdeg(urad: i32) -> u32 {
-    let v = i64::from(urad).saturating_abs().saturating_mul(180_000) / 3_141_593;
-    clamp_term(v)
+    clamp_term(mdeg(i64::from(urad)).saturating_abs())
 }
 
 fn clamp_term(v: i64) -> u32 {
@@ -203,7 +202,7 @@ pub fn terms(
         Angle::Beta => (Feature::FilterBeta, Feature::FilterSigmaBeta),
     };
     let clear = values.filter_clear();
-    let filter_mdeg = i64::from(values.get(filter_angle)).saturating_mul(180_000) / 3_141_593;
+    let filter_mdeg = mdeg(i64::from(values.get(filter_angle)));
     let disagreement = if clear {
         clamp_term(
             i64::from(angle_mdeg)

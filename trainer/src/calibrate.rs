@@ -35,7 +35,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{AirState, F16 as F16_MODEL, Factor, Point, Term, Var};
+use estimator_core::aero::{F16 as F16_MODEL, Factor, Term, Var};
 use estimator_core::filter::{self, F16_CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
@@ -540,7 +540,8 @@ pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
 
 fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32) -> Option<Parts> {
     let cfg = F16_CONFIG;
-    let c = filter::model_coefficients(
+    // The filter's operating point: the whole model there, and its flap terms alone.
+    let point = filter::model_point(
         inp,
         inp.gyro_rps,
         alpha as f32,
@@ -548,22 +549,11 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
         mach as f32,
         tas as f32,
         cfg.gear_norm,
-    );
+    )?;
+    let c = F16_MODEL.coefficients_at(&point);
     if !c.valid {
         return None;
     }
-    let air = AirState {
-        alpha_rad: alpha as f32,
-        beta_rad: beta as f32,
-        mach: mach as f32,
-        tas_mps: tas as f32,
-        p_rps: inp.gyro_rps[0],
-        q_rps: inp.gyro_rps[1],
-        r_rps: inp.gyro_rps[2],
-        h_over_b: AirState::NO_GROUND_EFFECT,
-    };
-    let s = filter::surfaces(inp, alpha as f32, mach as f32, cfg.gear_norm);
-    let point = Point::new(&F16_MODEL, &air, &s)?;
     let flap_cl = flap_lift_terms()
         .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
         .sum::<Option<f64>>()?;

@@ -232,24 +232,20 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
     let mut a = Vec::new();
     let mut b = Vec::new();
     let mut flagged = Vec::new();
-    let mut rows: [crate::uncertainty::Rows; 2] = Default::default();
+    // (1σ, error) per angle: the coverage needs no terms.
+    let mut pairs: [Vec<(u16, f64)>; 2] = Default::default();
     for fl in ds.flights(role) {
         let ans = shipped_answers(fl, suite);
-        let [ra, rb] = sigma_rows(
-            &ans,
-            [
-                fl.truth(Angle::Alpha.target()),
-                fl.truth(Angle::Beta.target()),
-            ],
-        );
-        rows[0].extend(ra);
-        rows[1].extend(rb);
-        let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
-        let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
-        let (ta, tb) = (
+        let truth = [
             fl.truth(Angle::Alpha.target()),
             fl.truth(Angle::Beta.target()),
-        );
+        ];
+        for (k, p) in pairs.iter_mut().enumerate() {
+            p.extend(sigma_errors(&ans, k, truth[k]).map(|(_, s, e)| (s, e)));
+        }
+        let held = ans.flags.iter().filter(|f| !f.is_usable()).count();
+        let count = |bit: u16| ans.flags.iter().filter(|f| f.has(bit)).count();
+        let [ta, tb] = truth;
         let (silent, _) =
             crate::metrics::silent_frames((&ans.alpha_deg, ta), (&ans.beta_deg, tb), |i| {
                 ans.flags.get(i).is_some_and(|f| f.0 == 0)
@@ -263,16 +259,8 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
             beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
             silent,
         };
-        a.push((
-            fl.name.clone(),
-            ans.alpha_deg,
-            fl.truth(Angle::Alpha.target()).to_vec(),
-        ));
-        b.push((
-            fl.name.clone(),
-            ans.beta_deg,
-            fl.truth(Angle::Beta.target()).to_vec(),
-        ));
+        a.push((fl.name.clone(), ans.alpha_deg, ta.to_vec()));
+        b.push((fl.name.clone(), ans.beta_deg, tb.to_vec()));
         flagged.push(counts);
     }
     ShippedEval {
@@ -280,7 +268,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
         beta: FlightMetrics::of(&b),
         regimes: crate::metrics::Regimes::of(&a, &b),
         flagged,
-        sigma: rows.map(|r| r.coverage()),
+        sigma: pairs.map(|p| crate::uncertainty::Coverage::of(p.into_iter())),
         provenance: shipped_provenance(),
     }
 }
@@ -336,23 +324,38 @@ pub fn shipped_answers(fl: &Flight, suite: Suite) -> FlightAnswers {
 /// The 1σ rows of one flight's answers ([`crate::uncertainty::Rows`], α then β): every frame
 /// whose angle was computed and has a truth, with its error against `truth` (degrees).
 pub fn sigma_rows(ans: &FlightAnswers, truth: [&[f64]; 2]) -> [crate::uncertainty::Rows; 2] {
-    let mut rows: [crate::uncertainty::Rows; 2] = Default::default();
-    for (k, (rows, truth)) in rows.iter_mut().zip(truth).enumerate() {
-        let est = if k == 0 {
-            &ans.alpha_deg
-        } else {
-            &ans.beta_deg
-        };
-        for (i, (e, t)) in est.iter().zip(truth).enumerate() {
-            let (Some(s), Some(terms)) = (ans.sigma_mdeg.get(i), ans.sigma_terms.get(i)) else {
-                continue;
-            };
-            if s[k] != estimator_core::uncertainty::SIGMA_UNKNOWN && t.is_finite() {
-                rows.push(terms[k], s[k], (e - t) * 1000.0);
+    [0, 1].map(|k| {
+        let mut rows = crate::uncertainty::Rows::default();
+        for (i, sigma, err) in sigma_errors(ans, k, truth[k]) {
+            if let Some(terms) = ans.sigma_terms.get(i) {
+                rows.push(terms[k], sigma, err);
             }
         }
-    }
-    rows
+        rows
+    })
+}
+
+/// (frame, 1σ, error in millidegrees) of angle `k` (0 α, 1 β) on every frame where it was computed
+/// and has a truth.
+fn sigma_errors<'a>(
+    ans: &'a FlightAnswers,
+    k: usize,
+    truth: &'a [f64],
+) -> impl Iterator<Item = (usize, u16, f64)> + 'a {
+    let est = if k == 0 {
+        &ans.alpha_deg
+    } else {
+        &ans.beta_deg
+    };
+    est.iter()
+        .zip(truth)
+        .zip(&ans.sigma_mdeg)
+        .enumerate()
+        .filter_map(move |(i, ((e, t), s))| {
+            let sigma = s.get(k).copied()?;
+            (sigma != estimator_core::uncertainty::SIGMA_UNKNOWN && t.is_finite())
+                .then(|| (i, sigma, (e - t) * 1000.0))
+        })
 }
 
 /// The smallest sensor suite the compiled-in model reads, if this build has one (the estimator's

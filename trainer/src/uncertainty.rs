@@ -52,16 +52,6 @@ impl Rows {
             err_mdeg: self.err_mdeg.iter().step_by(n).copied().collect(),
         }
     }
-
-    /// How the errors lie against the 1σ the estimator reported.
-    pub fn coverage(&self) -> Coverage {
-        Coverage::of(
-            self.sigma_mdeg
-                .iter()
-                .copied()
-                .zip(self.err_mdeg.iter().copied()),
-        )
-    }
 }
 
 /// How often |error| ≤ 1σ and ≤ 2σ (a Gaussian: 68.3 % and 95.4 %), over the frames with a 1σ.

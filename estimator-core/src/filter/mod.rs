@@ -476,6 +476,22 @@ pub fn model_coefficients(
     tas_mps: f32,
     gear_norm: f32,
 ) -> aero::Coefficients {
+    model_point(inp, gyro, alpha_rad, beta_rad, mach, tas_mps, gear_norm)
+        .map_or_else(aero::Coefficients::default, |p| F16.coefficients_at(&p))
+}
+
+/// The operating point [`model_coefficients`] evaluates the force model at (`None` if an input
+/// is not finite or the airspeed not positive), for evaluating single terms there.
+#[allow(clippy::too_many_arguments)]
+pub fn model_point(
+    inp: &Input,
+    gyro: [f32; 3],
+    alpha_rad: f32,
+    beta_rad: f32,
+    mach: f32,
+    tas_mps: f32,
+    gear_norm: f32,
+) -> Option<aero::Point> {
     let air = AirState {
         alpha_rad,
         beta_rad,
@@ -486,7 +502,7 @@ pub fn model_coefficients(
         r_rps: gyro[2],
         h_over_b: AirState::NO_GROUND_EFFECT,
     };
-    F16.coefficients(&air, &surfaces(inp, alpha_rad, mach, gear_norm))
+    aero::Point::new(&F16, &air, &surfaces(inp, alpha_rad, mach, gear_norm))
 }
 
 /// Dynamic pressure times the wing area over the mass: the specific force (m/s²) of a unit force
