@@ -85,6 +85,10 @@ impl Flags {
     /// was trained on, which the filter's kinematics follow); in heavy turbulence it can be the
     /// filter. β is still the network's.
     pub const BETA_DISAGREES: u16 = 1 << 13;
+    /// A computed angle's 1σ is above [`UNCERTAIN_ALPHA_MDEG`] (α) or [`UNCERTAIN_BETA_MDEG`]
+    /// (β): an error as large as a flight-control computer would act on (2° α, 1° β) is then a
+    /// 4σ event or likelier. The estimate is computed; its 1σ says how far to trust it.
+    pub const UNCERTAIN: u16 = 1 << 14;
 
     /// The flags that say an angle was computed from less than training saw (the 1σ's `Caution`
     /// term, [`crate::uncertainty::Term::Caution`]).
@@ -96,7 +100,7 @@ impl Flags {
 
     /// Every flag bit with its name, in bit order: the names of the estimates CSV's flag columns
     /// and of the summaries' flag counts.
-    pub const NAMED: [(u16, &'static str); 14] = [
+    pub const NAMED: [(u16, &'static str); 15] = [
         (Self::INVALID_INPUT, "invalid_input"),
         (Self::OUT_OF_ENVELOPE, "out_of_envelope"),
         (Self::STUCK_SENSOR, "stuck_sensor"),
@@ -111,6 +115,7 @@ impl Flags {
         (Self::TURBULENCE, "turbulence"),
         (Self::ALPHA_FROM_FILTER, "alpha_from_filter"),
         (Self::BETA_DISAGREES, "beta_disagrees"),
+        (Self::UNCERTAIN, "uncertain"),
     ];
 
     pub fn has(self, bit: u16) -> bool {
@@ -394,6 +399,13 @@ pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> boo
     diff > BETA_CROSSCHECK_MIN_MDEG.max(mdeg(sigmas))
 }
 
+/// [`Flags::UNCERTAIN`] is raised above this α 1σ, millidegrees: a quarter of the 2° α error a
+/// flight-control computer would act on. Not fitted to any flight.
+pub const UNCERTAIN_ALPHA_MDEG: u16 = 500;
+
+/// ... and above this β 1σ: a quarter of 1° β.
+pub const UNCERTAIN_BETA_MDEG: u16 = 250;
+
 /// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
 /// over its feature list).
 #[derive(Clone, Copy)]
@@ -594,15 +606,18 @@ impl<'m> Estimator<'m> {
                 Flags::ALPHA_HELD,
                 e.alpha_mdeg,
                 &mut e.sigma_alpha_mdeg,
+                UNCERTAIN_ALPHA_MDEG,
             ),
             (
                 uncertainty::Angle::Beta,
                 Flags::BETA_HELD,
                 e.beta_mdeg,
                 &mut e.sigma_beta_mdeg,
+                UNCERTAIN_BETA_MDEG,
             ),
         ];
-        for ((angle, held, value, sigma), (slow, terms)) in angles
+        let mut uncertain = false;
+        for ((angle, held, value, sigma, limit), (slow, terms)) in angles
             .into_iter()
             .zip(self.slow.iter_mut().zip(self.terms.iter_mut()))
         {
@@ -612,7 +627,11 @@ impl<'m> Estimator<'m> {
             }
             *terms = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
             *sigma = uncertainty::sigma(weights.of(angle), terms);
+            uncertain |= *sigma > limit;
             slow.track(terms);
+        }
+        if uncertain {
+            e.flags.0 |= Flags::UNCERTAIN;
         }
         e
     }

@@ -44,5 +44,7 @@ pub mod uncertainty;
 pub mod wire;
 
 pub use channels::{CHANNELS, Channel, SensorFrame, Suite};
-pub use estimator::{AngleNet, CascadeNet, Estimate, Estimator, Flags};
+pub use estimator::{
+    AngleNet, CascadeNet, Estimate, Estimator, Flags, UNCERTAIN_ALPHA_MDEG, UNCERTAIN_BETA_MDEG,
+};
 pub use features::{FEATURE_COUNT, Feature, FeatureState, FeatureValues, History, Lag};

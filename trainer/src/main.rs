@@ -765,13 +765,14 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
         }
         for c in &e.flagged {
             println!(
-                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's, {} silent (no flag, error > 2° α or > 1° β)",
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's, {} uncertain (1σ above its limit), {} silent (no flag, error > 2° α or > 1° β)",
                 c.flight,
                 c.not_usable,
                 c.out_of_envelope,
                 c.turbulence,
                 c.alpha_from_filter,
                 c.beta_disagrees,
+                c.uncertain,
                 c.silent
             );
         }

@@ -257,6 +257,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
             turbulence: count(estimator_core::Flags::TURBULENCE),
             alpha_from_filter: count(estimator_core::Flags::ALPHA_FROM_FILTER),
             beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
+            uncertain: count(estimator_core::Flags::UNCERTAIN),
             silent,
         };
         a.push((fl.name.clone(), ans.alpha_deg, ta.to_vec()));
@@ -285,6 +286,8 @@ pub struct FlagCounts {
     pub alpha_from_filter: usize,
     /// The network's and the filter's β disagree (`Flags::BETA_DISAGREES`).
     pub beta_disagrees: usize,
+    /// A 1σ above its limit (`Flags::UNCERTAIN`).
+    pub uncertain: usize,
     /// Silent frames: every flag clear and |α error| > 2° or |β error| > 1° (`crate::ood`).
     pub silent: usize,
 }
