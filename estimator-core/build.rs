@@ -57,19 +57,19 @@ fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
     path
 }
 
-/// `ESTIMATOR_FILTER_SIDE_SCALE=on` builds the air-data filter with its side-force scale learning
-/// (`filter::F16_CONFIG`), for networks trained and evaluated with it (docs/filter.md); unset or
-/// `off`, the shipped filter. Anything else is a failed build.
+/// `ESTIMATOR_FILTER_SIDE_SCALE=off` builds the air-data filter without its side-force scale
+/// learning (`filter::F16_CONFIG`: the seven-state filter), for networks trained with it; unset or
+/// `on`, the shipped filter, which learns it (docs/filter.md). Anything else is a failed build.
 fn filter_side_scale() {
     println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_SIDE_SCALE");
-    println!("cargo::rustc-check-cfg=cfg(filter_side_scale)");
+    println!("cargo::rustc-check-cfg=cfg(filter_no_side_scale)");
     let v = std::env::var("ESTIMATOR_FILTER_SIDE_SCALE").unwrap_or_default();
     assert!(
         matches!(v.as_str(), "" | "on" | "off"),
         "ESTIMATOR_FILTER_SIDE_SCALE must be on or off, not `{v}`"
     );
-    if v == "on" {
-        println!("cargo:rustc-cfg=filter_side_scale");
+    if v == "off" {
+        println!("cargo:rustc-cfg=filter_no_side_scale");
     }
 }
 

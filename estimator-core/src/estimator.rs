@@ -406,6 +406,12 @@ pub const UNCERTAIN_ALPHA_MDEG: u16 = 500;
 /// ... and above this β 1σ: a quarter of 1° β.
 pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 
+/// Whether a 1σ raises [`Flags::UNCERTAIN`]: a computed angle's (not [`SIGMA_UNKNOWN`]) above
+/// `limit`.
+pub fn above_limit(sigma_mdeg: u16, limit_mdeg: u16) -> bool {
+    sigma_mdeg != SIGMA_UNKNOWN && sigma_mdeg > limit_mdeg
+}
+
 /// A model and what [`Estimator::step`] asks of it every frame, worked out once (both are folds
 /// over its feature list).
 #[derive(Clone, Copy)]
@@ -616,7 +622,6 @@ impl<'m> Estimator<'m> {
                 UNCERTAIN_BETA_MDEG,
             ),
         ];
-        let mut uncertain = false;
         for ((angle, held, value, sigma, limit), (slow, terms)) in angles
             .into_iter()
             .zip(self.slow.iter_mut().zip(self.terms.iter_mut()))
@@ -627,12 +632,12 @@ impl<'m> Estimator<'m> {
             }
             *terms = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
             *sigma = uncertainty::sigma(weights.of(angle), terms);
-            uncertain |= *sigma > limit;
+            if above_limit(*sigma, limit) {
+                flags |= Flags::UNCERTAIN;
+            }
             slow.track(terms);
         }
-        if uncertain {
-            e.flags.0 |= Flags::UNCERTAIN;
-        }
+        e.flags = Flags(flags);
         e
     }
 }
@@ -654,6 +659,15 @@ mod tests {
             ..Default::default()
         });
         v
+    }
+
+    #[test]
+    fn uncertain_is_a_computed_sigma_strictly_above_the_limit() {
+        assert!(!above_limit(UNCERTAIN_ALPHA_MDEG, UNCERTAIN_ALPHA_MDEG));
+        assert!(above_limit(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG));
+        assert!(above_limit(uncertainty::SIGMA_MAX, UNCERTAIN_BETA_MDEG));
+        assert!(!above_limit(SIGMA_UNKNOWN, UNCERTAIN_BETA_MDEG));
+        assert!(!above_limit(0, 0));
     }
 
     #[test]

@@ -46,7 +46,7 @@ const DERIVED: usize = 5;
 const EGI_DERIVED: usize = 5;
 
 /// Number of air-data filter outputs offered as features, after the EGI kinematic ones.
-const FILTER_DERIVED: usize = 8;
+const FILTER_DERIVED: usize = 9;
 
 /// First filter feature.
 const FILTERED: usize = CHANNELS + DERIVED + EGI_DERIVED;
@@ -182,6 +182,8 @@ pub enum Feature {
     /// The filter's running mean of its normalised innovation squared
     /// ([`crate::filter::Output::nis_mean`]), 1e-3.
     FilterNisMean,
+    /// The filter's side-force scale ([`crate::filter::Output::side_scale`]), 1e-4.
+    FilterSideScale,
     /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
 }
@@ -222,6 +224,7 @@ impl Feature {
         all[FILTERED + 5] = Feature::FilterLiftScale;
         all[FILTERED + 6] = Feature::FilterTurbulence;
         all[FILTERED + 7] = Feature::FilterNisMean;
+        all[FILTERED + 8] = Feature::FilterSideScale;
         let mut c = 0;
         while c < TABLE1_CHANNELS {
             let mut l = 0;
@@ -259,6 +262,7 @@ impl Feature {
             Feature::FilterLiftScale => FILTERED + 5,
             Feature::FilterTurbulence => FILTERED + 6,
             Feature::FilterNisMean => FILTERED + 7,
+            Feature::FilterSideScale => FILTERED + 8,
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
         }
     }
@@ -284,6 +288,7 @@ impl Feature {
             Feature::FilterLiftScale => "filter_lift_scale",
             Feature::FilterTurbulence => "filter_turbulence_rad",
             Feature::FilterNisMean => "filter_nis_mean",
+            Feature::FilterSideScale => "filter_side_scale",
             Feature::Delta(c, l) => match c.delta_names() {
                 [d1, d2, d4, d10, d20] => match l {
                     Lag::F1 => d1,
@@ -313,6 +318,7 @@ impl Feature {
             Feature::FilterLiftScale => 1e-4,
             Feature::FilterTurbulence => 1e-6,
             Feature::FilterNisMean => 1e-3,
+            Feature::FilterSideScale => 1e-4,
         }
     }
 
@@ -347,7 +353,8 @@ impl Feature {
             | Feature::FilterAirspeed
             | Feature::FilterLiftScale
             | Feature::FilterTurbulence
-            | Feature::FilterNisMean => crate::filter::NEEDED_MASK,
+            | Feature::FilterNisMean
+            | Feature::FilterSideScale => crate::filter::NEEDED_MASK,
         }
     }
 
@@ -363,6 +370,7 @@ impl Feature {
                 | Feature::FilterLiftScale
                 | Feature::FilterTurbulence
                 | Feature::FilterNisMean
+                | Feature::FilterSideScale
         )
     }
 
@@ -729,6 +737,7 @@ impl FeatureValues {
             q(Feature::FilterLiftScale, out.lift_scale),
             q(Feature::FilterTurbulence, out.turbulence_rad),
             q(Feature::FilterNisMean, out.nis_mean),
+            q(Feature::FilterSideScale, out.side_scale),
         ] {
             if let Some(r) = self.raw.get_mut(f.index()) {
                 *r = v;
@@ -1076,6 +1085,7 @@ mod tests {
             lift_scale: 1.0321,
             turbulence_rad: 0.001_234,
             nis_mean: 1.5,
+            side_scale: 0.8765,
             ..Default::default()
         };
         let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
@@ -1088,6 +1098,7 @@ mod tests {
         assert_eq!(v.get(Feature::FilterLiftScale), 10_321);
         assert_eq!(v.get(Feature::FilterTurbulence), 1_234);
         assert_eq!(v.get(Feature::FilterNisMean), 1_500);
+        assert_eq!(v.get(Feature::FilterSideScale), 8_765);
     }
 
     #[test]

@@ -50,6 +50,8 @@ pub enum Term {
     Turbulence,
     /// |lift scale − 1| · |filter α|: the α the lift model misses on an airframe unlike the model.
     LiftMismatch,
+    /// |side-force scale − 1| · |filter β|: the β the side-force model misses.
+    SideMismatch,
     /// |this angle|: a force derivative that is not the model's (5–15 % on a real airframe) errs
     /// in proportion to the angle it is read from.
     Magnitude,
@@ -66,7 +68,7 @@ pub enum Term {
 }
 
 /// How many terms there are.
-pub const TERMS: usize = 12;
+pub const TERMS: usize = 13;
 
 impl Term {
     /// Every term, in index order.
@@ -77,6 +79,7 @@ impl Term {
         Term::SlowDisagreement,
         Term::Turbulence,
         Term::LiftMismatch,
+        Term::SideMismatch,
         Term::Magnitude,
         Term::NisExcess,
         Term::FilterUnclear,
@@ -93,6 +96,7 @@ impl Term {
             Term::SlowDisagreement => "slow_disagreement",
             Term::Turbulence => "turbulence",
             Term::LiftMismatch => "lift_mismatch",
+            Term::SideMismatch => "side_mismatch",
             Term::Magnitude => "magnitude",
             Term::NisExcess => "nis_excess",
             Term::FilterUnclear => "filter_unclear",
@@ -212,18 +216,19 @@ pub fn terms(
     } else {
         0
     };
-    let alpha_mdeg = i64::from(urad_to_mdeg(values.get(Feature::FilterAlpha)));
-    // Lift scale in 1e-4: |scale − 1| · |α|.
-    let lift_mismatch = if values.get(Feature::FilterAirspeed) > 0 {
-        clamp_term(
-            i64::from(values.get(Feature::FilterLiftScale))
-                .saturating_sub(10_000)
-                .saturating_abs()
-                .saturating_mul(alpha_mdeg)
-                / 10_000,
-        )
-    } else {
-        0
+    // A force scale in 1e-4 times the filter's angle it scales: |scale − 1| · |angle|.
+    let mismatch = |scale: Feature, angle: Feature| {
+        if values.get(Feature::FilterAirspeed) > 0 {
+            clamp_term(
+                i64::from(values.get(scale))
+                    .saturating_sub(10_000)
+                    .saturating_abs()
+                    .saturating_mul(i64::from(urad_to_mdeg(values.get(angle))))
+                    / 10_000,
+            )
+        } else {
+            0
+        }
     };
     let nis_excess = if values.get(Feature::FilterAirspeed) > 0 {
         clamp_term(
@@ -241,7 +246,8 @@ pub fn terms(
             Term::Disagreement => disagreement,
             Term::SlowDisagreement => slow_mdeg.min(TERM_MAX),
             Term::Turbulence => urad_to_mdeg(values.get(Feature::FilterTurbulence)),
-            Term::LiftMismatch => lift_mismatch,
+            Term::LiftMismatch => mismatch(Feature::FilterLiftScale, Feature::FilterAlpha),
+            Term::SideMismatch => mismatch(Feature::FilterSideScale, Feature::FilterBeta),
             Term::Magnitude => clamp_term(i64::from(angle_mdeg).saturating_abs()),
             Term::NisExcess => nis_excess,
             Term::FilterUnclear => on(!clear),
@@ -315,7 +321,7 @@ mod tests {
     }
 
     #[test]
-    fn a_clear_filter_gives_the_disagreement_and_the_lift_mismatch() {
+    fn a_clear_filter_gives_the_disagreement_and_the_force_mismatches() {
         let mut v = FeatureValues::compute(&SensorFrame::default(), &History::new());
         v.set_filter(&crate::filter::Output {
             alpha_rad: 0.1,
@@ -323,6 +329,7 @@ mod tests {
             sigma_alpha_rad: 0.004,
             airspeed_mps: 150.0,
             lift_scale: 1.1,
+            side_scale: 0.85,
             nis_mean: 2.5,
             ..Default::default()
         });
@@ -333,6 +340,8 @@ mod tests {
         assert_eq!(t[Term::FilterSigma as usize], 229);
         // |1.1 − 1| × 5729 mdeg.
         assert_eq!(t[Term::LiftMismatch as usize], 572);
+        // |0.85 − 1| × 1145 mdeg (filter β −0.02 rad), for either angle.
+        assert_eq!(t[Term::SideMismatch as usize], 171);
         assert_eq!(t[Term::NisExcess as usize], 50);
         assert_eq!(t[Term::FilterUnclear as usize], 0);
         assert_eq!(t[Term::Magnitude as usize], 6_229);

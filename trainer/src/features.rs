@@ -120,10 +120,15 @@ pub const EGI_BETA: [Feature; 6] = [
 /// (slow, high-α flight, where lift tells α) and where its own inputs do better.
 pub const FILTER_SLOW_FEATURES: [Feature; 2] = [Feature::FilterAirspeed, Feature::FilterLiftScale];
 
+/// The force scales the filter learns in flight (lift, side force): on an airframe unlike the
+/// model they leave 1, and a network that reads them can tell that its model is off.
+pub const FILTER_SCALE_FEATURES: [Feature; 2] =
+    [Feature::FilterLiftScale, Feature::FilterSideScale];
+
 /// The filter outputs that are back within a second of a sensor outage: α, β and their 1σ. Its air
 /// speed (through the along-track wind) and lift scale re-converge over tens of seconds when an
 /// outage falls in the first minutes of flight, and a network that reads them inherits that
-/// (docs/results/hybrid.md). The `egi-hybrid-fast` set, and the shipped `egi-hybrid-fast-d2`, read
+/// (docs/results/hybrid.md). The `egi-hybrid-fast` set, and `egi-hybrid-fast-d2`, read
 /// only these.
 pub const FILTER_FAST_FEATURES: [Feature; 4] = [
     Feature::FilterAlpha,
@@ -286,6 +291,13 @@ impl FeatureSet {
                 let b: Vec<Feature> = deltas(&DYNAMICS_BETA_DELTAS, &[Lag::F2]).collect();
                 FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &[], &b)
             }
+            // egi-hybrid-fast-d2 plus the force scales the filter learns in flight: what tells an
+            // airframe unlike the model (docs/airframes.md).
+            "egi-hybrid-scales" => FeatureSet::parse("egi-hybrid-fast-d2")?.extended(
+                spec,
+                &FILTER_SCALE_FEATURES,
+                &FILTER_SCALE_FEATURES,
+            ),
             // egi-hybrid plus the filter's turbulence index: better on the validation flights, but
             // slow to come back after a sensor outage (docs/results/hybrid.md), so not shipped.
             "egi-hybrid-turb" => {
@@ -299,7 +311,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -355,6 +367,17 @@ mod tests {
             DYNAMICS_BETA_DELTAS.map(|c| Feature::Delta(c, Lag::F2))[..]
         );
         assert_eq!(d2.suite(), Suite::Egi);
+    }
+
+    #[test]
+    fn the_shipped_set_is_the_two_frame_set_with_the_filter_scales_last() {
+        let d2 = FeatureSet::parse("egi-hybrid-fast-d2").unwrap();
+        let s = FeatureSet::parse("egi-hybrid-scales").unwrap();
+        for (with, base) in [(&s.alpha, &d2.alpha), (&s.beta, &d2.beta)] {
+            assert_eq!(with[..base.len()], base[..]);
+            assert_eq!(with[base.len()..], FILTER_SCALE_FEATURES[..]);
+        }
+        assert_eq!(s.suite(), Suite::Egi);
     }
 
     #[test]

@@ -122,13 +122,13 @@ impl Config {
     }
 }
 
-/// The side-force scale's random-walk PSD and initial 1σ in [`F16_CONFIG`]: held at 1 in the shipped
-/// build; learned in a build with `ESTIMATOR_FILTER_SIDE_SCALE=on` (build.rs; the values measured
-/// in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same).
-#[cfg(not(filter_side_scale))]
-const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
-#[cfg(filter_side_scale)]
+/// The side-force scale's random-walk PSD and initial 1σ in [`F16_CONFIG`]: learned in the shipped
+/// build (the values measured in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same);
+/// held at 1 in a build with `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
+#[cfg(not(filter_no_side_scale))]
 const SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
+#[cfg(filter_no_side_scale)]
+const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
 
 /// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
 /// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
