@@ -132,11 +132,11 @@ struct TrainArgs {
     /// axes and the kinematic α/β; needs --suite egi), egi-hybrid (egi-dynamics + the model-based
     /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), egi-hybrid-fast
     /// (egi-dynamics + the filter's α, β and their 1σ, which recover within a second of an
-    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas),
-    /// egi-hybrid-scales (egi-hybrid-fast-d2 + the filter's lift and side-force scales: the
-    /// shipped set), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
+    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas:
+    /// the shipped set), egi-hybrid-scales (egi-hybrid-fast-d2 + the filter's lift and side-force
+    /// scales), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
-    #[arg(long, default_value = "egi-hybrid-scales")]
+    #[arg(long, default_value = "egi-hybrid-fast-d2")]
     features: String,
     /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
     /// `filter_airspeed_mps,filter_lift_scale`): an ablation without spelling out the whole list.
@@ -174,7 +174,7 @@ struct ReportArgs {
     /// Print exactly one JSON object (the Table-2 numbers) on stdout.
     #[arg(long)]
     json: bool,
-    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid-scales`
+    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid-fast-d2`
     /// features on the `egi` suite, `medium-wide-beta` networks trained with `--loss l1`, the
     /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi` suite.
     #[arg(long)]
@@ -1361,7 +1361,7 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
         shipped_rows: if shipped_rows {
             ds.require(Suite::Egi)?;
             // The configuration the shipped weights were trained with (their PROVENANCE).
-            let hybrid = FeatureSet::parse("egi-hybrid-scales")?;
+            let hybrid = FeatureSet::parse("egi-hybrid-fast-d2")?;
             hybrid.check_suite(Suite::Egi)?;
             Some((hybrid, Size::MediumWideBeta, Loss::L1))
         } else {
