@@ -216,9 +216,11 @@ pub fn terms(
     } else {
         0
     };
+    // The filter's outputs mean something once it has run (an airspeed).
+    let ran = values.get(Feature::FilterAirspeed) > 0;
     // A force scale in 1e-4 times the filter's angle it scales: |scale − 1| · |angle|.
     let mismatch = |scale: Feature, angle: Feature| {
-        if values.get(Feature::FilterAirspeed) > 0 {
+        if ran {
             clamp_term(
                 i64::from(values.get(scale))
                     .saturating_sub(10_000)
@@ -230,7 +232,7 @@ pub fn terms(
             0
         }
     };
-    let nis_excess = if values.get(Feature::FilterAirspeed) > 0 {
+    let nis_excess = if ran {
         clamp_term(
             i64::from(values.get(Feature::FilterNisMean)).saturating_sub(NIS_CONSISTENT) / 10,
         )

@@ -463,25 +463,10 @@ pub fn body_velocity(inp: &Input) -> [f32; 3] {
     [v.x, v.y, v.z]
 }
 
-/// The force model's coefficients for a frame's input at an air-data point (α, β in rad, Mach, true
-/// airspeed in m/s), with the gyro's body rates as the aero rates (calm air), the surfaces of
-/// [`surfaces`] and no ground effect: what the filter and the flight-test calibration evaluate.
-#[allow(clippy::too_many_arguments)]
-pub fn model_coefficients(
-    inp: &Input,
-    gyro: [f32; 3],
-    alpha_rad: f32,
-    beta_rad: f32,
-    mach: f32,
-    tas_mps: f32,
-    gear_norm: f32,
-) -> aero::Coefficients {
-    model_point(inp, gyro, alpha_rad, beta_rad, mach, tas_mps, gear_norm)
-        .map_or_else(aero::Coefficients::default, |p| F16.coefficients_at(&p))
-}
-
-/// The operating point [`model_coefficients`] evaluates the force model at (`None` if an input
-/// is not finite or the airspeed not positive), for evaluating single terms there.
+/// The force model's operating point for a frame's input at an air-data point (α, β in rad, Mach,
+/// true airspeed in m/s), with the gyro's body rates as the aero rates (calm air), the surfaces of
+/// [`surfaces`] and no ground effect: where the filter and the flight-test calibration evaluate
+/// the model (`None` if an input is not finite or the airspeed not positive).
 #[allow(clippy::too_many_arguments)]
 pub fn model_point(
     inp: &Input,
@@ -546,7 +531,7 @@ fn model_force(
     let alpha = libm::atan2f(vb.z, vb.x);
     let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
     let mach = v / a_sound;
-    let c = model_coefficients(inp, gyro, alpha, beta, mach, v, gear_norm);
+    let c = F16.coefficients_at(&model_point(inp, gyro, alpha, beta, mach, v, gear_norm)?);
     if !c.valid {
         return None;
     }
