@@ -5,6 +5,9 @@
 //!   model and checks it end to end without touching the shipped weights).
 //! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/sigma.rs`, written by
 //!   `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against another fit.
+//! * The aircraft description, in `src/aircraft/mod.rs`. Default: `src/aircraft/f16.rs`, written by
+//!   `scripts/gen-aircraft` from `aircraft/f16.toml` and committed; `ESTIMATOR_AIRCRAFT=/abs/path.rs`
+//!   builds for another description.
 //! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/f16_tables.rs`,
 //!   written by `scripts/extract-aero` from JSBSim's F-16 and committed.
 //!   `ESTIMATOR_AERO=/abs/path/f16_tables.rs` builds against the tables of another aircraft
@@ -17,6 +20,7 @@ use std::path::PathBuf;
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     aero_tables(&manifest);
+    aircraft(&manifest);
     sigma_weights(&manifest);
     filter_side_scale();
     let path = chosen(
@@ -82,6 +86,18 @@ fn sigma_weights(manifest: &std::path::Path) {
         "src/model/sigma.rs",
         "a file written by trainer fit-sigma",
         "run scripts/fit-sigma (or git checkout it)",
+    );
+}
+
+/// `ESTIMATOR_AIRCRAFT_FILE`: the aircraft description `src/aircraft/mod.rs` includes, written by
+/// `scripts/gen-aircraft` from `aircraft/NAME.toml`.
+fn aircraft(manifest: &std::path::Path) {
+    required(
+        manifest,
+        "ESTIMATOR_AIRCRAFT",
+        "src/aircraft/f16.rs",
+        "a file written by scripts/gen-aircraft",
+        "run scripts/gen-aircraft",
     );
 }
 

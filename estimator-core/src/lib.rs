@@ -32,6 +32,7 @@
 )]
 
 pub mod aero;
+pub mod aircraft;
 pub mod channels;
 pub mod estimator;
 pub mod features;

@@ -3,10 +3,11 @@
 Protocol (one request per stdin line, fields separated by TAB; one framed reply per request on the
 ORIGINAL stdout):
   reply frame = status byte (b'O' ok / b'E' error) + u32 little-endian payload length + payload.
-  Started as `python -c SOURCE [AIRCRAFT_DIR]`: with a directory, JSBSim loads aircraft from there
-  (`set_aircraft_path`, as stock JSBSim does), else from the package's own aircraft folder.
+  Started as `python -c SOURCE AIRCRAFT_DIR MODEL`: with a directory (not ""), JSBSim loads
+  aircraft from there (`set_aircraft_path`, as stock JSBSim does), else from the package's own
+  aircraft folder; MODEL is the aircraft's JSBSim name (its description's, e.g. f16).
   On start the bridge sends one frame: b'O' + JSBSim version string + '\n' + the absolute path of
-  the f16.xml it will load, or b'E' + why it cannot run.
+  the MODEL/MODEL.xml it will load, or b'E' + why it cannot run.
   load\tSCRIPT\tINITFILE   load a runscript at the dt it declares, exactly as stock JSBSim runs it
                           (INITFILE may be empty: JSBSim looks in the aircraft folder), run the
                           initial conditions; payload = f64 little-endian dt in seconds
@@ -74,7 +75,8 @@ def main():
     pm = fdm.get_property_manager()
     full = sampler([])
     cycle, steps, width, buf = [full], 0, 0, bytearray(4)
-    xml = os.path.abspath(os.path.join(aircraft_dir, "f16", "f16.xml"))
+    model = sys.argv[2] if len(sys.argv) > 2 else ""
+    xml = os.path.abspath(os.path.join(aircraft_dir, model, model + ".xml"))
     reply(True, (jsbsim.__version__ + "\n" + xml).encode())
     for line in sys.stdin:
         f = line.rstrip("\n").split("\t")

@@ -58,7 +58,7 @@ impl Default for BoomConfig {
             bias_sigma: 0.1,
         };
         BoomConfig {
-            arm_m: 6.0,
+            arm_m: estimator_core::aircraft::AIRCRAFT.installation.boom_arm_m,
             alpha: vane,
             beta: vane,
             tas: ChannelErrors {

@@ -9,7 +9,7 @@ use crate::flight::{
 };
 use crate::plant::{
     AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan,
-    TEF_DEG_PER_UNIT, TRUTH_ONLY, WATCH, at, load_f16_script, truth_of,
+    TEF_DEG_PER_UNIT, TRUTH_ONLY, WATCH, at, load_runscript, truth_of,
 };
 use crate::sensors::{InputSchedule, SensorConfig, SensorInput, SensorModel};
 
@@ -121,7 +121,7 @@ fn fly_planned(
     cfg: &FlyConfig,
     plan: fn(&InputSchedule) -> ReadPlan,
 ) -> Result<Flight, PlantError> {
-    let Loaded { path: script, dt_s } = load_f16_script(plant, script)?;
+    let Loaded { path: script, dt_s } = load_runscript(plant, script)?;
     let mut sensors = SensorModel::new(&cfg.sensors, cfg.seed);
     let plan = plan(&sensors.input_schedule());
     plant.watch_planned(&WATCH, &plan)?;

@@ -14,6 +14,7 @@ use std::sync::{Arc, Mutex};
 
 use crate::flight::{Every, Truth};
 pub use crate::flight::{FT_TO_M, LB_TO_KG, SAMPLE_HZ, SIM_HZ, STEPS_PER_SAMPLE};
+use estimator_core::aircraft::AIRCRAFT;
 
 /// How far a script's rate may be from [`SIM_HZ`] (relative) and still be flown: the stock scripts
 /// write `dt="0.00833333"` (120.000005 Hz), which the 120 Hz sensor models and the 6-step decimation
@@ -42,10 +43,16 @@ pub enum PlantError {
     #[error("{path} is not a JSBSim runscript: {why}")]
     NotAScript { path: PathBuf, why: String },
     #[error(
-        "{0} is not a JSBSim aircraft directory: it has no f16/f16.xml (make one with scripts/airframe-variant, or copy JSBSim's aircraft/f16 into it)"
+        "{0} is not a JSBSim aircraft directory: it has no {model}/{model}.xml (make one with scripts/airframe-variant, or copy JSBSim's aircraft/{model} into it)",
+        model = AIRCRAFT.jsbsim_model
     )]
     NoAircraft(PathBuf),
-    #[error("{path} is a script for aircraft `{aircraft}`; hil-sim only flies the JSBSim `f16`")]
+    #[error(
+        "{path} is a script for aircraft `{aircraft}`; this build flies the JSBSim `{model}` ({title}, aircraft/{name}.toml)",
+        model = AIRCRAFT.jsbsim_model,
+        title = AIRCRAFT.title,
+        name = AIRCRAFT.name
+    )]
     WrongAircraft { path: PathBuf, aircraft: String },
     #[error("JSBSim rejected {path}: {message}")]
     ScriptRejected { path: PathBuf, message: String },
@@ -90,9 +97,11 @@ pub struct Plant {
     aircraft_xml: PathBuf,
 }
 
-/// A JSBSim aircraft directory as `--aircraft-dir` names it: absolute, holding `f16/f16.xml`.
+/// A JSBSim aircraft directory as `--aircraft-dir` names it: absolute, holding `MODEL/MODEL.xml`
+/// for the aircraft description's JSBSim model (`f16/f16.xml`).
 pub fn aircraft_dir(dir: &Path) -> Result<PathBuf, PlantError> {
-    let xml = dir.join("f16").join("f16.xml");
+    let model = AIRCRAFT.jsbsim_model;
+    let xml = dir.join(model).join(format!("{model}.xml"));
     if !xml.is_file() {
         return Err(PlantError::NoAircraft(dir.to_path_buf()));
     }
@@ -125,8 +134,9 @@ impl Plant {
         Plant::spawn_for(None)
     }
 
-    /// Starts the bridge on the F-16 of a JSBSim aircraft directory (`DIR/f16/f16.xml`, loaded as
-    /// stock JSBSim's `set_aircraft_path(DIR)` loads it), or JSBSim's own with `None`.
+    /// Starts the bridge on this build's aircraft in a JSBSim aircraft directory
+    /// (`DIR/MODEL/MODEL.xml`, loaded as stock JSBSim's `set_aircraft_path(DIR)` loads it), or in
+    /// JSBSim's own with `None`.
     pub fn spawn_for(aircraft: Option<&Path>) -> Result<Plant, PlantError> {
         let aircraft = aircraft.map(aircraft_dir).transpose()?;
         let python = python_path();
@@ -141,7 +151,13 @@ impl Plant {
             .arg("-u")
             .arg("-c")
             .arg(BRIDGE_SOURCE)
-            .args(aircraft.iter())
+            // The aircraft directory ("" for JSBSim's own) and the model, whose file the bridge reports.
+            .arg(
+                aircraft
+                    .as_deref()
+                    .map_or(std::ffi::OsStr::new(""), Path::as_os_str),
+            )
+            .arg(AIRCRAFT.jsbsim_model)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -201,7 +217,7 @@ impl Plant {
         &self.version
     }
 
-    /// The `f16.xml` this bridge loads (JSBSim's own, or `--aircraft-dir`'s).
+    /// The model file this bridge loads, `MODEL/MODEL.xml` (JSBSim's own, or `--aircraft-dir`'s).
     pub fn aircraft_xml(&self) -> &Path {
         &self.aircraft_xml
     }
@@ -609,10 +625,11 @@ pub(crate) const TRUTH_ONLY: [usize; 13] = [
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
 pub(crate) const PSF_TO_PA: f64 = 47.880_258_98;
 pub(crate) const G0_FPS2: f64 = 32.174_048_56;
-/// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (F-16: about 20° each way); the model has no deg property.
-pub const FLAPERON_DEG_PER_NORM: f64 = 20.0;
-/// `fcs/tef-control` = 1 is 20° of trailing-edge flap.
-pub const TEF_DEG_PER_UNIT: f64 = 20.0;
+/// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (the aircraft description's; F-16: 20° each
+/// way); the model has no deg property.
+pub const FLAPERON_DEG_PER_NORM: f64 = AIRCRAFT.surfaces.flaperon_deg_per_norm;
+/// Degrees of trailing-edge flap at `fcs/tef-control` = 1 (the aircraft description's; F-16: 20°).
+pub const TEF_DEG_PER_UNIT: f64 = AIRCRAFT.surfaces.tef_deg_per_unit;
 
 /// What `<use aircraft=… initialize=…/>` of a runscript says.
 #[derive(Debug, PartialEq)]
@@ -700,16 +717,16 @@ pub struct Loaded {
     pub dt_s: f64,
 }
 
-/// Loads a runscript for the `f16` into `plant` at its own dt and runs its initial conditions: the
-/// initialize file is taken from beside the script when it is there, else JSBSim looks in the
-/// aircraft folder. A script whose rate is not [`SIM_HZ`] (within [`SIM_HZ_TOLERANCE`]) is refused.
-pub fn load_f16_script(plant: &mut Plant, script: &Path) -> Result<Loaded, PlantError> {
+/// Loads a runscript for this build's aircraft (its description's JSBSim model) into `plant` at its
+/// own dt and runs its initial conditions: the initialize file is taken from beside the script when
+/// it is there, else JSBSim looks in the aircraft folder. A script whose rate is not [`SIM_HZ`] (within [`SIM_HZ_TOLERANCE`]) is refused.
+pub fn load_runscript(plant: &mut Plant, script: &Path) -> Result<Loaded, PlantError> {
     let script = std::fs::canonicalize(script).map_err(|source| PlantError::ScriptUnreadable {
         path: script.to_path_buf(),
         source,
     })?;
     let uses = script_use(&script)?;
-    if uses.aircraft != "f16" {
+    if uses.aircraft != AIRCRAFT.jsbsim_model {
         return Err(PlantError::WrongAircraft {
             path: script.clone(),
             aircraft: uses.aircraft,

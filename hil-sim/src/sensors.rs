@@ -100,7 +100,9 @@ impl Default for ImuConfig {
                 misalignment_sigma_rad: 200e-6,
             },
             gyro_g_sensitivity_rps_per_mps2: 1.0 * DEG_PER_H / G0,
-            lever_arm_m: [0.5, 0.0, 0.2],
+            lever_arm_m: estimator_core::aircraft::AIRCRAFT
+                .installation
+                .imu_lever_arm_m,
             lag_tau_s: 0.003,
             antialias_cutoff_hz: 6.0,
         }
@@ -237,8 +239,11 @@ pub struct FuelConfig {
 impl Default for FuelConfig {
     fn default() -> Self {
         FuelConfig {
-            // The JSBSim F-16's two internal tanks, 2 × 3486 lb (f16.xml); the generator fills only these.
-            full_scale_kg: 2.0 * 3486.0 * crate::flight::LB_TO_KG,
+            // The internal tanks the generator fills (the F-16's: 2 × 3486 lb, f16.xml).
+            full_scale_kg: estimator_core::aircraft::AIRCRAFT
+                .mass
+                .internal_fuel_capacity_lb()
+                * crate::flight::LB_TO_KG,
             bias_sigma_fs: 0.01,
             scale_factor_sigma: 0.01,
             gm_sigma_fs: 0.003,

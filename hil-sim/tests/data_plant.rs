@@ -102,7 +102,7 @@ fn a_read_plan_reads_the_same_values_where_it_reads() {
     let plan = ReadPlan::new(&[None, Some(vec![e(6, 5)]), Some(vec![e(4, 1), e(6, 0)])]);
     let run = |plan: &ReadPlan| {
         let mut p = Plant::spawn().unwrap();
-        plant::load_f16_script(&mut p, &script).unwrap();
+        plant::load_runscript(&mut p, &script).unwrap();
         p.watch_planned(&props, plan).unwrap();
         let mut rows: Vec<f64> = Vec::new();
         for n in [37, 50, 13] {
@@ -124,7 +124,7 @@ fn a_read_plan_reads_the_same_values_where_it_reads() {
         }
     }
     let mut p = Plant::spawn().unwrap();
-    plant::load_f16_script(&mut p, &script).unwrap();
+    plant::load_runscript(&mut p, &script).unwrap();
     let err = p.watch_planned(&props[..2], &plan).unwrap_err();
     assert!(
         err.to_string()
@@ -139,7 +139,7 @@ fn a_read_plan_reads_the_same_values_where_it_reads() {
 fn raw_stepping_flies_the_same_flight() {
     let (script, flight) = first_6_s_of_the_test_flight();
     let mut p = Plant::spawn().unwrap();
-    plant::load_f16_script(&mut p, &script).unwrap();
+    plant::load_runscript(&mut p, &script).unwrap();
     assert_eq!(p.run_raw(719).unwrap(), 719);
     p.watch(&["aero/alpha-deg", "simulation/sim-time-sec"])
         .unwrap();

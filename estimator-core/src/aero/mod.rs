@@ -25,9 +25,11 @@ pub mod f16_tables {
 
 pub use f16_tables::F16;
 
-/// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel
-/// (hil-sim's `plant::FLAPERON_DEG_PER_NORM`). JSBSim's model has no degree property for it.
-pub const FLAPERON_DEG_PER_NORM: f32 = 20.0;
+/// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
+/// the aircraft description (hil-sim's `plant::FLAPERON_DEG_PER_NORM`). JSBSim's model has no degree
+/// property for it.
+pub const FLAPERON_DEG_PER_NORM: f32 =
+    crate::aircraft::AIRCRAFT.surfaces.flaperon_deg_per_norm as f32;
 
 const FT_TO_M: f32 = 0.3048;
 

@@ -38,6 +38,7 @@
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 use crate::aero::{self, AirState, F16, Surfaces};
+use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SensorFrame, Suite};
 
 /// Number of states: mean wind (3), gust (3), lift scale, side-force scale.
@@ -130,8 +131,8 @@ const SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
 #[cfg(filter_no_side_scale)]
 const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
 
-/// The F-16 in hil-sim's installation: the IMU lever arm and anti-alias filter of `docs/sensors.md`,
-/// the empty weight and pilot of `aircraft/f16/f16.xml` (17,400 + 230 lb). The measurement noise and
+/// The F-16 in hil-sim's installation: the IMU lever arm, empty weight and pilot and the gear of its
+/// description (`aircraft/f16.toml`, [`crate::aircraft`]), the anti-alias filter of `docs/sensors.md`. The measurement noise and
 /// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
 /// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 pub const F16_CONFIG: Config = Config {
@@ -146,16 +147,16 @@ pub const F16_CONFIG: Config = Config {
     accel_sigma: [0.8, 1.5],
     gate: 25.0,
     gate_run: 20,
-    lever_arm_m: [0.5, 0.0, 0.2],
+    lever_arm_m: AIRCRAFT.installation.imu_lever_arm_f32(),
     accel_delay_s: 0.03,
-    empty_mass_kg: (17_400.0 + 230.0) * 0.453_592_37,
+    empty_mass_kg: AIRCRAFT.mass.empty_mass_kg(),
     max_sigma_rad: 0.0175,
     max_wind_var: 400.0,
     min_airspeed_mps: 30.0,
     // JSBSim's F-16 starts with the gear down and neither the generated maneuver scripts nor the
     // stock F-16 scripts retract it: every flight the plant flies is gear-down (CDgear 0.027,
     // part of the body side force at sideslip).
-    gear_norm: 1.0,
+    gear_norm: AIRCRAFT.mass.gear_norm as f32,
     // Off: the adaptive y noise improved the filter's own β (training flights 0.162 → 0.130) but
     // cost its α (0.228 → 0.257), and the hybrid fed with it scored worse on validation (α 0.144
     // → 0.149, β 0.068 → 0.072; docs/filter.md).

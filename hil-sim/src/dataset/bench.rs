@@ -2,7 +2,7 @@
 //! flights, side by side on the same workers (the target: 4 h of flight in ≤ 30 s on 2 cores).
 //!
 //! Raw stepping is the floor any data generator on JSBSim pays: the same maneuver scripts, loaded
-//! the same way ([`crate::plant::load_f16_script`], one bridge process per flight), run to their end
+//! the same way ([`crate::plant::load_script`], one bridge process per flight), run to their end
 //! with the bridge's `run` command, which calls `FGFDMExec::run` and reads nothing. `generate` on top
 //! of that reads the properties its read plan names at each 120 Hz step (`crate::fly`: 21 at every
 //! step, the others only where the truth or a sensor model uses them), runs the sensor models in
@@ -76,7 +76,7 @@ pub fn raw_steps(
         || tick(progress),
         |f| {
             let mut plant = Plant::spawn_for(aircraft_dir)?;
-            plant::load_f16_script(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
+            plant::load_runscript(&mut plant, &crate::maneuver::files(dir, &f.name).0)?;
             let mut steps = 0u64;
             loop {
                 let n = plant.run_raw(RAW_CHUNK)?;

@@ -1,0 +1,119 @@
+//! The aircraft this build is for, as its description says: `aircraft/NAME.toml` (docs/aircraft.md),
+//! turned into `src/aircraft/NAME.rs` by `scripts/gen-aircraft`. `build.rs` picks the file
+//! (`ESTIMATOR_AIRCRAFT`, default `src/aircraft/f16.rs`). Everything the chain knows of an airframe
+//! beyond its aerodynamic tables (`aero`) comes from here: mass properties and tanks, where the
+//! IMU and the flight-test boom sit, the surfaces' units, the flight-test points.
+
+/// An aircraft description.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aircraft {
+    /// The description's name (`aircraft/NAME.toml`).
+    pub name: &'static str,
+    pub title: &'static str,
+    /// JSBSim's model: `<use aircraft=…>`, and `DIR/MODEL/MODEL.xml` in an aircraft directory.
+    pub jsbsim_model: &'static str,
+    pub mass: Mass,
+    pub installation: Installation,
+    pub surfaces: SurfaceScales,
+    /// The `flight-test` preset's test points.
+    pub flight_test_points: &'static [TestPoint],
+}
+
+/// Mass properties of the JSBSim model and the tanks the flights use.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mass {
+    pub empty_weight_lb: f64,
+    /// The empty aircraft's CG station (JSBSim structural x), inches.
+    pub empty_cg_x_in: f64,
+    pub pilot_lb: f64,
+    /// The model's point mass that is the pilot (`inertia/pointmass-*[i]`).
+    pub pilot_pointmass: u8,
+    /// The tanks flights fill (`propulsion/tank[i]`) and the fuel gauge measures.
+    pub internal_tanks: &'static [u8],
+    /// Capacity of each internal tank, lb.
+    pub internal_tank_capacity_lb: f64,
+    /// The tanks only an out-of-distribution heavy case fills.
+    pub external_tanks: &'static [u8],
+    /// `gear/gear-pos-norm` in every flight (the filter's drag and side force read it).
+    pub gear_norm: f64,
+}
+
+impl Mass {
+    /// Empty weight with the pilot, kg, in the flight code's precision.
+    pub const fn empty_mass_kg(&self) -> f32 {
+        (self.empty_weight_lb as f32 + self.pilot_lb as f32) * LB_TO_KG
+    }
+
+    /// What the fuel gauge's full scale is: every internal tank full, lb.
+    pub const fn internal_fuel_capacity_lb(&self) -> f64 {
+        self.internal_tanks.len() as f64 * self.internal_tank_capacity_lb
+    }
+}
+
+/// Where the sensors sit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Installation {
+    /// The IMU from the CG, body axes (x forward, y right, z down), m.
+    pub imu_lever_arm_m: [f64; 3],
+    /// The flight-test nose boom's vanes ahead of the CG, m.
+    pub boom_arm_m: f64,
+}
+
+impl Installation {
+    /// The IMU lever arm in the flight code's precision.
+    pub const fn imu_lever_arm_f32(&self) -> [f32; 3] {
+        let [x, y, z] = self.imu_lever_arm_m;
+        [x as f32, y as f32, z as f32]
+    }
+}
+
+/// The units of surface channels whose JSBSim property is not in degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceScales {
+    /// Degrees of one flaperon at `fcs/*-flaperon-norm` = ±1.
+    pub flaperon_deg_per_norm: f64,
+    /// Degrees of trailing-edge flap at `fcs/tef-control` = 1.
+    pub tef_deg_per_unit: f64,
+}
+
+/// A flight-test point: trimmed start altitude and calibrated airspeed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TestPoint {
+    pub alt_ft: f64,
+    pub vc_kts: f64,
+}
+
+/// Pounds to kilograms (exact by definition).
+pub const LB_TO_KG: f32 = 0.453_592_37;
+
+#[rustfmt::skip]
+mod generated {
+    use super::*;
+    include!(env!("ESTIMATOR_AIRCRAFT_FILE"));
+}
+
+pub use generated::AIRCRAFT;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_flight_code_precision_values_are_the_descriptions() {
+        // The filter's empty mass and lever arm are computed from the description in f32, as the
+        // hand-written constants they replace were: (17,400 + 230) lb and [0.5, 0, 0.2] m.
+        if AIRCRAFT.name == "f16" {
+            assert_eq!(
+                AIRCRAFT.mass.empty_mass_kg(),
+                (17_400.0f32 + 230.0) * 0.453_592_37
+            );
+            assert_eq!(
+                AIRCRAFT.installation.imu_lever_arm_f32(),
+                [0.5f32, 0.0, 0.2]
+            );
+            assert_eq!(AIRCRAFT.mass.internal_fuel_capacity_lb(), 2.0 * 3_486.0);
+        }
+        assert!(!AIRCRAFT.jsbsim_model.is_empty());
+        assert!(!AIRCRAFT.flight_test_points.is_empty());
+    }
+}
