@@ -5,9 +5,9 @@
 //!   model and checks it end to end without touching the shipped weights).
 //! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/sigma.rs`, written by
 //!   `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against another fit.
-//! * The aircraft description, in `src/aircraft/mod.rs`. Default: `src/aircraft/f16.rs`, written by
-//!   `scripts/gen-aircraft` from `aircraft/f16.toml` and committed; `ESTIMATOR_AIRCRAFT=/abs/path.rs`
-//!   builds for another description.
+//! * The aircraft description, in `src/aircraft/mod.rs`: `src/aircraft/NAME.rs`, written by
+//!   `scripts/gen-aircraft` from `aircraft/NAME.toml` and committed, for `ESTIMATOR_AIRCRAFT=NAME`
+//!   (default `f16`).
 //! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/f16_tables.rs`,
 //!   written by `scripts/extract-aero` from JSBSim's F-16 and committed.
 //!   `ESTIMATOR_AERO=/abs/path/f16_tables.rs` builds against the tables of another aircraft
@@ -89,16 +89,32 @@ fn sigma_weights(manifest: &std::path::Path) {
     );
 }
 
-/// `ESTIMATOR_AIRCRAFT_FILE`: the aircraft description `src/aircraft/mod.rs` includes, written by
-/// `scripts/gen-aircraft` from `aircraft/NAME.toml`.
+/// `ESTIMATOR_AIRCRAFT_FILE`: the aircraft description `src/aircraft/mod.rs` includes,
+/// `src/aircraft/NAME.rs` written by `scripts/gen-aircraft` from `aircraft/NAME.toml`, for
+/// `ESTIMATOR_AIRCRAFT=NAME` (default `f16`; hil-sim's build reads the same variable).
 fn aircraft(manifest: &std::path::Path) {
-    required(
-        manifest,
-        "ESTIMATOR_AIRCRAFT",
-        "src/aircraft/f16.rs",
-        "a file written by scripts/gen-aircraft",
-        "run scripts/gen-aircraft",
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
+    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
+    let name = if name.is_empty() {
+        "f16".to_string()
+    } else {
+        name
+    };
+    assert!(
+        !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
     );
+    let path = manifest.join("src/aircraft").join(format!("{name}.rs"));
+    println!("cargo:rerun-if-changed={}", path.display());
+    assert!(
+        path.is_file(),
+        "{} is missing: describe the aircraft in aircraft/{name}.toml and run scripts/gen-aircraft",
+        path.display()
+    );
+    println!("cargo:rustc-env=ESTIMATOR_AIRCRAFT_FILE={}", path.display());
 }
 
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build

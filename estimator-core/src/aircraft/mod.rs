@@ -1,6 +1,6 @@
 //! The aircraft this build is for, as its description says: `aircraft/NAME.toml` (docs/aircraft.md),
 //! turned into `src/aircraft/NAME.rs` by `scripts/gen-aircraft`. `build.rs` picks the file
-//! (`ESTIMATOR_AIRCRAFT`, default `src/aircraft/f16.rs`). Everything the chain knows of an airframe
+//! (`ESTIMATOR_AIRCRAFT=NAME`, default `f16`). Everything the chain knows of an airframe
 //! beyond its aerodynamic tables (`aero`) comes from here: mass properties and tanks, where the
 //! IMU and the flight-test boom sit, the surfaces' units, the flight-test points.
 

@@ -271,102 +271,18 @@ pub struct Profile {
 }
 
 impl Profile {
-    /// The preset profiles.
+    /// The preset profiles: the aircraft description's `[profiles.*]` (`aircraft/NAME.toml`,
+    /// generated into `src/maneuver/NAME.rs` by `scripts/gen-aircraft`).
     pub fn preset(kind: ProfileKind) -> Profile {
-        let base = Profile {
-            kind,
-            init_alt_ft: (8_000.0, 25_000.0),
-            init_vc_kts: (280.0, 420.0),
-            fuel_per_tank_lbs: (600.0, 3_000.0),
-            theta_target_deg: (-8.0, 12.0),
-            target_hold_s: (6.0, 20.0),
-            alpha_mode_share: 0.0,
-            alpha_target_deg: (2.0, 10.0),
-            bank_target_deg: (0.0, 35.0),
-            pitch_stick_amp: 0.08,
-            roll_stick_amp: 0.1,
-            stick_hold_s: (0.5, 3.0),
-            rudder_amp: 0.2,
-            rudder_hold_s: (1.0, 6.0),
-            // From idle: a speed-holding pilot or autothrottle pulls it back whenever the aircraft
-            // is fast (the HIL flight does, to 0.02), and stock scripts fly it.
-            throttle: (0.0, 0.7),
-            throttle_hold_s: (10.0, 40.0),
-            speedbrake_share: 0.1,
-            min_agl_ft: 2_500.0,
-            ceiling_ft: 45_000.0,
-            max_bank_deg: 95.0,
-            max_pitch_deg: 45.0,
-            min_vc_kts: 150.0,
-            recover_vc_kts: 250.0,
-            reclimb_pitch_deg: 15.0,
-            max_alpha_deg: 22.0,
-            min_alpha_deg: -8.0,
-            target_ramp_s: 3.0,
-            max_nz_g: 7.5,
-            min_nz_g: -2.5,
-            turb_severity: (0, 3),
-            steady_wind_fps: (0.0, 40.0),
-            gust_fps: (5.0, 25.0),
-            gust_interval_s: (40.0, 150.0),
-        };
-        match kind {
-            ProfileKind::Gentle => base,
-            // Slow, low thrust, sustained pulls (wind-up turns) at α targets near the limiter.
-            ProfileKind::HighAlpha => Profile {
-                init_alt_ft: (12_000.0, 30_000.0),
-                init_vc_kts: (220.0, 320.0),
-                theta_target_deg: (-5.0, 15.0),
-                target_hold_s: (8.0, 20.0),
-                alpha_mode_share: 0.9,
-                alpha_target_deg: (14.0, 28.0),
-                bank_target_deg: (20.0, 75.0),
-                pitch_stick_amp: 0.1,
-                throttle: (0.0, 0.6),
-                min_vc_kts: 90.0,
-                recover_vc_kts: 180.0,
-                target_ramp_s: 2.0,
-                max_alpha_deg: 31.0,
-                max_bank_deg: 110.0,
-                max_pitch_deg: 50.0,
-                turb_severity: (0, 4),
-                ..base
-            },
-            ProfileKind::ClimbDescent => Profile {
-                init_alt_ft: (5_000.0, 35_000.0),
-                theta_target_deg: (-25.0, 25.0),
-                target_hold_s: (8.0, 30.0),
-                alpha_mode_share: 0.1,
-                bank_target_deg: (0.0, 45.0),
-                throttle: (0.0, 1.0),
-                turb_severity: (0, 5),
-                ..base
-            },
-            // High energy, big stick, rolls past 90°, pushes to negative α, afterburner dives.
-            ProfileKind::Aggressive => Profile {
-                init_alt_ft: (10_000.0, 35_000.0),
-                init_vc_kts: (350.0, 550.0),
-                theta_target_deg: (-35.0, 30.0),
-                target_hold_s: (3.0, 10.0),
-                alpha_mode_share: 0.2,
-                alpha_target_deg: (-6.0, 18.0),
-                bank_target_deg: (0.0, 140.0),
-                pitch_stick_amp: 0.5,
-                roll_stick_amp: 0.6,
-                stick_hold_s: (0.3, 2.0),
-                rudder_amp: 0.6,
-                throttle: (0.5, 1.0),
-                max_bank_deg: 160.0,
-                max_pitch_deg: 60.0,
-                max_nz_g: 8.0,
-                min_nz_g: -3.0,
-                target_ramp_s: 1.0,
-                speedbrake_share: 0.2,
-                turb_severity: (2, 6),
-                ..base
-            },
-        }
+        presets::preset(kind)
     }
+}
+
+/// The generated profiles of this build's aircraft (build.rs picks the file).
+#[rustfmt::skip]
+mod presets {
+    use super::{Profile, ProfileKind};
+    include!(env!("HIL_PROFILES_FILE"));
 }
 
 /// One generated flight.

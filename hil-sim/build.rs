@@ -1,0 +1,32 @@
+//! Picks the maneuver generator's profiles of the aircraft this build is for:
+//! `src/maneuver/NAME.rs`, written by `scripts/gen-aircraft` from `aircraft/NAME.toml`, for
+//! `ESTIMATOR_AIRCRAFT=NAME` (default `f16`), the variable estimator-core's build reads for the
+//! rest of the description, so the two crates are always built for the same aircraft.
+// Host build step, not flight code: a panic here is a failed build with a message.
+#![allow(clippy::unwrap_used)]
+
+use std::path::PathBuf;
+
+fn main() {
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
+    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
+    let name = if name.is_empty() {
+        "f16".to_string()
+    } else {
+        name
+    };
+    assert!(
+        name.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
+    );
+    let path = manifest.join("src/maneuver").join(format!("{name}.rs"));
+    println!("cargo:rerun-if-changed={}", path.display());
+    assert!(
+        path.is_file(),
+        "{} is missing: describe the aircraft in aircraft/{name}.toml and run scripts/gen-aircraft",
+        path.display()
+    );
+    println!("cargo:rustc-env=HIL_PROFILES_FILE={}", path.display());
+}

@@ -1,0 +1,94 @@
+//! An aircraft description (`aircraft/NAME.toml`, docs/aircraft.md) is checked before it becomes
+//! code: `scripts/gen-aircraft --validate` accepts the F-16's and refuses each kind of mistake with
+//! a non-zero exit and a message that names the key; the build's aircraft is the description's.
+
+// Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// `scripts/gen-aircraft --validate` on `text`: exit success and stderr.
+fn validate(text: &str, name: &str) -> (bool, String) {
+    let dir = std::env::temp_dir().join(format!("gen-aircraft-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let o = Command::new(root().join("scripts/gen-aircraft"))
+        .arg("--validate")
+        .arg(&file)
+        .output()
+        .expect("run scripts/gen-aircraft");
+    let _ = std::fs::remove_file(&file);
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn descriptions_are_validated_key_by_key() {
+    let f16 = std::fs::read_to_string(root().join("aircraft/f16.toml")).unwrap();
+    let (ok, err) = validate(&f16, "f16");
+    assert!(ok, "the shipped F-16 description is refused: {err}");
+    // (edit, what the message must name)
+    let cases: [(&str, &str, &str); 6] = [
+        (
+            "boom_arm_m = 6.0",
+            "boom_arm = 6.0",
+            "missing boom_arm_m; unknown boom_arm",
+        ),
+        (
+            "ceiling_ft = 45000.0\n",
+            "",
+            "profiles.base: missing ceiling_ft",
+        ),
+        (
+            "max_nz_g = 8.0",
+            "max_nzz_g = 8.0",
+            "profiles.aggressive: unknown max_nzz_g",
+        ),
+        (
+            "init_vc_kts = [350.0, 550.0]",
+            "init_vc_kts = [550.0, 350.0]",
+            "init_vc_kts: low 550.0 is above high 350.0",
+        ),
+        (
+            "[profiles.gentle]",
+            "[profiles.gentel]",
+            "missing gentle; unknown gentel",
+        ),
+        (
+            "pilot_pointmass = 0",
+            "pilot_pointmass = \"0\"",
+            "pilot_pointmass must be an index",
+        ),
+    ];
+    for (from, to, says) in cases {
+        assert!(
+            f16.contains(from),
+            "the F-16 description no longer has `{from}`"
+        );
+        let (ok, err) = validate(&f16.replacen(from, to, 1), "bad");
+        assert!(!ok, "`{from}` -> `{to}` was accepted");
+        assert!(err.contains(says), "`{from}` -> `{to}`: {err}");
+    }
+}
+
+#[test]
+fn the_build_is_for_the_f16_description() {
+    let a = estimator_core::aircraft::AIRCRAFT;
+    assert_eq!((a.name, a.jsbsim_model), ("f16", "f16"));
+    assert_eq!(a.mass.internal_fuel_capacity_lb(), 6_972.0);
+    assert_eq!(a.flight_test_points.len(), 3);
+    // The maneuver generator's envelope is the description's too.
+    let p = hil_sim::maneuver::Profile::preset(hil_sim::maneuver::ProfileKind::HighAlpha);
+    assert_eq!(
+        (p.max_alpha_deg, p.min_vc_kts, p.ceiling_ft),
+        (31.0, 90.0, 45_000.0)
+    );
+}
