@@ -36,7 +36,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 6] = [
+    let cases: [(&str, &str, &str); 9] = [
         (
             "boom_arm_m = 6.0",
             "boom_arm = 6.0",
@@ -61,6 +61,17 @@ fn descriptions_are_validated_key_by_key() {
             "[profiles.gentle]",
             "[profiles.gentel]",
             "missing gentle; unknown gentel",
+        ),
+        (
+            "mach_lef_rad = -0.0349",
+            "mach_lef = -0.0349",
+            "lef_schedule: missing mach_lef_rad; unknown mach_lef",
+        ),
+        ("[fcs.flaperon_mix]", "[fcs.flaperons]", "unknown flaperons"),
+        (
+            "g_protect_per_g = 0.6\n",
+            "",
+            "control_laws: missing g_protect_per_g",
         ),
         (
             "pilot_pointmass = 0",

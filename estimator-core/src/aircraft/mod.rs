@@ -17,6 +17,39 @@ pub struct Aircraft {
     pub surfaces: SurfaceScales,
     /// The `flight-test` preset's test points.
     pub flight_test_points: &'static [TestPoint],
+    /// The flight-control system's surface logic the filter reproduces for surfaces no channel
+    /// carries.
+    pub fcs: Fcs,
+}
+
+/// Surface logic of the aircraft's flight-control system, each part absent where the aircraft
+/// has no such surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fcs {
+    pub lef_schedule: Option<LefSchedule>,
+    pub flaperon_mix: Option<FlaperonMix>,
+}
+
+/// The leading-edge flap as the FCS schedules it in flight: the deflection of the first α step
+/// whose α is exceeded, else the Mach step's above its Mach, else 0. Radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LefSchedule {
+    /// (α above, rad; deflection, rad), in the order they are tried.
+    pub alpha_steps: &'static [(f32, f32)],
+    pub mach_above: f32,
+    pub mach_lef_rad: f32,
+}
+
+/// Flaperons mixed from the trailing-edge flap and the aileron, `left = −tef − a`,
+/// `right = tef − a` (norms, each clipped to ±1): the right one, which no channel carries, is
+/// `left + 2·tef` while the left one is inside `stop_norm`; at the stop `a` comes from the
+/// aileron, `δa / aileron_rad_per_norm · clamp(1 − mach_compensation·M, min_compensation, 1)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlaperonMix {
+    pub stop_norm: f32,
+    pub aileron_rad_per_norm: f32,
+    pub mach_compensation: f32,
+    pub min_compensation: f32,
 }
 
 /// Mass properties of the JSBSim model and the tanks the flights use.

@@ -409,32 +409,35 @@ pub fn isa(alt_m: f32) -> (f32, f32) {
     (p / (R_AIR * t), libm::sqrtf(1.4 * R_AIR * t))
 }
 
-/// The leading-edge flap the aero model reads (`fcs/lef-pos-rad`), scheduled by the F-16 model's
-/// flight-control system from α and Mach in flight (gear up): 25° above 15° α, 15° above 5° α,
-/// −2° above Mach 0.9, else 0. In degrees.
+/// The leading-edge flap the aero model reads (`fcs/lef-pos-rad`), scheduled by the aircraft's
+/// flight-control system from α and Mach in flight (its description's `[fcs.lef_schedule]`; the
+/// F-16's: 25° above 15° α, 15° above 5° α, −2° above Mach 0.9, else 0). In degrees; 0 for an
+/// aircraft without one.
 fn lef_schedule_deg(alpha_rad: f32, mach: f32) -> f32 {
-    let rad = if alpha_rad > 0.2618 {
-        0.436
-    } else if alpha_rad > 0.0873 {
-        0.262
-    } else if mach > 0.9 {
-        -0.0349
-    } else {
-        0.0
+    let Some(s) = AIRCRAFT.fcs.lef_schedule else {
+        return 0.0;
+    };
+    let rad = match s.alpha_steps.iter().find(|(above, _)| alpha_rad > *above) {
+        Some(&(_, lef)) => lef,
+        None if mach > s.mach_above => s.mach_lef_rad,
+        None => 0.0,
     };
     rad * (180.0 / core::f32::consts::PI)
 }
 
-/// The right flaperon, which no channel carries, from the left one and the trailing-edge flap: the
-/// F-16 model mixes left = −tef − a, right = tef − a (norms, each clipped to ±1), so right =
-/// left + 2·tef while the left one is not at its stop. At the stop, `a` comes from the aileron
-/// (÷ 0.375 rad, speed-compensated by 1 − 0.85·Mach).
+/// The right flaperon, which no channel carries, from the left one and the trailing-edge flap by
+/// the description's `[fcs.flaperon_mix]` ([`crate::aircraft::FlaperonMix`]); the left one for an
+/// aircraft without the mix.
 fn flaperon_right_deg(inp: &Input, mach: f32) -> f32 {
+    let Some(m) = AIRCRAFT.fcs.flaperon_mix else {
+        return inp.flaperon_left_deg;
+    };
     let per = aero::FLAPERON_DEG_PER_NORM;
     let left = inp.flaperon_left_deg / per;
     let tef = inp.tef_deg / per;
-    let right = if libm::fabsf(left) > 0.995 {
-        let a = inp.aileron_deg.to_radians() / 0.375 * (1.0 - 0.85 * mach).clamp(0.15, 1.0);
+    let right = if libm::fabsf(left) > m.stop_norm {
+        let a = inp.aileron_deg.to_radians() / m.aileron_rad_per_norm
+            * (1.0 - m.mach_compensation * mach).clamp(m.min_compensation, 1.0);
         tef - a
     } else {
         left + 2.0 * tef

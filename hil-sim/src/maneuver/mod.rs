@@ -278,10 +278,48 @@ impl Profile {
     }
 }
 
+/// The maneuver generator's control laws for an airframe (its description's `[control_laws]`):
+/// gains from attitude, α, bank, load-factor, altitude and speed errors to the normalised surface
+/// and throttle commands (`fcs/*-cmd-norm`) of the three zones.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ControlLaws {
+    /// Flight Zone elevator per degree of pitch-attitude error.
+    pub pitch_per_deg: f64,
+    /// α mode: elevator feed-forward per degree of α target, and per degree of α error.
+    pub alpha_feedforward_per_deg: f64,
+    pub alpha_per_deg: f64,
+    /// Danger and Re-climb elevator per degree of pitch-attitude error, applied only while the bank
+    /// is within `recovery_max_bank_deg`.
+    pub recovery_pitch_per_deg: f64,
+    pub recovery_max_bank_deg: f64,
+    /// Elevator command limits (nose down, nose up), normalised.
+    pub elevator_cmd: Range,
+    /// Aileron per degree of bank error (Flight), and per degree of bank (wings level).
+    pub bank_per_deg: f64,
+    pub wings_level_per_deg: f64,
+    /// Elevator per g outside the load-factor band.
+    pub g_protect_per_g: f64,
+    /// Danger Zone pitch target: per ft below the mid altitude, per kt below the recovery speed,
+    /// and its limit either way.
+    pub danger_pitch_per_ft: f64,
+    pub danger_pitch_per_kt: f64,
+    pub danger_pitch_limit_deg: f64,
+    /// Re-climb Zone: nose down per kt within the slow margin.
+    pub reclimb_pitch_per_kt: f64,
+    /// Danger Zone throttle: this, plus this per kt below the recovery speed + a margin.
+    pub danger_throttle: f64,
+    pub danger_throttle_per_kt: f64,
+    pub danger_throttle_margin_kts: f64,
+    /// Re-climb Zone throttle: at least this, plus this per kt below the recovery speed + a margin.
+    pub reclimb_throttle: f64,
+    pub reclimb_throttle_per_kt: f64,
+    pub reclimb_throttle_margin_kts: f64,
+}
+
 /// The generated profiles of this build's aircraft (build.rs picks the file).
 #[rustfmt::skip]
 mod presets {
-    use super::{Profile, ProfileKind};
+    use super::{ControlLaws, Profile, ProfileKind};
     include!(env!("HIL_PROFILES_FILE"));
 }
 
@@ -469,6 +507,7 @@ fn wind(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng, ood: Option<OodCase>
 /// conditions, then the zone state machine (it reads its own value of the previous step), then the
 /// zones' pitch targets and the load-factor protection.
 fn zone_laws(s: &mut String, p: &Profile) {
+    let k = &presets::LAWS;
     // Zone logic, evaluated every step in this order (the command tables go just before it): three
     // 0/1 conditions, then the zone state machine (it reads its own value of the previous step),
     // then the laws, each blending the three zones' commands by the zone flags.
@@ -556,11 +595,11 @@ fn zone_laws(s: &mut String, p: &Profile) {
         &format!(
             "          {}\n",
             clamp(
-                -15.0,
-                15.0,
+                -k.danger_pitch_limit_deg,
+                k.danger_pitch_limit_deg,
                 &format!(
-                    "<sum><product><value>0.004</value><difference><value>{mid_alt:.0}</value><property>position/h-sl-ft</property></difference></product><product><value>0.2</value><min><value>0</value><difference><property>velocities/vc-kts</property><value>{}</value></difference></min></product></sum>",
-                    p.recover_vc_kts
+                    "<sum><product><value>{}</value><difference><value>{mid_alt:.0}</value><property>position/h-sl-ft</property></difference></product><product><value>{}</value><min><value>0</value><difference><property>velocities/vc-kts</property><value>{}</value></difference></min></product></sum>",
+                    k.danger_pitch_per_ft, k.danger_pitch_per_kt, p.recover_vc_kts
                 )
             )
         ),
@@ -578,9 +617,10 @@ fn zone_laws(s: &mut String, p: &Profile) {
                 -RECLIMB_DESCENT_PITCH_DEG,
                 p.reclimb_pitch_deg,
                 &format!(
-                    "<difference><product><value>{RECLIMB_PITCH_PER_FT}</value><difference><max><value>0</value><difference><value>{:.0}</value><property>position/h-agl-ft</property></difference></max><max><value>0</value><difference><property>position/h-sl-ft</property><value>{:.0}</value></difference></max></difference></product><product><value>0.3</value><max><value>0</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></max></product></difference>",
+                    "<difference><product><value>{RECLIMB_PITCH_PER_FT}</value><difference><max><value>0</value><difference><value>{:.0}</value><property>position/h-agl-ft</property></difference></max><max><value>0</value><difference><property>position/h-sl-ft</property><value>{:.0}</value></difference></max></difference></product><product><value>{}</value><max><value>0</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></max></product></difference>",
                     p.min_agl_ft + SAFE_FLOOR_MARGIN_FT + RECLIMB_OVERSHOOT_FT,
                     p.ceiling_ft - SAFE_CEILING_MARGIN_FT - RECLIMB_OVERSHOOT_FT,
+                    k.reclimb_pitch_per_kt,
                     p.min_vc_kts + RECLIMB_VC_MARGIN_KTS,
                 )
             )
@@ -597,8 +637,10 @@ fn zone_laws(s: &mut String, p: &Profile) {
         "g protection: push when above the band, pull when below (the FCS has no g-limiter)",
         "maneuver/g-protect",
         &format!(
-            "          <sum><product><value>0.6</value><max><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></max></product><product><value>0.6</value><min><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></min></product></sum>\n",
-            p.max_nz_g, p.min_nz_g
+            "          <sum><product><value>{g}</value><max><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></max></product><product><value>{g}</value><min><value>0</value><difference><property>maneuver/nz-g</property><value>{}</value></difference></min></product></sum>\n",
+            p.max_nz_g,
+            p.min_nz_g,
+            g = k.g_protect_per_g
         ),
     );
 }
@@ -606,13 +648,18 @@ fn zone_laws(s: &mut String, p: &Profile) {
 /// The control laws: each surface and the throttle blend the three zones' commands by the zone
 /// flags.
 fn control_laws(s: &mut String, p: &Profile) {
-    // α mode: at low speed the F-16 stick roughly commands α (full aft ≈ the ~28° limiter), so a
-    // feed-forward of the target plus a proportional correction holds it.
-    let flight_elev = "<sum><property>maneuver/pitch-stick</property><product><difference><value>1</value><property>maneuver/alpha-mode</property></difference><value>0.04</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-target-deg</property></difference></product><product><property>maneuver/alpha-mode</property><sum><product><value>-0.036</value><property>maneuver/alpha-target-deg</property></product><product><value>0.1</value><difference><property>aero/alpha-deg</property><property>maneuver/alpha-target-deg</property></difference></product></sum></product></sum>";
-    // Danger and Re-climb pitch only once the wings are within 60° of level (pulling inverted dives).
+    let k = &presets::LAWS;
+    // α mode: at low speed a fly-by-wire stick roughly commands α (the F-16's: full aft ≈ the ~28°
+    // limiter), so a feed-forward of the target plus a proportional correction holds it.
+    let flight_elev = format!(
+        "<sum><property>maneuver/pitch-stick</property><product><difference><value>1</value><property>maneuver/alpha-mode</property></difference><value>{}</value><difference><property>attitude/theta-deg</property><property>maneuver/theta-target-deg</property></difference></product><product><property>maneuver/alpha-mode</property><sum><product><value>{}</value><property>maneuver/alpha-target-deg</property></product><product><value>{}</value><difference><property>aero/alpha-deg</property><property>maneuver/alpha-target-deg</property></difference></product></sum></product></sum>",
+        k.pitch_per_deg, k.alpha_feedforward_per_deg, k.alpha_per_deg
+    );
+    // Danger and Re-climb pitch only once the wings are near level (pulling inverted dives).
     let pitch_to = |target: &str| {
         format!(
-            "<product><lt><abs><property>attitude/phi-deg</property></abs><value>60</value></lt><value>0.05</value><difference><property>attitude/theta-deg</property><property>{target}</property></difference></product>"
+            "<product><lt><abs><property>attitude/phi-deg</property></abs><value>{}</value></lt><value>{}</value><difference><property>attitude/theta-deg</property><property>{target}</property></difference></product>",
+            k.recovery_max_bank_deg, k.recovery_pitch_per_deg
         )
     };
     // Commands by zone: Flight × (1 − danger − reclimb) + Danger × danger + Re-climb × reclimb.
@@ -628,12 +675,12 @@ fn control_laws(s: &mut String, p: &Profile) {
         &format!(
             "          {}\n",
             clamp(
-                -1.0,
-                0.44,
+                k.elevator_cmd.0,
+                k.elevator_cmd.1,
                 &format!(
                     "<sum>{}<property>maneuver/g-protect</property></sum>",
                     blend(
-                        flight_elev,
+                        &flight_elev,
                         &pitch_to("maneuver/theta-recover-deg"),
                         &pitch_to("maneuver/theta-reclimb-deg")
                     )
@@ -641,16 +688,21 @@ fn control_laws(s: &mut String, p: &Profile) {
             )
         ),
     );
-    let flight_ail = "<sum><property>maneuver/roll-stick</property><product><value>0.02</value><difference><property>maneuver/bank-target-deg</property><property>attitude/phi-deg</property></difference></product></sum>";
-    let wings_level =
-        "<product><value>-0.03</value><property>attitude/phi-deg</property></product>";
+    let flight_ail = format!(
+        "<sum><property>maneuver/roll-stick</property><product><value>{}</value><difference><property>maneuver/bank-target-deg</property><property>attitude/phi-deg</property></difference></product></sum>",
+        k.bank_per_deg
+    );
+    let wings_level = format!(
+        "<product><value>{}</value><property>attitude/phi-deg</property></product>",
+        k.wings_level_per_deg
+    );
     law(
         s,
         "aileron: bank target + stick, or wings level",
         "fcs/aileron-cmd-norm",
         &format!(
             "          {}\n",
-            clamp(-1.0, 1.0, &blend(flight_ail, wings_level, wings_level))
+            clamp(-1.0, 1.0, &blend(&flight_ail, &wings_level, &wings_level))
         ),
     );
     law(
@@ -685,12 +737,16 @@ fn control_laws(s: &mut String, p: &Profile) {
                 &blend(
                     "<property>maneuver/throttle</property>",
                     &format!(
-                        "<sum><value>0.6</value><product><value>0.01</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
-                        p.recover_vc_kts + 30.0
+                        "<sum><value>{}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
+                        k.danger_throttle,
+                        k.danger_throttle_per_kt,
+                        p.recover_vc_kts + k.danger_throttle_margin_kts
                     ),
                     &format!(
-                        "<max><value>0.5</value><sum><value>0.5</value><product><value>0.02</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum></max>",
-                        p.recover_vc_kts + 50.0
+                        "<max><value>{t}</value><sum><value>{t}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum></max>",
+                        k.reclimb_throttle_per_kt,
+                        p.recover_vc_kts + k.reclimb_throttle_margin_kts,
+                        t = k.reclimb_throttle
                     )
                 )
             )
