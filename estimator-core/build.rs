@@ -8,8 +8,9 @@
 //! * The aircraft description, in `src/aircraft/mod.rs`: `src/aircraft/NAME.rs`, written by
 //!   `scripts/gen-aircraft` from `aircraft/NAME.toml` and committed, for `ESTIMATOR_AIRCRAFT=NAME`
 //!   (default `f16`).
-//! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/f16_tables.rs`,
-//!   written by `scripts/extract-aero` from JSBSim's F-16 and committed.
+//! * The filter's aerodynamic tables, in `src/aero/mod.rs`. Default: `src/aero/NAME_tables.rs` of
+//!   the build's aircraft (`f16_tables.rs`), written by `scripts/extract-aero` from the JSBSim model
+//!   its description names and committed.
 //!   `ESTIMATOR_AERO=/abs/path/f16_tables.rs` builds against the tables of another aircraft
 //!   directory (`scripts/calibrate` builds the calibrated estimator this way).
 // Host build step, not flight code: a panic here is a failed build with a message.
@@ -62,7 +63,7 @@ fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
 }
 
 /// `ESTIMATOR_FILTER_SIDE_SCALE=off` builds the air-data filter without its side-force scale
-/// learning (`filter::F16_CONFIG`: the seven-state filter), for networks trained with it; unset or
+/// learning (`filter::CONFIG`: the seven-state filter), for networks trained with it; unset or
 /// `on`, the shipped filter, which learns it (docs/filter.md). Anything else is a failed build.
 fn filter_side_scale() {
     println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_SIDE_SCALE");
@@ -93,20 +94,7 @@ fn sigma_weights(manifest: &std::path::Path) {
 /// `src/aircraft/NAME.rs` written by `scripts/gen-aircraft` from `aircraft/NAME.toml`, for
 /// `ESTIMATOR_AIRCRAFT=NAME` (default `f16`; hil-sim's build reads the same variable).
 fn aircraft(manifest: &std::path::Path) {
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
-    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
-    let name = if name.is_empty() {
-        "f16".to_string()
-    } else {
-        name
-    };
-    assert!(
-        !name.is_empty()
-            && name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
-        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
-    );
+    let name = aircraft_name();
     let path = manifest.join("src/aircraft").join(format!("{name}.rs"));
     println!("cargo:rerun-if-changed={}", path.display());
     assert!(
@@ -117,13 +105,31 @@ fn aircraft(manifest: &std::path::Path) {
     println!("cargo:rustc-env=ESTIMATOR_AIRCRAFT_FILE={}", path.display());
 }
 
+/// The build's aircraft: `ESTIMATOR_AIRCRAFT` (default `f16`), a name as in `aircraft/NAME.toml`.
+fn aircraft_name() -> String {
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
+    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
+    let name = if name.is_empty() {
+        "f16".to_string()
+    } else {
+        name
+    };
+    assert!(
+        name.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
+    );
+    name
+}
+
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
 /// (the filter has no model without them), with the variable named.
 fn aero_tables(manifest: &std::path::Path) {
+    let name = aircraft_name();
     required(
         manifest,
         "ESTIMATOR_AERO",
-        "src/aero/f16_tables.rs",
+        &format!("src/aero/{name}_tables.rs"),
         "a file written by scripts/extract-aero",
         "run scripts/extract-aero",
     );

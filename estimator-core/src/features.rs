@@ -450,8 +450,7 @@ impl FeatureState {
             frames: 0,
             stuck_before: 0,
             gps_alt: None,
-            filter: with_filter
-                .then(|| crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG)),
+            filter: with_filter.then(|| crate::filter::AirDataFilter::new(crate::filter::CONFIG)),
             last_ms: None,
         }
     }
@@ -541,7 +540,7 @@ impl FeatureState {
             let mut dt_ms = match gap_ms {
                 Some(gap) if gap <= FILTER_RESTART_GAP_MS => gap,
                 Some(_) => {
-                    *filter = crate::filter::AirDataFilter::new(crate::filter::F16_CONFIG);
+                    *filter = crate::filter::AirDataFilter::new(crate::filter::CONFIG);
                     self.checkpoints = [None, None];
                     FRAME_PERIOD_MS
                 }

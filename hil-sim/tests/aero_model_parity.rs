@@ -1,6 +1,6 @@
 //! estimator-core's aerodynamic model is JSBSim's: over every step of the project's 20-minute test
 //! flight, flown by stock JSBSim (`scripts/jsbsim-stock`), each force term, the wind-axis sums and
-//! the body-axis forces of `estimator_core::aero::F16` agree with JSBSim's own
+//! the body-axis forces of `estimator_core::aero::MODEL` agree with JSBSim's own
 //! (`aero/coefficient/*`, `forces/fw{x,y,z}-aero-lbs`, `forces/fb{x,y,z}-aero-lbs`, over
 //! `qbar·Sw`) to a small fraction of each coefficient's range over the flight.
 //!
@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use estimator_core::aero::{
-    self, AirState, Coefficients, F16, Factor, Model, Point, Surfaces, Table2, Term, f16_tables,
+    self, AirState, Coefficients, Factor, MODEL, Model, Point, Surfaces, Table2, Term, tables,
 };
 
 /// Largest error allowed, as a fraction of the coefficient's range over the flight. f32 rounding of
@@ -65,7 +65,7 @@ fn root() -> PathBuf {
 }
 
 fn terms() -> impl Iterator<Item = &'static Term<'static>> {
-    F16.drag.iter().chain(F16.side).chain(F16.lift)
+    MODEL.drag.iter().chain(MODEL.side).chain(MODEL.lift)
 }
 
 /// One JSBSim step: every property above, by name.
@@ -300,9 +300,9 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
 
     // Each term on its own, at JSBSim's own inputs, against the range of the axis it adds to.
     for (axis, force) in [
-        (F16.drag, "forces/fwx-aero-lbs"),
-        (F16.side, "forces/fwy-aero-lbs"),
-        (F16.lift, "forces/fwz-aero-lbs"),
+        (MODEL.drag, "forces/fwx-aero-lbs"),
+        (MODEL.side, "forces/fwy-aero-lbs"),
+        (MODEL.lift, "forces/fwz-aero-lbs"),
     ] {
         let scale = range_of(steps, force);
         for term in axis {
@@ -319,7 +319,7 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
     for s in steps {
         let ours = Term {
             name: "",
-            factors: &[Factor::Table(&f16_tables::KCLGE)],
+            factors: &[Factor::Table(&tables::KCLGE)],
         }
         .eval(&s.point())
         .unwrap()
@@ -341,17 +341,17 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
         let mut w = Worst::default();
         for s in steps {
             let (air, surf) = s.estimator_inputs();
-            let p = Point::new(&F16, &air, &surf).unwrap();
+            let p = Point::new(&MODEL, &air, &surf).unwrap();
             let v = [p.bi2vel_s, p.ci2vel_s, p.flaperon_mix_rad][ours];
             w.add(s.get("simulation/sim-time-sec"), v, s.get(theirs));
         }
         ok &= report(name, &w, w.range());
     }
 
-    ok &= compare_totals("JSBSim units", steps, |s| F16.coefficients_at(&s.point()));
+    ok &= compare_totals("JSBSim units", steps, |s| MODEL.coefficients_at(&s.point()));
     ok &= compare_totals("estimator units", steps, |s| {
         let (air, surf) = s.estimator_inputs();
-        F16.coefficients(&air, &surf)
+        MODEL.coefficients(&air, &surf)
     });
     assert!(
         ok,
@@ -359,26 +359,24 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
     );
 }
 
-/// `F16` with one cell of the lift table CLDh moved by `delta`.
+/// `MODEL` with one cell of the lift table CLDh moved by `delta`.
 fn with_cldh_cell(row: usize, col: usize, delta: f32, run: impl FnOnce(&Model<'_>)) {
-    let mut t: Table2<12, 5> = f16_tables::CLDH.clone();
+    let mut t: Table2<12, 5> = tables::CLDH.clone();
     t.data[row][col] += delta;
-    let swap: Vec<Vec<Factor<'_>>> = F16
+    let swap: Vec<Vec<Factor<'_>>> = MODEL
         .lift
         .iter()
         .map(|term| {
             term.factors
                 .iter()
                 .map(|f| match f {
-                    Factor::Table(x) if std::ptr::addr_eq(*x, &f16_tables::CLDH) => {
-                        Factor::Table(&t)
-                    }
+                    Factor::Table(x) if std::ptr::addr_eq(*x, &tables::CLDH) => Factor::Table(&t),
                     other => *other,
                 })
                 .collect()
         })
         .collect();
-    let lift: Vec<Term<'_>> = F16
+    let lift: Vec<Term<'_>> = MODEL
         .lift
         .iter()
         .zip(&swap)
@@ -387,7 +385,10 @@ fn with_cldh_cell(row: usize, col: usize, delta: f32, run: impl FnOnce(&Model<'_
             factors,
         })
         .collect();
-    run(&Model { lift: &lift, ..F16 });
+    run(&Model {
+        lift: &lift,
+        ..MODEL
+    });
 }
 
 /// Worst lift error of a model against JSBSim over the flight, and whether it is within tolerance.
@@ -408,7 +409,7 @@ fn lift_error(model: &Model<'_>, steps: &[Step]) -> (Worst, bool) {
 #[test]
 fn a_model_with_one_table_cell_changed_fails() {
     let steps = flight();
-    assert!(lift_error(&F16, steps).1);
+    assert!(lift_error(&MODEL, steps).1);
     // The cell the cruise trim interpolates on (α 0.087 rad, elevator 0): moved by about one unit
     // of the XML's last digit (1e-4) … and by 1e-3.
     for delta in [1e-4_f32, 1e-3] {
@@ -428,7 +429,7 @@ fn a_model_with_one_table_cell_changed_fails() {
         for col in 0..5 {
             with_cldh_cell(row, col, 1e-3, |m| {
                 if !lift_error(m, steps).1 {
-                    caught.push((f16_tables::CLDH.rows[row], f16_tables::CLDH.cols[col]));
+                    caught.push((tables::CLDH.rows[row], tables::CLDH.cols[col]));
                 }
             });
         }

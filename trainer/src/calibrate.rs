@@ -35,8 +35,8 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{F16 as F16_MODEL, Factor, Term, Var};
-use estimator_core::filter::{self, F16_CONFIG, Input};
+use estimator_core::aero::{Factor, MODEL, Term, Var};
+use estimator_core::filter::{self, CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
 
@@ -253,7 +253,7 @@ struct Row {
 
 /// The rows of one flight: frames with every channel the filter needs, and the boom.
 fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
-    let cfg = F16_CONFIG;
+    let cfg = CONFIG;
     let arm = cfg.lever_arm_m;
     let mut out = Vec::new();
     let mut prev: Option<Input> = None;
@@ -531,7 +531,7 @@ struct Parts {
 /// Their scale is a parameter of its own: in JSBSim's F-16 the trailing-edge flap cancels in the
 /// mix, which follows the aileron, so their lift is unlike either the axis scale or an offset.
 pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
-    F16_MODEL.lift.iter().filter(|t| {
+    MODEL.lift.iter().filter(|t| {
         t.factors
             .iter()
             .any(|f| matches!(f, Factor::Var(Var::FlaperonMixRad)))
@@ -539,7 +539,7 @@ pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
 }
 
 fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32) -> Option<Parts> {
-    let cfg = F16_CONFIG;
+    let cfg = CONFIG;
     // The filter's operating point: the whole model there, and its flap terms alone.
     let point = filter::model_point(
         inp,
@@ -550,7 +550,7 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
         tas as f32,
         cfg.gear_norm,
     )?;
-    let c = F16_MODEL.coefficients_at(&point);
+    let c = MODEL.coefficients_at(&point);
     if !c.valid {
         return None;
     }
@@ -601,7 +601,7 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
             f / l
         ));
     }
-    if let Some(first) = F16_MODEL.lift.first() {
+    if let Some(first) = MODEL.lift.first() {
         t.push_str(&format!(
             "[coefficients.\"{}\"]\noffset = {o:.5}\n",
             first.name
@@ -636,7 +636,7 @@ impl Report {
             flight_test,
             model_card,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
-            offset_term: F16_MODEL.lift.first().map(|t| t.name.to_string()),
+            offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
         }
     }
 }
@@ -722,7 +722,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
 #[cfg(test)]
 mod tests {
     use super::*;
-    use estimator_core::aero::{AirState, F16};
+    use estimator_core::aero::{AirState, MODEL};
 
     #[test]
     fn least_squares_recovers_a_line_and_its_uncertainty_grows_with_correlated_noise() {
@@ -784,13 +784,13 @@ mod tests {
             r_rps: -0.01,
             h_over_b: AirState::NO_GROUND_EFFECT,
         };
-        let gear = F16_CONFIG.gear_norm;
-        let c = F16.coefficients(
+        let gear = CONFIG.gear_norm;
+        let c = MODEL.coefficients(
             &air,
             &filter::surfaces(&inp, alpha as f32, mach as f32, gear),
         );
-        let s_m2 = f64::from(F16.wing_area_ft2) * 0.3048 * 0.3048;
-        let mass = f64::from(F16_CONFIG.empty_mass_kg) + 2000.0;
+        let s_m2 = f64::from(MODEL.wing_area_ft2) * 0.3048 * 0.3048;
+        let mass = f64::from(CONFIG.empty_mass_kg) + 2000.0;
         let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
         let body = [c.body.x, c.body.y, c.body.z];
         for (i, b) in body.iter().enumerate() {

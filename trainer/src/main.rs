@@ -988,9 +988,9 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
     Ok(())
 }
 
-/// `F16_CONFIG` with the `--tune` overrides.
+/// `CONFIG` with the `--tune` overrides.
 fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
-    let mut c = estimator_core::filter::F16_CONFIG;
+    let mut c = estimator_core::filter::CONFIG;
     for kv in tune.split(',').filter(|s| !s.is_empty()) {
         let (k, v) = kv
             .split_once('=')
@@ -1253,7 +1253,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
     let e = eval_filter(&ds, role, cfg);
     if json {
         let v = serde_json::json!({
-            "model": "filter (estimator_core::filter::F16_CONFIG, f32)",
+            "model": "filter (estimator_core::filter::CONFIG, f32)",
             "tune": tune,
             "suite": "egi",
             "split": split,

@@ -6,8 +6,8 @@
 //! Estimators, each frame by frame in flight order on the frames the link delivers (faults applied):
 //! * the shipped estimator: `Estimator::shipped()` on the frames its suite sends, exactly as the
 //!   firmware steps it (int8 networks, the filter inside its feature state, every flag);
-//! * the model-based filter alone (`estimator_core::filter`, `F16_CONFIG`), its own flags.
-use estimator_core::filter::F16_CONFIG;
+//! * the model-based filter alone (`estimator_core::filter`, `CONFIG`), its own flags.
+use estimator_core::filter::CONFIG;
 use serde::Serialize;
 
 use crate::data::{Dataset, Role, Target};
@@ -63,7 +63,7 @@ fn run_shipped(fl: &crate::data::Flight) -> Answers {
 }
 
 fn run_filter(fl: &crate::data::Flight) -> Answers {
-    let out = run_flight(F16_CONFIG, &fl.frames);
+    let out = run_flight(CONFIG, &fl.frames);
     let (alpha_deg, beta_deg) = crate::filter_eval::degrees(&out);
     Answers {
         alpha_deg,

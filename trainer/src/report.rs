@@ -115,7 +115,7 @@ pub const MLP: &str = Baseline::Mlp.name();
 pub const CASCADE: &str = "Cascaded MLP";
 /// The shipped configuration: the hybrid (network over the filter's outputs), `egi` suite.
 pub const HYBRID: &str = "Hybrid, shipped configuration";
-/// The model-based filter alone (`estimator_core::filter`, `F16_CONFIG`), `egi` suite.
+/// The model-based filter alone (`estimator_core::filter`, `CONFIG`), `egi` suite.
 pub const FILTER: &str = "Model-based filter alone";
 
 /// Runs every model. `on_trained` receives the cascades of the first seed (for plots).
@@ -478,7 +478,7 @@ fn filter_entries(ds: &Dataset, extra: &[&crate::data::Flight]) -> Vec<Entry> {
     let t0 = std::time::Instant::now();
     let run = |fl: &crate::data::Flight| {
         crate::filter_eval::degrees(&crate::filter_eval::run_flight(
-            estimator_core::filter::F16_CONFIG,
+            estimator_core::filter::CONFIG,
             &fl.frames,
         ))
     };

@@ -279,8 +279,8 @@ pub static LIFT: [Term<'static>; 6] = [
     },
 ];
 
-/// The F-16 as JSBSim flies it: the three force axes and the lengths and gain the inputs need.
-pub static F16: Model<'static> = Model {
+/// F-16 (JSBSim's f16): the three force axes as JSBSim flies them, and the lengths and gain the inputs need.
+pub static MODEL: Model<'static> = Model {
     drag: &DRAG,
     side: &SIDE,
     lift: &LIFT,

@@ -1,9 +1,11 @@
-//! The F-16's aerodynamic force model, as JSBSim flies it: lift, drag and side-force coefficients
-//! and their body-axis components, with their slopes in α and β for a model-based filter.
+//! The aircraft's aerodynamic force model, as JSBSim flies it: lift, drag and side-force
+//! coefficients and their body-axis components, with their slopes in α and β for a model-based
+//! filter.
 //!
-//! The model itself is data in [`f16_tables`], generated from the `jsbsim` package's
-//! `aircraft/f16/f16.xml` (or, with `ESTIMATOR_AERO`, from another aircraft directory) by
-//! `scripts/extract-aero` and never edited by hand. This module only knows
+//! The model itself is data in [`tables`] ([`MODEL`]), generated from the JSBSim model the
+//! aircraft description names (the F-16's: the `jsbsim` package's `aircraft/f16/f16.xml`, or, with
+//! `ESTIMATOR_AERO`, another aircraft directory's) by `scripts/extract-aero` and never edited by
+//! hand. This module only knows
 //! how JSBSim evaluates such data:
 //! * every term of an axis is a product of factors ([`Factor`]): constants, state and surface
 //!   values ([`Var`]) and table lookups ([`Table1`], [`Table2`]); JSBSim's `qbar·Sw` is divided out;
@@ -16,14 +18,15 @@
 //! positive) give all-zero coefficients with `valid == false`; NaN or ±Inf never comes out.
 //! `hil-sim/tests/aero_model_parity.rs` checks the result against JSBSim's own terms and forces.
 
-/// The tables: `f16_tables.rs` beside this file, or the file `ESTIMATOR_AERO` names at build time
-/// (`build.rs`; `scripts/calibrate` builds a calibrated aircraft's tables this way).
+/// The tables: `NAME_tables.rs` beside this file for the build's aircraft (`ESTIMATOR_AIRCRAFT`,
+/// default `f16`), or the file `ESTIMATOR_AERO` names at build time (`build.rs`;
+/// `scripts/calibrate` builds a calibrated aircraft's tables this way).
 #[rustfmt::skip]
-pub mod f16_tables {
+pub mod tables {
     include!(env!("ESTIMATOR_AERO_FILE"));
 }
 
-pub use f16_tables::F16;
+pub use tables::MODEL;
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
 /// the aircraft description (hil-sim's `plant::FLAPERON_DEG_PER_NORM`). JSBSim's model has no degree
@@ -682,11 +685,11 @@ mod tests {
         let alphas = F16_ALPHA_MIDPOINTS;
         for (i, &a) in alphas.iter().enumerate() {
             let b = [-0.15_f32, -0.02, 0.0, 0.07, 0.2][i % 5];
-            let c = F16.coefficients_at(&at(a, b));
+            let c = MODEL.coefficients_at(&at(a, b));
             assert!(c.valid);
             let fd = |da: f32, db: f32| {
-                let hi = F16.coefficients_at(&at(a + da, b + db));
-                let lo = F16.coefficients_at(&at(a - da, b - db));
+                let hi = MODEL.coefficients_at(&at(a + da, b + db));
+                let lo = MODEL.coefficients_at(&at(a - da, b - db));
                 let d = |x: f32, y: f32| (x - y) / (2.0 * h);
                 (
                     [
@@ -741,7 +744,7 @@ mod tests {
             h_over_b: AirState::NO_GROUND_EFFECT,
         };
         let s = Surfaces::default();
-        assert!(F16.coefficients(&air, &s).valid);
+        assert!(MODEL.coefficients(&air, &s).valid);
         for bad in [
             AirState {
                 alpha_rad: f32::NAN,
@@ -771,7 +774,7 @@ mod tests {
             },
         ] {
             assert_eq!(
-                F16.coefficients(&bad, &s),
+                MODEL.coefficients(&bad, &s),
                 Coefficients::default(),
                 "{bad:?}"
             );
@@ -781,15 +784,15 @@ mod tests {
             ..s
         };
         assert_eq!(
-            F16.coefficients(&air, &nan_surface),
+            MODEL.coefficients(&air, &nan_surface),
             Coefficients::default()
         );
         let p = Point {
             mach: f32::NAN,
             ..at(0.1, 0.0)
         };
-        assert_eq!(F16.coefficients_at(&p), Coefficients::default());
-        assert!(F16.lift.iter().all(|t| t.eval(&p).is_none()));
+        assert_eq!(MODEL.coefficients_at(&p), Coefficients::default());
+        assert!(MODEL.lift.iter().all(|t| t.eval(&p).is_none()));
     }
 
     #[test]

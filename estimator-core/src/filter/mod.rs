@@ -37,7 +37,7 @@
 
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
-use crate::aero::{self, AirState, F16, Surfaces};
+use crate::aero::{self, AirState, MODEL, Surfaces};
 use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SensorFrame, Suite};
 
@@ -123,7 +123,7 @@ impl Config {
     }
 }
 
-/// The side-force scale's random-walk PSD and initial 1σ in [`F16_CONFIG`]: learned in the shipped
+/// The side-force scale's random-walk PSD and initial 1σ in [`CONFIG`]: learned in the shipped
 /// build (the values measured in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same);
 /// held at 1 in a build with `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
 #[cfg(not(filter_no_side_scale))]
@@ -135,7 +135,7 @@ const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
 /// description (`aircraft/f16.toml`, [`crate::aircraft`]), the anti-alias filter of `docs/sensors.md`. The measurement noise and
 /// the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
 /// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
-pub const F16_CONFIG: Config = Config {
+pub const CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],
     mean_wind_sigma0: [15.0, 15.0, 1.0],
     gust_tau_s: 1.0,
@@ -491,13 +491,13 @@ pub fn model_point(
         r_rps: gyro[2],
         h_over_b: AirState::NO_GROUND_EFFECT,
     };
-    aero::Point::new(&F16, &air, &surfaces(inp, alpha_rad, mach, gear_norm))
+    aero::Point::new(&MODEL, &air, &surfaces(inp, alpha_rad, mach, gear_norm))
 }
 
 /// Dynamic pressure times the wing area over the mass: the specific force (m/s²) of a unit force
 /// coefficient at density `rho` (kg/m³) and true airspeed `tas_mps`.
 pub fn qs_over_m(rho: f32, tas_mps: f32, mass_kg: f32) -> f32 {
-    let s_m2 = F16.wing_area_ft2 * 0.3048 * 0.3048;
+    let s_m2 = MODEL.wing_area_ft2 * 0.3048 * 0.3048;
     0.5 * rho * tas_mps * tas_mps * s_m2 / mass_kg
 }
 
@@ -535,7 +535,7 @@ fn model_force(
     let alpha = libm::atan2f(vb.z, vb.x);
     let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
     let mach = v / a_sound;
-    let c = F16.coefficients_at(&model_point(inp, gyro, alpha, beta, mach, v, gear_norm)?);
+    let c = MODEL.coefficients_at(&model_point(inp, gyro, alpha, beta, mach, v, gear_norm)?);
     if !c.valid {
         return None;
     }

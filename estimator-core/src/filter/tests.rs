@@ -73,7 +73,7 @@ fn cfg() -> Config {
     Config {
         accel_delay_s: 0.0,
         lever_arm_m: [0.0; 3],
-        ..F16_CONFIG
+        ..CONFIG
     }
 }
 
@@ -105,7 +105,7 @@ pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
     };
     (0..n).map(move |k| {
         let t = f32::from(k) * DT;
-        let (inp, _) = w.frame(t, &F16_CONFIG);
+        let (inp, _) = w.frame(t, &CONFIG);
         let d = f64::from(k % 2);
         let mut si = [0.0f64; crate::CHANNELS];
         let mut set = |c: Channel, v: f32| {
@@ -487,7 +487,7 @@ proptest! {
     /// Whatever arrives, what leaves is finite, and a step without usable inputs says so.
     #[test]
     fn nothing_non_finite_ever_leaves(values in proptest::collection::vec(any_f32(), 22 * 8), valid in any::<[bool; 8]>()) {
-        let mut f = AirDataFilter::new(F16_CONFIG);
+        let mut f = AirDataFilter::new(CONFIG);
         for (chunk, ok) in values.chunks(22).zip(valid) {
             let g = |i: usize| chunk[i];
             let inp = Input {
@@ -543,7 +543,7 @@ fn level_frame(k: u32, alt_valid: bool) -> SensorFrame {
 
 #[test]
 fn a_gps_altitude_outage_is_bridged_for_max_alt_coast_s_then_the_filter_stops() {
-    let mut f = AirDataFilter::new(F16_CONFIG);
+    let mut f = AirDataFilter::new(CONFIG);
     for k in 0..100 {
         let out = f.step_frame(&level_frame(k, true), 0.05);
         assert_eq!(out.flags & (flags::ALT_COASTED | flags::NO_INPUT), 0);
