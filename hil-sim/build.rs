@@ -28,5 +28,22 @@ fn main() {
         "{} is missing: describe the aircraft in aircraft/{name}.toml and run scripts/gen-aircraft",
         path.display()
     );
+    // Both halves of the description must come from the same aircraft/NAME.toml: their first
+    // lines name it with its sha256.
+    let core = manifest
+        .join("../estimator-core/src/aircraft")
+        .join(format!("{name}.rs"));
+    println!("cargo:rerun-if-changed={}", core.display());
+    let head = |p: &std::path::Path| {
+        std::fs::read_to_string(p)
+            .ok()
+            .and_then(|t| t.lines().next().map(str::to_string))
+    };
+    assert!(
+        head(&path).is_some() && head(&path) == head(&core),
+        "{} and {} were not generated from the same description: run scripts/gen-aircraft",
+        path.display(),
+        core.display()
+    );
     println!("cargo:rustc-env=HIL_PROFILES_FILE={}", path.display());
 }

@@ -1,4 +1,5 @@
-//! The plant: JSBSim's F-16, stepped by a pinned Python bridge (`bridge/jsbsim_bridge.py`).
+//! The plant: JSBSim flying the build's aircraft (its description's model; the F-16), stepped by a
+//! pinned Python bridge (`bridge/jsbsim_bridge.py`).
 //!
 //! The bridge only loads scripts, steps and reads the watched properties; everything else (which
 //! properties, sampling, sensors, cutting a bad flight) is here. [`fly_script`] runs a JSBSim runscript to its

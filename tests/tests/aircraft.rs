@@ -36,7 +36,17 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 9] = [
+    let cases: [(&str, &str, &str); 11] = [
+        (
+            "gear_norm = 1.0",
+            "gear_norm = 2.0",
+            "mass.gear_norm must be within 0..=1",
+        ),
+        (
+            "external_tanks = [2, 3]",
+            "external_tanks = [1, 3]",
+            "name a tank twice",
+        ),
         (
             "boom_arm_m = 6.0",
             "boom_arm = 6.0",
@@ -84,7 +94,7 @@ fn descriptions_are_validated_key_by_key() {
             f16.contains(from),
             "the F-16 description no longer has `{from}`"
         );
-        let (ok, err) = validate(&f16.replacen(from, to, 1), "bad");
+        let (ok, err) = validate(&f16.replacen(from, to, 1), "f16");
         assert!(!ok, "`{from}` -> `{to}` was accepted");
         assert!(err.contains(says), "`{from}` -> `{to}`: {err}");
     }

@@ -1,8 +1,10 @@
 //! The aircraft this build is for, as its description says: `aircraft/NAME.toml` (docs/aircraft.md),
 //! turned into `src/aircraft/NAME.rs` by `scripts/gen-aircraft`. `build.rs` picks the file
-//! (`ESTIMATOR_AIRCRAFT=NAME`, default `f16`). Everything the chain knows of an airframe
-//! beyond its aerodynamic tables (`aero`) comes from here: mass properties and tanks, where the
-//! IMU and the flight-test boom sit, the surfaces' units, the flight-test points.
+//! (`ESTIMATOR_AIRCRAFT=NAME`, default `f16`). What the flight code and the simulator know of an
+//! airframe beyond its aerodynamic tables (`aero`) and the maneuver generator's profiles and laws
+//! (hil-sim's `maneuver`) comes from here: mass properties and tanks, where the IMU and the
+//! flight-test boom sit, the surfaces' units, the flight-test points, and the flight-control
+//! logic the filter reproduces (LEF schedule, flaperon mix).
 
 /// An aircraft description.
 #[derive(Clone, Copy, Debug, PartialEq)]

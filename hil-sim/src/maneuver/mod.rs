@@ -161,8 +161,8 @@ impl OodCase {
     }
 }
 
-/// Mass of an OOD case: fuel in the two internal and two external tanks, and the pilot's point
-/// mass (weight, x station) where it changes.
+/// Mass of an OOD case: fuel in each internal and external tank (the aircraft description's), and
+/// the pilot's point mass (weight, x station) where it changes.
 struct MassOverride {
     internal_lbs: f64,
     external_lbs: f64,
@@ -223,7 +223,8 @@ pub struct Profile {
     /// Initial altitude and calibrated airspeed.
     pub init_alt_ft: Range,
     pub init_vc_kts: Range,
-    /// Fuel per main tank (2 tanks), lb; frozen so each flight has its own constant mass.
+    /// Fuel per internal tank (the aircraft description's), lb; frozen so each flight has its own
+    /// constant mass.
     pub fuel_per_tank_lbs: Range,
     /// Pitch-attitude targets, deg, and how long each is held, s.
     pub theta_target_deg: Range,
@@ -1310,10 +1311,10 @@ mod tests {
         let c = generate(&p, 4, "a", 120.0).unwrap();
         assert_eq!(a, b);
         assert_ne!(a.script_xml, c.script_xml);
-        assert!(
-            a.script_xml
-                .contains("<use aircraft=\"f16\" initialize=\"a_init\"/>")
-        );
+        assert!(a.script_xml.contains(&format!(
+            "<use aircraft=\"{}\" initialize=\"a_init\"/>",
+            AIRCRAFT.jsbsim_model
+        )));
     }
 
     #[test]
@@ -1408,7 +1409,10 @@ mod tests {
             let body = &c[..c.find("-->").unwrap()];
             assert!(!body.contains("--"), "comment with --: {body}");
         }
-        assert!(x[x.find("<use ").unwrap()..].starts_with("<use aircraft=\"f16\""));
+        assert!(
+            x[x.find("<use ").unwrap()..]
+                .starts_with(&format!("<use aircraft=\"{}\"", AIRCRAFT.jsbsim_model))
+        );
         assert!(x.find("<use ").unwrap() > x.find("-->").unwrap());
     }
 
@@ -1543,8 +1547,8 @@ pub struct Plan {
     pub seed: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub campaign: Option<Campaign>,
-    /// The JSBSim aircraft directory whose `f16/f16.xml` every flight flies (`--aircraft-dir`);
-    /// `None`: JSBSim's own F-16.
+    /// The JSBSim aircraft directory whose `MODEL/MODEL.xml` (the description's model,
+    /// `f16/f16.xml`) every flight flies (`--aircraft-dir`); `None`: JSBSim's own.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub aircraft_dir: Option<std::path::PathBuf>,
     /// Only the preset's test flights (the same flights, seeds and bytes as in the whole preset):

@@ -29,5 +29,5 @@ for f in files:
                 lambda n: sev[n] <= 2):
         v, k = agg(per, sel)
         cells.append(f"{v:.3f} [{k}]")
-    print(f"| `{j['tune'] or '(shipped F16_CONFIG)'}` | {j['split']} | " + " | ".join(cells)
+    print(f"| `{j['tune'] or '(shipped filter::CONFIG)'}` | {j['split']} | " + " | ".join(cells)
           + f" | {j['alpha']['overall']['mae']:.3f} |")
