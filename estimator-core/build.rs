@@ -20,8 +20,9 @@ use std::path::PathBuf;
 
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
-    aero_tables(&manifest);
+    println!("cargo:rerun-if-changed=aircraft_name.rs");
     aircraft(&manifest);
+    aero_tables(&manifest);
     sigma_weights(&manifest);
     filter_side_scale();
     let path = chosen(
@@ -105,22 +106,7 @@ fn aircraft(manifest: &std::path::Path) {
     println!("cargo:rustc-env=ESTIMATOR_AIRCRAFT_FILE={}", path.display());
 }
 
-/// The build's aircraft: `ESTIMATOR_AIRCRAFT` (default `f16`), a name as in `aircraft/NAME.toml`.
-fn aircraft_name() -> String {
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
-    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
-    let name = if name.is_empty() {
-        "f16".to_string()
-    } else {
-        name
-    };
-    assert!(
-        name.chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
-        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
-    );
-    name
-}
+include!("aircraft_name.rs");
 
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
 /// (the filter has no model without them), with the variable named.

@@ -7,20 +7,12 @@
 
 use std::path::PathBuf;
 
+include!("../estimator-core/aircraft_name.rs");
+
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
-    let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
-    let name = if name.is_empty() {
-        "f16".to_string()
-    } else {
-        name
-    };
-    assert!(
-        name.chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
-        "ESTIMATOR_AIRCRAFT must name an aircraft (aircraft/NAME.toml), not `{name}`"
-    );
+    println!("cargo:rerun-if-changed=../estimator-core/aircraft_name.rs");
+    let name = aircraft_name();
     let path = manifest.join("src/maneuver").join(format!("{name}.rs"));
     println!("cargo:rerun-if-changed={}", path.display());
     assert!(
