@@ -288,4 +288,5 @@ pub static MODEL: Model<'static> = Model {
     wingspan_ft: 30.0,
     chord_ft: 11.32,
     flaperon_mix_gain: 1.4324,
+    stall_hysteresis_rad: None,
 };

@@ -71,6 +71,19 @@ pub enum Var {
     Ci2Vel,
     /// `aero/h_b-mac-ft`: height of the aero reference point above ground / wingspan.
     HOverBMac,
+    /// `aero/mag-beta-rad`: |β| (its slope in β is β's sign).
+    MagBetaRad,
+    /// `fcs/mag-elevator-pos-rad`: |elevator|.
+    MagElevatorRad,
+    /// `fcs/left-aileron-pos-rad`: the left aileron (models with one aileron property per side).
+    LeftAileronRad,
+    /// `aero/alphadot-rad_sec`: α̇.
+    AlphaDotRps,
+    /// `fcs/flap-pos-deg`: trailing-edge flap, degrees.
+    FlapDeg,
+    /// `aero/stall-hyst-norm`: JSBSim's stall-hysteresis latch (1 once α passes the model's upper
+    /// hysteresis limit, 0 again below its lower one).
+    StallHystNorm,
 }
 
 /// A value with its partial derivatives in α and β (per radian).
@@ -113,6 +126,19 @@ impl Partial {
             d_beta: if v == Var::BetaRad { slope } else { 0.0 },
         }
     }
+
+    /// [`Partial::through`] at `p`, where a variable's slope in β depends on the point: |β|'s is
+    /// β's sign (+1 at β = 0, JSBSim's right derivative).
+    fn through_at(p: &Point, v: Var, value: f32, slope: f32) -> Partial {
+        match v {
+            Var::MagBetaRad => Partial {
+                value,
+                d_alpha: 0.0,
+                d_beta: if p.beta_rad < 0.0 { -slope } else { slope },
+            },
+            _ => Partial::through(v, value, slope),
+        }
+    }
 }
 
 /// Everything the model reads, in JSBSim's units: one operating point.
@@ -137,6 +163,10 @@ pub struct Point {
     pub bi2vel_s: f32,
     pub ci2vel_s: f32,
     pub h_over_b: f32,
+    pub left_aileron_rad: f32,
+    pub alpha_dot_rps: f32,
+    pub flap_deg: f32,
+    pub stall_hyst_norm: f32,
 }
 
 /// The air-relative state.
@@ -234,6 +264,12 @@ impl Point {
             bi2vel_s: model.wingspan_ft * FT_TO_M / two_v,
             ci2vel_s: model.chord_ft * FT_TO_M / two_v,
             h_over_b: air.h_over_b,
+            // Not sensed yet: one aileron channel, no α̇, no flap channel, no stall latch (the
+            // F-16's model reads none of them).
+            left_aileron_rad: s.aileron_deg.to_radians(),
+            alpha_dot_rps: 0.0,
+            flap_deg: 0.0,
+            stall_hyst_norm: 0.0,
         };
         p.is_finite().then_some(p)
     }
@@ -256,6 +292,12 @@ impl Point {
             Var::Bi2Vel => self.bi2vel_s,
             Var::Ci2Vel => self.ci2vel_s,
             Var::HOverBMac => self.h_over_b,
+            Var::MagBetaRad => libm::fabsf(self.beta_rad),
+            Var::MagElevatorRad => libm::fabsf(self.elevator_rad),
+            Var::LeftAileronRad => self.left_aileron_rad,
+            Var::AlphaDotRps => self.alpha_dot_rps,
+            Var::FlapDeg => self.flap_deg,
+            Var::StallHystNorm => self.stall_hyst_norm,
         }
     }
 
@@ -277,6 +319,10 @@ impl Point {
             self.bi2vel_s,
             self.ci2vel_s,
             self.h_over_b,
+            self.left_aileron_rad,
+            self.alpha_dot_rps,
+            self.flap_deg,
+            self.stall_hyst_norm,
         ]
         .iter()
         .all(|v| v.is_finite())
@@ -344,10 +390,10 @@ impl<const N: usize> Lookup for Table1<N> {
         };
         // JSBSim returns the end values themselves at and beyond the ends.
         if k <= x0 {
-            return Partial::through(self.key, y0, 0.0);
+            return Partial::through_at(p, self.key, y0, 0.0);
         }
         if k >= xn {
-            return Partial::through(self.key, yn, 0.0);
+            return Partial::through_at(p, self.key, yn, 0.0);
         }
         let Some((i, f, inv)) = segment(&self.x, k) else {
             return Partial::default();
@@ -356,7 +402,7 @@ impl<const N: usize> Lookup for Table1<N> {
             return Partial::default();
         };
         // JSBSim: Factor·(y1 − y0) + y0.
-        Partial::through(self.key, f * (yb - ya) + ya, (yb - ya) * inv)
+        Partial::through_at(p, self.key, f * (yb - ya) + ya, (yb - ya) * inv)
     }
 }
 
@@ -384,7 +430,8 @@ impl<const R: usize, const C: usize> Lookup for Table2<R, C> {
         let value = cf * (col2 - col1) + col1;
         let d_row = (cf * (b1 - b0) + (1.0 - cf) * (a1 - a0)) * rinv;
         let d_col = (col2 - col1) * cinv;
-        Partial::through(self.row, value, d_row).plus(Partial::through(self.col, 0.0, d_col))
+        Partial::through_at(p, self.row, value, d_row)
+            .plus(Partial::through_at(p, self.col, 0.0, d_col))
     }
 }
 
@@ -404,7 +451,7 @@ impl Factor<'_> {
                 d_alpha: 0.0,
                 d_beta: 0.0,
             },
-            Factor::Var(v) => Partial::through(v, p.get(v), 1.0),
+            Factor::Var(v) => Partial::through_at(p, v, p.get(v), 1.0),
             Factor::Table(t) => t.look_up(p, sealed::Token),
         }
     }
@@ -444,6 +491,9 @@ pub struct Model<'a> {
     pub chord_ft: f32,
     /// `fcs/flaperon-mix-rad` per unit of (left + right flaperon norm).
     pub flaperon_mix_gain: f32,
+    /// JSBSim's stall latch `aero/stall-hyst-norm` (its `<hysteresis_limits>`): cleared below the
+    /// first α (rad), set above the second; `None` when no term reads it.
+    pub stall_hysteresis_rad: Option<(f32, f32)>,
 }
 
 /// Wind-axis coefficients with JSBSim's signs: drag positive aft, lift positive up, side positive
@@ -628,7 +678,40 @@ mod tests {
             bi2vel_s: 0.05,
             ci2vel_s: 0.02,
             h_over_b: 0.5,
+            left_aileron_rad: 0.1,
+            alpha_dot_rps: 0.05,
+            flap_deg: 10.0,
+            stall_hyst_norm: 0.0,
         }
+    }
+
+    #[test]
+    fn magnitudes_read_the_absolute_value_with_the_sign_as_slope() {
+        // |β| through a 1-D table: the value of |β|, the table's slope times β's sign in β.
+        let t = Table1 {
+            key: Var::MagBetaRad,
+            x: [0.0, 0.2],
+            y: [0.0, 0.4],
+        };
+        for (beta, slope) in [(0.1f32, 2.0f32), (-0.1, -2.0)] {
+            let v = t.look_up(&at(0.05, beta), sealed::Token);
+            assert!((v.value - 0.2).abs() < 1e-6, "{beta}: {v:?}");
+            assert!(
+                (v.d_beta - slope).abs() < 1e-5 && v.d_alpha == 0.0,
+                "{beta}: {v:?}"
+            );
+        }
+        let p = at(0.05, -0.1);
+        assert_eq!(p.get(Var::MagElevatorRad), 0.05);
+        assert_eq!(
+            Factor::Var(Var::MagBetaRad).eval(&p),
+            Partial {
+                value: 0.1,
+                d_alpha: 0.0,
+                d_beta: -1.0
+            }
+        );
+        assert_eq!((p.get(Var::FlapDeg), p.get(Var::AlphaDotRps)), (10.0, 0.05));
     }
 
     #[test]

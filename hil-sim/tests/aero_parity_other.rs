@@ -1,0 +1,189 @@
+//! The no_std aero evaluator is JSBSim's on aircraft other than the F-16: the force terms of every
+//! fixture in `hil-sim/tests/aero/` (JSBSim package models extracted by `scripts/extract-aero
+//! --jsbsim-model`, listed in its generated `fixtures.rs`), evaluated at JSBSim's own property
+//! values over a flight of each (`NAME_parity.xml` beside it, flown by stock JSBSim through
+//! `scripts/jsbsim-stock`), agree with JSBSim's `aero/coefficient/*` term by term and with the
+//! wind-axis force sums. The fixtures read what the F-16 does not: |β| and |δe| (slope: the
+//! sign), a left aileron, α̇, a flap in degrees, 2-D tables in α × Mach and α × flap, and a stall
+//! latch as a table key.
+//!
+//!     cargo test --release -p hil-sim --test aero_parity_other -- --nocapture   # prints the figures
+
+// Host test code: the flight-code lints of `[workspace.lints]` do not apply (a panic is how it fails).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use estimator_core::aero::{Model, Point};
+
+/// The generated fixtures, each in a module whose parent offers the names they `use super::…`.
+mod fixtures {
+    pub use estimator_core::aero::{Factor, Model, Table1, Table2, Term, Var, strictly_ascending};
+    include!("aero/fixtures.rs");
+}
+
+/// Largest error allowed, as a fraction of the coefficient's range over the flight (as for the F-16:
+/// f32 rounding of the inputs and the arithmetic).
+const TOLERANCE: f64 = 1e-6;
+
+/// The evaluator's inputs, by the JSBSim property each stands for. `None`: derived (|β|, |δe|).
+const INPUTS: [&str; 17] = [
+    "aero/alpha-rad",
+    "aero/beta-rad",
+    "velocities/mach",
+    "fcs/elevator-pos-rad",
+    "fcs/rudder-pos-rad",
+    "fcs/left-aileron-pos-rad",
+    "velocities/p-aero-rad_sec",
+    "velocities/q-aero-rad_sec",
+    "velocities/r-aero-rad_sec",
+    "aero/bi2vel",
+    "aero/ci2vel",
+    "aero/h_b-mac-ft",
+    "aero/alphadot-rad_sec",
+    "fcs/flap-pos-deg",
+    "aero/stall-hyst-norm",
+    "aero/qbar-psf",
+    "metrics/Sw-sqft",
+];
+const FORCES: [&str; 3] = [
+    "forces/fwx-aero-lbs",
+    "forces/fwy-aero-lbs",
+    "forces/fwz-aero-lbs",
+];
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn terms<'a>(m: &'a Model<'a>) -> impl Iterator<Item = &'a estimator_core::aero::Term<'a>> {
+    m.drag.iter().chain(m.side).chain(m.lift)
+}
+
+/// Every step of `aircraft`'s parity flight: each property by name.
+fn flight(aircraft: &str, model: &Model<'_>) -> Vec<HashMap<String, f64>> {
+    let names: Vec<String> = INPUTS
+        .iter()
+        .chain(FORCES.iter())
+        .map(|s| s.to_string())
+        .chain(terms(model).map(|t| t.name.to_string()))
+        .collect();
+    let dir = std::env::temp_dir().join(format!("aero-parity-{aircraft}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("flight.tsv");
+    let here = root().join("hil-sim/tests/aero");
+    let mut cmd = std::process::Command::new(root().join("scripts/jsbsim-stock"));
+    cmd.arg(here.join(format!("{aircraft}_parity.xml")))
+        .arg(here.join(format!("{aircraft}_parity_init.xml")))
+        .arg("--out")
+        .arg(&out);
+    for n in &names {
+        cmd.arg("--prop").arg(n);
+    }
+    let status = cmd.stdout(std::process::Stdio::null()).status().unwrap();
+    assert!(
+        status.success(),
+        "scripts/jsbsim-stock failed on {aircraft}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    text.lines()
+        .map(|l| {
+            // jsbsim-stock writes sim time, α and β (deg) first, then the --prop columns.
+            let vals: Vec<f64> = l.split('\t').skip(3).map(|x| x.parse().unwrap()).collect();
+            assert_eq!(vals.len(), names.len(), "{l}");
+            names.iter().cloned().zip(vals).collect()
+        })
+        .collect()
+}
+
+/// JSBSim's own values as an operating point.
+fn point(s: &HashMap<String, f64>) -> Point {
+    let g = |p: &str| s[p] as f32;
+    Point {
+        alpha_rad: g("aero/alpha-rad"),
+        beta_rad: g("aero/beta-rad"),
+        mach: g("velocities/mach"),
+        elevator_rad: g("fcs/elevator-pos-rad"),
+        rudder_rad: g("fcs/rudder-pos-rad"),
+        left_aileron_rad: g("fcs/left-aileron-pos-rad"),
+        p_aero_rps: g("velocities/p-aero-rad_sec"),
+        q_aero_rps: g("velocities/q-aero-rad_sec"),
+        r_aero_rps: g("velocities/r-aero-rad_sec"),
+        bi2vel_s: g("aero/bi2vel"),
+        ci2vel_s: g("aero/ci2vel"),
+        h_over_b: g("aero/h_b-mac-ft"),
+        alpha_dot_rps: g("aero/alphadot-rad_sec"),
+        flap_deg: g("fcs/flap-pos-deg"),
+        stall_hyst_norm: g("aero/stall-hyst-norm"),
+        ..Point::default()
+    }
+}
+
+/// Largest error of each term and wind-axis sum over the flight, against its own range.
+fn parity(aircraft: &str, model: &Model<'_>) {
+    let steps = flight(aircraft, model);
+    println!("{aircraft}: {} JSBSim steps", steps.len());
+    assert!(steps.len() > 4_000, "{aircraft}: {} steps", steps.len());
+    let names: Vec<&str> = terms(model)
+        .map(|t| t.name)
+        .chain(["CD", "CY", "CL"])
+        .collect();
+    // (max |err|, min, max) of each quantity
+    let mut worst = vec![(0.0f64, f64::MAX, f64::MIN); names.len()];
+    for s in &steps {
+        let qs = s["aero/qbar-psf"] * s["metrics/Sw-sqft"];
+        let p = point(s);
+        let ours = terms(model)
+            .map(|t| t.eval(&p).expect("finite").value)
+            .chain({
+                let c = model.coefficients_at(&p);
+                assert!(c.valid, "{aircraft}: invalid at α {}", p.alpha_rad);
+                [c.wind.drag, c.wind.side, c.wind.lift]
+            });
+        // JSBSim: each term's property is its force (lbs), as are the wind-axis sums (drag, side,
+        // lift with JSBSim's signs, as `Wind` has them).
+        let theirs = terms(model)
+            .map(|t| s[t.name] / qs)
+            .chain(FORCES.map(|f| s[f] / qs));
+        for ((w, o), j) in worst.iter_mut().zip(ours).zip(theirs) {
+            *w = (w.0.max((f64::from(o) - j).abs()), w.1.min(j), w.2.max(j));
+        }
+    }
+    let mut failed = Vec::new();
+    for (n, (err, lo, hi)) in names.iter().zip(&worst) {
+        // A term that stays constant over the flight (a zero-valued derivative) is held to the
+        // sums' scale.
+        let scale = (hi - lo).max(1e-3);
+        println!(
+            "{aircraft} {n:32} max |err| {err:9.3e}  range {:9.3e}  err/range {:9.3e}",
+            hi - lo,
+            err / scale
+        );
+        if err.is_nan() || *err > TOLERANCE * scale {
+            failed.push(*n);
+        }
+    }
+    assert!(
+        failed.is_empty(),
+        "{aircraft}: {failed:?} differ from JSBSim"
+    );
+}
+
+#[test]
+fn every_fixture_force_model_is_jsbsims() {
+    assert!(
+        fixtures::ALL.len() >= 2,
+        "the fixtures: {}",
+        fixtures::ALL.len()
+    );
+    for (name, model) in fixtures::ALL {
+        parity(name, model);
+    }
+}
