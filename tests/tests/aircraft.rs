@@ -36,7 +36,12 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 11] = [
+    let cases: [(&str, &str, &str); 12] = [
+        (
+            "fuel_per_tank_lb = 1800.0",
+            "fuel_per_tank_lb = 4000.0",
+            "is more than a tank holds",
+        ),
         (
             "gear_norm = 1.0",
             "gear_norm = 2.0",

@@ -317,10 +317,47 @@ pub struct ControlLaws {
     pub reclimb_throttle_margin_kts: f64,
 }
 
+/// The flight-test card's sizes for an airframe (its description's `[flight_test_card]`); the
+/// card's sequence and timing are [`card_inputs`]'s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlightTestCard {
+    /// Normalised amplitudes of the first pass: pitch doublet, pitch 3-2-1-1, roll doublet, rudder
+    /// doublet, rudder 3-2-1-1, the steady-heading sideslips' rudder.
+    pub pitch_doublet: f64,
+    pub pitch_multistep: f64,
+    pub roll_doublet: f64,
+    pub rudder_doublet: f64,
+    pub rudder_multistep: f64,
+    pub sideslip_rudder: f64,
+    /// The second pass's inputs over the first's.
+    pub second_pass_scale: f64,
+    /// Wind-up turn: the bank, the α target it starts at, the α target at its peak (plus this per
+    /// unit of pass scale) and the α target it ends at.
+    pub windup_bank_deg: f64,
+    pub windup_alpha_start_deg: f64,
+    pub windup_alpha_deg: f64,
+    pub windup_alpha_per_scale_deg: f64,
+    pub windup_alpha_end_deg: f64,
+    /// Pull-up then push-over: pitch-attitude offsets per unit of pass scale.
+    pub pull_up_theta_deg: f64,
+    pub push_over_theta_deg: f64,
+    /// Between inputs: pitch attitude `hold_pitch_deg` plus `altitude_hold_per_ft` per ft below the
+    /// test point (within ±`altitude_hold_limit_deg`), throttle `speed_hold_throttle` plus
+    /// `speed_hold_per_kt` per kt below its speed; the throttle the card starts from.
+    pub hold_pitch_deg: f64,
+    pub altitude_hold_per_ft: f64,
+    pub altitude_hold_limit_deg: f64,
+    pub speed_hold_throttle: f64,
+    pub speed_hold_per_kt: f64,
+    pub initial_throttle: f64,
+    /// Fuel in each internal tank during the card, lb (a mid-range mass).
+    pub fuel_per_tank_lb: f64,
+}
+
 /// The generated profiles of this build's aircraft (build.rs picks the file).
 #[rustfmt::skip]
 mod presets {
-    use super::{ControlLaws, Profile, ProfileKind};
+    use super::{ControlLaws, FlightTestCard, Profile, ProfileKind};
     include!(env!("HIL_PROFILES_FILE"));
 }
 
@@ -872,6 +909,7 @@ fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0
 /// the wings level), a wind-up turn (60° bank, α target ramped up), a push-over/pull-up and an
 /// accel/decel (full throttle, then idle with the speedbrake).
 fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
+    let c = &presets::CARD;
     let mut t = t0;
     // A doublet: +a for w, −a for w, then neutral; `settle` after.
     let doublet = |ch: &mut Vec<(f64, f64, f64)>, t: &mut f64, a: f64, w: f64, settle: f64| {
@@ -890,29 +928,40 @@ fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
         ch.push((at, 0.0, settle));
         *t = at + settle;
     };
-    doublet(&mut seq.pitch, &mut t, 0.08 * scale, 1.0, 8.0);
-    multistep(&mut seq.pitch, &mut t, 0.06 * scale, 0.4, 8.0);
-    doublet(&mut seq.roll, &mut t, 0.12 * scale, 1.0, 8.0);
-    doublet(&mut seq.rudder, &mut t, 0.25 * scale, 1.0, 8.0);
-    multistep(&mut seq.rudder, &mut t, 0.2 * scale, 0.5, 8.0);
+    doublet(&mut seq.pitch, &mut t, c.pitch_doublet * scale, 1.0, 8.0);
+    multistep(&mut seq.pitch, &mut t, c.pitch_multistep * scale, 0.4, 8.0);
+    doublet(&mut seq.roll, &mut t, c.roll_doublet * scale, 1.0, 8.0);
+    doublet(&mut seq.rudder, &mut t, c.rudder_doublet * scale, 1.0, 8.0);
+    multistep(
+        &mut seq.rudder,
+        &mut t,
+        c.rudder_multistep * scale,
+        0.5,
+        8.0,
+    );
     for sign in [1.0, -1.0] {
-        seq.rudder.push((t, sign * 0.35 * scale, 12.0));
+        seq.rudder.push((t, sign * c.sideslip_rudder * scale, 12.0));
         seq.rudder.push((t + 12.0, 0.0, 8.0));
         t += 20.0;
     }
     // Wind-up turn: bank to 60°, α target from 4° up to 5° + 4°·scale; wings level first, then
     // back to the pitch attitude (leaving α hold while banked pulls the nose through).
-    seq.bank.push((t, 60.0, 24.0));
+    seq.bank.push((t, c.windup_bank_deg, 24.0));
     seq.mode.push((t + 3.0, 1.0, 27.0));
-    seq.alpha.push((t + 3.0, 4.0, 5.0));
-    seq.alpha.push((t + 8.0, 5.0 + 4.0 * scale, 14.0));
-    seq.alpha.push((t + 22.0, 3.0, 8.0));
+    seq.alpha.push((t + 3.0, c.windup_alpha_start_deg, 5.0));
+    seq.alpha.push((
+        t + 8.0,
+        c.windup_alpha_deg + c.windup_alpha_per_scale_deg * scale,
+        14.0,
+    ));
+    seq.alpha.push((t + 22.0, c.windup_alpha_end_deg, 8.0));
     seq.bank.push((t + 24.0, 0.0, 21.0));
     seq.mode.push((t + 30.0, 0.0, 15.0));
     t += 45.0;
     // Push-over/pull-up: offsets to the altitude-holding pitch attitude.
-    seq.theta.push((t, 8.0 * scale, 8.0));
-    seq.theta.push((t + 8.0, -6.0 * scale, 8.0));
+    seq.theta.push((t, c.pull_up_theta_deg * scale, 8.0));
+    seq.theta
+        .push((t + 8.0, c.push_over_theta_deg * scale, 8.0));
     seq.theta.push((t + 16.0, 0.0, 14.0));
     t += 30.0;
     // Accel/decel: the speed hold off, full throttle, then idle with the speedbrake.
@@ -946,15 +995,16 @@ struct CardSeq {
 /// test pilot re-trims before each input.
 fn card_tables(duration_s: f64, point: &TestPoint) -> String {
     let mut seq = CardSeq::default();
+    let c = &presets::CARD;
     let end = card_inputs(1.0, COMMANDS_START_S + 10.0, &mut seq);
-    card_inputs(1.5, end + 10.0, &mut seq);
+    card_inputs(c.second_pass_scale, end + 10.0, &mut seq);
     let keep = |v: Vec<(f64, f64, f64)>| -> Vec<(f64, f64, f64)> {
         v.into_iter().filter(|(t, _, _)| *t < duration_s).collect()
     };
     let mut tables = String::new();
     for (prop, initial) in [
         ("maneuver/card-theta-offset-deg", 0.0),
-        ("maneuver/card-throttle", 0.6),
+        ("maneuver/card-throttle", c.initial_throttle),
         ("maneuver/card-speed-hold", 1.0),
     ] {
         let _ = writeln!(
@@ -970,7 +1020,12 @@ fn card_tables(duration_s: f64, point: &TestPoint) -> String {
         ("maneuver/pitch-stick", 0.0, keep(seq.pitch), 0.05),
         ("maneuver/roll-stick", 0.0, keep(seq.roll), 0.05),
         ("maneuver/rudder", 0.0, keep(seq.rudder), 0.1),
-        ("maneuver/card-throttle", 0.6, keep(seq.throttle), 1.0),
+        (
+            "maneuver/card-throttle",
+            c.initial_throttle,
+            keep(seq.throttle),
+            1.0,
+        ),
         ("maneuver/card-speed-hold", 1.0, keep(seq.hold), 0.0),
         ("maneuver/speedbrake", 0.0, keep(seq.speedbrake), 0.0),
     ] {
@@ -982,13 +1037,14 @@ fn card_tables(duration_s: f64, point: &TestPoint) -> String {
         "card: pitch attitude holding the test point's altitude, plus the card's offset",
         "maneuver/theta-target-deg",
         &format!(
-            "          <sum><value>2</value><property>maneuver/card-theta-offset-deg</property>{}</sum>\n",
+            "          <sum><value>{}</value><property>maneuver/card-theta-offset-deg</property>{}</sum>\n",
+            c.hold_pitch_deg,
             clamp(
-                -5.0,
-                5.0,
+                -c.altitude_hold_limit_deg,
+                c.altitude_hold_limit_deg,
                 &format!(
-                    "<product><value>0.004</value><difference><value>{}</value><property>position/h-sl-ft</property></difference></product>",
-                    point.alt_ft
+                    "<product><value>{}</value><difference><value>{}</value><property>position/h-sl-ft</property></difference></product>",
+                    c.altitude_hold_per_ft, point.alt_ft
                 )
             )
         ),
@@ -1004,8 +1060,8 @@ fn card_tables(duration_s: f64, point: &TestPoint) -> String {
                 0.0,
                 1.0,
                 &format!(
-                    "<sum><value>0.5</value><product><value>0.02</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
-                    point.vc_kts
+                    "<sum><value>{}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
+                    c.speed_hold_throttle, c.speed_hold_per_kt, point.vc_kts
                 )
             )
         ),
@@ -1631,12 +1687,14 @@ impl PlannedFlight {
             // A flight test is flown at its point in calm air, at a mid-range mass.
             p.init_alt_ft = (c.alt_ft, c.alt_ft);
             p.init_vc_kts = (c.vc_kts, c.vc_kts);
-            p.fuel_per_tank_lbs = (1_800.0, 1_800.0);
+            let fuel = presets::CARD.fuel_per_tank_lb;
+            p.fuel_per_tank_lbs = (fuel, fuel);
             p.turb_severity = (0, 0);
             p.steady_wind_fps = (0.0, 0.0);
             p.gust_fps = (0.0, 0.0);
             p.gust_interval_s = (1e9, 1e9);
-            p.throttle = (0.6, 0.6);
+            let throttle = presets::CARD.initial_throttle;
+            p.throttle = (throttle, throttle);
         }
         p
     }
