@@ -128,7 +128,7 @@ impl Partial {
     }
 
     /// [`Partial::through`] at `p`, where a variable's slope in β depends on the point: |β|'s is
-    /// β's sign (+1 at β = 0, JSBSim's right derivative).
+    /// β's sign (+1 at β = 0, a convention: JSBSim computes no slopes).
     fn through_at(p: &Point, v: Var, value: f32, slope: f32) -> Partial {
         match v {
             Var::MagBetaRad => Partial {
@@ -264,8 +264,8 @@ impl Point {
             bi2vel_s: model.wingspan_ft * FT_TO_M / two_v,
             ci2vel_s: model.chord_ft * FT_TO_M / two_v,
             h_over_b: air.h_over_b,
-            // Not sensed yet: one aileron channel, no α̇, no flap channel, no stall latch (the
-            // F-16's model reads none of them).
+            // Not sensed yet (the F-16's model reads none of them): the left aileron is the one
+            // aileron channel; no α̇, no flap channel, no stall latch.
             left_aileron_rad: s.aileron_deg.to_radians(),
             alpha_dot_rps: 0.0,
             flap_deg: 0.0,

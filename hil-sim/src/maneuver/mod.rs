@@ -906,7 +906,7 @@ fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0
 /// the time the card ends. Each input is a held value on one maneuver channel, back to neutral
 /// after it, with time to settle between inputs: pitch doublet, pitch 3-2-1-1, roll doublet, rudder
 /// doublet, rudder 3-2-1-1, steady-heading sideslips both ways (rudder held, the bank law holding
-/// the wings level), a wind-up turn (60° bank, α target ramped up), a push-over/pull-up and an
+/// the wings level), a wind-up turn (banked, α target ramped up), a pull-up/push-over and an
 /// accel/decel (full throttle, then idle with the speedbrake).
 fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
     let c = &presets::CARD;
@@ -944,8 +944,9 @@ fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
         seq.rudder.push((t + 12.0, 0.0, 8.0));
         t += 20.0;
     }
-    // Wind-up turn: bank to 60°, α target from 4° up to 5° + 4°·scale; wings level first, then
-    // back to the pitch attitude (leaving α hold while banked pulls the nose through).
+    // Wind-up turn: the card's bank, its α target ramped from start to peak (the peak growing with
+    // scale); wings level first, then back to the pitch attitude (leaving α hold while banked pulls
+    // the nose through).
     seq.bank.push((t, c.windup_bank_deg, 24.0));
     seq.mode.push((t + 3.0, 1.0, 27.0));
     seq.alpha.push((t + 3.0, c.windup_alpha_start_deg, 5.0));
@@ -958,7 +959,7 @@ fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
     seq.bank.push((t + 24.0, 0.0, 21.0));
     seq.mode.push((t + 30.0, 0.0, 15.0));
     t += 45.0;
-    // Push-over/pull-up: offsets to the altitude-holding pitch attitude.
+    // Pull-up then push-over: offsets to the altitude-holding pitch attitude.
     seq.theta.push((t, c.pull_up_theta_deg * scale, 8.0));
     seq.theta
         .push((t + 8.0, c.push_over_theta_deg * scale, 8.0));
@@ -990,9 +991,9 @@ struct CardSeq {
     hold: Vec<(f64, f64, f64)>,
 }
 
-/// The flight-test card flown twice (the second pass with 1.5× the inputs) as maneuver tables, at
-/// `point`: between inputs the pitch attitude holds its altitude and the throttle its speed, as a
-/// test pilot re-trims before each input.
+/// The flight-test card flown twice (the second pass with `second_pass_scale` times the inputs) as
+/// maneuver tables, at `point`: between inputs the pitch attitude holds its altitude and the
+/// throttle its speed, as a test pilot re-trims before each input.
 fn card_tables(duration_s: f64, point: &TestPoint) -> String {
     let mut seq = CardSeq::default();
     let c = &presets::CARD;
