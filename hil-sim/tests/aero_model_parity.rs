@@ -11,8 +11,10 @@
 //!
 //!     cargo test --release -p hil-sim --test aero_model_parity -- --nocapture   # prints the figures
 
-use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
+
+#[path = "aero/stock_flight.rs"]
+mod stock_flight;
 
 use estimator_core::aero::{
     self, AirState, Coefficients, Factor, MODEL, Model, Point, Surfaces, Table2, Term, tables,
@@ -60,9 +62,7 @@ const FORCES: [&str; 6] = [
     "forces/fbz-aero-lbs",
 ];
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+use stock_flight::root;
 
 fn terms() -> impl Iterator<Item = &'static Term<'static>> {
     MODEL.drag.iter().chain(MODEL.side).chain(MODEL.lift)
@@ -70,7 +70,7 @@ fn terms() -> impl Iterator<Item = &'static Term<'static>> {
 
 /// One JSBSim step: every property above, by name.
 struct Step {
-    v: std::collections::HashMap<&'static str, f64>,
+    v: std::collections::HashMap<String, f64>,
 }
 
 impl Step {
@@ -150,32 +150,15 @@ fn flight() -> &'static [Step] {
             .chain(terms().map(|t| t.name))
             .chain(FORCES)
             .collect();
-        let dir = std::env::temp_dir().join(format!("aero-parity-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let out = dir.join("flight.tsv");
-        let mut cmd = std::process::Command::new(root().join("scripts/jsbsim-stock"));
-        cmd.arg(root().join("flights/f16_test_flight.xml"))
-            .arg(root().join("flights/f16_cruise_init.xml"))
-            .arg("--out")
-            .arg(&out);
-        for n in &names {
-            cmd.arg("--prop").arg(n);
-        }
-        // JSBSim's banner and <notify/> lines go to stdout.
-        let status = cmd.stdout(std::process::Stdio::null()).status().unwrap();
-        assert!(status.success(), "scripts/jsbsim-stock failed");
-        let text = std::fs::read_to_string(&out).unwrap();
-        std::fs::remove_dir_all(&dir).ok();
-        text.lines()
-            .map(|l| {
-                // jsbsim-stock writes sim time, α and β (deg) first, then the --prop columns.
-                let vals: Vec<f64> = l.split('\t').skip(3).map(|x| x.parse().unwrap()).collect();
-                assert_eq!(vals.len(), names.len(), "{l}");
-                Step {
-                    v: names.iter().copied().zip(vals).collect(),
-                }
-            })
-            .collect()
+        let props: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        stock_flight::fly(
+            &root().join("flights/f16_test_flight.xml"),
+            &root().join("flights/f16_cruise_init.xml"),
+            &props,
+        )
+        .into_iter()
+        .map(|v| Step { v })
+        .collect()
     })
 }
 

@@ -18,7 +18,9 @@
 )]
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+
+#[path = "aero/stock_flight.rs"]
+mod stock_flight;
 
 use estimator_core::aero::{Model, Point};
 
@@ -59,10 +61,6 @@ const FORCES: [&str; 3] = [
     "forces/fwz-aero-lbs",
 ];
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
 fn terms<'a>(m: &'a Model<'a>) -> impl Iterator<Item = &'a estimator_core::aero::Term<'a>> {
     m.drag.iter().chain(m.side).chain(m.lift)
 }
@@ -75,33 +73,12 @@ fn flight(aircraft: &str, model: &Model<'_>) -> Vec<HashMap<String, f64>> {
         .map(|s| s.to_string())
         .chain(terms(model).map(|t| t.name.to_string()))
         .collect();
-    let dir = std::env::temp_dir().join(format!("aero-parity-{aircraft}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.join("flight.tsv");
-    let here = root().join("hil-sim/tests/aero");
-    let mut cmd = std::process::Command::new(root().join("scripts/jsbsim-stock"));
-    cmd.arg(here.join(format!("{aircraft}_parity.xml")))
-        .arg(here.join(format!("{aircraft}_parity_init.xml")))
-        .arg("--out")
-        .arg(&out);
-    for n in &names {
-        cmd.arg("--prop").arg(n);
-    }
-    let status = cmd.stdout(std::process::Stdio::null()).status().unwrap();
-    assert!(
-        status.success(),
-        "scripts/jsbsim-stock failed on {aircraft}"
-    );
-    let text = std::fs::read_to_string(&out).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    text.lines()
-        .map(|l| {
-            // jsbsim-stock writes sim time, α and β (deg) first, then the --prop columns.
-            let vals: Vec<f64> = l.split('\t').skip(3).map(|x| x.parse().unwrap()).collect();
-            assert_eq!(vals.len(), names.len(), "{l}");
-            names.iter().cloned().zip(vals).collect()
-        })
-        .collect()
+    let here = stock_flight::root().join("hil-sim/tests/aero");
+    stock_flight::fly(
+        &here.join(format!("{aircraft}_parity.xml")),
+        &here.join(format!("{aircraft}_parity_init.xml")),
+        &names,
+    )
 }
 
 /// JSBSim's own values as an operating point.
