@@ -720,7 +720,8 @@ pub struct Loaded {
 
 /// Loads a runscript for this build's aircraft (its description's JSBSim model) into `plant` at its
 /// own dt and runs its initial conditions: the initialize file is taken from beside the script when
-/// it is there, else JSBSim looks in the aircraft folder. A script whose rate is not [`SIM_HZ`] (within [`SIM_HZ_TOLERANCE`]) is refused.
+/// it is there, else JSBSim looks in the aircraft folder. A script whose rate is not [`SIM_HZ`]
+/// (within [`SIM_HZ_TOLERANCE`]) is refused.
 pub fn load_runscript(plant: &mut Plant, script: &Path) -> Result<Loaded, PlantError> {
     let script = std::fs::canonicalize(script).map_err(|source| PlantError::ScriptUnreadable {
         path: script.to_path_buf(),

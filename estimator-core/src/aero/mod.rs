@@ -117,26 +117,21 @@ impl Partial {
         }
     }
 
-    /// A value that depends on `v` alone, with slope `slope` in it: nonzero partials only if `v`
-    /// is α or β.
-    fn through(v: Var, value: f32, slope: f32) -> Partial {
+    /// A value that depends on `v` alone, with slope `slope` in it, at `p`: its partials are the
+    /// slope times `v`'s own in α and β. α's and β's are 1; |β|'s in β is β's sign (+1 at β = 0, a
+    /// convention: JSBSim computes no slopes); every other variable's are 0.
+    fn through(p: &Point, v: Var, value: f32, slope: f32) -> Partial {
+        let (d_alpha, d_beta) = match v {
+            Var::AlphaRad => (slope, 0.0),
+            Var::BetaRad => (0.0, slope),
+            Var::MagBetaRad if p.beta_rad < 0.0 => (0.0, -slope),
+            Var::MagBetaRad => (0.0, slope),
+            _ => (0.0, 0.0),
+        };
         Partial {
             value,
-            d_alpha: if v == Var::AlphaRad { slope } else { 0.0 },
-            d_beta: if v == Var::BetaRad { slope } else { 0.0 },
-        }
-    }
-
-    /// [`Partial::through`] at `p`, where a variable's slope in β depends on the point: |β|'s is
-    /// β's sign (+1 at β = 0, a convention: JSBSim computes no slopes).
-    fn through_at(p: &Point, v: Var, value: f32, slope: f32) -> Partial {
-        match v {
-            Var::MagBetaRad => Partial {
-                value,
-                d_alpha: 0.0,
-                d_beta: if p.beta_rad < 0.0 { -slope } else { slope },
-            },
-            _ => Partial::through(v, value, slope),
+            d_alpha,
+            d_beta,
         }
     }
 }
@@ -390,10 +385,10 @@ impl<const N: usize> Lookup for Table1<N> {
         };
         // JSBSim returns the end values themselves at and beyond the ends.
         if k <= x0 {
-            return Partial::through_at(p, self.key, y0, 0.0);
+            return Partial::through(p, self.key, y0, 0.0);
         }
         if k >= xn {
-            return Partial::through_at(p, self.key, yn, 0.0);
+            return Partial::through(p, self.key, yn, 0.0);
         }
         let Some((i, f, inv)) = segment(&self.x, k) else {
             return Partial::default();
@@ -402,7 +397,7 @@ impl<const N: usize> Lookup for Table1<N> {
             return Partial::default();
         };
         // JSBSim: Factor·(y1 − y0) + y0.
-        Partial::through_at(p, self.key, f * (yb - ya) + ya, (yb - ya) * inv)
+        Partial::through(p, self.key, f * (yb - ya) + ya, (yb - ya) * inv)
     }
 }
 
@@ -430,8 +425,7 @@ impl<const R: usize, const C: usize> Lookup for Table2<R, C> {
         let value = cf * (col2 - col1) + col1;
         let d_row = (cf * (b1 - b0) + (1.0 - cf) * (a1 - a0)) * rinv;
         let d_col = (col2 - col1) * cinv;
-        Partial::through_at(p, self.row, value, d_row)
-            .plus(Partial::through_at(p, self.col, 0.0, d_col))
+        Partial::through(p, self.row, value, d_row).plus(Partial::through(p, self.col, 0.0, d_col))
     }
 }
 
@@ -451,7 +445,7 @@ impl Factor<'_> {
                 d_alpha: 0.0,
                 d_beta: 0.0,
             },
-            Factor::Var(v) => Partial::through_at(p, v, p.get(v), 1.0),
+            Factor::Var(v) => Partial::through(p, v, p.get(v), 1.0),
             Factor::Table(t) => t.look_up(p, sealed::Token),
         }
     }
@@ -724,7 +718,11 @@ mod tests {
         let look = |a: f32| t.look_up(&at(a, 0.0), sealed::Token);
         // The end values themselves at and beyond the ends, with no slope.
         for (a, v) in [(-1.0, 1.0), (0.0, 1.0), (0.3, 0.0), (5.0, 0.0)] {
-            assert_eq!(look(a), Partial::through(Var::AlphaRad, v, 0.0), "{a}");
+            assert_eq!(
+                look(a),
+                Partial::through(&at(a, 0.0), Var::AlphaRad, v, 0.0),
+                "{a}"
+            );
         }
         let m = look(0.05);
         assert!((m.value - 1.5).abs() < 1e-6 && (m.d_alpha - 10.0).abs() < 1e-4);

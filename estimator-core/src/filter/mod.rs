@@ -133,8 +133,9 @@ const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
 
 /// The filter for the build's aircraft in hil-sim's installation: the IMU lever arm, empty weight,
 /// pilot and gear of its description ([`crate::aircraft`]; the F-16's, `aircraft/f16.toml`), the
-/// anti-alias filter of `docs/sensors.md`. The measurement noise and the accelerometer delay are tuned on the training flights of the `paper` preset, never the test
-/// flights (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
+/// anti-alias filter of `docs/sensors.md`. The measurement noise and the accelerometer delay are
+/// tuned on the training flights of the `paper` preset, never the test flights
+/// (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 pub const CONFIG: Config = Config {
     mean_wind_psd: [0.02, 0.02, 0.0005],
     mean_wind_sigma0: [15.0, 15.0, 1.0],
