@@ -103,6 +103,8 @@ impl Step {
             bi2vel_s: g("aero/bi2vel"),
             ci2vel_s: g("aero/ci2vel"),
             h_over_b: g("aero/h_b-mac-ft"),
+            mag_beta_rad: g("aero/beta-rad").abs(),
+            mag_elevator_rad: g("fcs/elevator-pos-rad").abs(),
             // The F-16's model reads none of these.
             left_aileron_rad: 0.0,
             alpha_dot_rps: 0.0,

@@ -100,6 +100,8 @@ fn point(s: &HashMap<String, f64>) -> Point {
         alpha_dot_rps: g("aero/alphadot-rad_sec"),
         flap_deg: g("fcs/flap-pos-deg"),
         stall_hyst_norm: g("aero/stall-hyst-norm"),
+        mag_beta_rad: g("aero/beta-rad").abs(),
+        mag_elevator_rad: g("fcs/elevator-pos-rad").abs(),
         ..Point::default()
     }
 }
