@@ -11,12 +11,16 @@
 //!    them.
 //! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
 //!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
-//!    `f_y = k_Y·f_y,side + k_D·f_y,drag + b_y` and
-//!    `f_z = k_L·f_z,lift + k_D·f_z,drag + k_Y·f_z,side + b_z`, each model part computed from the
-//!    wind-axis coefficients, the constants b taking the accelerometers' bias and misalignment.
-//!    k_L (lift) is observable in the normal force, k_Y (side force) in the lateral force. Drag is
-//!    not identified: along body x the unknown thrust adds to it, and without a thrust model k_D is
-//!    held at 1. Only quasi-steady frames enter both steps.
+//!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + k_D·f_y,drag + b_y` and
+//!    `f_z = k_L·f_z,lift + k_D·f_z,drag + k_β·f_z,sideslip + k_Y·f_z,surfaces + b_z`, each model
+//!    part computed from the wind-axis coefficients, the constants b taking the accelerometers' bias
+//!    and misalignment. k_L (lift) is observable in the normal force of quasi-steady frames. The
+//!    side force has two scales, of its sideslip terms (k_β) and of its surface and body-rate terms
+//!    (k_Y): in quasi-steady flight the rudder and aileron hold the sideslip, so the two move
+//!    together there, and they are fitted over the rolling frames, where the aileron and roll-rate
+//!    terms move without sideslip. Drag is not identified: along body x the unknown thrust adds to
+//!    it, and without a thrust model k_D is held at 1. The boom step reads quasi-steady frames
+//!    only.
 //!
 //! 3. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
@@ -50,6 +54,10 @@ const MAX_ALPHA_DEG: f64 = 20.0;
 const MAX_OMEGA_DOT_RPS2: f64 = 0.05;
 /// …and boom α and β changing by less than this per frame, deg.
 const MAX_ANGLE_STEP_DEG: f64 = 0.05;
+/// The side-force fit reads the frames rolling faster than this, rad/s (the card's roll doublets
+/// and bank captures): there the aileron and roll-rate terms' side force is unlike the sideslip
+/// terms'.
+const MIN_ROLL_RATE_RPS: f64 = 0.2;
 
 /// One identified parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -81,7 +89,8 @@ pub struct Calibration {
     pub boom_beta: Fit,
     /// Boom airspeed against the inertial speed (m/s).
     pub boom_tas: Fit,
-    /// Lateral specific force, m/s²: k_Y (side force scale).
+    /// Lateral specific force over the rolling frames, m/s²: k_β (the sideslip terms' scale) and
+    /// k_Y (the surface and body-rate terms').
     pub side: Fit,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
@@ -100,8 +109,10 @@ pub struct Scales {
     pub flap: Estimate,
     /// A lift-coefficient offset ΔC_L added to the lift axis.
     pub offset: Estimate,
-    /// The side-force axis, × this.
-    pub side: Estimate,
+    /// The side-force terms driven by sideslip ([`sideslip_side_terms`]), × this.
+    pub sideslip: Estimate,
+    /// The other side-force terms (surfaces, body rates), × this.
+    pub side_controls: Estimate,
 }
 
 impl Scales {
@@ -121,7 +132,8 @@ impl Scales {
                 value: self.offset.value - model.offset.value,
                 std_error: self.offset.std_error.hypot(model.offset.std_error),
             },
-            side: ratio(self.side, model.side),
+            sideslip: ratio(self.sideslip, model.sideslip),
+            side_controls: ratio(self.side_controls, model.side_controls),
         }
     }
 }
@@ -133,7 +145,8 @@ pub struct PerFlight {
     pub lift: f64,
     pub flap: f64,
     pub offset: f64,
-    pub side: f64,
+    pub sideslip: f64,
+    pub side_controls: f64,
 }
 
 /// A fit's parameter `name` with its 1σ raised to `spread`'s standard deviation over √n (the
@@ -420,7 +433,9 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         let tas = (r.boom_tas - bv) / sv;
         let (rho, a_sound) = filter::isa(r.inp.alt_m);
         let qbar = 0.5 * f64::from(rho) * tas * tas;
-        if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG || !quasi_steady(r) {
+        let steady = quasi_steady(r);
+        let rolling = f64::from(r.inp.gyro_rps[0]).abs() >= MIN_ROLL_RATE_RPS;
+        if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG || !(steady || rolling) {
             continue;
         }
         let mach = tas / f64::from(a_sound);
@@ -429,13 +444,15 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         };
         eq.push(EqRow {
             flight: r.flight,
+            steady,
+            rolling,
             parts,
             f_cg: r.f_cg,
         });
     }
     let all_eq: Vec<&EqRow> = eq.iter().collect();
     let (side, lift) = force_fits(&all_eq).ok_or_else(|| {
-        Error::Numeric("lift and side force: the flight-test data do not determine them (too few quasi-steady frames, or no excitation)".into())
+        Error::Numeric("lift and side force: the flight-test data do not determine them (too few quasi-steady or rolling frames: the card needs steady points and roll inputs)".into())
     })?;
     // Each flight alone: the scatter of its scales is the honest part of the 1σ.
     let per_flight: Vec<PerFlight> = names
@@ -449,7 +466,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 lift: l.get("k_lift"),
                 flap: l.get("k_flap"),
                 offset: l.get("offset_cl"),
-                side: s.get("k_side"),
+                sideslip: s.get("k_sideslip"),
+                side_controls: s.get("k_side_controls"),
             })
         })
         .collect();
@@ -458,7 +476,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         lift: with_scatter(&lift, "k_lift", &spread(|f| f.lift)),
         flap: with_scatter(&lift, "k_flap", &spread(|f| f.flap)),
         offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
-        side: with_scatter(&side, "k_side", &spread(|f| f.side)),
+        sideslip: with_scatter(&side, "k_sideslip", &spread(|f| f.sideslip)),
+        side_controls: with_scatter(&side, "k_side_controls", &spread(|f| f.side_controls)),
     };
     Ok(Calibration {
         flights: names,
@@ -475,29 +494,43 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
 /// One frame of the force equations.
 struct EqRow {
     flight: usize,
+    /// Quasi-steady ([`quasi_steady`]): the lift fit reads it.
+    steady: bool,
+    /// Rolling ([`MIN_ROLL_RATE_RPS`]): the side-force fit reads it.
+    rolling: bool,
     parts: Parts,
     f_cg: [f64; 3],
 }
 
-/// The side-force fit, then the lift fit with the side force at its scale:
-/// `f_y − drag_y = k_Y·side_y + b_y`,
-/// `f_z − k_Y·side_z − drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
+/// The side-force fit over the rolling frames, then the lift fit over the quasi-steady ones with
+/// the side force at its scales:
+/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + b_y`,
+/// `f_z − k_β·sideslip_z − k_Y·surfaces_z − drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
+/// In quasi-steady flight the surfaces' side force is a fixed share of the sideslip terms' (the
+/// rudder and aileron hold the sideslip; −0.32 on JSBSim's F-16 card), so those frames tell only
+/// one combination of k_β and k_Y; in a roll the aileron and roll-rate terms move on their own.
 /// Drag is not identified (thrust along x is unknown): its part is held at the model's. Each force
 /// equation carries a constant: the accelerometer's bias and misalignment (a milliradian moves
 /// 0.01 m/s² of the normal force into y) would otherwise bias the scale. The lift offset ΔC_L is
 /// told apart from that constant by dynamic pressure (the test points span 3:1 in it), and from
 /// k_L because in quasi-steady flight the lift carries the weight at every speed while q varies.
-fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
-    let ones = vec![1.0; rows.len()];
+fn force_fits(all: &[&EqRow]) -> Option<(Fit, Fit)> {
+    let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
     let side = least_squares(
-        &["k_side", "bias_mps2"],
-        &[rows.iter().map(|r| r.parts.side[1]).collect(), ones.clone()],
-        &rows
+        &["k_sideslip", "k_side_controls", "bias_mps2"],
+        &[
+            rolling.iter().map(|r| r.parts.sideslip[1]).collect(),
+            rolling.iter().map(|r| r.parts.side_rest[1]).collect(),
+            vec![1.0; rolling.len()],
+        ],
+        &rolling
             .iter()
             .map(|r| r.f_cg[1] - r.parts.drag[1])
             .collect::<Vec<_>>(),
     )?;
-    let k_y = side.get("k_side");
+    let (k_b, k_y) = (side.get("k_sideslip"), side.get("k_side_controls"));
+    let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
+    let ones = vec![1.0; rows.len()];
     let lift = least_squares(
         &["k_lift", "k_flap", "offset_cl", "bias_mps2"],
         &[
@@ -508,7 +541,9 @@ fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
         ],
         &rows
             .iter()
-            .map(|r| r.f_cg[2] - k_y * r.parts.side[2] - r.parts.drag[2])
+            .map(|r| {
+                r.f_cg[2] - k_b * r.parts.sideslip[2] - k_y * r.parts.side_rest[2] - r.parts.drag[2]
+            })
             .collect::<Vec<_>>(),
     )?;
     Some((side, lift))
@@ -518,7 +553,10 @@ fn force_fits(rows: &[&EqRow]) -> Option<(Fit, Fit)> {
 /// split into its trailing-edge-flap terms and the rest; and that of a unit lift coefficient.
 struct Parts {
     drag: [f64; 3],
-    side: [f64; 3],
+    /// The side-force terms driven by sideslip ([`sideslip_side_terms`]).
+    sideslip: [f64; 3],
+    /// The other side-force terms (surfaces, body rates).
+    side_rest: [f64; 3],
     /// The lift terms not driven by the trailing-edge flaps.
     lift: [f64; 3],
     /// The lift terms driven by the trailing-edge flaps ([`flap_lift_terms`]).
@@ -535,6 +573,16 @@ pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
         t.factors
             .iter()
             .any(|f| matches!(f, Factor::Var(Var::FlaperonMixRad)))
+    })
+}
+
+/// The model's side-force terms driven by sideslip (a factor β or |β|): `CYb` and `CYb_M` in
+/// JSBSim's F-16.
+pub fn sideslip_side_terms() -> impl Iterator<Item = &'static Term<'static>> {
+    MODEL.side.iter().filter(|t| {
+        t.factors
+            .iter()
+            .any(|f| matches!(f, Factor::Var(Var::BetaRad | Var::MagBetaRad)))
     })
 }
 
@@ -557,15 +605,19 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
     let flap_cl = flap_lift_terms()
         .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
         .sum::<Option<f64>>()?;
+    let sideslip_cy = sideslip_side_terms()
+        .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
+        .sum::<Option<f64>>()?;
     let qs_m = f64::from(filter::qs_over_m(rho, tas as f32, cfg.mass_kg(inp.fuel_kg)));
     let (sa, ca, sb, cb) = (alpha.sin(), alpha.cos(), beta.sin(), beta.cos());
     // Wind to body (JSBSim's Tw2b) of (−D, Y, −L): x forward, y right, z down.
     let drag = -f64::from(c.wind.drag) * qs_m;
-    let side = f64::from(c.wind.side) * qs_m;
+    let side_body = |cy: f64| [-ca * sb * cy * qs_m, cb * cy * qs_m, -sa * sb * cy * qs_m];
     let lift_body = |cl: f64| [-sa * (-cl * qs_m), 0.0, ca * (-cl * qs_m)];
     Some(Parts {
         drag: [ca * cb * drag, sb * drag, sa * cb * drag],
-        side: [-ca * sb * side, cb * side, -sa * sb * side],
+        sideslip: side_body(sideslip_cy),
+        side_rest: side_body(f64::from(c.wind.side) - sideslip_cy),
         lift: lift_body(f64::from(c.wind.lift) - flap_cl),
         flap: lift_body(flap_cl),
         unit_lift: lift_body(1.0),
@@ -576,11 +628,12 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
 /// with the identified corrections. The axis scales multiply every term of their axis; the flap
 /// terms carry their own scale over the lift axis's, and the offset joins the lift axis's first term.
 pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -> String {
-    let (l, f, o, s) = (
+    let (l, f, o, sb, sc) = (
         scales.lift.value,
         scales.flap.value,
         scales.offset.value,
-        scales.side.value,
+        scales.sideslip.value,
+        scales.side_controls.value,
     );
     let how = if corrected {
         "equation error, over the same card flown on the model; drag not identified"
@@ -589,11 +642,18 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
     };
     let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {s:.5} ({how}).\"\n\
-         [axes]\nLIFT = {l:.5}\nSIDE = {s:.5}\n",
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms) ({how}).\"\n\
+         [axes]\nLIFT = {l:.5}\nSIDE = {sc:.5}\n",
         ft.display(),
         c.flights.len()
     );
+    for term in sideslip_side_terms() {
+        t.push_str(&format!(
+            "[coefficients.\"{}\"]\nscale = {:.5}\n",
+            term.name,
+            sb / sc
+        ));
+    }
     for term in flap_lift_terms() {
         t.push_str(&format!(
             "[coefficients.\"{}\"]\nscale = {:.5}\n",
@@ -652,15 +712,16 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     let e = |e: &Estimate| format!("{:.4} ± {:.4}", e.value, e.std_error);
     let row = |what: &str, s: &Scales| {
         format!(
-            "| {what} | {} | {} | {} | {} |\n",
+            "| {what} | {} | {} | {} | {} | {} |\n",
             e(&s.lift),
             e(&s.flap),
             e(&s.offset),
-            e(&s.side)
+            e(&s.sideslip),
+            e(&s.side_controls)
         )
     };
     m.push_str(
-        "| corrections (± 1σ) | lift scale | flap-lift scale | lift offset ΔC_L | side-force scale |\n|---|---|---|---|---|\n",
+        "| corrections (± 1σ) | lift scale | flap-lift scale | lift offset ΔC_L | sideslip side-force scale | surface side-force scale |\n|---|---|---|---|---|---|\n",
     );
     m.push_str(&row("flight test", &c.scales));
     if let Some(mc) = &r.model_card {
@@ -669,12 +730,12 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
     let f = |p: &PerFlight| {
         format!(
-            "{:.4} / {:.4} / {:+.4} / {:.4}",
-            p.lift, p.flap, p.offset, p.side
+            "{:.4} / {:.4} / {:+.4} / {:.4} / {:.4}",
+            p.lift, p.flap, p.offset, p.sideslip, p.side_controls
         )
     };
     m.push_str(
-        "\nFlight by flight (lift scale / flap-lift scale / lift offset / side-force scale):\n\n| flight | flight test |",
+        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale):\n\n| flight | flight test |",
     );
     if r.model_card.is_some() {
         m.push_str(" model card |");
@@ -699,7 +760,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         ("inertial α vs boom α, deg", &c.boom_alpha),
         ("inertial β vs boom β, deg", &c.boom_beta),
         ("boom airspeed vs inertial, m/s", &c.boom_tas),
-        ("lateral specific force, m/s²", &c.side),
+        ("lateral specific force (rolling frames), m/s²", &c.side),
         ("normal specific force, m/s²", &c.lift),
     ] {
         for (name, e) in &f.params {
@@ -711,9 +772,10 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     }
     m.push_str(
         "\nThe vanes' gain and per-flight offsets and the airspeed's scale and bias are the boom's \
-         calibration against the inertial data (gain and scale 1: none); the lift and side-force \
-         scales multiply the model's LIFT and SIDE axes in aircraft.toml, the flap-lift scale the \
-         lift terms driven by the trailing-edge flaps, and the offset joins the lift axis. Drag is \
+         calibration against the inertial data (gain and scale 1: none); the lift scale multiplies \
+         the model's LIFT axis in aircraft.toml, the flap-lift scale the lift terms driven by the \
+         trailing-edge flaps, and the offset joins the lift axis; the surface side-force scale \
+         multiplies the SIDE axis and the sideslip terms carry their own scale over it. Drag is \
          not identified: along body x the engine's thrust adds to it.\n",
     );
     m
@@ -794,13 +856,15 @@ mod tests {
         let qs_m = 0.5 * f64::from(rho) * tas * tas * s_m2 / mass;
         let body = [c.body.x, c.body.y, c.body.z];
         for (i, b) in body.iter().enumerate() {
-            let sum = p.drag[i] + p.side[i] + p.lift[i] + p.flap[i];
+            let sum = p.drag[i] + p.sideslip[i] + p.side_rest[i] + p.lift[i] + p.flap[i];
             let want = f64::from(*b) * qs_m;
             assert!((sum - want).abs() < 1e-3, "axis {i}: {sum} vs {want}");
         }
         // The flap terms are a part of the lift (this point has flaperon deflection), and the
         // unit lift points along the lift with qS/m.
         assert!(p.flap[2].abs() > 1e-3);
+        // Both side-force parts are there: β ≠ 0, and rudder, aileron and rates.
+        assert!(p.sideslip[1].abs() > 1e-3 && p.side_rest[1].abs() > 1e-4);
         let unit = (p.unit_lift[0].powi(2) + p.unit_lift[2].powi(2)).sqrt();
         assert!((unit - qs_m).abs() < 1e-6 * qs_m, "{unit} vs {qs_m}");
     }

@@ -415,7 +415,8 @@ enum Cmd {
     },
     /// Flight-test calibration: from a `flight-test` dataset's production sensors and nose boom
     /// (never its truth columns), check the boom against the inertial data and identify the lift
-    /// scale, the flap-lift scale, a lift offset and the side-force scale of the aircraft against
+    /// scale, the flap-lift scale, a lift offset and the side force's two scales (its sideslip
+    /// terms', and its surface and rate terms', from the rolling frames) of the aircraft against
     /// the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
     /// spec of the calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
     Calibrate {
@@ -960,22 +961,25 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
     if json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
-        let (l, f, o, s) = (
+        let (l, f, o, sb, sc) = (
             &r.scales.lift,
             &r.scales.flap,
             &r.scales.offset,
-            &r.scales.side,
+            &r.scales.sideslip,
+            &r.scales.side_controls,
         );
         println!(
-            "lift scale {:.4} ± {:.4}, flap-lift scale {:.4} ± {:.4}, lift offset {:+.4} ± {:.4}, side-force scale {:.4} ± {:.4} ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
+            "lift scale {:.4} ± {:.4}, flap-lift scale {:.4} ± {:.4}, lift offset {:+.4} ± {:.4}, side-force scale {:.4} ± {:.4} (sideslip terms) and {:.4} ± {:.4} (surface and rate terms) ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
             l.value,
             l.std_error,
             f.value,
             f.std_error,
             o.value,
             o.std_error,
-            s.value,
-            s.std_error,
+            sb.value,
+            sb.std_error,
+            sc.value,
+            sc.std_error,
             r.flight_test.flights.len(),
             if r.model_card.is_some() {
                 ", over the model card's"
