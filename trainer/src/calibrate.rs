@@ -25,7 +25,7 @@
 //! 3. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
 //!    the mix, surfaces and accelerometers behind the anti-alias filter): on the model's own
-//!    aircraft the scales come out near 0.99 (lift) and 0.97 (side force), not 1. The same test
+//!    aircraft the scales come out near 0.99 (lift), 1.01 and 1.05 (side force), not 1. The same test
 //!    card flown in simulation on the a-priori model (`--model-flight-test`: the production sensors
 //!    and the boom of that flight, never its truth) measures this bias, and the scales reported are
 //!    the flight test's over the model card's.
@@ -48,7 +48,7 @@ use std::path::Path;
 const MIN_QBAR_PA: f64 = 5_000.0;
 /// Frames beyond this α (deg) are left out (the vanes and the model's stall region).
 const MAX_ALPHA_DEG: f64 = 20.0;
-/// Only quasi-steady frames enter the force equations: the boom's vane lag, the IMU's anti-alias
+/// The boom step and the lift read quasi-steady frames only: the boom's vane lag, the IMU's anti-alias
 /// filter and the surfaces' sampling delay the signals differently, so during a fast input
 /// (a doublet's edge) they disagree. Angular acceleration below this, rad/s²…
 const MAX_OMEGA_DOT_RPS2: f64 = 0.05;
@@ -142,11 +142,14 @@ impl Scales {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PerFlight {
     pub flight: String,
-    pub lift: f64,
-    pub flap: f64,
-    pub offset: f64,
-    pub sideslip: f64,
-    pub side_controls: f64,
+    /// `None`: the flight has too few quasi-steady frames for the lift fit.
+    pub lift: Option<f64>,
+    pub flap: Option<f64>,
+    pub offset: Option<f64>,
+    /// `None`: the flight has too few rolling frames for the side-force fit (no roll inputs);
+    /// its lift is then fitted with the side force at the pooled scales.
+    pub sideslip: Option<f64>,
+    pub side_controls: Option<f64>,
 }
 
 /// A fit's parameter `name` with its 1σ raised to `spread`'s standard deviation over √n (the
@@ -451,27 +454,52 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         });
     }
     let all_eq: Vec<&EqRow> = eq.iter().collect();
-    let (side, lift) = force_fits(&all_eq).ok_or_else(|| {
-        Error::Numeric("lift and side force: the flight-test data do not determine them (too few quasi-steady or rolling frames: the card needs steady points and roll inputs)".into())
+    let count = |f: fn(&EqRow) -> bool| eq.iter().filter(|r| f(r)).count();
+    let side = side_fit(&all_eq).ok_or_else(|| {
+        Error::Numeric(format!(
+            "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
+            count(|r| r.rolling),
+            MIN_QBAR_PA / 1000.0
+        ))
     })?;
-    // Each flight alone: the scatter of its scales is the honest part of the 1σ.
+    let (k_b, k_y) = side_scales(&side);
+    // A scale far from 1 is not a calibration but a card that did not excite the term; 0 would
+    // also divide the spec's sideslip-term scale.
+    for (what, k) in [("sideslip terms", k_b), ("surface and rate terms", k_y)] {
+        if !(0.2..=5.0).contains(&k) {
+            return Err(Error::Numeric(format!(
+                "side force: the {what}' scale came out at {k:.3}, outside 0.2–5: the rolling frames do not determine it; fly more roll inputs at each test point"
+            )));
+        }
+    }
+    let lift = lift_fit(&all_eq, k_b, k_y).ok_or_else(|| {
+        Error::Numeric(format!(
+            "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
+            count(|r| r.steady)
+        ))
+    })?;
+    // Each flight alone: the scatter of its scales is the honest part of the 1σ. A flight without
+    // roll inputs has no side-force scales of its own; its lift reads the pooled ones.
     let per_flight: Vec<PerFlight> = names
         .iter()
         .enumerate()
-        .filter_map(|(k, name)| {
+        .map(|(k, name)| {
             let rows: Vec<&EqRow> = eq.iter().filter(|r| r.flight == k).collect();
-            let (s, l) = force_fits(&rows)?;
-            Some(PerFlight {
+            let s = side_fit(&rows);
+            let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
+            let l = lift_fit(&rows, kb, ky);
+            PerFlight {
                 flight: name.clone(),
-                lift: l.get("k_lift"),
-                flap: l.get("k_flap"),
-                offset: l.get("offset_cl"),
-                sideslip: s.get("k_sideslip"),
-                side_controls: s.get("k_side_controls"),
-            })
+                lift: l.as_ref().map(|l| l.get("k_lift")),
+                flap: l.as_ref().map(|l| l.get("k_flap")),
+                offset: l.as_ref().map(|l| l.get("offset_cl")),
+                sideslip: s.as_ref().map(|s| s.get("k_sideslip")),
+                side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
+            }
         })
         .collect();
-    let spread = |f: fn(&PerFlight) -> f64| per_flight.iter().map(f).collect::<Vec<_>>();
+    let spread =
+        |f: fn(&PerFlight) -> Option<f64>| per_flight.iter().filter_map(f).collect::<Vec<_>>();
     let scales = Scales {
         lift: with_scatter(&lift, "k_lift", &spread(|f| f.lift)),
         flap: with_scatter(&lift, "k_flap", &spread(|f| f.flap)),
@@ -514,9 +542,9 @@ struct EqRow {
 /// 0.01 m/s² of the normal force into y) would otherwise bias the scale. The lift offset ΔC_L is
 /// told apart from that constant by dynamic pressure (the test points span 3:1 in it), and from
 /// k_L because in quasi-steady flight the lift carries the weight at every speed while q varies.
-fn force_fits(all: &[&EqRow]) -> Option<(Fit, Fit)> {
+fn side_fit(all: &[&EqRow]) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
-    let side = least_squares(
+    least_squares(
         &["k_sideslip", "k_side_controls", "bias_mps2"],
         &[
             rolling.iter().map(|r| r.parts.sideslip[1]).collect(),
@@ -527,11 +555,14 @@ fn force_fits(all: &[&EqRow]) -> Option<(Fit, Fit)> {
             .iter()
             .map(|r| r.f_cg[1] - r.parts.drag[1])
             .collect::<Vec<_>>(),
-    )?;
-    let (k_b, k_y) = (side.get("k_sideslip"), side.get("k_side_controls"));
+    )
+}
+
+/// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`.
+fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64) -> Option<Fit> {
     let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
     let ones = vec![1.0; rows.len()];
-    let lift = least_squares(
+    least_squares(
         &["k_lift", "k_flap", "offset_cl", "bias_mps2"],
         &[
             rows.iter().map(|r| r.parts.lift[2]).collect(),
@@ -545,8 +576,12 @@ fn force_fits(all: &[&EqRow]) -> Option<(Fit, Fit)> {
                 r.f_cg[2] - k_b * r.parts.sideslip[2] - k_y * r.parts.side_rest[2] - r.parts.drag[2]
             })
             .collect::<Vec<_>>(),
-    )?;
-    Some((side, lift))
+    )
+}
+
+/// The side force's two scales of a fit.
+fn side_scales(side: &Fit) -> (f64, f64) {
+    (side.get("k_sideslip"), side.get("k_side_controls"))
 }
 
 /// Body-axis specific force (m/s²) of each wind axis of the model: drag, side force, and lift
@@ -683,6 +718,8 @@ pub struct Report {
     pub flap_terms: Vec<String>,
     /// The lift term the offset joins.
     pub offset_term: Option<String>,
+    /// The side-force terms the sideslip scale applies to (JSBSim function names).
+    pub sideslip_terms: Vec<String>,
 }
 
 impl Report {
@@ -697,6 +734,7 @@ impl Report {
             model_card,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
+            sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
         }
     }
 }
@@ -729,9 +767,18 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
     let f = |p: &PerFlight| {
+        let v = |x: Option<f64>, signed: bool| match (x, signed) {
+            (Some(x), true) => format!("{x:+.4}"),
+            (Some(x), false) => format!("{x:.4}"),
+            (None, _) => "–".to_string(),
+        };
         format!(
-            "{:.4} / {:.4} / {:+.4} / {:.4} / {:.4}",
-            p.lift, p.flap, p.offset, p.sideslip, p.side_controls
+            "{} / {} / {} / {} / {}",
+            v(p.lift, false),
+            v(p.flap, false),
+            v(p.offset, true),
+            v(p.sideslip, false),
+            v(p.side_controls, false)
         )
     };
     m.push_str(
@@ -752,6 +799,10 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         }
         m.push('\n');
     }
+    m.push_str(
+        "\n–: the flight has too few frames for that fit (no roll inputs, or no steady points); \
+         it does not enter that scale's 1σ.\n",
+    );
     m.push_str("\nThe fits of the flight test:\n\n");
     m.push_str(
         "| step | parameter | value | 1σ | frames | residual RMS | R² | ρ₁ |\n|---|---|---|---|---|---|---|---|\n",
@@ -813,6 +864,57 @@ mod tests {
             se(&slow),
             se(&white)
         );
+    }
+
+    #[test]
+    fn the_side_force_scales_come_from_the_rolling_frames_and_the_lift_from_the_steady_ones() {
+        // Steady frames: the surfaces' side force a fixed −0.32 of the sideslip terms' (one
+        // combination only); rolling frames: the two move apart. Truth k_β 0.9, k_Y 1.1, k_L 0.95.
+        let row = |k: usize, steady: bool| {
+            let t = k as f64 * 0.37;
+            let b = 2.0 * t.sin();
+            let rest = if steady {
+                -0.32 * b
+            } else {
+                0.8 * (1.3 * t).cos()
+            };
+            let lift = 9.0 + (0.5 * t).sin();
+            let parts = Parts {
+                drag: [0.0; 3],
+                sideslip: [0.0, b, 0.1 * b],
+                side_rest: [0.0, rest, 0.05 * rest],
+                lift: [0.0, 0.0, -lift],
+                flap: [0.0, 0.0, -0.3 * (0.9 * t).cos()],
+                unit_lift: [0.0, 0.0, -(20.0 + 5.0 * (0.2 * t).sin())],
+            };
+            let (kb, ky) = (0.9, 1.1);
+            let f_y = kb * b + ky * rest + 0.01;
+            let f_z = -0.95 * lift + 0.1 * kb * b + 0.05 * ky * rest - 0.3 * (0.9 * t).cos();
+            EqRow {
+                flight: 0,
+                steady,
+                rolling: !steady,
+                parts,
+                f_cg: [0.0, f_y, f_z],
+            }
+        };
+        let rows: Vec<EqRow> = (0..400).map(|k| row(k, k % 3 != 0)).collect();
+        let all: Vec<&EqRow> = rows.iter().collect();
+        let side = side_fit(&all).unwrap();
+        let (kb, ky) = side_scales(&side);
+        assert!(
+            (kb - 0.9).abs() < 1e-9 && (ky - 1.1).abs() < 1e-9,
+            "{kb} {ky}"
+        );
+        let lift = lift_fit(&all, kb, ky).unwrap();
+        assert!(
+            (lift.get("k_lift") - 0.95).abs() < 1e-9,
+            "{}",
+            lift.get("k_lift")
+        );
+        // Without a rolling frame there is no side-force fit.
+        let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
+        assert!(side_fit(&steady).is_none());
     }
 
     #[test]
