@@ -604,21 +604,35 @@ struct Parts {
 /// Their scale is a parameter of its own: in JSBSim's F-16 the trailing-edge flap cancels in the
 /// mix, which follows the aileron, so their lift is unlike either the axis scale or an offset.
 pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
-    MODEL.lift.iter().filter(|t| {
-        t.factors
-            .iter()
-            .any(|f| matches!(f, Factor::Var(Var::FlaperonMixRad)))
-    })
+    terms_reading(MODEL.lift, &[Var::FlaperonMixRad])
 }
 
 /// The model's side-force terms driven by sideslip (a factor β or |β|): `CYb` and `CYb_M` in
 /// JSBSim's F-16.
 pub fn sideslip_side_terms() -> impl Iterator<Item = &'static Term<'static>> {
-    MODEL.side.iter().filter(|t| {
+    terms_reading(MODEL.side, &[Var::BetaRad, Var::MagBetaRad])
+}
+
+/// The terms of a force axis with a factor among `vars`.
+fn terms_reading(
+    axis: &'static [Term<'static>],
+    vars: &'static [Var],
+) -> impl Iterator<Item = &'static Term<'static>> {
+    axis.iter().filter(move |t| {
         t.factors
             .iter()
-            .any(|f| matches!(f, Factor::Var(Var::BetaRad | Var::MagBetaRad)))
+            .any(|f| matches!(f, Factor::Var(v) if vars.contains(v)))
     })
+}
+
+/// The summed coefficient of `terms` at `point` (`None` if one cannot be evaluated there).
+fn coefficient_of(
+    terms: impl Iterator<Item = &'static Term<'static>>,
+    point: &estimator_core::aero::Point,
+) -> Option<f64> {
+    terms
+        .map(|t| t.eval(point).map(|v| f64::from(v.value)))
+        .sum()
 }
 
 fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32) -> Option<Parts> {
@@ -637,12 +651,8 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
     if !c.valid {
         return None;
     }
-    let flap_cl = flap_lift_terms()
-        .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
-        .sum::<Option<f64>>()?;
-    let sideslip_cy = sideslip_side_terms()
-        .map(|t| t.eval(&point).map(|v| f64::from(v.value)))
-        .sum::<Option<f64>>()?;
+    let flap_cl = coefficient_of(flap_lift_terms(), &point)?;
+    let sideslip_cy = coefficient_of(sideslip_side_terms(), &point)?;
     let qs_m = f64::from(filter::qs_over_m(rho, tas as f32, cfg.mass_kg(inp.fuel_kg)));
     let (sa, ca, sb, cb) = (alpha.sin(), alpha.cos(), beta.sin(), beta.cos());
     // Wind to body (JSBSim's Tw2b) of (−D, Y, −L): x forward, y right, z down.
@@ -682,18 +692,14 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
         ft.display(),
         c.flights.len()
     );
-    for term in sideslip_side_terms() {
+    // Terms with a scale of their own carry it over their axis's.
+    let own_scale = sideslip_side_terms()
+        .map(|term| (term, sb / sc))
+        .chain(flap_lift_terms().map(|term| (term, f / l)));
+    for (term, k) in own_scale {
         t.push_str(&format!(
-            "[coefficients.\"{}\"]\nscale = {:.5}\n",
-            term.name,
-            sb / sc
-        ));
-    }
-    for term in flap_lift_terms() {
-        t.push_str(&format!(
-            "[coefficients.\"{}\"]\nscale = {:.5}\n",
-            term.name,
-            f / l
+            "[coefficients.\"{}\"]\nscale = {k:.5}\n",
+            term.name
         ));
     }
     if let Some(first) = MODEL.lift.first() {
