@@ -228,6 +228,7 @@ mod tests {
                     time_s: k as f64 / 20.0,
                     truth: truth(k),
                     sensed: [0.0; estimator_core::CHANNELS],
+                    sub: crate::flight::NO_SUBSAMPLES,
                 })
                 .collect(),
             cut: None,

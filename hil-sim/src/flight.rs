@@ -2,7 +2,7 @@
 //! generator zones, and the time base and units they use. No I/O: `dataset` reads and writes them,
 //! `plant` fills them, everything downstream reads them.
 
-use estimator_core::CHANNELS;
+use estimator_core::{CHANNELS, Channel};
 use serde::{Deserialize, Serialize};
 
 /// JSBSim integration rate, Hz.
@@ -11,6 +11,34 @@ pub const SIM_HZ: u32 = 120;
 pub const SAMPLE_HZ: u32 = 20;
 /// JSBSim steps per recorded sample.
 pub const STEPS_PER_SAMPLE: u32 = SIM_HZ / SAMPLE_HZ;
+/// Sub-samples per recorded sample: the IMU and the surface position sensors deliver at the
+/// simulation rate, 120 Hz (`docs/sensors.md`, "Sensor output rate").
+pub const SUBSAMPLES: usize = STEPS_PER_SAMPLE as usize;
+/// The channels sub-sampled at 120 Hz: the IMU's six axes and the seven surface positions (SI,
+/// degrees for surfaces), before the flight computer's anti-alias filter.
+pub const SUB_CHANNELS: [Channel; 13] = [
+    Channel::GyroP,
+    Channel::GyroQ,
+    Channel::GyroR,
+    Channel::AccelX,
+    Channel::AccelY,
+    Channel::AccelZ,
+    Channel::Elevator,
+    Channel::Aileron,
+    Channel::Rudder,
+    Channel::Lef,
+    Channel::Tef,
+    Channel::Flaperon,
+    Channel::Speedbrake,
+];
+/// One 120 Hz output of the [`SUB_CHANNELS`], in that order.
+pub type SubSample = [f64; SUB_CHANNELS.len()];
+/// The sensors' 120 Hz outputs over one 20 Hz period, oldest first: sub-sample `k` is the output
+/// `SUBSAMPLES − 1 − k` simulation steps before the sample instant (the last one at it).
+pub type Subsamples = [SubSample; SUBSAMPLES];
+/// The sub-samples of a sample that has none (a dataset older than format 5, a flight log without
+/// them).
+pub const NO_SUBSAMPLES: Subsamples = [[f64::NAN; SUB_CHANNELS.len()]; SUBSAMPLES];
 /// Feet to metres.
 pub const FT_TO_M: f64 = 0.3048;
 /// Pounds (mass) to kilograms.
@@ -187,6 +215,10 @@ pub struct Sample {
     /// The sensed channels in [`Channel`] order and SI units (degrees for surfaces); NaN for a
     /// channel the dataset does not carry.
     pub sensed: [f64; CHANNELS],
+    /// The IMU's and the surface sensors' own outputs over the period that ends at this sample
+    /// ([`Subsamples`]; before the flight computer's anti-alias filter that makes their 20 Hz
+    /// channels in `sensed`); [`NO_SUBSAMPLES`] when the flight does not carry them.
+    pub sub: Subsamples,
 }
 
 /// The maneuver generator's zones (Karali et al. 2023, Fig. 3), as its scripts code them in

@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use crate::flight::{
-    Every, FT_TO_M, Flight, LB_TO_KG, SIM_HZ, STEPS_PER_SAMPLE, Sample, Zone, ZoneTimes,
+    Every, FT_TO_M, Flight, LB_TO_KG, NO_SUBSAMPLES, SIM_HZ, STEPS_PER_SAMPLE, Sample, Zone,
+    ZoneTimes,
 };
 use crate::plant::{
     AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan,
@@ -141,6 +142,8 @@ fn fly_planned(
     let mut k: u64 = 0;
     let mut zone_steps: Option<[u64; 3]> = None;
     let mut airborne = false;
+    // The sensors' 120 Hz outputs of the last `SUBSAMPLES` steps, oldest first.
+    let mut sub = NO_SUBSAMPLES;
     'outer: loop {
         let rows = plant.step(SIM_HZ * 5)?;
         let ended = rows.len() < (SIM_HZ * 5) as usize;
@@ -176,6 +179,10 @@ fn fly_planned(
                 n[zone.index()] += 1;
             }
             let si = sensors.step(&sensor_input(r));
+            sub.rotate_left(1);
+            if let Some(last) = sub.last_mut() {
+                *last = sensors.fast_output();
+            }
             if sample_step {
                 flight.samples.push(Sample {
                     // JSBSim's own clock (its summed dt, e.g. 0.049999999999999996 after 6 steps):
@@ -183,6 +190,7 @@ fn fly_planned(
                     time_s: t,
                     truth: truth_of(r),
                     sensed: si,
+                    sub,
                 });
             }
         }
@@ -226,6 +234,8 @@ mod tests {
                 "truth, sample {k}"
             );
             assert_eq!(bits(&p.sensed), bits(&f.sensed), "sensed, sample {k}");
+            let sub = |s: &Sample| bits(s.sub.as_flattened());
+            assert_eq!(sub(p), sub(f), "sub-samples, sample {k}");
         }
     }
 }

@@ -44,6 +44,7 @@ mod tests {
             time_s: 12.35,
             truth: Truth::default(),
             sensed,
+            sub: crate::flight::NO_SUBSAMPLES,
         };
         let f = sample_to_frame(7, &s);
         assert_eq!(f.seq, 7);

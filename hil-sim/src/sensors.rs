@@ -10,9 +10,12 @@
 //! (rates relative to inertial space, specific force moved from the CG), through the triad's
 //! per-flight scale-factor and misalignment matrix (I + S + M); then per axis turn-on bias,
 //! Gauss-Markov in-run bias, g-dependent gyro bias and white noise; then Δθ/Δv quantization
-//! (residual carried, as an integrating IMU does), a first-order lag and a 2nd-order Butterworth
-//! anti-alias low-pass, so that the 20 Hz decimation does not fold vibration and noise into the
-//! band. Defaults and their sources: `docs/sensors.md`.
+//! (residual carried, as an integrating IMU does) and a first-order lag: the unit's own output,
+//! delivered at the 120 Hz simulation rate ([`SensorModel::fast_output`], with the surface
+//! positions). The flight computer's
+//! 2nd-order Butterworth anti-alias low-pass on that output makes the 20 Hz IMU channels, so that
+//! the 20 Hz decimation does not fold vibration and noise into the band. Defaults and their
+//! sources: `docs/sensors.md`.
 
 use std::collections::VecDeque;
 use std::path::Path;
@@ -23,7 +26,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::flight::{Every, SIM_HZ};
+use crate::flight::{Every, SIM_HZ, SUB_CHANNELS, SubSample};
 
 const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
@@ -596,6 +599,15 @@ pub struct ImuAxis {
     aa: Option<Biquad>,
 }
 
+/// What [`ImuAxis::filter`] gives for one raw sample.
+#[derive(Clone, Copy, Debug)]
+struct AxisOutput {
+    /// The unit's output: the raw sample through the sensor's lag.
+    unit: f64,
+    /// That output through the flight computer's anti-alias filter (the 20 Hz channel's value).
+    channel: f64,
+}
+
 impl ImuAxis {
     fn new(e: &InertialErrors, lag_tau_s: f64, aa_hz: f64, rng: &mut ChaCha12Rng) -> Self {
         let t: f64 = StandardNormal.sample(rng);
@@ -632,16 +644,20 @@ impl ImuAxis {
         }
     }
 
-    /// Lag and anti-alias filter applied to one raw sample.
-    fn filter(&mut self, raw: f64) -> f64 {
+    /// Lag, then anti-alias filter, applied to one raw sample.
+    fn filter(&mut self, raw: f64) -> AxisOutput {
         let lagged = match self.lag {
             None => raw,
             Some(y) => y + self.lag_alpha * (raw - y),
         };
         self.lag = Some(lagged);
-        match &mut self.aa {
+        let channel = match &mut self.aa {
             Some(f) => f.step(lagged),
             None => lagged,
+        };
+        AxisOutput {
+            unit: lagged,
+            channel,
         }
     }
 
@@ -851,6 +867,8 @@ pub struct SensorModel {
     surface_aa: [Option<Biquad>; 7],
     steps: u64,
     egi: EgiModel,
+    /// The 120 Hz outputs of the last step, [`SUB_CHANNELS`] order.
+    fast_out: SubSample,
 }
 
 impl SensorModel {
@@ -880,6 +898,7 @@ impl SensorModel {
             surface_aa: std::array::from_fn(|_| Biquad::lowpass(cfg.surfaces.antialias_cutoff_hz)),
             steps: 0,
             egi: EgiModel::new(cfg, seed),
+            fast_out: [f64::NAN; SUB_CHANNELS.len()],
             cfg: cfg.clone(),
             rng,
         }
@@ -966,13 +985,26 @@ impl SensorModel {
         (gyro, accel)
     }
 
+    /// The sensors' 120 Hz output at the last [`SensorModel::step`], in [`SUB_CHANNELS`] order
+    /// (NaN before the first step): the IMU unit's gyro p, q, r (rad/s) and specific force x, y, z
+    /// (m/s²), every error of its path and its lag; then the seven surface positions (degrees),
+    /// truth plus the step's ADC noise draw, quantized. Both before the flight computer's
+    /// anti-alias filter (the 20 Hz channels carry the noise and quantization after it).
+    pub fn fast_output(&self) -> SubSample {
+        self.fast_out
+    }
+
     /// One 120 Hz step: the sensed channels of every suite at this instant.
     pub fn step(&mut self, t: &SensorInput) -> [f64; CHANNELS] {
         let mut out = [f64::NAN; CHANNELS];
         let (gyro_raw, accel_raw) = self.imu_raw(t);
         for k in 0..3 {
-            out[Channel::GyroP.index() + k] = self.gyro[k].filter(gyro_raw[k]);
-            out[Channel::AccelX.index() + k] = self.accel[k].filter(accel_raw[k]);
+            let g = self.gyro[k].filter(gyro_raw[k]);
+            let a = self.accel[k].filter(accel_raw[k]);
+            out[Channel::GyroP.index() + k] = g.channel;
+            out[Channel::AccelX.index() + k] = a.channel;
+            self.fast_out[k] = g.unit;
+            self.fast_out[3 + k] = a.unit;
         }
 
         // GPS: a fix is the truth `latency` ago plus noise, refreshed at the fix rate and held.
@@ -1007,10 +1039,16 @@ impl SensorModel {
             (Channel::Flaperon, t.flaperon_deg),
             (Channel::Speedbrake, t.speedbrake_deg),
         ];
-        for ((c, v), aa) in surfaces.into_iter().zip(self.surface_aa.iter_mut()) {
-            let v = aa.as_mut().map_or(v, |f| f.step(v));
+        let fast = self.fast_out.iter_mut().skip(6);
+        for (((c, v), aa), fast) in surfaces
+            .into_iter()
+            .zip(self.surface_aa.iter_mut())
+            .zip(fast)
+        {
+            let filtered = aa.as_mut().map_or(v, |f| f.step(v));
             let n: f64 = StandardNormal.sample(&mut self.rng);
-            out[c.index()] = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
+            out[c.index()] = quantize(filtered + s.noise_sigma_deg * n, s.quantum_deg);
+            *fast = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
         }
         let n: f64 = StandardNormal.sample(&mut self.rng);
         out[Channel::Throttle.index()] = quantize(
@@ -1107,6 +1145,52 @@ mod tests {
             fuel_kg: 3000.0 - 0.5 * t,
             ..SensorInput::default()
         }
+    }
+
+    /// The unit's 120 Hz output is what the flight computer's anti-alias filter reads: the
+    /// documented 2nd-order Butterworth run over [`SensorModel::fast_output`] gives every 20 Hz IMU
+    /// channel bit for bit; the output is the lagged raw sample (no anti-alias of its own). The
+    /// surfaces' 120 Hz positions follow the truth within the ADC's noise and quantum.
+    #[test]
+    fn the_imu_channels_are_the_anti_aliased_unit_output() {
+        let cfg = SensorConfig::default();
+        let mut m = SensorModel::new(&cfg, 3);
+        let mut aa: [Biquad; 6] =
+            std::array::from_fn(|_| Biquad::lowpass(cfg.imu.antialias_cutoff_hz).unwrap());
+        let mut lag_gap: f64 = 0.0;
+        let mut prev = [0.0; 6];
+        for k in 0..2400 {
+            let out = m.step(&wandering(k));
+            let fast = m.fast_output();
+            let t = wandering(k);
+            for (c, truth) in [(6, t.elevator_deg), (8, t.rudder_deg), (9, t.lef_deg)] {
+                assert!(
+                    (fast[c] - truth).abs() < 0.2,
+                    "step {k} {c}: {} vs {truth}",
+                    fast[c]
+                );
+            }
+            let unit = [fast[0], fast[1], fast[2], fast[3], fast[4], fast[5]];
+            for (axis, f) in aa.iter_mut().enumerate() {
+                let channel = out[Channel::GyroP.index() + axis];
+                assert_eq!(
+                    f.step(unit[axis]).to_bits(),
+                    channel.to_bits(),
+                    "step {k} axis {axis}"
+                );
+            }
+            // The unit follows the 1.7 rad/s lateral specific force within its 3 ms lag, the
+            // 6 Hz channel lags it by tens of ms: their gap is the anti-alias filter's.
+            if k > 600 {
+                lag_gap = lag_gap.max((unit[4] - out[Channel::AccelY.index()]).abs());
+            }
+            prev = unit;
+        }
+        assert!(prev.iter().all(|v| v.is_finite()));
+        assert!(
+            lag_gap > 0.01,
+            "unit and channel differ by {lag_gap} at most"
+        );
     }
 
     /// `t` with NaN in every input [`InputSchedule`] says step `k` does not use.

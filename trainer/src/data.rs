@@ -462,6 +462,7 @@ mod tests {
                 time_s: k as f64 * 0.05,
                 truth: Default::default(),
                 sensed: [0.0; CHANNELS],
+                sub: hil_sim::dataset::NO_SUBSAMPLES,
             })
             .collect();
         let csv = hil_sim::dataset::Flight {
@@ -614,6 +615,7 @@ mod tests {
             time_s: 12.3456,
             truth: Default::default(),
             sensed: si,
+            sub: hil_sim::dataset::NO_SUBSAMPLES,
         };
         let f = hil_sim::frames::sample_to_frame(70_000usize as u16, &sample);
         assert_eq!(f, SensorFrame::from_si(70_000u32 as u16, 12_346, &si));

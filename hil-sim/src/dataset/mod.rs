@@ -10,7 +10,8 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 pub use crate::flight::{
-    Flight, Sample, Split, TRUTH_COLUMNS, TRUTH_COUNT, Truth, Zone, ZoneTimes,
+    Flight, NO_SUBSAMPLES, SUB_CHANNELS, SUBSAMPLES, Sample, Split, SubSample, Subsamples,
+    TRUTH_COLUMNS, TRUTH_COUNT, Truth, Zone, ZoneTimes,
 };
 
 /// Truth columns added by format 4 (NaN when reading a format-3 flight).
@@ -129,18 +130,40 @@ impl Drop for Staging {
     }
 }
 
-/// All CSV column names in file order: time, truth, then one sensed column per channel of every
-/// suite.
+/// Number of CSV columns: time, truth, sensed channels, sub-samples.
+const COLUMNS: usize = 1 + TRUTH_COUNT + CHANNELS + SUBSAMPLES * SUB_CHANNELS.len();
+
+/// The sub-sample columns (format 5), in file order: for each sub-sample `k` (oldest first) the
+/// [`SUB_CHANNELS`]' names with `_sub{k}`, e.g. `accel_y_mps2_sub5` (the sample instant's).
+static SUB_COLUMNS: std::sync::LazyLock<Vec<String>> = std::sync::LazyLock::new(|| {
+    (0..SUBSAMPLES)
+        .flat_map(|k| {
+            SUB_CHANNELS
+                .iter()
+                .map(move |c| format!("{}_sub{k}", c.name()))
+        })
+        .collect()
+});
+
+/// All CSV column names in file order: time, truth, one sensed column per channel of every
+/// suite, then the IMU's sub-samples.
 pub fn columns() -> Vec<&'static str> {
     let mut c = vec!["time_s"];
     c.extend_from_slice(&TRUTH_COLUMNS);
     c.extend(Channel::ALL.iter().map(|c| c.name()));
+    c.extend(SUB_COLUMNS.iter().map(String::as_str));
     c
 }
 
 /// Whether column `k` of [`columns`] is a truth column.
 fn is_truth(k: usize) -> bool {
     (1..1 + TRUTH_COUNT).contains(&k)
+}
+
+/// Whether column `k` of [`columns`] is a sub-sample (format 5; absent in older datasets and
+/// optional in a flight log, all or none).
+fn is_subsample(k: usize) -> bool {
+    k >= 1 + TRUTH_COUNT + CHANNELS
 }
 
 /// A flight's samples must be the estimator's 20 Hz: times strictly increasing, every step one
@@ -183,7 +206,8 @@ pub fn check_time_base(path: &Path, f: &Flight) -> Result<(), DatasetError> {
 /// read as NaN when all of them are absent.
 fn since_format_4(column: usize) -> bool {
     let truth = 1 + TRUTH_COUNT - TRUTH_SINCE_FORMAT_4..1 + TRUTH_COUNT;
-    truth.contains(&column) || column >= 1 + TRUTH_COUNT + TABLE1_CHANNELS
+    let egi = 1 + TRUTH_COUNT + TABLE1_CHANNELS..1 + TRUTH_COUNT + CHANNELS;
+    truth.contains(&column) || egi.contains(&column)
 }
 
 impl Flight {
@@ -204,7 +228,10 @@ impl Flight {
         let mut field = String::with_capacity(32);
         for s in &self.samples {
             let truth = s.truth.to_array();
-            let values = std::iter::once(&s.time_s).chain(&truth).chain(&s.sensed);
+            let values = std::iter::once(&s.time_s)
+                .chain(&truth)
+                .chain(&s.sensed)
+                .chain(s.sub.iter().flatten());
             for v in values {
                 field.clear();
                 // Writing into a String cannot fail. (ryu finds the same digits faster but breaks
@@ -233,14 +260,16 @@ impl Flight {
     /// Reads a flight CSV (columns found by name; extra columns are ignored). The name is the file stem;
     /// `cut` is not stored in the CSV (it is in the manifest). A format-3 flight (no EGI sensed
     /// columns, none of the format-4 truth columns) reads them as NaN: the EGI channels are then
-    /// absent (invalid) in its frames. Some but not all of those columns is an error.
+    /// absent (invalid) in its frames. A flight before format 5 has no sub-samples:
+    /// [`NO_SUBSAMPLES`]. Some but not all of the columns of a format is an error.
     pub fn read_csv(path: &Path) -> Result<Flight, DatasetError> {
         Flight::read(path, true)
     }
 
     /// Reads a flight log (docs/flight-log.md): `time_s` and every Table 1 sensed column are
-    /// required, the EGI sensed columns all or none, each truth column optional (absent or empty:
-    /// NaN, not scored). An empty sensed cell is a sensor that gave nothing (NaN: sent invalid).
+    /// required, the EGI sensed columns all or none, the sub-samples all or none, each truth
+    /// column optional (absent or empty: NaN, not scored). An empty sensed cell is a sensor that
+    /// gave nothing (NaN: sent invalid).
     pub fn read_log(path: &Path) -> Result<Flight, DatasetError> {
         Flight::read(path, false)
     }
@@ -270,11 +299,15 @@ impl Flight {
         let format3 = (0..all.len())
             .filter(|k| since_format_4(*k))
             .all(|k| header.iter().all(|h| h != all[k]));
+        let no_sub = (0..all.len())
+            .filter(|k| is_subsample(*k))
+            .all(|k| header.iter().all(|h| h != all[k]));
         let idx: Vec<Option<usize>> = all
             .iter()
             .enumerate()
             .map(|(k, c)| match find(c) {
                 Err(_) if format3 && since_format_4(k) => Ok(None),
+                Err(_) if no_sub && is_subsample(k) => Ok(None),
                 Err(_) if !truth_required && is_truth(k) => Ok(None),
                 r => r.map(Some),
             })
@@ -283,7 +316,7 @@ impl Flight {
         for rec in rd.records() {
             let rec = rec.map_err(csv_err)?;
             let line = rec.position().map(|p| p.line()).unwrap_or(0);
-            let mut vals = [f64::NAN; 1 + TRUTH_COUNT + CHANNELS];
+            let mut vals = [f64::NAN; COLUMNS];
             for (k, (i, v)) in idx.iter().zip(vals.iter_mut()).enumerate() {
                 let Some(i) = *i else { continue };
                 let s = rec.get(i).unwrap_or("");
@@ -303,11 +336,17 @@ impl Flight {
             let mut truth = [0.0; TRUTH_COUNT];
             truth.copy_from_slice(&vals[1..1 + TRUTH_COUNT]);
             let mut sensed = [0.0; CHANNELS];
-            sensed.copy_from_slice(&vals[1 + TRUTH_COUNT..]);
+            sensed.copy_from_slice(&vals[1 + TRUTH_COUNT..1 + TRUTH_COUNT + CHANNELS]);
+            let mut sub: Subsamples = NO_SUBSAMPLES;
+            let subsamples = vals[1 + TRUTH_COUNT + CHANNELS..].chunks_exact(SUB_CHANNELS.len());
+            for (to, from) in sub.iter_mut().zip(subsamples) {
+                to.copy_from_slice(from);
+            }
             samples.push(Sample {
                 time_s: vals[0],
                 truth: Truth::from_array(&truth),
                 sensed,
+                sub,
             });
         }
         Ok(Flight {
@@ -417,12 +456,14 @@ impl AircraftRecord {
 }
 
 impl Manifest {
-    /// 4: the sensor suites: EGI sensed columns (attitude, NED velocity, fuel) and truth NED
-    /// velocity, fuel and wind, `suites` in the manifest (3: time on JSBSim's own clock, IMU with
-    /// Earth rate, scale factor and misalignment, zone times per flight; 2: time as whole steps /
-    /// 120 Hz, gyros blind to the Earth's rotation; 1 had no position). Format 3 is still read, as a
-    /// Table 1 dataset: its Table 1 columns mean what they mean in format 4.
-    pub const FORMAT: u32 = 4;
+    /// 5: the IMU's own 120 Hz outputs, six sub-samples per row (`*_sub0` … `*_sub5`). 4: the
+    /// sensor suites: EGI sensed columns (attitude, NED velocity, fuel) and truth NED velocity,
+    /// fuel and wind, `suites` in the manifest (3: time on JSBSim's own clock, IMU with Earth rate,
+    /// scale factor and misalignment, zone times per flight; 2: time as whole steps / 120 Hz, gyros
+    /// blind to the Earth's rotation; 1 had no position). Formats 3 and 4 are still read, without
+    /// the IMU sub-samples (format 3 as a Table 1 dataset): their other columns mean what they mean
+    /// in format 5.
+    pub const FORMAT: u32 = 5;
 
     /// The oldest format this build reads.
     pub const OLDEST_READ: u32 = 3;
@@ -696,6 +737,7 @@ mod tests {
             time_s: 0.05,
             truth: Truth::default(),
             sensed: [0.0; CHANNELS],
+            sub: crate::flight::NO_SUBSAMPLES,
         };
         s.truth.alpha_deg = 1.0 / 3.0;
         s.truth.mass_kg = 9876.54321;
@@ -704,6 +746,9 @@ mod tests {
         s.sensed[Channel::Heading.index()] = 5.4321;
         s.sensed[Channel::Fuel.index()] = 1234.5;
         s.truth.wind_down_mps = -0.25;
+        for (k, v) in s.sub.iter_mut().flatten().enumerate() {
+            *v = k as f64 / 7.0 - 2.0;
+        }
         let f = Flight {
             name: "t".into(),
             samples: vec![s, s],
@@ -729,10 +774,39 @@ mod tests {
     }
 
     #[test]
+    fn a_format_4_flight_reads_without_subsamples_and_half_of_them_is_refused() {
+        let cols = columns();
+        let n4 = 1 + TRUTH_COUNT + CHANNELS;
+        assert_eq!(cols.len(), n4 + 6 * 13);
+        assert_eq!(cols[n4], "gyro_p_rps_sub0");
+        assert_eq!(cols[n4 + 8], "rudder_deg_sub0");
+        assert_eq!(cols[cols.len() - 1], "speedbrake_deg_sub5");
+        let dir = std::env::temp_dir().join(format!("hil-ds4-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("old.csv");
+        let write = |n: usize| {
+            let row: Vec<String> = (0..n).map(|k| format!("{}", k as f64 * 0.25)).collect();
+            let text = format!("{}\n{}\n", cols[..n].join(","), row.join(","));
+            std::fs::write(&p, text).unwrap();
+        };
+        write(n4);
+        let g = Flight::read_csv(&p).unwrap();
+        let s = &g.samples[0];
+        assert!(s.sub.iter().flatten().all(|v| v.is_nan()));
+        assert_eq!(s.sensed[CHANNELS - 1], (n4 - 1) as f64 * 0.25);
+        write(n4 + SUB_CHANNELS.len());
+        let err = Flight::read_csv(&p).unwrap_err().to_string();
+        assert!(err.contains("gyro_p_rps_sub1"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn a_format_3_flight_reads_with_the_egi_channels_absent() {
         // The format-3 columns: time, the first 19 truth columns, the 16 Table 1 channels.
         let cols = columns();
-        let keep: Vec<usize> = (0..cols.len()).filter(|k| !since_format_4(*k)).collect();
+        let keep: Vec<usize> = (0..cols.len())
+            .filter(|k| !since_format_4(*k) && !is_subsample(*k))
+            .collect();
         assert_eq!(keep.len(), 1 + 19 + TABLE1_CHANNELS);
         let row: Vec<String> = keep
             .iter()
@@ -752,6 +826,7 @@ mod tests {
         );
         assert!(s.sensed[TABLE1_CHANNELS..].iter().all(|v| v.is_nan()));
         assert!(s.truth.fuel_kg.is_nan() && s.truth.wind_north_mps.is_nan());
+        assert!(s.sub.iter().flatten().all(|v| v.is_nan()));
         assert_eq!(s.truth.lon_deg, 19.0 * 0.5);
         // Half of the new columns is not a format-3 file: refused, naming the missing column.
         let mut header = header.clone();
