@@ -184,6 +184,11 @@ impl Channel {
 /// All channels valid.
 pub const ALL_VALID: u32 = u32::MAX >> (32 - CHANNELS);
 
+/// The bit after the channels' in a channel mask ([`Suite::channels`], a feature's sources, the
+/// usable channels of a frame): the frame's 120 Hz [`Subsamples`], every one of the
+/// [`SUB_CHANNELS`] valid. Not a channel: [`SensorFrame::valid`] never has it.
+pub const SUBSAMPLES_VALID: u32 = 1 << CHANNELS;
+
 /// A named, versioned set of sensed channels: what a frame of the wire format, a dataset and a
 /// model's inputs may carry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -195,16 +200,20 @@ pub enum Suite {
     /// Table 1 plus what a fighter's embedded GPS/INS gives: roll, pitch, heading, velocity
     /// north/east/down, and the fuel quantity. All [`CHANNELS`] channels.
     Egi,
+    /// The EGI suite plus the IMU's and the surface sensors' own 120 Hz outputs of each frame
+    /// period ([`Subsamples`]).
+    Egi120,
 }
 
 impl Suite {
-    pub const ALL: [Suite; 2] = [Suite::Table1, Suite::Egi];
+    pub const ALL: [Suite; 3] = [Suite::Table1, Suite::Egi, Suite::Egi120];
 
     /// Name used on command lines, in manifests and reports.
     pub const fn name(self) -> &'static str {
         match self {
             Suite::Table1 => "table1",
             Suite::Egi => "egi",
+            Suite::Egi120 => "egi120",
         }
     }
 
@@ -212,11 +221,13 @@ impl Suite {
         Suite::ALL.iter().copied().find(|s| s.name() == name)
     }
 
-    /// The channels this suite carries (bit per [`Channel`]).
+    /// The channels this suite carries (bit per [`Channel`]), and [`SUBSAMPLES_VALID`] if it
+    /// carries the 120 Hz sub-samples.
     pub const fn channels(self) -> u32 {
         match self {
             Suite::Table1 => u32::MAX >> (32 - TABLE1_CHANNELS),
             Suite::Egi => ALL_VALID,
+            Suite::Egi120 => ALL_VALID | SUBSAMPLES_VALID,
         }
     }
 
@@ -235,6 +246,8 @@ impl Suite {
             Some(Suite::Table1)
         } else if mask & !Suite::Egi.channels() == 0 {
             Some(Suite::Egi)
+        } else if mask & !Suite::Egi120.channels() == 0 {
+            Some(Suite::Egi120)
         } else {
             None
         }
@@ -249,6 +262,20 @@ macro_rules! channel_names {
             pub const fn name(self) -> &'static str {
                 match self {
                     $(Channel::$v => $c,)*
+                }
+            }
+
+            /// Names of this channel's sub-sample features `"<name>_sub<k>"`, k = 0 … 5.
+            pub(crate) const fn sub_names(self) -> [&'static str; 6] {
+                match self {
+                    $(Channel::$v => [
+                        concat!($c, "_sub0"),
+                        concat!($c, "_sub1"),
+                        concat!($c, "_sub2"),
+                        concat!($c, "_sub3"),
+                        concat!($c, "_sub4"),
+                        concat!($c, "_sub5"),
+                    ],)*
                 }
             }
 
@@ -295,6 +322,109 @@ channel_names!(
     Fuel => "fuel_qty_kg",
 );
 
+/// Sub-samples per frame: the IMU and the surface sensors deliver at 120 Hz, six outputs per
+/// 20 Hz frame period.
+pub const SUBSAMPLES: usize = 6;
+
+/// Number of [`SUB_CHANNELS`].
+pub const SUB_CHANNEL_COUNT: usize = 13;
+
+/// The channels a sensor bus may also deliver at 120 Hz ([`Subsamples`]): the IMU's six axes and
+/// the seven surface positions, before the anti-alias filter that makes their 20 Hz values.
+pub const SUB_CHANNELS: [Channel; SUB_CHANNEL_COUNT] = [
+    Channel::GyroP,
+    Channel::GyroQ,
+    Channel::GyroR,
+    Channel::AccelX,
+    Channel::AccelY,
+    Channel::AccelZ,
+    Channel::Elevator,
+    Channel::Aileron,
+    Channel::Rudder,
+    Channel::Lef,
+    Channel::Tef,
+    Channel::Flaperon,
+    Channel::Speedbrake,
+];
+
+/// The 120 Hz outputs of the [`SUB_CHANNELS`] over one frame period.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Subsamples {
+    /// `raw[k][i]`: sub-sample `k` (oldest first; the last at the frame's `time_ms`, the first
+    /// five 120 Hz steps before it) of `SUB_CHANNELS[i]`, in that channel's unit.
+    pub raw: [[i32; SUB_CHANNEL_COUNT]; SUBSAMPLES],
+    /// Bit `i` set: `SUB_CHANNELS[i]` is valid in every sub-sample. 0: the frame carries none.
+    pub valid: u16,
+}
+
+/// The position of `c` in [`SUB_CHANNELS`], if it is one (usable in constants).
+// `i < SUB_CHANNEL_COUNT` (13): the increment cannot overflow.
+#[allow(clippy::arithmetic_side_effects)]
+pub const fn sub_position(c: Channel) -> Option<usize> {
+    let mut i = 0;
+    while i < SUB_CHANNEL_COUNT {
+        // `i < SUB_CHANNEL_COUNT`: in bounds.
+        #[allow(clippy::indexing_slicing)]
+        if SUB_CHANNELS[i] as u8 == c as u8 {
+            return Some(i);
+        }
+        i += 1;
+    }
+    None
+}
+
+impl Subsamples {
+    /// None carried.
+    pub const NONE: Subsamples = Subsamples {
+        raw: [[0; SUB_CHANNEL_COUNT]; SUBSAMPLES],
+        valid: 0,
+    };
+
+    /// All [`SUB_CHANNELS`] valid.
+    pub const ALL_VALID: u16 = u16::MAX >> (16 - SUB_CHANNEL_COUNT);
+
+    /// The position of `c` in [`SUB_CHANNELS`], if it is one.
+    pub const fn position(c: Channel) -> Option<usize> {
+        sub_position(c)
+    }
+
+    /// Whether channel `c` is carried and valid.
+    pub fn is_valid(&self, c: Channel) -> bool {
+        Self::position(c).is_some_and(|i| self.valid & (1 << i) != 0)
+    }
+
+    /// Sub-sample `k` of channel `c` in its unit (0 when not carried).
+    pub fn get(&self, k: usize, c: Channel) -> i32 {
+        match Self::position(c) {
+            Some(i) => self.raw.get(k).and_then(|s| s.get(i)).copied().unwrap_or(0),
+            None => 0,
+        }
+    }
+
+    /// From SI values (`si[k][i]`, sub-sample `k` of `SUB_CHANNELS[i]`, in [`Channel::name`]
+    /// units): a channel with a NaN, an infinity or a value it cannot carry in any sub-sample is
+    /// invalid, and reads 0 in every one.
+    pub fn from_si(si: &[[f64; SUB_CHANNEL_COUNT]; SUBSAMPLES]) -> Subsamples {
+        let mut s = Subsamples::NONE;
+        for (i, c) in SUB_CHANNELS.iter().enumerate() {
+            let q: [Option<i32>; SUBSAMPLES] = core::array::from_fn(|k| {
+                let v = si.get(k).and_then(|row| row.get(i)).copied();
+                v.and_then(|v| quantize(v, c.lsb(), c.raw_range()))
+            });
+            if q.iter().all(Option::is_some) {
+                for (row, v) in s.raw.iter_mut().zip(q) {
+                    if let Some(r) = row.get_mut(i) {
+                        *r = v.unwrap_or(0);
+                    }
+                }
+                s.valid |= 1 << i;
+            }
+        }
+        s
+    }
+}
+
 /// One validated sensor sample: the payload of a sensor frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -308,6 +438,9 @@ pub struct SensorFrame {
     /// Bit `c` set: channel `c` is valid (sensor self-test passed, value finite and in range). A
     /// channel the sending suite does not carry is invalid.
     pub valid: u32,
+    /// The 120 Hz sub-samples of the frame period ([`Subsamples::NONE`] unless the sender's
+    /// suite carries them).
+    pub sub: Subsamples,
 }
 
 impl SensorFrame {
@@ -327,6 +460,7 @@ impl SensorFrame {
             time_ms,
             raw: [0; CHANNELS],
             valid: 0,
+            sub: Subsamples::NONE,
         };
         for ((c, v), raw) in Channel::ALL.iter().zip(si.iter()).zip(f.raw.iter_mut()) {
             if let Some(q) = quantize(*v, c.lsb(), c.raw_range()) {
@@ -347,6 +481,9 @@ impl SensorFrame {
             }
         }
         f.valid &= suite.channels();
+        if suite.channels() & SUBSAMPLES_VALID == 0 {
+            f.sub = Subsamples::NONE;
+        }
         f
     }
 
@@ -413,7 +550,9 @@ mod tests {
         assert_eq!(Suite::Egi.channels(), ALL_VALID);
         assert_eq!(Suite::covering(Channel::Rudder.bit()), Some(Suite::Table1));
         assert_eq!(Suite::covering(Channel::Fuel.bit()), Some(Suite::Egi));
-        assert_eq!(Suite::covering(1 << CHANNELS), None);
+        assert_eq!(Suite::covering(SUBSAMPLES_VALID), Some(Suite::Egi120));
+        assert_eq!(Suite::covering(1 << (CHANNELS + 1)), None);
+        assert!(Suite::Egi120.delivers(Suite::Egi) && !Suite::Egi.delivers(Suite::Egi120));
         for s in Suite::ALL {
             assert_eq!(Suite::from_name(s.name()), Some(s));
         }

@@ -37,7 +37,10 @@
 //! way the lag's bit is set in [`FeatureValues::short_lags`], which the estimator reports as
 //! `HISTORY_SHORT` when a model uses that lag.
 
-use crate::channels::{CHANNELS, Channel, SensorFrame, Suite, TABLE1_CHANNELS};
+use crate::channels::{
+    CHANNELS, Channel, SUB_CHANNEL_COUNT, SUB_CHANNELS, SUBSAMPLES, SUBSAMPLES_VALID, SensorFrame,
+    Subsamples, Suite, TABLE1_CHANNELS, sub_position,
+};
 
 /// Number of derived single-frame features of the Table 1 channels, after the sensed channels.
 const DERIVED: usize = 5;
@@ -54,9 +57,12 @@ const FILTERED: usize = CHANNELS + DERIVED + EGI_DERIVED;
 /// First delta feature.
 const DELTAS: usize = FILTERED + FILTER_DERIVED;
 
-/// Number of candidate features: sensed channels, derived features, and a delta per Table 1 channel
-/// and lag.
-pub const FEATURE_COUNT: usize = DELTAS + TABLE1_CHANNELS * Lag::COUNT;
+/// First sub-sample feature.
+const SUBS: usize = DELTAS + TABLE1_CHANNELS * Lag::COUNT;
+
+/// Number of candidate features: sensed channels, derived features, a delta per Table 1 channel
+/// and lag, and the frame's 120 Hz sub-samples ([`Feature::Sub`]).
+pub const FEATURE_COUNT: usize = SUBS + SUB_CHANNEL_COUNT * SUBSAMPLES;
 
 /// Frames a [`History`] keeps: 1 s at 20 Hz plus room for lost frames.
 pub const HISTORY_FRAMES: usize = 24;
@@ -186,6 +192,10 @@ pub enum Feature {
     FilterSideScale,
     /// The channel now minus the channel `Lag` ago, in the channel's unit (Table 1 channels only).
     Delta(Channel, Lag),
+    /// Sub-sample `k` (0 … 5, oldest first; 5 at the frame's time) of a sub-sampled channel
+    /// ([`crate::channels::SUB_CHANNELS`]), in the channel's unit: the sensor's own 120 Hz output,
+    /// before the anti-alias filter of the 20 Hz channel ([`Suite::Egi120`] only).
+    Sub(Channel, u8),
 }
 
 /// The EGI channels the kinematic features are computed from.
@@ -234,6 +244,15 @@ impl Feature {
             }
             c += 1;
         }
+        let mut i = 0;
+        while i < SUB_CHANNEL_COUNT {
+            let mut k = 0;
+            while k < SUBSAMPLES {
+                all[SUBS + i * SUBSAMPLES + k] = Feature::Sub(SUB_CHANNELS[i], k as u8);
+                k += 1;
+            }
+            i += 1;
+        }
         all
     };
 
@@ -263,7 +282,16 @@ impl Feature {
             Feature::FilterTurbulence => FILTERED + 6,
             Feature::FilterNisMean => FILTERED + 7,
             Feature::FilterSideScale => FILTERED + 8,
+            // Past the candidates for an EGI channel: no such feature.
+            Feature::Delta(c, l) if c.index() >= TABLE1_CHANNELS => {
+                FEATURE_COUNT + c.index() * Lag::COUNT + l.index()
+            }
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
+            // Past the candidates for a channel that is not sub-sampled or a k beyond the period.
+            Feature::Sub(c, k) => match sub_position(c) {
+                Some(i) if (k as usize) < SUBSAMPLES => SUBS + i * SUBSAMPLES + k as usize,
+                _ => FEATURE_COUNT + c.index() * SUBSAMPLES + k as usize,
+            },
         }
     }
 
@@ -298,13 +326,23 @@ impl Feature {
                     Lag::F20 => d20,
                 },
             },
+            Feature::Sub(c, k) => match c.sub_names() {
+                [s0, s1, s2, s3, s4, s5] => match k {
+                    0 => s0,
+                    1 => s1,
+                    2 => s2,
+                    3 => s3,
+                    4 => s4,
+                    _ => s5,
+                },
+            },
         }
     }
 
     /// Size of one integer step in the feature's unit.
     pub const fn lsb(self) -> f64 {
         match self {
-            Feature::Sensor(c) | Feature::Delta(c, _) => c.lsb(),
+            Feature::Sensor(c) | Feature::Delta(c, _) | Feature::Sub(c, _) => c.lsb(),
             Feature::FxOverRhoV2 | Feature::FyOverRhoV2 | Feature::FzOverRhoV2 => 1e-7,
             Feature::MachProxy => 1e-4,
             Feature::RhoV2 => 1.0,
@@ -337,6 +375,8 @@ impl Feature {
         let speed_alt = Channel::GpsSpeed.bit() | Channel::GpsAlt.bit();
         match self {
             Feature::Sensor(c) | Feature::Delta(c, _) => c.bit(),
+            // The 20 Hz channel's bit too: a channel found stuck or invalid is not read at 120 Hz.
+            Feature::Sub(c, _) => c.bit() | SUBSAMPLES_VALID,
             Feature::FxOverRhoV2 => speed_alt | Channel::AccelX.bit(),
             Feature::FyOverRhoV2 => speed_alt | Channel::AccelY.bit(),
             Feature::FzOverRhoV2 => speed_alt | Channel::AccelZ.bit(),
@@ -530,7 +570,7 @@ impl FeatureState {
         let frame = &frame;
         let mut values = FeatureValues::compute(frame, &self.history);
         values.substituted = substituted;
-        values.usable = frame.valid;
+        values.usable = frame.valid | subsamples_usable(frame);
         let newly_stuck = health.stuck & !self.stuck_before & crate::filter::NEEDED_MASK != 0;
         self.stuck_before = health.stuck;
         values.health = health;
@@ -611,6 +651,7 @@ impl History {
                 time_ms: 0,
                 raw: [0; CHANNELS],
                 valid: 0,
+                sub: crate::channels::Subsamples::NONE,
             }; HISTORY_FRAMES],
             head: 0,
             len: 0,
@@ -807,6 +848,14 @@ impl FeatureValues {
                 short_lags |= lag.bit();
             }
         }
+        // Channel-major here ([`Feature::Sub`]'s index), sample-major in the frame.
+        if let Some(subs) = raw.get_mut(SUBS..) {
+            for (i, per_channel) in subs.chunks_exact_mut(SUBSAMPLES).enumerate() {
+                for (r, sample) in per_channel.iter_mut().zip(&frame.sub.raw) {
+                    *r = sample.get(i).copied().unwrap_or(0);
+                }
+            }
+        }
         FeatureValues {
             raw,
             low_speed,
@@ -815,8 +864,17 @@ impl FeatureValues {
             health: crate::health::Status::default(),
             filter_flags: 0,
             substituted: 0,
-            usable: frame.valid,
+            usable: frame.valid | subsamples_usable(frame),
         }
+    }
+}
+
+/// [`SUBSAMPLES_VALID`] when the frame carries every sub-sampled channel valid, else 0.
+fn subsamples_usable(frame: &SensorFrame) -> u32 {
+    if frame.sub.valid & Subsamples::ALL_VALID == Subsamples::ALL_VALID {
+        SUBSAMPLES_VALID
+    } else {
+        0
     }
 }
 
@@ -1044,6 +1102,7 @@ mod tests {
             time_ms: t_ms,
             raw: [t_ms as i32 * 7; CHANNELS],
             valid: crate::channels::ALL_VALID,
+            sub: crate::channels::Subsamples::NONE,
         }
     }
 
@@ -1071,6 +1130,39 @@ mod tests {
         si[Channel::AccelZ.index()] = -9.81;
         si[Channel::Fuel.index()] = 1000.0;
         SensorFrame::from_si((t_ms / FRAME_PERIOD_MS) as u16, t_ms, &si)
+    }
+
+    #[test]
+    fn subsample_features_read_the_frame_period_and_need_all_of_it() {
+        let mut frame = ramp(1_000);
+        let h = History::new();
+        // Without sub-samples: the features read 0 and the frame does not make them usable.
+        let v = FeatureValues::compute(&frame, &h);
+        assert_eq!(v.usable & SUBSAMPLES_VALID, 0);
+        assert_eq!(v.get(Feature::Sub(Channel::AccelY, 5)), 0);
+        for (k, row) in frame.sub.raw.iter_mut().enumerate() {
+            for (i, x) in row.iter_mut().enumerate() {
+                *x = 1000 * i as i32 + k as i32;
+            }
+        }
+        frame.sub.valid = Subsamples::ALL_VALID;
+        let v = FeatureValues::compute(&frame, &h);
+        assert_ne!(v.usable & SUBSAMPLES_VALID, 0);
+        // AccelY is sub-channel 4, the rudder 8.
+        assert_eq!(v.get(Feature::Sub(Channel::AccelY, 5)), 4005);
+        assert_eq!(v.get(Feature::Sub(Channel::AccelY, 0)), 4000);
+        assert_eq!(v.get(Feature::Sub(Channel::Rudder, 3)), 8003);
+        let f = Feature::Sub(Channel::Rudder, 3);
+        assert_eq!(f.name(), "rudder_deg_sub3");
+        assert_eq!(Feature::from_name("rudder_deg_sub3"), Some(f));
+        assert_eq!(f.suite(), Suite::Egi120);
+        // One sub-channel missing takes them all away (a model reading any is held).
+        frame.sub.valid &= !(1 << 8);
+        assert_eq!(FeatureValues::compute(&frame, &h).usable & SUBSAMPLES_VALID, 0);
+        // A channel that is not sub-sampled, or a k past the period, is no candidate.
+        assert!(Feature::Sub(Channel::GpsAlt, 0).index() >= FEATURE_COUNT);
+        assert!(Feature::Sub(Channel::AccelY, 6).index() >= FEATURE_COUNT);
+        assert!(Feature::Delta(Channel::Roll, Lag::F1).index() >= FEATURE_COUNT);
     }
 
     #[test]

@@ -101,6 +101,7 @@ fn frame(seq: u16) -> SensorFrame {
         time_ms: seq as u32 * 50,
         raw,
         valid: ALL_VALID,
+        sub: estimator_core::channels::Subsamples::NONE,
     }
 }
 
@@ -251,6 +252,7 @@ fn extreme_raw_values_never_panic() {
             time_ms: 0,
             raw: [v; CHANNELS],
             valid: u32::MAX,
+            sub: estimator_core::channels::Subsamples::NONE,
         };
         let out = e.step(&f);
         assert!(out.alpha_mdeg.abs() <= 90_000);

@@ -60,6 +60,7 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             time_ms: v[1] as u32,
             raw,
             valid: v[2] as u32,
+            sub: estimator_core::channels::Subsamples::NONE,
         };
         let values = state.next(&frame);
         let e = est.step(&frame);

@@ -198,6 +198,7 @@ mod tests {
             time_ms: u32::from(seq) * 50,
             raw,
             valid: ALL_VALID,
+            sub: estimator_core::channels::Subsamples::NONE,
         }
     }
 

@@ -2,7 +2,7 @@
 //! generator zones, and the time base and units they use. No I/O: `dataset` reads and writes them,
 //! `plant` fills them, everything downstream reads them.
 
-use estimator_core::{CHANNELS, Channel};
+use estimator_core::CHANNELS;
 use serde::{Deserialize, Serialize};
 
 /// JSBSim integration rate, Hz.
@@ -11,26 +11,12 @@ pub const SIM_HZ: u32 = 120;
 pub const SAMPLE_HZ: u32 = 20;
 /// JSBSim steps per recorded sample.
 pub const STEPS_PER_SAMPLE: u32 = SIM_HZ / SAMPLE_HZ;
-/// Sub-samples per recorded sample: the IMU and the surface position sensors deliver at the
-/// simulation rate, 120 Hz (`docs/sensors.md`, "Sensor output rate").
-pub const SUBSAMPLES: usize = STEPS_PER_SAMPLE as usize;
-/// The channels sub-sampled at 120 Hz: the IMU's six axes and the seven surface positions (SI,
-/// degrees for surfaces), before the flight computer's anti-alias filter.
-pub const SUB_CHANNELS: [Channel; 13] = [
-    Channel::GyroP,
-    Channel::GyroQ,
-    Channel::GyroR,
-    Channel::AccelX,
-    Channel::AccelY,
-    Channel::AccelZ,
-    Channel::Elevator,
-    Channel::Aileron,
-    Channel::Rudder,
-    Channel::Lef,
-    Channel::Tef,
-    Channel::Flaperon,
-    Channel::Speedbrake,
-];
+/// Sub-samples per recorded sample, and the channels sub-sampled (the IMU's six axes and the
+/// seven surface positions, before the flight computer's anti-alias filter): the IMU and the
+/// surface position sensors deliver at the simulation rate, 120 Hz (`docs/sensors.md`, "Sensor
+/// output rate"), as [`estimator_core::channels::Subsamples`] carries them.
+pub use estimator_core::channels::{SUB_CHANNELS, SUBSAMPLES};
+const _: () = assert!(SUBSAMPLES == STEPS_PER_SAMPLE as usize);
 /// One 120 Hz output of the [`SUB_CHANNELS`], in that order.
 pub type SubSample = [f64; SUB_CHANNELS.len()];
 /// The sensors' 120 Hz outputs over one 20 Hz period, oldest first: sub-sample `k` is the output

@@ -1,6 +1,7 @@
 //! Dataset samples → sensor frames, the one conversion the HIL runner and the parity tests share.
 
 use estimator_core::SensorFrame;
+use estimator_core::channels::Subsamples;
 
 use crate::flight::{Flight, Sample};
 
@@ -15,9 +16,13 @@ pub fn time_ms(time_s: f64) -> u32 {
     }
 }
 
-/// The sensor frame of sample `seq` (sequence numbers wrap at u16).
+/// The sensor frame of sample `seq` (sequence numbers wrap at u16), with the sample's 120 Hz
+/// sub-samples where it carries them.
 pub fn sample_to_frame(seq: u16, sample: &Sample) -> SensorFrame {
-    SensorFrame::from_si(seq, time_ms(sample.time_s), &sample.sensed)
+    SensorFrame {
+        sub: Subsamples::from_si(&sample.sub),
+        ..SensorFrame::from_si(seq, time_ms(sample.time_s), &sample.sensed)
+    }
 }
 
 /// All frames of a flight, `seq` counting from 0.

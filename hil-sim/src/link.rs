@@ -266,6 +266,25 @@ mod tests {
         }
     }
 
+    /// The link budget at the board's 115 200 Bd: the largest sensor frame (kind 4, with the
+    /// 120 Hz sub-samples; COBS's worst case and the delimiter) once per 20 Hz period uses under
+    /// 60 % of the line, and the estimate frames of the other direction about 10 %.
+    #[test]
+    fn every_frame_kind_fits_the_20_hz_period_at_115200_bd() {
+        use estimator_core::wire::{MAX_FRAME, estimate, sensor};
+        let frames_per_s = 1000.0 / f64::from(estimator_core::features::FRAME_PERIOD_MS);
+        let per_s = |bytes: usize| bytes as f64 * 10.0 * frames_per_s;
+        let baud = f64::from(LinkConfig::default().baud);
+        assert_eq!(baud, 115_200.0);
+        assert_eq!(sensor::EGI120_BODY_LEN, 316);
+        // CRC, COBS (one byte per 254) and the delimiter.
+        assert_eq!(MAX_FRAME, sensor::EGI120_BODY_LEN + 4 + 2 + 1);
+        let share = per_s(MAX_FRAME) / baud;
+        assert!(share < 0.6, "a kind-4 frame takes {share:.3} of the line");
+        let estimate_frame = estimate::BODY_LEN + 4 + 3;
+        assert!(per_s(estimate_frame) / baud < 0.12);
+    }
+
     #[test]
     fn a_clean_line_delivers_every_byte_at_the_baud_rate() {
         let mut d = Direction::new(LinkConfig::default(), 1);

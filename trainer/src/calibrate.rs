@@ -279,7 +279,7 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
         } else {
             (times[k] - times[k - 1]) as f32
         };
-        let Some(inp) = Input::from_frame(f, dt, arm) else {
+        let Some(inp) = Input::from_frame(f, dt, arm, CONFIG.subsamples) else {
             prev = None;
             continue;
         };

@@ -140,6 +140,26 @@ pub const FILTER_FAST_FEATURES: [Feature; 4] = [
 /// The lags of the `dynamics` sets' delta features (every set built on `dynamics` reads these).
 pub const DYNAMICS_LAGS: [Lag; 4] = [Lag::F1, Lag::F4, Lag::F10, Lag::F20];
 
+/// The channels whose 120 Hz sub-samples the `egi120` sets read: β's lateral force and the
+/// surfaces that make it (the rudder's chatter in turbulence is in both at 120 Hz, in neither
+/// channel at 20 Hz)...
+pub const SUB_BETA: [Channel; 4] = [
+    Channel::AccelY,
+    Channel::Rudder,
+    Channel::Aileron,
+    Channel::GyroR,
+];
+/// ... and α's normal force, pitch rate and elevator.
+pub const SUB_ALPHA: [Channel; 3] = [Channel::AccelZ, Channel::GyroQ, Channel::Elevator];
+
+/// Every sub-sample of a frame period of each of `channels`.
+fn subsamples(channels: &[Channel]) -> Vec<Feature> {
+    channels
+        .iter()
+        .flat_map(|c| (0..estimator_core::channels::SUBSAMPLES as u8).map(|k| Feature::Sub(*c, k)))
+        .collect()
+}
+
 fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = Feature> + 'a {
     channels
         .iter()
@@ -291,6 +311,16 @@ impl FeatureSet {
                 let b: Vec<Feature> = deltas(&DYNAMICS_BETA_DELTAS, &[Lag::F2]).collect();
                 FeatureSet::parse("egi-hybrid-fast")?.extended(spec, &[], &b)
             }
+            // egi-hybrid-fast-d2 plus the period's 120 Hz sub-samples of β's lateral channels
+            // (`egi120-beta`), and of α's normal ones too (`egi120`): the egi120 suite.
+            "egi120-beta" => {
+                FeatureSet::parse("egi-hybrid-fast-d2")?.extended(spec, &[], &subsamples(&SUB_BETA))
+            }
+            "egi120" => FeatureSet::parse("egi-hybrid-fast-d2")?.extended(
+                spec,
+                &subsamples(&SUB_ALPHA),
+                &subsamples(&SUB_BETA),
+            ),
             // egi-hybrid-fast-d2 plus the force scales the filter learns in flight: what tells an
             // airframe unlike the model. Measured, not shipped: it loses on the 20-minute test
             // flight (docs/airframes.md).
@@ -312,7 +342,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -420,10 +450,12 @@ mod tests {
             // No candidate feature (sensed channel or derived) carries an air-data column's name.
             assert!(Feature::ALL.iter().all(|f| f.name() != col));
         }
-        // Every candidate is computed from sensed channels only.
+        // Every candidate is computed from sensed channels (and their 120 Hz sub-samples) only.
+        let sensed =
+            estimator_core::channels::ALL_VALID | estimator_core::channels::SUBSAMPLES_VALID;
         for f in Feature::ALL {
             assert_ne!(f.sources(), 0);
-            assert_eq!(f.sources() & !estimator_core::channels::ALL_VALID, 0);
+            assert_eq!(f.sources() & !sensed, 0);
         }
         for set in ["table1", "physics", "dynamics", "egi-dynamics"] {
             let s = FeatureSet::parse(set).unwrap();

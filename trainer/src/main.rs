@@ -368,7 +368,7 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
-        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
@@ -1018,6 +1018,14 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
             "side_scale_psd" => c.side_scale_psd = v,
             "side_scale_sigma0" => c.side_scale_sigma0 = v,
+            "subsamples" => {
+                c.subsamples = match v as u8 {
+                    0 => estimator_core::filter::SubsampleUse::Off,
+                    1 => estimator_core::filter::SubsampleUse::Latest,
+                    2 => estimator_core::filter::SubsampleUse::Mean,
+                    _ => bail!("--tune: subsamples is 0 (off), 1 (latest) or 2 (period mean)"),
+                }
+            }
             "r_adapt_tau_s" => c.r_adapt_tau_s = v,
             "r_adapt_lo_y" => c.r_adapt_range[0][0] = v,
             "r_adapt_hi_y" => c.r_adapt_range[0][1] = v,

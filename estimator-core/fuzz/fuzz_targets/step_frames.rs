@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
         let u16_at = |i: usize| u16::from_le_bytes([chunk[i], chunk[i + 1]]);
         let u32_at = |i: usize| u32::from_le_bytes([chunk[i], chunk[i + 1], chunk[i + 2], chunk[i + 3]]);
         let raw = core::array::from_fn(|c| u32_at(6 + 4 * c) as i32);
-        let f = SensorFrame { seq: u16_at(0), time_ms: u32_at(2), raw, valid: u32_at(6 + 4 * CHANNELS) };
+        let f = SensorFrame { seq: u16_at(0), time_ms: u32_at(2), raw, valid: u32_at(6 + 4 * CHANNELS), sub: estimator_core::channels::Subsamples::NONE };
         let out = e.step(&f);
         assert_eq!(out.seq, f.seq);
         if out.flags.has(Flags::NO_ESTIMATE) {

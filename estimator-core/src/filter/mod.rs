@@ -39,7 +39,7 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
 use crate::aero::{self, AirState, MODEL, Surfaces};
 use crate::aircraft::AIRCRAFT;
-use crate::channels::{Channel, SensorFrame, Suite};
+use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 
 /// Number of states: mean wind (3), gust (3), lift scale, side-force scale.
 pub const STATES: usize = 8;
@@ -114,6 +114,22 @@ pub struct Config {
     /// Bounds `[low, high]` of the adapted measurement 1σ of the y and the z specific force, as
     /// multiples of [`Config::accel_sigma`] (`[1, 1]` keeps that axis fixed).
     pub r_adapt_range: [[f32; 2]; 2],
+    /// What the measurement reads from a frame's 120 Hz sub-samples, when it carries them.
+    pub subsamples: SubsampleUse,
+}
+
+/// How the filter's measurement reads a frame's 120 Hz [`crate::channels::Subsamples`] (IMU and
+/// surfaces, before the anti-alias filter), when the frame carries every one it needs; otherwise
+/// it reads the 20 Hz channels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SubsampleUse {
+    /// The 20 Hz channels (behind the 6 Hz anti-alias filter) only.
+    Off,
+    /// The last sub-sample: the frame instant's, behind the IMU's own lag only.
+    Latest,
+    /// The mean of the period's six: the Δv/Δθ of the period over its length, centred 2.5
+    /// sub-samples (21 ms) back.
+    Mean,
 }
 
 impl Config {
@@ -163,6 +179,7 @@ pub const CONFIG: Config = Config {
     // → 0.149, β 0.068 → 0.072; docs/filter.md).
     r_adapt_tau_s: 0.0,
     r_adapt_range: [[1.0, 1.0], [1.0, 1.0]],
+    subsamples: SubsampleUse::Off,
 };
 
 /// One frame of what the filter reads, in SI units and radians.
@@ -197,17 +214,49 @@ pub struct Input {
 pub const NEEDED_MASK: u32 = Suite::Egi.channels()
     & !(Channel::GpsSpeed.bit() | Channel::Lef.bit() | Channel::Throttle.bit());
 
+/// The sub-sampled channels the measurement reads, as a mask of [`Subsamples::valid`] bits: the
+/// IMU and every surface but the LEF actuator (the force model reads the scheduled LEF). All of
+/// them valid, or the 20 Hz channels.
+const SUBSAMPLES_NEEDED: u16 = Subsamples::ALL_VALID & !(1 << LEF_SUB);
+/// The LEF's position in [`crate::channels::SUB_CHANNELS`].
+const LEF_SUB: usize = 9;
+const _: () = assert!(matches!(
+    crate::channels::SUB_CHANNELS[LEF_SUB],
+    Channel::Lef
+));
+
 impl Input {
     /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
     /// which is the IMU point's, moved to the centre of gravity (`v_cg = v_imu − C_nb (ω × r)`).
     /// `None` if a [`NEEDED_MASK`] channel is not valid (a `table1` frame has no EGI channels).
-    pub fn from_frame(f: &SensorFrame, dt_s: f32, lever_arm_m: [f32; 3]) -> Option<Input> {
+    pub fn from_frame(
+        f: &SensorFrame,
+        dt_s: f32,
+        lever_arm_m: [f32; 3],
+        sub: SubsampleUse,
+    ) -> Option<Input> {
         if f.valid & NEEDED_MASK != NEEDED_MASK {
             return None;
         }
+        let fast = match sub {
+            SubsampleUse::Off => None,
+            _ if f.sub.valid & SUBSAMPLES_NEEDED != SUBSAMPLES_NEEDED => None,
+            use_ => Some(use_),
+        };
         // Channel values are below 2^24 in magnitude for any flight value, so the f32 conversion
-        // is exact; the product with the LSB rounds once.
-        let si = |c: Channel| f.get(c) as f32 * c.lsb() as f32;
+        // is exact; the product with the LSB rounds once. A sub-sampled channel reads the last
+        // sub-sample or the period's mean (six values below 2^24: the sum is exact in i64).
+        let si = |c: Channel| {
+            let raw = match (fast, Subsamples::position(c)) {
+                (Some(SubsampleUse::Latest), Some(_)) => f.sub.get(SUBSAMPLES - 1, c) as f32,
+                (Some(SubsampleUse::Mean), Some(_)) => {
+                    let sum: i64 = (0..SUBSAMPLES).map(|k| i64::from(f.sub.get(k, c))).sum();
+                    sum as f32 / SUBSAMPLES as f32
+                }
+                _ => f.get(c) as f32,
+            };
+            raw * c.lsb() as f32
+        };
         let euler = [si(Channel::Roll), si(Channel::Pitch), si(Channel::Heading)];
         let gyro = [si(Channel::GyroP), si(Channel::GyroQ), si(Channel::GyroR)];
         let w = Vector3::from(gyro);
@@ -811,7 +860,8 @@ impl AirDataFilter {
                 self.alt = Some((alt, since));
             }
         }
-        let mut out = match Input::from_frame(&frame, dt_s, self.cfg.lever_arm_m) {
+        let c = &self.cfg;
+        let mut out = match Input::from_frame(&frame, dt_s, c.lever_arm_m, c.subsamples) {
             Some(inp) => {
                 if !coasted {
                     self.alt = Some((inp.alt_m, 0.0));

@@ -257,7 +257,7 @@ mod tests {
         let mut v3 = body;
         v3[0] = 3;
         assert_eq!(EstimateFrame::parse(&v3[..8 + 39]), Err(Error::Version(3)));
-        for other in [2, 3, 5] {
+        for other in [2, 3, 4, 6] {
             let mut v = body;
             v[0] = other;
             assert_eq!(EstimateFrame::parse(&v), Err(Error::Version(other)));
@@ -273,7 +273,7 @@ mod tests {
         assert_eq!(got, [Err(Error::Version(1))]);
         assert_eq!(
             std::format!("{}", Error::Version(1)),
-            "wire format version 1, but this build speaks version 4"
+            "wire format version 1, but this build speaks version 5"
         );
     }
 }

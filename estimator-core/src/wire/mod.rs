@@ -2,7 +2,8 @@
 //!
 //! ```text
 //! on the wire:  COBS( body | crc32 ) 0x00
-//! body:         header (8 bytes) | payload (sensor: 50 bytes, sensor-egi: 78 bytes, estimate: 39 bytes)
+//! body:         header (8 bytes) | payload (sensor: 50 bytes, sensor-egi: 78 bytes,
+//!               sensor-egi120: 308 bytes, estimate: 43 bytes)
 //! header:       version u8 | kind u8 | seq u16 | time_ms u32          (all little-endian)
 //! crc32:        CRC-32/ISO-HDLC of the body, little-endian
 //! ```
@@ -24,17 +25,19 @@
 //! | 2 | estimate frames carry `rx_overruns` (payload 39 bytes); sensor frames unchanged |
 //! | 3 | sensor suites: kind 3 `SensorEgi` (the 50-byte sensor payload + EGI attitude, velocity, fuel and their validity: 78 bytes) next to kind 1 `Sensor` (the Table 1 suite, layout unchanged); estimate frames unchanged |
 //! | 4 | estimate frames carry the 1σ of α and β (payload 43 bytes); sensor frames unchanged |
+//! | 5 | kind 4 `SensorEgi120` (the 78-byte EGI payload + the 120 Hz sub-samples of the frame period: 308 bytes) next to kinds 1 and 3 (layouts unchanged); estimate frames unchanged |
 //!
-//! A receiver of version 4 takes both sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
-//! a kind-1 frame decodes with the EGI channels marked invalid. Frames of versions 2 and 3 (same
-//! sensor layouts, estimates without a 1σ) are refused as `Error::Version(v)`, like any other
-//! version.
+//! A receiver of version 5 takes the three sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
+//! a kind-1 frame decodes with the EGI channels marked invalid, a kind-1 or kind-3 frame without
+//! sub-samples. Frames of versions 2 to 4 are refused as `Error::Version(v)`, like any other
+//! version (a version-4 sender's kinds 1 and 3 have the same layout here, but a version-4 receiver
+//! cannot read kind 4, so the two builds must not be mixed silently).
 
 pub mod estimate;
 pub mod sensor;
 
 /// Wire format version carried in every header (the table in the module docs).
-pub const VERSION: u8 = 4;
+pub const VERSION: u8 = 5;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0;
 /// Header length.
@@ -42,7 +45,7 @@ pub const HEADER_LEN: usize = 8;
 /// CRC length.
 pub const CRC_LEN: usize = 4;
 /// Longest body (header + payload) of any frame kind.
-pub const MAX_BODY: usize = HEADER_LEN + sensor::EGI_PAYLOAD_LEN;
+pub const MAX_BODY: usize = HEADER_LEN + sensor::EGI120_PAYLOAD_LEN;
 /// Longest encoded frame including the delimiter.
 pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_BODY + CRC_LEN) + 1;
 
@@ -104,6 +107,8 @@ pub enum Kind {
     Estimate = 2,
     /// A sensor frame of the EGI suite ([`crate::Suite::Egi`]).
     SensorEgi = 3,
+    /// A sensor frame of the EGI suite with the 120 Hz sub-samples ([`crate::Suite::Egi120`]).
+    SensorEgi120 = 4,
 }
 
 /// The header fields common to every frame.
@@ -286,6 +291,7 @@ mod tests {
             time_ms: seq as u32 * 50,
             raw,
             valid: ALL_VALID,
+            sub: crate::channels::Subsamples::NONE,
         }
     }
 
@@ -359,7 +365,7 @@ mod tests {
             assert_eq!(results, [Err(Error::Version(2))]);
             let text = std::format!("{}", Error::Version(2));
             assert!(
-                text.contains("version 2") && text.contains("version 4"),
+                text.contains("version 2") && text.contains("version 5"),
                 "{text}"
             );
         }

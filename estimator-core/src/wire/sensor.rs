@@ -21,14 +21,29 @@
 //! 74              fuel quantity                  u16       0.1 kg
 //! 76              valid (EGI)                    u16       bit k: channel 16 + k (bits 7–15 zero)
 //! ```
+//! Kind 4 `SensorEgi120`, the EGI suite with the 120 Hz sub-samples ([`Suite::Egi120`]), 308-byte
+//! payload: the 78 bytes above, byte for byte, then
+//! ```text
+//! payload offset  field                          type      unit
+//! 78              valid (sub-samples)            u16       bit i: SUB_CHANNELS[i] valid in all six
+//!                                                          (bits 13–15 zero)
+//! 80 + 38·k       sub-sample k = 0…5 (oldest first; k = 5 at the header's time_ms):
+//!   + 0             gyro p, q, r                 3 × i32   µrad/s
+//!   + 12            specific force x, y, z       3 × i32   1e-5 m/s²
+//!   + 24            elevator, aileron, rudder,   7 × i16   0.01°
+//!                   LEF, TEF, flaperon, speedbrake
+//! ```
 //! A kind-1 frame decodes with the EGI channels invalid (raw 0): nothing of a Table 1 frame is read
-//! as EGI data. The sender chooses the kind ([`SensorFrame::encode`]); encoding a frame as kind 1
+//! as EGI data. A kind-1 or kind-3 frame decodes without sub-samples ([`Subsamples::NONE`]). The sender chooses the kind ([`SensorFrame::encode`]); encoding a frame as kind 1
 //! leaves its EGI channels out.
 
 use super::{
     Error, HEADER_LEN, Kind, check_header, emit_header, header_of, read_u16, read_u32, write,
 };
-use crate::channels::{CHANNELS, Channel, SensorFrame, Suite, TABLE1_CHANNELS};
+use crate::channels::{
+    ALL_VALID, CHANNELS, Channel, SUB_CHANNELS, SUBSAMPLES, SensorFrame, Subsamples, Suite,
+    TABLE1_CHANNELS,
+};
 
 /// Payload of a kind-1 (Table 1) sensor frame.
 pub const PAYLOAD_LEN: usize = 50;
@@ -36,6 +51,11 @@ pub const BODY_LEN: usize = HEADER_LEN + PAYLOAD_LEN;
 /// Payload of a kind-3 (EGI) sensor frame.
 pub const EGI_PAYLOAD_LEN: usize = 78;
 pub const EGI_BODY_LEN: usize = HEADER_LEN + EGI_PAYLOAD_LEN;
+/// Bytes of one sub-sample in a kind-4 frame: six i32 IMU axes, seven i16 surfaces.
+const SUB_LEN: usize = 6 * 4 + 7 * 2;
+/// Payload of a kind-4 (EGI + 120 Hz sub-samples) sensor frame.
+pub const EGI120_PAYLOAD_LEN: usize = EGI_PAYLOAD_LEN + 2 + SUBSAMPLES * SUB_LEN;
+pub const EGI120_BODY_LEN: usize = HEADER_LEN + EGI120_PAYLOAD_LEN;
 
 mod field {
     use super::HEADER_LEN;
@@ -49,6 +69,22 @@ mod field {
     pub const EGI_WIDE: usize = HEADER_LEN + 50;
     pub const FUEL: Range<usize> = HEADER_LEN + 74..HEADER_LEN + 76;
     pub const EGI_VALID: Range<usize> = HEADER_LEN + 76..HEADER_LEN + 78;
+    pub const SUB_VALID: Range<usize> = HEADER_LEN + 78..HEADER_LEN + 80;
+    /// Start of the sub-samples.
+    pub const SUB: usize = HEADER_LEN + 80;
+}
+
+/// Where sub-sample `k` of `SUB_CHANNELS[i]` sits in a kind-4 body, and whether it is an i16
+/// (the surfaces) rather than an i32 (the IMU).
+// k < 6 and i < 13: far from overflowing.
+#[allow(clippy::arithmetic_side_effects)]
+fn sub_range(k: usize, i: usize) -> (core::ops::Range<usize>, bool) {
+    let s = field::SUB + SUB_LEN * k;
+    if i < 6 {
+        (s + 4 * i..s + 4 * i + 4, false)
+    } else {
+        (s + 24 + 2 * (i - 6)..s + 24 + 2 * (i - 6) + 2, true)
+    }
 }
 
 /// Number of 32-bit Table 1 channels; the rest of Table 1 is 16-bit.
@@ -60,6 +96,7 @@ impl Suite {
         match self {
             Suite::Table1 => Kind::Sensor,
             Suite::Egi => Kind::SensorEgi,
+            Suite::Egi120 => Kind::SensorEgi120,
         }
     }
 
@@ -68,6 +105,7 @@ impl Suite {
         match self {
             Suite::Table1 => PAYLOAD_LEN,
             Suite::Egi => EGI_PAYLOAD_LEN,
+            Suite::Egi120 => EGI120_PAYLOAD_LEN,
         }
     }
 }
@@ -113,6 +151,7 @@ impl<T: AsRef<[u8]>> SensorPacket<T> {
         let b = buf.as_ref();
         let suite = match b.get(super::field::KIND) {
             Some(k) if *k == Kind::SensorEgi as u8 => Suite::Egi,
+            Some(k) if *k == Kind::SensorEgi120 as u8 => Suite::Egi120,
             _ => Suite::Table1,
         };
         check_header(b, suite.kind(), suite.payload_len())?;
@@ -150,10 +189,32 @@ impl<T: AsRef<[u8]>> SensorPacket<T> {
     pub fn valid(&self) -> u32 {
         let b = self.buf.as_ref();
         let mut v = u32::from(read_u16(b, field::VALID));
-        if self.suite == Suite::Egi {
+        if self.suite != Suite::Table1 {
             v |= u32::from(read_u16(b, field::EGI_VALID)) << TABLE1_CHANNELS;
         }
-        v & self.suite.channels()
+        v & self.suite.channels() & ALL_VALID
+    }
+
+    /// The 120 Hz sub-samples of a kind-4 frame ([`Subsamples::NONE`] for the other kinds); bits
+    /// naming no sub-channel are clear.
+    pub fn subsamples(&self) -> Subsamples {
+        if self.suite != Suite::Egi120 {
+            return Subsamples::NONE;
+        }
+        let b = self.buf.as_ref();
+        let mut s = Subsamples {
+            valid: read_u16(b, field::SUB_VALID) & Subsamples::ALL_VALID,
+            ..Subsamples::NONE
+        };
+        for (k, row) in s.raw.iter_mut().enumerate() {
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = match sub_range(k, i) {
+                    (r, true) => read_u16(b, r) as i16 as i32,
+                    (r, false) => read_u32(b, r) as i32,
+                };
+            }
+        }
+        s
     }
 }
 
@@ -183,6 +244,7 @@ impl SensorFrame {
             time_ms: p.time_ms(),
             raw,
             valid: p.valid(),
+            sub: p.subsamples(),
         })
     }
 
@@ -211,9 +273,26 @@ impl SensorFrame {
         }
         // The low 16 bits are the Table 1 channels, the next 7 the EGI ones (truncation intended).
         write(b, field::VALID, &(valid as u16).to_le_bytes());
-        if suite == Suite::Egi {
-            let egi = (valid >> TABLE1_CHANNELS) as u16;
+        if suite != Suite::Table1 {
+            let egi = ((valid & ALL_VALID) >> TABLE1_CHANNELS) as u16;
             write(b, field::EGI_VALID, &egi.to_le_bytes());
+        }
+        if suite == Suite::Egi120 {
+            let mut sub_valid = self.sub.valid & Subsamples::ALL_VALID;
+            for (k, row) in self.sub.raw.iter().enumerate() {
+                for (i, (c, v)) in SUB_CHANNELS.iter().zip(row).enumerate() {
+                    let (lo, hi) = c.raw_range();
+                    if *v < lo || *v > hi {
+                        sub_valid &= !(1 << i);
+                    }
+                    let v = (*v).clamp(lo, hi);
+                    match sub_range(k, i) {
+                        (r, true) => write(b, r, &(v as i16).to_le_bytes()),
+                        (r, false) => write(b, r, &v.to_le_bytes()),
+                    }
+                }
+            }
+            write(b, field::SUB_VALID, &sub_valid.to_le_bytes());
         }
     }
 
@@ -229,7 +308,7 @@ impl SensorFrame {
     /// The whole wire frame of `suite`'s kind (CRC, COBS, delimiter). Returns its length. The
     /// sender's suite decides the kind: as [`Suite::Table1`] the EGI channels are not sent.
     pub fn encode(&self, suite: Suite, out: &mut [u8]) -> Result<usize, Error> {
-        let mut body = [0u8; EGI_BODY_LEN];
+        let mut body = [0u8; EGI120_BODY_LEN];
         let n = self.emit_body(suite, &mut body)?;
         super::encode(body.get(..n).ok_or(Error::Buffer)?, out)
     }
@@ -246,6 +325,7 @@ mod tests {
             time_ms: 0x0304_0506,
             raw: [0; CHANNELS],
             valid: u32::MAX,
+            sub: crate::channels::Subsamples::NONE,
         };
         f.raw[Channel::GyroR.index()] = -2;
         f.raw[Channel::Rudder.index()] = -3;
@@ -298,6 +378,51 @@ mod tests {
         let back = SensorFrame::parse(&body).unwrap();
         assert_eq!(back.raw, f.raw);
         assert_eq!(back.valid, ALL_VALID);
+    }
+
+    #[test]
+    fn egi120_frames_carry_the_subsamples_after_the_egi_payload() {
+        let mut f = sample();
+        for (k, row) in f.sub.raw.iter_mut().enumerate() {
+            for (i, v) in row.iter_mut().enumerate() {
+                *v = (k as i32 * 100 + i as i32) * if i % 2 == 0 { 1 } else { -1 };
+            }
+        }
+        f.sub.valid = Subsamples::ALL_VALID & !(1 << 8);
+        let mut egi = [0u8; EGI_BODY_LEN];
+        f.emit_body(Suite::Egi, &mut egi).unwrap();
+        let mut body = [0u8; EGI120_BODY_LEN];
+        assert_eq!(f.emit_body(Suite::Egi120, &mut body), Ok(8 + 308));
+        assert_eq!(body[1], 4);
+        // The EGI frame's payload byte for byte, then the sub-samples' validity and values.
+        assert_eq!(&body[2..EGI_BODY_LEN], &egi[2..]);
+        assert_eq!(&body[8 + 78..8 + 80], &0x1EFFu16.to_le_bytes());
+        // Sub-sample 5, specific force y (i = 4): 504 at 80 + 38·5 + 16.
+        assert_eq!(
+            &body[8 + 80 + 190 + 16..8 + 80 + 190 + 20],
+            &504i32.to_le_bytes()
+        );
+        // Sub-sample 2, rudder (i = 8): 208 as i16 at 80 + 38·2 + 24 + 4.
+        assert_eq!(
+            &body[8 + 80 + 76 + 28..8 + 80 + 76 + 30],
+            &208i16.to_le_bytes()
+        );
+        let back = SensorFrame::parse(&body).unwrap();
+        assert_eq!(back.raw, f.raw);
+        assert_eq!(back.sub, f.sub);
+        assert!(!back.sub.is_valid(Channel::Rudder) && back.sub.is_valid(Channel::AccelY));
+        assert_eq!(back.sub.get(5, Channel::AccelY), 504);
+        assert_eq!(back.sub.get(5, Channel::AccelX), -503);
+        // Bits above the 13 sub-channels name nothing and are ignored; a surface out of the i16
+        // range is saturated and invalid; an EGI frame carries none.
+        body[8 + 79] |= 0xE0;
+        assert_eq!(SensorFrame::parse(&body).unwrap().sub.valid, f.sub.valid);
+        f.sub.raw[3][6] = 40_000;
+        f.emit_body(Suite::Egi120, &mut body).unwrap();
+        let back = SensorFrame::parse(&body).unwrap();
+        assert_eq!(back.sub.get(3, Channel::Elevator), i16::MAX as i32);
+        assert!(!back.sub.is_valid(Channel::Elevator));
+        assert_eq!(SensorFrame::parse(&egi).unwrap().sub, Subsamples::NONE);
     }
 
     #[test]
@@ -356,7 +481,7 @@ mod tests {
         b[1] = Kind::Sensor as u8;
         assert_eq!(SensorFrame::parse(&b), Err(Error::TooLong));
         // Another version is refused as such whatever the kind and length.
-        for v in [1, 2, 3, 5, 255] {
+        for v in [1, 2, 3, 4, 6, 255] {
             b[0] = v;
             b[1] = Kind::SensorEgi as u8;
             assert_eq!(SensorFrame::parse(&b), Err(Error::Version(v)));

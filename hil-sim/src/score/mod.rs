@@ -139,6 +139,13 @@ pub struct Summary {
     pub wall_s: f64,
     pub uplink: LinkStats,
     pub downlink: LinkStats,
+    /// The link budget: the share of each direction's line the run's frames took (bytes sent ×
+    /// 10 bit, 8N1, over the baud rate × the flight time; 1 is a full line, beyond it the frames
+    /// queue up), and the mean bytes per frame on the wire (`null` without frames).
+    pub uplink_line_share: Option<f64>,
+    pub downlink_line_share: Option<f64>,
+    pub uplink_bytes_per_frame: Option<f64>,
+    pub downlink_bytes_per_frame: Option<f64>,
     /// Scripted sensor faults (`--fault`) and how the estimator came through each (empty without).
     pub faults: Vec<faults::FaultScore>,
 }
@@ -255,7 +262,31 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         wall_s: round_ms(o.wall_s),
         uplink: o.uplink,
         downlink: o.downlink,
+        uplink_line_share: None,
+        downlink_line_share: None,
+        uplink_bytes_per_frame: per_frame(&o.uplink),
+        downlink_bytes_per_frame: per_frame(&o.downlink),
         faults: Vec::new(),
+    }
+}
+
+/// Mean bytes per transmission of a direction.
+fn per_frame(s: &LinkStats) -> Option<f64> {
+    (s.frames_sent > 0).then(|| s.bytes_sent as f64 / s.frames_sent as f64)
+}
+
+/// The share of a line of `baud` (8N1: 10 bit per byte) that `s`'s bytes took over `flight_s`.
+pub fn line_share(s: &LinkStats, baud: u32, flight_s: f64) -> Option<f64> {
+    let capacity_bytes = f64::from(baud) / 10.0 * flight_s;
+    (capacity_bytes > 0.0).then(|| s.bytes_sent as f64 / capacity_bytes)
+}
+
+impl Summary {
+    /// Fills the line shares from the provenance's link and the flight time.
+    pub fn measure_link_budget(&mut self) {
+        let baud = self.provenance.link.baud;
+        self.uplink_line_share = line_share(&self.uplink, baud, self.flight_s);
+        self.downlink_line_share = line_share(&self.downlink, baud, self.flight_s);
     }
 }
 
