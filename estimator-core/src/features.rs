@@ -1158,7 +1158,10 @@ mod tests {
         assert_eq!(f.suite(), Suite::Egi120);
         // One sub-channel missing takes them all away (a model reading any is held).
         frame.sub.valid &= !(1 << 8);
-        assert_eq!(FeatureValues::compute(&frame, &h).usable & SUBSAMPLES_VALID, 0);
+        assert_eq!(
+            FeatureValues::compute(&frame, &h).usable & SUBSAMPLES_VALID,
+            0
+        );
         // A channel that is not sub-sampled, or a k past the period, is no candidate.
         assert!(Feature::Sub(Channel::GpsAlt, 0).index() >= FEATURE_COUNT);
         assert!(Feature::Sub(Channel::AccelY, 6).index() >= FEATURE_COUNT);

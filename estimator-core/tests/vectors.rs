@@ -13,10 +13,16 @@
 
 #[cfg(estimator_weights)]
 use estimator_core::AngleNet;
-use estimator_core::channels::TABLE1_CHANNELS;
+use estimator_core::channels::{
+    SUB_CHANNEL_COUNT, SUBSAMPLES, SUBSAMPLES_VALID, Subsamples, TABLE1_CHANNELS,
+};
 use estimator_core::{CHANNELS, Estimator, FeatureState, Flags, SensorFrame};
 
 const VECTORS: Option<&str> = option_env!("ESTIMATOR_VECTORS");
+
+/// Numbers of an `egi120` line's frame after `seq time_ms valid`: the channels, the sub-samples'
+/// validity and their values.
+const EGI120_WIDTH: usize = CHANNELS + 1 + SUBSAMPLES * SUB_CHANNEL_COUNT;
 
 #[test]
 fn compiled_in_model_matches_the_trainer_vectors() {
@@ -42,10 +48,12 @@ fn compiled_in_model_matches_the_trainer_vectors() {
             .split_whitespace()
             .map(|t| t.parse().expect("integer"))
             .collect();
-        // A line carries the channels of its model's suite: 16 (Table 1) or all 23 (EGI).
+        // A line carries the channels of its model's suite: 16 (Table 1) or all 23 (EGI), then
+        // for `egi120` the sub-samples' validity and their 6 × 13 values.
         let n = v.len() - 4 - 6;
+        let channels = if n == EGI120_WIDTH { CHANNELS } else { n };
         assert!(
-            n == TABLE1_CHANNELS || n == CHANNELS,
+            n == TABLE1_CHANNELS || n == CHANNELS || n == EGI120_WIDTH,
             "malformed vector line: {line}"
         );
         if v[0] == 1 {
@@ -54,13 +62,20 @@ fn compiled_in_model_matches_the_trainer_vectors() {
         }
         let v = &v[1..];
         let raw: [i32; CHANNELS] =
-            core::array::from_fn(|i| if i < n { v[3 + i] as i32 } else { 0 });
+            core::array::from_fn(|i| if i < channels { v[3 + i] as i32 } else { 0 });
+        let mut sub = Subsamples::NONE;
+        if n == EGI120_WIDTH {
+            sub.valid = v[3 + CHANNELS] as u16;
+            for (r, x) in sub.raw.iter_mut().flatten().zip(&v[4 + CHANNELS..3 + n]) {
+                *r = *x as i32;
+            }
+        }
         let frame = SensorFrame {
             seq: v[0] as u16,
             time_ms: v[1] as u32,
             raw,
             valid: v[2] as u32,
-            sub: estimator_core::channels::Subsamples::NONE,
+            sub,
         };
         let values = state.next(&frame);
         let e = est.step(&frame);
@@ -82,12 +97,13 @@ fn compiled_in_model_matches_the_trainer_vectors() {
         }
         // The full step gives the same numbers when every channel of the line's suite is valid and
         // healthy (a channel at its full scale is held by the step, see estimator_core::health).
-        let suite = if n == CHANNELS {
-            estimator_core::Suite::Egi
-        } else {
-            estimator_core::Suite::Table1
+        let suite = match n {
+            EGI120_WIDTH => estimator_core::Suite::Egi120,
+            CHANNELS => estimator_core::Suite::Egi,
+            _ => estimator_core::Suite::Table1,
         };
-        if values.health.usable(&frame) & suite.channels() == suite.channels() {
+        let healthy = values.health.usable(&frame) | (values.usable & SUBSAMPLES_VALID);
+        if healthy & suite.channels() == suite.channels() {
             // An α network out of its envelope gives way to a consistent filter: α is the filter's.
             let want = if e.flags.has(Flags::ALPHA_FROM_FILTER) {
                 assert!(want_alpha.2, "α from the filter while in envelope: {line}");

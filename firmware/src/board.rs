@@ -15,8 +15,9 @@ use firmware::{App, ByteQueue, Clock, Config, Transport};
 use panic_probe as _;
 
 const BAUD: u32 = 115_200;
-/// Room for several sensor frames (64 bytes each) while a step runs.
-const RX_CAPACITY: usize = 512;
+/// Room for three sensor frames of the largest kind (kind 4, 323 bytes on the wire) while a step
+/// runs: at 115 200 Bd about 12 bytes arrive during a 1-ms step.
+const RX_CAPACITY: usize = 1024;
 
 mod reg {
     pub const RCC: usize = 0x4002_3800;

@@ -18,6 +18,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use estimator_core::channels::{SUB_CHANNELS, Subsamples};
 use estimator_core::{Channel, SensorFrame};
 
 /// What goes wrong.
@@ -131,7 +132,9 @@ impl fmt::Display for Fault {
 }
 
 /// Applies `faults` to a flight's frames, `times_s` being each frame's flight time. A stuck or
-/// saturated channel takes its value (or sign) from the last frame before its fault.
+/// saturated channel takes its value (or sign) from the last frame before its fault. A faulted
+/// channel's 120 Hz sub-samples fail with it: invalid when it is dead, all six at its stuck or
+/// saturated value.
 pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
     for fault in faults {
         let mut before: Option<i32> = None;
@@ -140,6 +143,11 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
             match fault.kind {
                 FaultKind::GpsLoss | FaultKind::Dead(_) if active => {
                     f.valid &= !fault.kind.channels();
+                    for (i, c) in SUB_CHANNELS.iter().enumerate() {
+                        if fault.kind.channels() & c.bit() != 0 {
+                            f.sub.valid &= !(1 << i);
+                        }
+                    }
                 }
                 FaultKind::Stuck(c) if active => {
                     let v = *before.get_or_insert(f.get(c));
@@ -161,9 +169,17 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
     }
 }
 
+/// Channel `c` of the frame, and each of its sub-samples if it has them, to `v`.
 fn set(f: &mut SensorFrame, c: Channel, v: i32) {
     if let Some(r) = f.raw.get_mut(c.index()) {
         *r = v;
+    }
+    if let Some(i) = Subsamples::position(c) {
+        for sample in f.sub.raw.iter_mut() {
+            if let Some(r) = sample.get_mut(i) {
+                *r = v;
+            }
+        }
     }
 }
 
@@ -184,6 +200,12 @@ mod tests {
                 for (i, r) in f.raw.iter_mut().enumerate() {
                     *r = 100 * i as i32 - 5 * k as i32;
                 }
+                for (j, sample) in f.sub.raw.iter_mut().enumerate() {
+                    for (i, r) in sample.iter_mut().enumerate() {
+                        *r = 1000 * i as i32 + j as i32 - 5 * k as i32;
+                    }
+                }
+                f.sub.valid = Subsamples::ALL_VALID;
                 f
             })
             .collect();
@@ -245,10 +267,15 @@ mod tests {
                     continue;
                 }
                 match fault.kind {
-                    FaultKind::GpsLoss | FaultKind::Dead(_) => assert!(!a.is_valid(c)),
+                    FaultKind::GpsLoss => assert!(!a.is_valid(c)),
+                    FaultKind::Dead(_) => {
+                        assert!(!a.is_valid(c) && !a.sub.is_valid(c));
+                        assert!(a.sub.is_valid(Channel::AccelZ));
+                    }
                     FaultKind::Stuck(_) => {
                         assert!(a.is_valid(c));
                         assert_eq!(a.get(c), clean[19].get(c));
+                        assert!((0..6).all(|k| a.sub.get(k, c) == clean[19].get(c)));
                     }
                     FaultKind::Saturated(_) => {
                         assert!(a.is_valid(c));

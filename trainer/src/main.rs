@@ -132,21 +132,24 @@ struct TrainArgs {
     /// axes and the kinematic α/β; needs --suite egi), egi-hybrid (egi-dynamics + the model-based
     /// air-data filter's α, β, their 1σ, air speed and lift scale; --suite egi), egi-hybrid-fast
     /// (egi-dynamics + the filter's α, β and their 1σ, which recover within a second of an
-    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas:
-    /// the shipped set), egi-hybrid-scales (egi-hybrid-fast-d2 + the filter's lift and side-force
-    /// scales), egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
+    /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas),
+    /// egi120-beta (egi-hybrid-fast-d2 + the 120 Hz sub-samples of Ay, rudder, aileron and r for
+    /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α: the shipped
+    /// set), egi-hybrid-scales (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
+    /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
-    #[arg(long, default_value = "egi-hybrid-fast-d2")]
+    #[arg(long, default_value = "egi120")]
     features: String,
     /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
     /// `filter_airspeed_mps,filter_lift_scale`): an ablation without spelling out the whole list.
     #[arg(long, default_value = "")]
     without: String,
-    /// Sensor suite the models may read: table1 (the paper's inputs) or egi (Table 1 + the
-    /// embedded GPS/INS attitude and velocity and the fuel quantity, the shipped suite; needs a
-    /// dataset of format 4). A feature of a suite the run does not have is refused with the suite
+    /// Sensor suite the models may read: table1 (the paper's inputs), egi (Table 1 + the
+    /// embedded GPS/INS attitude and velocity and the fuel quantity; needs a dataset of format 4)
+    /// or egi120 (egi + the IMU's and the surfaces' 120 Hz sub-samples, the shipped suite; needs a
+    /// dataset of format 5). A feature of a suite the run does not have is refused with the suite
     /// it needs.
-    #[arg(long, default_value = "egi")]
+    #[arg(long, default_value = "egi120")]
     suite: String,
     /// Fraction of training flights held out (by flight) for validation, strictly between 0 and 1.
     #[arg(long, default_value_t = 0.15, value_parser = fraction, allow_hyphen_values = true)]
@@ -174,9 +177,9 @@ struct ReportArgs {
     /// Print exactly one JSON object (the Table-2 numbers) on stdout.
     #[arg(long)]
     json: bool,
-    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi-hybrid-fast-d2`
-    /// features on the `egi` suite, `medium-wide-beta` networks trained with `--loss l1`, the
-    /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi` suite.
+    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi120`
+    /// features on the `egi120` suite, `medium-wide-beta` networks trained with `--loss l1`, the
+    /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi120` suite (format 5).
     #[arg(long)]
     shipped_rows: bool,
     /// An out-of-distribution dataset (`hil-sim generate --preset ood`): every row also answers
@@ -1371,10 +1374,10 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
         ablation: ablation.clone(),
         suite,
         shipped_rows: if shipped_rows {
-            ds.require(Suite::Egi)?;
+            ds.require(Suite::Egi120)?;
             // The configuration the shipped weights were trained with (their PROVENANCE).
-            let hybrid = FeatureSet::parse("egi-hybrid-fast-d2")?;
-            hybrid.check_suite(Suite::Egi)?;
+            let hybrid = FeatureSet::parse("egi120")?;
+            hybrid.check_suite(Suite::Egi120)?;
             Some((hybrid, Size::MediumWideBeta, Loss::L1))
         } else {
             None

@@ -2,6 +2,7 @@
 //! reference of the deployed network, the `weights.rs` code generator and the test-vector writer.
 use crate::model::{FloatLayer, float_forward};
 use crate::prep::{Angle, Prep, fixed_point, fp_value};
+use estimator_core::channels::{ALL_VALID, SUB_CHANNEL_COUNT, SUBSAMPLES, SUBSAMPLES_VALID};
 use estimator_core::normalize::{Envelope, Norm, ONE_SIGMA, TurbulenceEnvelope};
 use estimator_core::{Channel, Feature, FeatureState, FeatureValues, SensorFrame, Suite};
 use std::fmt::Write;
@@ -258,6 +259,7 @@ fn feature_path(f: Feature) -> String {
         Feature::Delta(c, l) => {
             format!("crate::Feature::Delta(crate::Channel::{c:?}, crate::Lag::{l:?})")
         }
+        Feature::Sub(c, k) => format!("crate::Feature::Sub(crate::Channel::{c:?}, {k})"),
         other => format!("crate::Feature::{other:?}"),
     }
 }
@@ -417,15 +419,42 @@ pub struct Vector {
 /// The columns of a vector line for `suite`: its channels only (16 for Table 1, as every vector file
 /// before the EGI suite, so a Table 1 model's vectors do not change; 23 for EGI).
 pub fn vector_columns(suite: Suite) -> String {
+    let sub = if carries_subsamples(suite) {
+        format!(
+            " sub_valid sub0..sub{} (sub-sample k of SUB_CHANNELS[i] at k·{} + i)",
+            SUBSAMPLE_VALUES - 1,
+            SUB_CHANNEL_COUNT
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "reset seq time_ms valid raw0..raw{} w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped",
-        suite_width(suite) - 1
+        "reset seq time_ms valid raw0..raw{}{sub} w_aero_mms alpha_mdeg alpha_clamped v_aero_mms beta_mdeg beta_clamped",
+        channel_width(suite) - 1
     )
 }
 
+/// Number of sub-sample values a line of a suite that carries them holds after their validity.
+const SUBSAMPLE_VALUES: usize = SUBSAMPLES * SUB_CHANNEL_COUNT;
+
+fn carries_subsamples(suite: Suite) -> bool {
+    suite.channels() & SUBSAMPLES_VALID != 0
+}
+
 /// Number of channels a vector line of `suite` carries.
+fn channel_width(suite: Suite) -> usize {
+    (suite.channels() & ALL_VALID).count_ones() as usize
+}
+
+/// Numbers a vector line of `suite` carries for its frame after `seq time_ms valid`: the
+/// channels, then (`egi120`) the sub-samples' validity and values.
 fn suite_width(suite: Suite) -> usize {
-    suite.channels().count_ones() as usize
+    channel_width(suite)
+        + if carries_subsamples(suite) {
+            1 + SUBSAMPLE_VALUES
+        } else {
+            0
+        }
 }
 
 /// Vectors for `frames` (`(reset, frame)`: a reset starts a new sequence with an empty history),
@@ -451,7 +480,8 @@ pub fn vectors(alpha: &QCascade, beta: &QCascade, frames: &[(bool, SensorFrame)]
 
 /// Text format: `#` comment lines, then one line per vector of whitespace-separated integers
 /// ([`vector_columns`]): 4 + 16 + 6 = 26 numbers for a Table 1 model, 4 + 23 + 6 = 33 for an EGI
-/// one. Frames are written as a sender of `suite` delivers them ([`SensorFrame::restricted_to`]).
+/// one, 4 + 23 + 1 + 78 + 6 = 112 for an `egi120` one. Frames are written as a sender of `suite`
+/// delivers them ([`SensorFrame::restricted_to`]).
 pub fn format_vectors(vs: &[Vector], suite: Suite, header: &str) -> String {
     let mut out = String::new();
     for line in header.lines() {
@@ -461,8 +491,14 @@ pub fn format_vectors(vs: &[Vector], suite: Suite, header: &str) -> String {
     for v in vs {
         let f = v.frame.restricted_to(suite);
         let _ = write!(out, "{} {} {} {}", v.reset as u8, f.seq, f.time_ms, f.valid);
-        for r in f.raw.iter().take(suite_width(suite)) {
+        for r in f.raw.iter().take(channel_width(suite)) {
             let _ = write!(out, " {r}");
+        }
+        if carries_subsamples(suite) {
+            let _ = write!(out, " {}", f.sub.valid);
+            for r in f.sub.raw.iter().flatten() {
+                let _ = write!(out, " {r}");
+            }
         }
         let _ = writeln!(
             out,
@@ -490,9 +526,8 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             .map(|t| t.parse().ok())
             .collect::<Option<_>>()?;
         let width = n.len().checked_sub(4 + 6)?;
-        if !Suite::ALL.iter().any(|s| suite_width(*s) == width) {
-            return None;
-        }
+        let suite = Suite::ALL.into_iter().find(|s| suite_width(*s) == width)?;
+        let channels = channel_width(suite);
         let reset = n[0] == 1;
         let n = &n[1..];
         let mut frame = SensorFrame {
@@ -501,8 +536,15 @@ pub fn parse_vectors(text: &str) -> Option<Vec<Vector>> {
             valid: u32::try_from(n[2]).ok()?,
             ..SensorFrame::default()
         };
-        for (r, v) in frame.raw.iter_mut().zip(&n[3..3 + width]) {
+        for (r, v) in frame.raw.iter_mut().zip(&n[3..3 + channels]) {
             *r = *v as i32;
+        }
+        if carries_subsamples(suite) {
+            frame.sub.valid = u16::try_from(n[3 + channels]).ok()?;
+            let values = &n[4 + channels..3 + width];
+            for (r, v) in frame.sub.raw.iter_mut().flatten().zip(values) {
+                *r = *v as i32;
+            }
         }
         let ro = |k: usize| RefOut {
             mid: n[k] as i32,

@@ -245,6 +245,21 @@ fn integer_reference_matches_estimator_core_and_tracks_float() {
     let vs = vectors(&q, &q, &seq);
     let text = format_vectors(&vs, estimator_core::Suite::Egi, "test\nheader");
     assert_eq!(parse_vectors(&text).unwrap(), vs);
+    // An egi120 file carries the sub-samples too (112 numbers a line), bit for bit.
+    let mut vs120 = vs.clone();
+    for (n, v) in vs120.iter_mut().enumerate() {
+        for (k, r) in v.frame.sub.raw.iter_mut().flatten().enumerate() {
+            *r = (n * 1000 + k) as i32 - 40_000;
+        }
+        v.frame.sub.valid = estimator_core::channels::Subsamples::ALL_VALID & !(n as u16 & 7);
+    }
+    let text = format_vectors(&vs120, estimator_core::Suite::Egi120, "t120");
+    assert!(
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .all(|l| l.split_whitespace().count() == 112)
+    );
+    assert_eq!(parse_vectors(&text).unwrap(), vs120);
     // A Table 1 file carries the Table 1 channels only (26 numbers a line, as before the EGI
     // suite): the frames come back as a Table 1 sender delivers them.
     let text = format_vectors(&vs, estimator_core::Suite::Table1, "t1");
