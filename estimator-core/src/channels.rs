@@ -254,7 +254,15 @@ impl Suite {
     }
 }
 
-/// [`Channel::name`] and the delta-feature names from one list: `"<name>_d<frames>"` for every lag.
+/// The array of `name` with each suffix appended, at compile time.
+macro_rules! suffixed {
+    ($c:literal; $($suffix:literal),*) => {
+        [$(concat!($c, $suffix)),*]
+    };
+}
+
+/// [`Channel::name`], the delta-feature names (`"<name>_d<frames>"` for every lag) and the
+/// sub-sample names (`"<name>_sub<k>"`) from one list.
 macro_rules! channel_names {
     ($($v:ident => $c:literal),* $(,)?) => {
         impl Channel {
@@ -268,14 +276,7 @@ macro_rules! channel_names {
             /// Names of this channel's sub-sample features `"<name>_sub<k>"`, k = 0 … 5.
             pub(crate) const fn sub_names(self) -> [&'static str; 6] {
                 match self {
-                    $(Channel::$v => [
-                        concat!($c, "_sub0"),
-                        concat!($c, "_sub1"),
-                        concat!($c, "_sub2"),
-                        concat!($c, "_sub3"),
-                        concat!($c, "_sub4"),
-                        concat!($c, "_sub5"),
-                    ],)*
+                    $(Channel::$v => suffixed!($c; "_sub0", "_sub1", "_sub2", "_sub3", "_sub4", "_sub5"),)*
                 }
             }
 
@@ -284,13 +285,7 @@ macro_rules! channel_names {
             /// checks the suffixes against the lags' frame counts).
             pub(crate) const fn delta_names(self) -> [&'static str; 5] {
                 match self {
-                    $(Channel::$v => [
-                        concat!($c, "_d1"),
-                        concat!($c, "_d2"),
-                        concat!($c, "_d4"),
-                        concat!($c, "_d10"),
-                        concat!($c, "_d20"),
-                    ],)*
+                    $(Channel::$v => suffixed!($c; "_d1", "_d2", "_d4", "_d10", "_d20"),)*
                 }
             }
         }

@@ -549,6 +549,17 @@ fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
         count(s.step_ticks_median),
         s.deadline_misses
     );
+    if let (Some(up), Some(share)) = (s.uplink_bytes_per_frame, s.uplink_line_share) {
+        let _ = writeln!(
+            t,
+            "  {:<16} sensor frames {up:.0} B, {:.1} % of {} Bd; estimates {:.0} B, {:.1} %",
+            "link budget",
+            100.0 * share,
+            s.provenance.link.baud,
+            s.downlink_bytes_per_frame.unwrap_or(0.0),
+            100.0 * s.downlink_line_share.unwrap_or(0.0)
+        );
+    }
     if unit == "cycles" {
         // DWT cycles on silicon: the firmware runs at 168 MHz (firmware::rcc) once the PLL is up.
         let us = |v: Option<u32>| {
