@@ -475,7 +475,7 @@ impl SensorFrame {
                 *r = 0;
             }
         }
-        f.valid &= suite.channels();
+        f.valid &= suite.channels() & ALL_VALID;
         if suite.channels() & SUBSAMPLES_VALID == 0 {
             f.sub = Subsamples::NONE;
         }

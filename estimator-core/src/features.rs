@@ -365,8 +365,8 @@ impl Feature {
     pub const fn suite(self) -> Suite {
         match Suite::covering(self.sources()) {
             Some(s) => s,
-            // Every source is a channel, and the largest suite carries every channel.
-            None => Suite::Egi,
+            // Every source is a channel or the sub-samples, and the largest suite carries all.
+            None => Suite::Egi120,
         }
     }
 
@@ -562,7 +562,8 @@ impl FeatureState {
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
         let health = self.health.check(frame, self.history.newest());
         let mut frame = SensorFrame {
-            valid: health.usable(frame),
+            // Channel bits only: the sub-samples' bit is the frame's `sub.valid`'s to give.
+            valid: health.usable(frame) & crate::channels::ALL_VALID,
             ..*frame
         };
         let gap_ms = self.last_ms.map(|p| frame.time_ms.wrapping_sub(p));
@@ -864,14 +865,22 @@ impl FeatureValues {
             health: crate::health::Status::default(),
             filter_flags: 0,
             substituted: 0,
-            usable: frame.valid | subsamples_usable(frame),
+            usable: (frame.valid & crate::channels::ALL_VALID) | subsamples_usable(frame),
         }
     }
 }
 
-/// [`SUBSAMPLES_VALID`] when the frame carries every sub-sampled channel valid, else 0.
+/// [`SUBSAMPLES_VALID`] when the frame carries the sub-samples of every sub-sampled channel whose
+/// 20 Hz value is usable, else 0. A channel that is itself invalid, stuck or saturated does not
+/// take the others' sub-samples away (a dead LEF leaves β's inputs alone): a feature of its own
+/// sub-samples is held through its 20 Hz channel's bit ([`Feature::sources`]).
 fn subsamples_usable(frame: &SensorFrame) -> u32 {
-    if frame.sub.valid & Subsamples::ALL_VALID == Subsamples::ALL_VALID {
+    let need = SUB_CHANNELS
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| frame.valid & c.bit() != 0)
+        .fold(0u16, |m, (i, _)| m | (1 << i));
+    if frame.sub.valid & need == need && frame.sub.valid & Subsamples::ALL_VALID != 0 {
         SUBSAMPLES_VALID
     } else {
         0
@@ -1156,12 +1165,27 @@ mod tests {
         assert_eq!(f.name(), "rudder_deg_sub3");
         assert_eq!(Feature::from_name("rudder_deg_sub3"), Some(f));
         assert_eq!(f.suite(), Suite::Egi120);
-        // One sub-channel missing takes them all away (a model reading any is held).
+        // One sub-channel missing takes them all away (a model reading any is held)...
         frame.sub.valid &= !(1 << 8);
         assert_eq!(
             FeatureValues::compute(&frame, &h).usable & SUBSAMPLES_VALID,
             0
         );
+        // ... unless its 20 Hz channel is gone too: then only its own features are held.
+        frame.valid &= !Channel::Rudder.bit();
+        let v = FeatureValues::compute(&frame, &h);
+        assert_ne!(v.usable & SUBSAMPLES_VALID, 0);
+        assert_ne!(Feature::Sub(Channel::Rudder, 0).sources() & !v.usable, 0);
+        assert_eq!(Feature::Sub(Channel::AccelY, 0).sources() & !v.usable, 0);
+        // A sender cannot switch the sub-samples on through the channel bits.
+        frame.sub.valid = 0;
+        frame.valid |= SUBSAMPLES_VALID;
+        assert_eq!(
+            FeatureValues::compute(&frame, &h).usable & SUBSAMPLES_VALID,
+            0
+        );
+        let mut state = FeatureState::new(false);
+        assert_eq!(state.next(&frame).usable & SUBSAMPLES_VALID, 0);
         // A channel that is not sub-sampled, or a k past the period, is no candidate.
         assert!(Feature::Sub(Channel::GpsAlt, 0).index() >= FEATURE_COUNT);
         assert!(Feature::Sub(Channel::AccelY, 6).index() >= FEATURE_COUNT);

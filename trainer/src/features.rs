@@ -195,7 +195,7 @@ impl FeatureSet {
             .iter()
             .chain(&self.beta)
             .fold(0, |m, f| m | f.sources());
-        Suite::covering(sources).unwrap_or(Suite::Egi)
+        Suite::covering(sources).unwrap_or(Suite::Egi120)
     }
 
     /// Refuses, naming the first one, a feature that `suite`'s frames do not deliver.
