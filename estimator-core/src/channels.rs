@@ -353,22 +353,6 @@ pub struct Subsamples {
     pub valid: u16,
 }
 
-/// The position of `c` in [`SUB_CHANNELS`], if it is one (usable in constants).
-// `i < SUB_CHANNEL_COUNT` (13): the increment cannot overflow.
-#[allow(clippy::arithmetic_side_effects)]
-pub const fn sub_position(c: Channel) -> Option<usize> {
-    let mut i = 0;
-    while i < SUB_CHANNEL_COUNT {
-        // `i < SUB_CHANNEL_COUNT`: in bounds.
-        #[allow(clippy::indexing_slicing)]
-        if SUB_CHANNELS[i] as u8 == c as u8 {
-            return Some(i);
-        }
-        i += 1;
-    }
-    None
-}
-
 impl Subsamples {
     /// None carried.
     pub const NONE: Subsamples = Subsamples {
@@ -379,9 +363,38 @@ impl Subsamples {
     /// All [`SUB_CHANNELS`] valid.
     pub const ALL_VALID: u16 = u16::MAX >> (16 - SUB_CHANNEL_COUNT);
 
-    /// The position of `c` in [`SUB_CHANNELS`], if it is one.
+    /// The position of `c` in [`SUB_CHANNELS`], if it is one (usable in constants).
+    // `i < SUB_CHANNEL_COUNT` (13): the increment cannot overflow.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn position(c: Channel) -> Option<usize> {
-        sub_position(c)
+        let mut i = 0;
+        while i < SUB_CHANNEL_COUNT {
+            // `i < SUB_CHANNEL_COUNT`: in bounds.
+            #[allow(clippy::indexing_slicing)]
+            if SUB_CHANNELS[i] as u8 == c as u8 {
+                return Some(i);
+            }
+            i += 1;
+        }
+        None
+    }
+
+    /// The [`Subsamples::valid`] bits of the sub-sampled channels among `channels` (a channel
+    /// mask).
+    // `i < SUB_CHANNEL_COUNT` (13): the shift and the increment cannot overflow.
+    #[allow(clippy::arithmetic_side_effects)]
+    pub const fn mask_of(channels: u32) -> u16 {
+        let mut m = 0;
+        let mut i = 0;
+        while i < SUB_CHANNEL_COUNT {
+            // `i < SUB_CHANNEL_COUNT`: in bounds.
+            #[allow(clippy::indexing_slicing)]
+            if channels & SUB_CHANNELS[i].bit() != 0 {
+                m |= 1 << i;
+            }
+            i += 1;
+        }
+        m
     }
 
     /// Whether channel `c` is carried and valid.
@@ -445,6 +458,22 @@ impl SensorFrame {
 
     pub fn is_valid(&self, c: Channel) -> bool {
         self.valid & c.bit() != 0
+    }
+
+    /// Channel `c` to `raw`, and each of its 120 Hz sub-samples if it is a sub-sampled channel: a
+    /// sensor held at one value (a stuck or saturated sensor, an extreme test value). Validity is
+    /// left as it is.
+    pub fn set_everywhere(&mut self, c: Channel, raw: i32) {
+        if let Some(r) = self.raw.get_mut(c.index()) {
+            *r = raw;
+        }
+        if let Some(i) = Subsamples::position(c) {
+            for sample in self.sub.raw.iter_mut() {
+                if let Some(r) = sample.get_mut(i) {
+                    *r = raw;
+                }
+            }
+        }
     }
 
     /// Converts SI values (in [`Channel::name`] units) to a frame. A NaN, an infinity, or a value the

@@ -39,7 +39,7 @@
 
 use crate::channels::{
     CHANNELS, Channel, SUB_CHANNEL_COUNT, SUB_CHANNELS, SUBSAMPLES, SUBSAMPLES_VALID, SensorFrame,
-    Subsamples, Suite, TABLE1_CHANNELS, sub_position,
+    Subsamples, Suite, TABLE1_CHANNELS,
 };
 
 /// Number of derived single-frame features of the Table 1 channels, after the sensed channels.
@@ -288,7 +288,7 @@ impl Feature {
             }
             Feature::Delta(c, l) => DELTAS + c.index() * Lag::COUNT + l.index(),
             // Past the candidates for a channel that is not sub-sampled or a k beyond the period.
-            Feature::Sub(c, k) => match sub_position(c) {
+            Feature::Sub(c, k) => match Subsamples::position(c) {
                 Some(i) if (k as usize) < SUBSAMPLES => SUBS + i * SUBSAMPLES + k as usize,
                 _ => FEATURE_COUNT + c.index() * SUBSAMPLES + k as usize,
             },
@@ -562,8 +562,7 @@ impl FeatureState {
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
         let health = self.health.check(frame, self.history.newest());
         let mut frame = SensorFrame {
-            // Channel bits only: the sub-samples' bit is the frame's `sub.valid`'s to give.
-            valid: health.usable(frame) & crate::channels::ALL_VALID,
+            valid: health.usable(frame),
             ..*frame
         };
         let gap_ms = self.last_ms.map(|p| frame.time_ms.wrapping_sub(p));
@@ -571,7 +570,6 @@ impl FeatureState {
         let frame = &frame;
         let mut values = FeatureValues::compute(frame, &self.history);
         values.substituted = substituted;
-        values.usable = frame.valid | subsamples_usable(frame);
         let newly_stuck = health.stuck & !self.stuck_before & crate::filter::NEEDED_MASK != 0;
         self.stuck_before = health.stuck;
         values.health = health;
@@ -875,11 +873,7 @@ impl FeatureValues {
 /// take the others' sub-samples away (a dead LEF leaves β's inputs alone): a feature of its own
 /// sub-samples is held through its 20 Hz channel's bit ([`Feature::sources`]).
 fn subsamples_usable(frame: &SensorFrame) -> u32 {
-    let need = SUB_CHANNELS
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| frame.valid & c.bit() != 0)
-        .fold(0u16, |m, (i, _)| m | (1 << i));
+    let need = Subsamples::mask_of(frame.valid);
     if frame.sub.valid & need == need && frame.sub.valid & Subsamples::ALL_VALID != 0 {
         SUBSAMPLES_VALID
     } else {

@@ -18,7 +18,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use estimator_core::channels::{SUB_CHANNELS, Subsamples};
+use estimator_core::channels::Subsamples;
 use estimator_core::{Channel, SensorFrame};
 
 /// What goes wrong.
@@ -143,15 +143,11 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
             match fault.kind {
                 FaultKind::GpsLoss | FaultKind::Dead(_) if active => {
                     f.valid &= !fault.kind.channels();
-                    for (i, c) in SUB_CHANNELS.iter().enumerate() {
-                        if fault.kind.channels() & c.bit() != 0 {
-                            f.sub.valid &= !(1 << i);
-                        }
-                    }
+                    f.sub.valid &= !Subsamples::mask_of(fault.kind.channels());
                 }
                 FaultKind::Stuck(c) if active => {
                     let v = *before.get_or_insert(f.get(c));
-                    set(f, c, v);
+                    f.set_everywhere(c, v);
                 }
                 FaultKind::Saturated(c) if active => {
                     let sign = if before.unwrap_or(f.get(c)) < 0 {
@@ -159,25 +155,11 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
                     } else {
                         1
                     };
-                    set(f, c, sign * c.full_scale().unwrap_or(i32::MAX));
+                    f.set_everywhere(c, sign * c.full_scale().unwrap_or(i32::MAX));
                     f.valid |= c.bit();
                 }
                 FaultKind::Stuck(c) | FaultKind::Saturated(c) => before = Some(f.get(c)),
                 _ => {}
-            }
-        }
-    }
-}
-
-/// Channel `c` of the frame, and each of its sub-samples if it has them, to `v`.
-fn set(f: &mut SensorFrame, c: Channel, v: i32) {
-    if let Some(r) = f.raw.get_mut(c.index()) {
-        *r = v;
-    }
-    if let Some(i) = Subsamples::position(c) {
-        for sample in f.sub.raw.iter_mut() {
-            if let Some(r) = sample.get_mut(i) {
-                *r = v;
             }
         }
     }

@@ -17,14 +17,15 @@ pub const STEPS_PER_SAMPLE: u32 = SIM_HZ / SAMPLE_HZ;
 /// output rate"), as [`estimator_core::channels::Subsamples`] carries them.
 pub use estimator_core::channels::{SUB_CHANNELS, SUBSAMPLES};
 const _: () = assert!(SUBSAMPLES == STEPS_PER_SAMPLE as usize);
-/// One 120 Hz output of the [`SUB_CHANNELS`], in that order.
-pub type SubSample = [f64; SUB_CHANNELS.len()];
+/// One 120 Hz output of the [`SUB_CHANNELS`], in that order, in SI units (degrees for surfaces).
+pub type SubSampleSi = [f64; SUB_CHANNELS.len()];
 /// The sensors' 120 Hz outputs over one 20 Hz period, oldest first: sub-sample `k` is the output
 /// `SUBSAMPLES − 1 − k` simulation steps before the sample instant (the last one at it).
-pub type Subsamples = [SubSample; SUBSAMPLES];
+/// (The integer form a frame carries is [`estimator_core::channels::Subsamples`].)
+pub type SubsamplesSi = [SubSampleSi; SUBSAMPLES];
 /// The sub-samples of a sample that has none (a dataset older than format 5, a flight log without
 /// them).
-pub const NO_SUBSAMPLES: Subsamples = [[f64::NAN; SUB_CHANNELS.len()]; SUBSAMPLES];
+pub const NO_SUBSAMPLES: SubsamplesSi = [[f64::NAN; SUB_CHANNELS.len()]; SUBSAMPLES];
 /// Feet to metres.
 pub const FT_TO_M: f64 = 0.3048;
 /// Pounds (mass) to kilograms.
@@ -202,9 +203,9 @@ pub struct Sample {
     /// channel the dataset does not carry.
     pub sensed: [f64; CHANNELS],
     /// The IMU's and the surface sensors' own outputs over the period that ends at this sample
-    /// ([`Subsamples`]; before the flight computer's anti-alias filter that makes their 20 Hz
+    /// ([`SubsamplesSi`]; before the flight computer's anti-alias filter that makes their 20 Hz
     /// channels in `sensed`); [`NO_SUBSAMPLES`] when the flight does not carry them.
-    pub sub: Subsamples,
+    pub sub: SubsamplesSi,
 }
 
 /// The maneuver generator's zones (Karali et al. 2023, Fig. 3), as its scripts code them in

@@ -26,7 +26,7 @@ use rand_chacha::ChaCha12Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::flight::{Every, SIM_HZ, SUB_CHANNELS, SubSample};
+use crate::flight::{Every, SIM_HZ, SUB_CHANNELS, SubSampleSi};
 
 const DT: f64 = 1.0 / SIM_HZ as f64;
 const DEG_PER_H: f64 = std::f64::consts::PI / 180.0 / 3600.0;
@@ -867,8 +867,9 @@ pub struct SensorModel {
     surface_aa: [Option<Biquad>; 7],
     steps: u64,
     egi: EgiModel,
-    /// The 120 Hz outputs of the last step, [`SUB_CHANNELS`] order.
-    fast_out: SubSample,
+    /// The 120 Hz outputs of the last step, in [`Channel`] order (NaN for the channels without
+    /// one).
+    fast_out: [f64; CHANNELS],
 }
 
 impl SensorModel {
@@ -898,7 +899,7 @@ impl SensorModel {
             surface_aa: std::array::from_fn(|_| Biquad::lowpass(cfg.surfaces.antialias_cutoff_hz)),
             steps: 0,
             egi: EgiModel::new(cfg, seed),
-            fast_out: [f64::NAN; SUB_CHANNELS.len()],
+            fast_out: [f64::NAN; CHANNELS],
             cfg: cfg.clone(),
             rng,
         }
@@ -990,8 +991,8 @@ impl SensorModel {
     /// (m/s²), every error of its path and its lag; then the seven surface positions (degrees),
     /// truth plus the step's ADC noise draw, quantized. Both before the flight computer's
     /// anti-alias filter (the 20 Hz channels carry the noise and quantization after it).
-    pub fn fast_output(&self) -> SubSample {
-        self.fast_out
+    pub fn fast_output(&self) -> SubSampleSi {
+        SUB_CHANNELS.map(|c| self.fast_out[c.index()])
     }
 
     /// One 120 Hz step: the sensed channels of every suite at this instant.
@@ -1003,8 +1004,8 @@ impl SensorModel {
             let a = self.accel[k].filter(accel_raw[k]);
             out[Channel::GyroP.index() + k] = g.channel;
             out[Channel::AccelX.index() + k] = a.channel;
-            self.fast_out[k] = g.unit;
-            self.fast_out[3 + k] = a.unit;
+            self.fast_out[Channel::GyroP.index() + k] = g.unit;
+            self.fast_out[Channel::AccelX.index() + k] = a.unit;
         }
 
         // GPS: a fix is the truth `latency` ago plus noise, refreshed at the fix rate and held.
@@ -1039,16 +1040,11 @@ impl SensorModel {
             (Channel::Flaperon, t.flaperon_deg),
             (Channel::Speedbrake, t.speedbrake_deg),
         ];
-        let fast = self.fast_out.iter_mut().skip(6);
-        for (((c, v), aa), fast) in surfaces
-            .into_iter()
-            .zip(self.surface_aa.iter_mut())
-            .zip(fast)
-        {
+        for ((c, v), aa) in surfaces.into_iter().zip(self.surface_aa.iter_mut()) {
             let filtered = aa.as_mut().map_or(v, |f| f.step(v));
             let n: f64 = StandardNormal.sample(&mut self.rng);
             out[c.index()] = quantize(filtered + s.noise_sigma_deg * n, s.quantum_deg);
-            *fast = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
+            self.fast_out[c.index()] = quantize(v + s.noise_sigma_deg * n, s.quantum_deg);
         }
         let n: f64 = StandardNormal.sample(&mut self.rng);
         out[Channel::Throttle.index()] = quantize(

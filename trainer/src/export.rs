@@ -135,13 +135,8 @@ pub fn vector_frames(
             let (lo, hi) = c.raw_range();
             for v in [lo, hi, 0] {
                 let mut f = base;
-                f.raw[c.index()] = v;
                 // A sub-sampled channel's six 120 Hz values too (an `egi120` frame carries them).
-                if let Some(i) = estimator_core::channels::Subsamples::position(c) {
-                    for sample in f.sub.raw.iter_mut() {
-                        sample[i] = v;
-                    }
-                }
+                f.set_everywhere(c, v);
                 out.push((true, f));
             }
         }

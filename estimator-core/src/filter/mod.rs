@@ -214,16 +214,9 @@ pub struct Input {
 pub const NEEDED_MASK: u32 = Suite::Egi.channels()
     & !(Channel::GpsSpeed.bit() | Channel::Lef.bit() | Channel::Throttle.bit());
 
-/// The sub-sampled channels the measurement reads, as a mask of [`Subsamples::valid`] bits: the
-/// IMU and every surface but the LEF actuator (the force model reads the scheduled LEF). All of
-/// them valid, or the 20 Hz channels.
-const SUBSAMPLES_NEEDED: u16 = Subsamples::ALL_VALID & !(1 << LEF_SUB);
-/// The LEF's position in [`crate::channels::SUB_CHANNELS`].
-const LEF_SUB: usize = 9;
-const _: () = assert!(matches!(
-    crate::channels::SUB_CHANNELS[LEF_SUB],
-    Channel::Lef
-));
+/// The sub-sampled channels among [`NEEDED_MASK`], as a mask of [`Subsamples::valid`] bits: the
+/// IMU and every surface but the LEF actuator. All of them valid, or the 20 Hz channels.
+const SUBSAMPLES_NEEDED: u16 = Subsamples::mask_of(NEEDED_MASK);
 
 impl Input {
     /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
@@ -246,11 +239,16 @@ impl Input {
         // Channel values are below 2^24 in magnitude for any flight value, so the f32 conversion
         // is exact; the product with the LSB rounds once. A sub-sampled channel reads the last
         // sub-sample or the period's mean (six values below 2^24: the sum is exact in i64).
+        let at = |k: usize, i: usize| f.sub.raw.get(k).and_then(|s| s.get(i)).copied();
         let si = |c: Channel| {
-            let raw = match (fast, Subsamples::position(c)) {
-                (Some(SubsampleUse::Latest), Some(_)) => f.sub.get(SUBSAMPLES - 1, c) as f32,
-                (Some(SubsampleUse::Mean), Some(_)) => {
-                    let sum: i64 = (0..SUBSAMPLES).map(|k| i64::from(f.sub.get(k, c))).sum();
+            // Only a frame whose sub-samples are read looks up the channel's position.
+            let sub = fast.and_then(|u| Some((u, Subsamples::position(c)?)));
+            let raw = match sub {
+                Some((SubsampleUse::Latest, i)) => at(SUBSAMPLES - 1, i).unwrap_or(0) as f32,
+                Some((SubsampleUse::Mean, i)) => {
+                    let sum: i64 = (0..SUBSAMPLES)
+                        .map(|k| i64::from(at(k, i).unwrap_or(0)))
+                        .sum();
                     sum as f32 / SUBSAMPLES as f32
                 }
                 _ => f.get(c) as f32,

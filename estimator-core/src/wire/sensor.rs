@@ -74,17 +74,39 @@ mod field {
     pub const SUB: usize = HEADER_LEN + 80;
 }
 
-/// Where sub-sample `k` of `SUB_CHANNELS[i]` sits in a kind-4 body, and whether it is an i16
-/// (the surfaces) rather than an i32 (the IMU).
+/// Where sub-sample `k` of `SUB_CHANNELS[i]` sits in a kind-4 body: the IMU's six first (i32),
+/// then the surfaces (i16), each in its channel's wire width ([`narrow`]).
 // k < 6 and i < 13: far from overflowing.
 #[allow(clippy::arithmetic_side_effects)]
-fn sub_range(k: usize, i: usize) -> (core::ops::Range<usize>, bool) {
+fn sub_range(k: usize, i: usize) -> core::ops::Range<usize> {
     let s = field::SUB + SUB_LEN * k;
     if i < 6 {
-        (s + 4 * i..s + 4 * i + 4, false)
+        s + 4 * i..s + 4 * i + 4
     } else {
-        (s + 24 + 2 * (i - 6)..s + 24 + 2 * (i - 6) + 2, true)
+        s + 24 + 2 * (i - 6)..s + 24 + 2 * (i - 6) + 2
     }
+}
+
+/// Channel `c`'s raw value at `r`, in its wire width and signedness ([`narrow`]).
+fn read_value(b: &[u8], r: core::ops::Range<usize>, c: Channel) -> i32 {
+    match narrow(c) {
+        Some(false) => read_u16(b, r) as i32,
+        Some(true) => read_u16(b, r) as i16 as i32,
+        None => read_u32(b, r) as i32,
+    }
+}
+
+/// Writes channel `c`'s raw value `v` at `r` in its wire width, saturated to the channel's range;
+/// false when `v` was outside it (the value is then not valid).
+fn write_value(b: &mut [u8], r: core::ops::Range<usize>, c: Channel, v: i32) -> bool {
+    let (lo, hi) = c.raw_range();
+    let w = v.clamp(lo, hi);
+    match narrow(c) {
+        None => write(b, r, &w.to_le_bytes()),
+        Some(false) => write(b, r, &(w as u16).to_le_bytes()),
+        Some(true) => write(b, r, &(w as i16).to_le_bytes()),
+    }
+    w == v
 }
 
 /// Number of 32-bit Table 1 channels; the rest of Table 1 is 16-bit.
@@ -176,13 +198,7 @@ impl<T: AsRef<[u8]>> SensorPacket<T> {
         if !self.suite.carries(c) {
             return 0;
         }
-        let b = self.buf.as_ref();
-        let r = channel_range(c);
-        match narrow(c) {
-            Some(false) => read_u16(b, r) as i32,
-            Some(true) => read_u16(b, r) as i16 as i32,
-            None => read_u32(b, r) as i32,
-        }
+        read_value(self.buf.as_ref(), channel_range(c), c)
     }
 
     /// Bit per channel; channels the suite does not carry, and bits naming no channel, are clear.
@@ -207,11 +223,8 @@ impl<T: AsRef<[u8]>> SensorPacket<T> {
             ..Subsamples::NONE
         };
         for (k, row) in s.raw.iter_mut().enumerate() {
-            for (i, v) in row.iter_mut().enumerate() {
-                *v = match sub_range(k, i) {
-                    (r, true) => read_u16(b, r) as i16 as i32,
-                    (r, false) => read_u32(b, r) as i32,
-                };
+            for (i, (v, c)) in row.iter_mut().zip(SUB_CHANNELS).enumerate() {
+                *v = read_value(b, sub_range(k, i), c);
             }
         }
         s
@@ -259,16 +272,8 @@ impl SensorFrame {
             if !suite.carries(*c) {
                 continue;
             }
-            let r = channel_range(*c);
-            let (lo, hi) = c.raw_range();
-            if v < lo || v > hi {
+            if !write_value(b, channel_range(*c), *c, v) {
                 valid &= !c.bit();
-            }
-            let v = v.clamp(lo, hi);
-            match narrow(*c) {
-                None => write(b, r, &v.to_le_bytes()),
-                Some(false) => write(b, r, &(v as u16).to_le_bytes()),
-                Some(true) => write(b, r, &(v as i16).to_le_bytes()),
             }
         }
         // The low 16 bits are the Table 1 channels, the next 7 the EGI ones (truncation intended).
@@ -281,14 +286,8 @@ impl SensorFrame {
             let mut sub_valid = self.sub.valid & Subsamples::ALL_VALID;
             for (k, row) in self.sub.raw.iter().enumerate() {
                 for (i, (c, v)) in SUB_CHANNELS.iter().zip(row).enumerate() {
-                    let (lo, hi) = c.raw_range();
-                    if *v < lo || *v > hi {
+                    if !write_value(b, sub_range(k, i), *c, *v) {
                         sub_valid &= !(1 << i);
-                    }
-                    let v = (*v).clamp(lo, hi);
-                    match sub_range(k, i) {
-                        (r, true) => write(b, r, &(v as i16).to_le_bytes()),
-                        (r, false) => write(b, r, &v.to_le_bytes()),
                     }
                 }
             }

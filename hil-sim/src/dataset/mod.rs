@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 pub use crate::flight::{
-    Flight, NO_SUBSAMPLES, SUB_CHANNELS, SUBSAMPLES, Sample, Split, SubSample, Subsamples,
+    Flight, NO_SUBSAMPLES, SUB_CHANNELS, SUBSAMPLES, Sample, Split, SubSampleSi, SubsamplesSi,
     TRUTH_COLUMNS, TRUTH_COUNT, Truth, Zone, ZoneTimes,
 };
 
@@ -337,7 +337,7 @@ impl Flight {
             truth.copy_from_slice(&vals[1..1 + TRUTH_COUNT]);
             let mut sensed = [0.0; CHANNELS];
             sensed.copy_from_slice(&vals[1 + TRUTH_COUNT..1 + TRUTH_COUNT + CHANNELS]);
-            let mut sub: Subsamples = NO_SUBSAMPLES;
+            let mut sub: SubsamplesSi = NO_SUBSAMPLES;
             let subsamples = vals[1 + TRUTH_COUNT + CHANNELS..].chunks_exact(SUB_CHANNELS.len());
             for (to, from) in sub.iter_mut().zip(subsamples) {
                 to.copy_from_slice(from);

@@ -415,7 +415,6 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         hil_sim_version: env!("CARGO_PKG_VERSION").to_string(),
         link: cfg.link.clone(),
     };
-    summary.measure_link_budget();
     if !faults.is_empty() {
         let estimates: Vec<_> = outcome
             .records

@@ -337,6 +337,7 @@ pub fn run_with_progress(
         records,
         uplink: link.up.stats(),
         downlink: link.down.stats(),
+        baud: cfg.link.baud,
         downlink_rejected: down.rejected,
         unmatched_replies: unmatched,
         wall_s: start.elapsed().as_secs_f64(),

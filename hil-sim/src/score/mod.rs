@@ -33,6 +33,8 @@ pub struct RunOutcome {
     pub records: Vec<FrameRecord>,
     pub uplink: LinkStats,
     pub downlink: LinkStats,
+    /// The link's baud rate (both directions), for the line shares of the link budget.
+    pub baud: u32,
     /// Estimate frames hil-sim rejected (COBS, CRC, length, version, kind).
     pub downlink_rejected: u32,
     /// Intact estimate frames whose seq matched no frame sent.
@@ -228,6 +230,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
             (name.to_string(), n)
         })
         .collect();
+    let flight_s = o.records.len() as f64 * PERIOD_S;
     Summary {
         provenance: Provenance::default(),
         firmware: o.target.to_string(),
@@ -258,12 +261,12 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         step_instructions_max: tmax.filter(|_| instr),
         step_instructions_median: tmed.filter(|_| instr),
         macs_per_step: estimator_core::Estimator::shipped().macs(),
-        flight_s: round_ms(o.records.len() as f64 * PERIOD_S),
+        flight_s: round_ms(flight_s),
         wall_s: round_ms(o.wall_s),
         uplink: o.uplink,
         downlink: o.downlink,
-        uplink_line_share: None,
-        downlink_line_share: None,
+        uplink_line_share: line_share(&o.uplink, o.baud, flight_s),
+        downlink_line_share: line_share(&o.downlink, o.baud, flight_s),
         uplink_bytes_per_frame: per_frame(&o.uplink),
         downlink_bytes_per_frame: per_frame(&o.downlink),
         faults: Vec::new(),
@@ -276,18 +279,9 @@ fn per_frame(s: &LinkStats) -> Option<f64> {
 }
 
 /// The share of a line of `baud` (8N1: 10 bit per byte) that `s`'s bytes took over `flight_s`.
-pub fn line_share(s: &LinkStats, baud: u32, flight_s: f64) -> Option<f64> {
+fn line_share(s: &LinkStats, baud: u32, flight_s: f64) -> Option<f64> {
     let capacity_bytes = f64::from(baud) / 10.0 * flight_s;
     (capacity_bytes > 0.0).then(|| s.bytes_sent as f64 / capacity_bytes)
-}
-
-impl Summary {
-    /// Fills the line shares from the provenance's link and the flight time.
-    pub fn measure_link_budget(&mut self) {
-        let baud = self.provenance.link.baud;
-        self.uplink_line_share = line_share(&self.uplink, baud, self.flight_s);
-        self.downlink_line_share = line_share(&self.downlink, baud, self.flight_s);
-    }
 }
 
 /// A 1σ in millidegrees as degrees, exactly; empty when the angle has none (held).
