@@ -4,7 +4,7 @@ Computes nothing by itself: dataset I/O (with an .npz cache in $WORK/cache), ISA
 drag coefficients parsed from estimator-core/src/aero/f16_tables.rs, the memoryless β inversion of
 the lateral force, the IMU's anti-alias filter at 120 Hz, MAE and a zero-phase band split.
 
-Data: $DATA (hil-sim generate --preset large --seed 1; default <repo>/out/data/large-egi), the
+Data: $DATA (hil-sim generate --preset large --seed 1; default <repo>/out/data/large), the
 shipped estimator's per-frame answers in $WORK/run-<flight>/estimates.csv (run_all.sh). See paths.py.
 """
 import csv

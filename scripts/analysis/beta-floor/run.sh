@@ -3,7 +3,8 @@
 #   data       hil-sim generate --preset large --seed 1 into $DATA, if $DATA has no manifest.json
 #   estimates  run_all.sh: the shipped hybrid on all 68 flights → $WORK/run-<flight>/
 #   replay     replay120.py: 120 Hz JSBSim internals of the 4 test + 16 aggressive training flights
-#   tables     a_where … j_matched → $WORK/out/*.md
+#   tables     a_where … j_matched, k_floor120 → $WORK/out/*.md
+#   floors     i_sensor_floor, k_floor120 only (the sensor floors: no estimates needed) → $WORK/out/
 #   cf         cf_run.sh, cf_run2.sh: counterfactual re-flights (severity, EGI, anti-alias) → $WORK/cf/
 #   filter     filter_tune.sh + filter_summary.py: the filter alone on the training split
 # usage: scripts/analysis/beta-floor/run.sh [step ...]      (no step: all, in the order above)
@@ -22,7 +23,7 @@ die() { printf 'beta-floor: ERROR: %s\n' "$*" >&2; exit 1; }
 steps=("$@")
 [ ${#steps[@]} -gt 0 ] || steps=(data estimates replay tables cf filter)
 for s in "${steps[@]}"; do
-  case "$s" in data|estimates|replay|tables|cf|filter) ;; *) die "unknown step '$s'" ;; esac
+  case "$s" in data|estimates|replay|tables|floors|cf|filter) ;; *) die "unknown step '$s'" ;; esac
 done
 want() { local s; for s in "${steps[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
 
@@ -64,8 +65,15 @@ if want replay; then
 fi
 
 if want tables; then
-  for t in a_where b_timescale c_physics d_turb f_floor g_by_flight h_residual i_sensor_floor j_matched; do
+  for t in a_where b_timescale c_physics d_turb f_floor g_by_flight h_residual i_sensor_floor j_matched k_floor120; do
     say "tables: $t.py → $WORK/out/$t.md"
+    nice -n 19 "$PY" "$HERE/$t.py" > "$WORK/out/$t.md"
+  done
+fi
+
+if want floors; then
+  for t in i_sensor_floor k_floor120; do
+    say "floors: $t.py → $WORK/out/$t.md"
     nice -n 19 "$PY" "$HERE/$t.py" > "$WORK/out/$t.md"
   done
 fi

@@ -1,0 +1,176 @@
+"""β error floor for an estimator that reads the IMU unit's 120 Hz outputs (egi120 suite), beside the
+6 Hz anti-alias floor of i_sensor_floor.py, on the current dataset (format 5).
+
+Oracle (as F1 in f_floor.py / i_sensor_floor.py): β_noturb exact; β_turb recovered from the sensor
+path's output. 6 Hz: lag 3 ms + 6 Hz Butterworth, 20 Hz frames, lags 0..5 frames. 120 Hz: the 3 ms
+first-order discrete lag only (hil_sim::sensors ImuAxis::filter, α = 1 − exp(−dt/τ) per 120 Hz step),
+read at the 120 Hz steps idx−j (j = 0..L−1; j = 0..5 are sub5..sub0 of the frame) at the 20 Hz
+sample instants idx. Linear causal deconvolution + constant, least squares on the 16 aggressive
+training flights, scored on the 4 test flights.
+
+Accelerometer error ("real"): e_Ay = accel_y_mps2_sub* (the unit's output, reassembled into the full
+120 Hz series) − lag(f_y,IMU true) where f_IMU true = fb_total/m + ω̇×r + ω×(ω×r) from the replay
+(the inputs hil-sim feeds the sensor model). It carries every error of the model (scale factor,
+misalignment, turn-on and in-run bias, white noise, Δv quantization). Converted to β with the
+oracle's truth: δβ = e_Ay·m / (q̄·S·(∂C_Y,body/∂β)), ∂C_Y,body/∂β ≈ CYβ(M) − C_D (wind-axis drag).
+"White" variant: e_Ay minus its 2-s centred moving mean (bias/misalignment removed; noise and
+quantization kept).
+
+usage: DATA=... WORK=... nice -n 19 <repo>/.venv/bin/python k_floor120.py > "$WORK/out/k_floor120.md"
+"""
+import sys
+
+import numpy as np
+
+from common import FT, LEVER, S_M2, flights, imu_filter_120, mae, side_parts
+from d_turb import parts
+from f_floor import TESTS, lags
+from frames import table
+
+DT = 1 / 120.0
+SLUG_KG = 14.593902937
+PSF_PA = 47.880258889
+
+
+def lag120(x, tau=0.003):
+    a = 1.0 - np.exp(-DT / tau)
+    y = np.empty_like(x)
+    s = x[0]
+    for i, v in enumerate(x):
+        s = s + a * (v - s)
+        y[i] = s
+    return y
+
+
+def butter6(x, fc=6.0):
+    """The flight computer's biquad alone (primed on the first input, as hil_sim's Biquad)."""
+    k = np.tan(np.pi * fc * DT)
+    q = 1 / np.sqrt(2)
+    norm = 1 / (1 + k / q + k * k)
+    b0 = k * k * norm
+    a1, a2 = 2 * (k * k - 1) * norm, (1 - k / q + k * k) * norm
+    out = np.empty_like(x)
+    x1 = x2 = y1 = y2 = x[0]
+    for i, v in enumerate(x):
+        o = b0 * v + 2 * b0 * x1 + b0 * x2 - a1 * y1 - a2 * y2
+        x2, x1 = x1, v
+        y2, y1 = y1, o
+        out[i] = o
+    return out
+
+
+def sub_series(d, ch, n120):
+    """The unit's full 120 Hz output of channel `ch` from the *_sub0..5 columns (frame n's sub k is
+    step 6n + k; sub5 the sample instant 6n + 5)."""
+    s = np.stack([d[f"{ch}_sub{k}"] for k in range(6)], 1).reshape(-1)
+    assert len(s) == n120, (len(s), n120)
+    return s
+
+
+def shift(x, k):
+    return np.concatenate([np.full(k, x[0]), x[:-k]]) if k else x
+
+
+def prep(n):
+    d = table(n)
+    r = d["r120"]
+    i = d["idx120"]
+    n120 = len(r["simulation__sim_time_sec"])
+    b_all, b_nt = parts(d)
+    bt = b_all - b_nt
+    # true specific force at the IMU, y axis (hil_sim::sensors::specific_force_at)
+    ms = r["inertia__mass_slugs"]
+    fy_cg = r["forces__fby_total_lbs"] / ms * FT
+    p, q, rr = r["velocities__pi_rad_sec"], r["velocities__qi_rad_sec"], r["velocities__ri_rad_sec"]
+    pd, rd = r["accelerations__pdot_rad_sec2"], r["accelerations__rdot_rad_sec2"]
+    rx, ry, rz = LEVER
+    fy_imu = fy_cg + (rd * rx - pd * rz) + (q * (p * rx + q * ry + rr * rz) - ry * (p * p + q * q + rr * rr))
+    u = sub_series(d, "accel_y_mps2", n120)
+    e_ay = u - lag120(fy_imu)
+    # consistency: the 20 Hz channel is the biquad over the unit's outputs
+    chk = np.max(np.abs(butter6(u)[i] - d["accel_y_mps2"]))
+    # m/s² → β (deg), oracle truth
+    qs = r["aero__qbar_psf"] * 300.0
+    cd = r["forces__fwx_aero_lbs"] / qs
+    slope, _ = side_parts(r["aero__alpha_rad"], r["velocities__mach"], 0, 0, 0, 0, r["velocities__vt_fps"] * FT)
+    k_beta = np.degrees(ms * SLUG_KG / (r["aero__qbar_psf"] * PSF_PA * S_M2) / (slope - cd))
+    e_b = e_ay * k_beta
+    w = 240  # 2 s centred moving mean of e_Ay: its slow part (bias, misalignment·f)
+    slow = np.convolve(e_ay, np.ones(w) / w, mode="same")
+    e_b_white = (e_ay - slow) * k_beta
+    # 6 Hz channel with its real error: (channel − Butterworth∘lag of the truth) in β at the frames
+    e20 = (d["accel_y_mps2"] - butter6(lag120(fy_imu))[i]) * k_beta[i]
+    lagged = lag120(bt)
+    return dict(
+        i=i, bt=bt[i], b_nt=b_nt[i], b_all=b_all[i],
+        f6=imu_filter_120(bt, fc=6.0)[i],
+        f6_real=imu_filter_120(bt, fc=6.0)[i] + e20,
+        y120=lagged, y120_real=lagged + e_b, y120_white=lagged + e_b_white,
+        chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
+        e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
+    )
+
+
+def feat20(x, L):
+    return np.stack(lags(x, L) + [np.ones_like(x)], 1)
+
+
+def feat120(y, i, L):
+    return np.stack([shift(y, j)[i] for j in range(L)] + [np.ones(len(i))], 1)
+
+
+def main():
+    train = [fl["name"] for fl in flights("train") if fl["profile"] == "aggressive"]
+    if len(sys.argv) > 1:
+        train = train[: int(sys.argv[1])]
+    tr = [prep(n) for n in train]
+    te = {n: prep(n) for n in TESTS}
+    nfr = {n: len(p["bt"]) for n, p in te.items()}
+
+    def score(est):  # per-flight MAE and frame-weighted overall
+        errs = {n: est(p) - p["b_all"] for n, p in te.items()}
+        per = {n: mae(e) for n, e in errs.items()}
+        per["overall"] = float(np.sum([np.sum(np.abs(e)) for e in errs.values()]) / sum(nfr.values()))
+        return per
+
+    def fit(make):
+        x = np.concatenate([make(p) for p in tr])
+        y = np.concatenate([p["bt"] for p in tr])
+        w, *_ = np.linalg.lstsq(x, y, rcond=None)
+        return w
+
+    rows = []
+    rows.append(("6 Hz (20 Hz frames), as filtered", score(lambda p: p["b_nt"] + p["f6"])))
+    w = fit(lambda p: feat20(p["f6"], 5))
+    rows.append(("6 Hz, deconvolved (lags 0..5 frames)", score(lambda p: p["b_nt"] + feat20(p["f6"], 5) @ w)))
+    rows.append(("6 Hz + real accel error, as filtered", score(lambda p: p["b_nt"] + p["f6_real"])))
+    w = fit(lambda p: feat20(p["f6_real"], 5))
+    rows.append(("6 Hz + real accel error, deconvolved (lags 0..5 frames)", score(lambda p: p["b_nt"] + feat20(p["f6_real"], 5) @ w)))
+    for key, lab in (("y120", "120 Hz lag-only (perfect accel)"), ("y120_real", "120 Hz + real accel error"),
+                     ("y120_white", "120 Hz + accel noise & quantization only (slow error removed)")):
+        rows.append((f"{lab}, as filtered (sub5)", score(lambda p, k=key: p["b_nt"] + p[k][p["i"]])))
+        for L in (2, 6, 12, 18):
+            w = fit(lambda p, k=key, L=L: feat120(p[k], p["i"], L))
+            rows.append((f"{lab}, deconvolved (120 Hz lags 0..{L-1})",
+                         score(lambda p, k=key, L=L, w=w: p["b_nt"] + feat120(p[k], p["i"], L) @ w)))
+            if L == 6:
+                print(f"<!-- weights {key} L=6: {np.array2string(w, precision=4)} -->")
+    rows.append(("reference: β_noturb exact, β_turb = 0", score(lambda p: p["b_nt"])))
+
+    print(f"# β floor with 120 Hz IMU outputs (fit: {len(tr)} aggressive training flights; MAE, deg)\n")
+    cols = TESTS + ["overall"]
+    print("| oracle | " + " | ".join(c.replace("test_", "") for c in cols) + " |")
+    print("|---|" + "---|" * len(cols))
+    for lab, per in rows:
+        print(f"| {lab} | " + " | ".join(f"{per[c]:.4f}" for c in cols) + " |")
+    print("\n## Accelerometer error (unit output − lag(true f_y,IMU)), test flights\n")
+    print("| flight | frames | max abs(Butterworth(sub-series) − accel_y channel) | mean e_Ay m/s² | std e_Ay m/s² | median deg per m/s² | MAE e_β deg (120 Hz) | MAE white part deg |")
+    print("|---|---|---|---|---|---|---|---|")
+    for n, p in te.items():
+        print(f"| {n} | {nfr[n]} | {p['chk']:.2e} | {p['e_ay_mean']:.2e} | {p['e_ay_std']:.2e} | {p['k_beta']:.3f} | {p['e_b_mae']:.4f} | {p['e_b_white_mae']:.4f} |")
+    print("\nTraining flights: max channel check " + f"{max(p['chk'] for p in tr):.2e}, e_Ay std " +
+          ", ".join(f"{p['e_ay_std']:.2e}" for p in tr))
+
+
+if __name__ == "__main__":
+    main()
