@@ -410,6 +410,21 @@ impl Subsamples {
         }
     }
 
+    /// The largest magnitude among channel `c`'s sub-samples, in its unit (0 when not carried or
+    /// not valid): where a sensor clipped within the period although its 20 Hz value did not.
+    pub fn peak(&self, c: Channel) -> u32 {
+        match Self::position(c) {
+            Some(i) if self.valid & (1 << i) != 0 => self
+                .raw
+                .iter()
+                .filter_map(|s| s.get(i))
+                .map(|v| v.unsigned_abs())
+                .max()
+                .unwrap_or(0),
+            _ => 0,
+        }
+    }
+
     /// From SI values (`si[k][i]`, sub-sample `k` of `SUB_CHANNELS[i]`, in [`Channel::name`]
     /// units): a channel with a NaN, an infinity or a value it cannot carry in any sub-sample is
     /// invalid, and reads 0 in every one.

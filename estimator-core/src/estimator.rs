@@ -5,7 +5,7 @@
 //! |---|---|
 //! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
 //! | a noisy channel (IMU, GPS, EGI) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR` on that frame, held as above, until it changes ([`crate::health`]) |
-//! | an IMU channel a model uses is at its full scale (the sensor clipped) | `SATURATED` on that frame, held as above |
+//! | an IMU channel a model uses is at its full scale in its 20 Hz value or a 120 Hz sub-sample (the sensor clipped) | `SATURATED` on that frame, held as above |
 //! | the air-data filter a model reads restarted or keeps failing its innovation gate | `FILTER_DIVERGED`, estimate computed |
 //! | GPS speed or altitude invalid (no fix) while the EGI velocity is valid | both filled from the EGI (altitude for at most 120 s): `GPS_SUBSTITUTED`, estimate computed |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
@@ -57,8 +57,9 @@ impl Flags {
     /// over the exact lag (the first second after a start or reset, lost frames, a channel invalid in
     /// the lagged frame): the estimate is computed but may be less accurate.
     pub const HISTORY_SHORT: u16 = 1 << 7;
-    /// An IMU channel used by α or β is at its full scale ([`crate::Channel::full_scale`]): the
-    /// sensor clipped. Held as for `INVALID_INPUT`.
+    /// An IMU channel used by α or β is at its full scale ([`crate::Channel::full_scale`]) in its
+    /// 20 Hz value or one of the period's 120 Hz sub-samples: the sensor clipped. Held as for
+    /// `INVALID_INPUT`.
     pub const SATURATED: u16 = 1 << 8;
     /// A computed angle reads the air-data filter's outputs and the filter is diverging: it
     /// restarted this step (covariance blow-up, non-finite arithmetic) or its innovations have

@@ -560,7 +560,9 @@ impl FeatureState {
     /// altitude the last one carried on by `v_D`, for up to [`GPS_COAST_MAX_MS`]; those channels
     /// are then valid and listed in [`FeatureValues::substituted`].
     pub fn next(&mut self, frame: &SensorFrame) -> FeatureValues {
-        let health = self.health.check(frame, self.history.newest());
+        let health = self
+            .health
+            .check(frame, self.history.newest().map(|p| &p.raw));
         let mut frame = SensorFrame {
             valid: health.usable(frame),
             ..*frame
@@ -627,10 +629,35 @@ impl FeatureState {
     }
 }
 
+/// What [`History`] keeps of a frame: its time, channel values and valid bits (not the 120 Hz
+/// sub-samples, which no delta reads: they are two thirds of a frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PastFrame {
+    pub time_ms: u32,
+    pub raw: [i32; CHANNELS],
+    pub valid: u32,
+}
+
+impl PastFrame {
+    const EMPTY: PastFrame = PastFrame {
+        time_ms: 0,
+        raw: [0; CHANNELS],
+        valid: 0,
+    };
+
+    fn get(&self, c: Channel) -> i32 {
+        self.raw.get(c.index()).copied().unwrap_or(0)
+    }
+
+    fn is_valid(&self, c: Channel) -> bool {
+        self.valid & c.bit() != 0
+    }
+}
+
 /// The last [`HISTORY_FRAMES`] sensor frames, newest last, for the delta features. Fixed size, no heap.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct History {
-    past: [SensorFrame; HISTORY_FRAMES],
+    past: [PastFrame; HISTORY_FRAMES],
     /// Slot the next frame goes to.
     head: usize,
     len: usize,
@@ -645,13 +672,7 @@ impl Default for History {
 impl History {
     pub const fn new() -> History {
         History {
-            past: [SensorFrame {
-                seq: 0,
-                time_ms: 0,
-                raw: [0; CHANNELS],
-                valid: 0,
-                sub: crate::channels::Subsamples::NONE,
-            }; HISTORY_FRAMES],
+            past: [PastFrame::EMPTY; HISTORY_FRAMES],
             head: 0,
             len: 0,
         }
@@ -666,7 +687,11 @@ impl History {
     /// Stores a frame (the oldest is dropped when full).
     pub fn push(&mut self, frame: &SensorFrame) {
         if let Some(p) = self.past.get_mut(self.head) {
-            *p = *frame;
+            *p = PastFrame {
+                time_ms: frame.time_ms,
+                raw: frame.raw,
+                valid: frame.valid,
+            };
         }
         // `head < HISTORY_FRAMES` and `len <= HISTORY_FRAMES`: neither add can overflow. The slot
         // index is modular by nature (wrapping); the count is bounded (saturating, then capped).
@@ -675,12 +700,12 @@ impl History {
     }
 
     /// The frame stored last.
-    pub fn newest(&self) -> Option<&SensorFrame> {
+    pub fn newest(&self) -> Option<&PastFrame> {
         self.newest_first().next()
     }
 
     /// Stored frames, newest first.
-    fn newest_first(&self) -> impl Iterator<Item = &SensorFrame> {
+    fn newest_first(&self) -> impl Iterator<Item = &PastFrame> {
         // Slot `head - k` modulo the ring: `head < HISTORY_FRAMES` and `1 <= k <= HISTORY_FRAMES`, so
         // `head + HISTORY_FRAMES - k` stays in 0..2 × HISTORY_FRAMES and nothing wraps.
         (1..=self.len).filter_map(move |k| {
@@ -693,7 +718,7 @@ impl History {
     fn deltas(&self, frame: &SensorFrame, lag: Lag, raw: &mut [i32; FEATURE_COUNT]) -> bool {
         let want = lag.ms();
         // Time stamps wrap (u32 ms, 49 days), so ages are differences modulo 2^32.
-        let age = |p: &SensorFrame| frame.time_ms.wrapping_sub(p.time_ms);
+        let age = |p: &PastFrame| frame.time_ms.wrapping_sub(p.time_ms);
         let max_age = want.saturating_mul(2);
         // The stored frame whose age is closest to the lag, in (0, 2 × lag], with the `need` channels
         // valid (the first, i.e. newest, of equally close ones). Age == lag is the exact frame.

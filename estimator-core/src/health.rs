@@ -6,7 +6,8 @@
 //!   repeats now and then); twenty in a row do not happen in flight. So a stuck channel is flagged
 //!   on the [`STUCK_FRAMES`]th identical frame, 1 s after it froze, and clears on the first change.
 //! * **saturated**: an IMU output at or beyond its measuring range ([`Channel::full_scale`]) is the
-//!   sensor's clip level, not the aircraft's motion. Flagged on the frame it happens.
+//!   sensor's clip level, not the aircraft's motion. Flagged on the frame it happens, whether the
+//!   20 Hz value or one of the period's 120 Hz sub-samples ([`crate::Subsamples`]) clipped.
 //!
 //! [`Health::check`] returns both as masks; [`crate::FeatureState`] hides such channels from the
 //! air-data filter and the delta history (as if their valid bit were clear), and
@@ -22,7 +23,7 @@ pub const STUCK_FRAMES: u16 = 20;
 pub struct Status {
     /// Noisy channels unchanged for [`STUCK_FRAMES`] frames (this one included).
     pub stuck: u32,
-    /// Valid IMU channels at or beyond their full scale.
+    /// Valid IMU channels at or beyond their full scale, in the 20 Hz value or a sub-sample.
     pub saturated: u32,
 }
 
@@ -52,9 +53,9 @@ impl Health {
         }
     }
 
-    /// Checks `frame` against the frame before it (`None` before the first).
-    pub fn check(&mut self, frame: &SensorFrame, previous: Option<&SensorFrame>) -> Status {
-        let previous = previous.map_or(&[0; CHANNELS], |p| &p.raw);
+    /// Checks `frame` against the channel values of the frame before it (`None` before the first).
+    pub fn check(&mut self, frame: &SensorFrame, previous: Option<&[i32; CHANNELS]>) -> Status {
+        let previous = previous.unwrap_or(&[0; CHANNELS]);
         let mut status = Status::default();
         for (((c, raw), last), n) in Channel::ALL
             .iter()
@@ -64,7 +65,7 @@ impl Health {
         {
             if let Some(fs) = c.full_scale()
                 && frame.is_valid(*c)
-                && raw.unsigned_abs() >= fs.unsigned_abs()
+                && raw.unsigned_abs().max(frame.sub.peak(*c)) >= fs.unsigned_abs()
             {
                 status.saturated |= c.bit();
             }
@@ -108,7 +109,7 @@ mod tests {
             if (10..30).contains(&k) {
                 f.raw[Channel::GyroR.index()] = 77;
             }
-            let s = h.check(&f, prev.as_ref());
+            let s = h.check(&f, prev.as_ref().map(|p| &p.raw));
             assert_eq!(s.stuck & !Channel::GyroR.bit(), 0);
             if s.stuck != 0 && first_stuck.is_none() {
                 first_stuck = Some(k);
@@ -128,7 +129,7 @@ mod tests {
         let f = frame(0);
         let mut s = Status::default();
         for _ in 0..100 {
-            s = h.check(&f, Some(&f));
+            s = h.check(&f, Some(&f.raw));
         }
         for c in Channel::ALL {
             assert_eq!(s.stuck & c.bit() != 0, c.is_noisy(), "{c:?}");
@@ -152,5 +153,24 @@ mod tests {
             s.usable(&f),
             ALL_VALID & !(Channel::AccelZ.bit() | Channel::GyroP.bit())
         );
+    }
+
+    #[test]
+    fn a_subsample_at_full_scale_saturates_its_channel_though_the_20_hz_value_did_not_clip() {
+        use crate::channels::Subsamples;
+        let mut h = Health::new();
+        let mut f = frame(1);
+        f.sub.valid = Subsamples::ALL_VALID;
+        let Some(i) = Subsamples::position(Channel::GyroR) else {
+            panic!("gyro r is sub-sampled")
+        };
+        f.sub.raw[2][i] = -17_453_293; // −1000 °/s in µrad/s, inside the period
+        assert_eq!(h.check(&f, None).saturated, Channel::GyroR.bit());
+        // One count short of full scale is motion, not a clip; invalid sub-samples are not read.
+        f.sub.raw[2][i] = -17_453_292;
+        assert_eq!(h.check(&f, None).saturated, 0);
+        f.sub.raw[2][i] = i32::MIN;
+        f.sub.valid &= !(1 << i);
+        assert_eq!(h.check(&f, None).saturated, 0);
     }
 }
