@@ -194,7 +194,9 @@ impl Dataset {
                 Split::Train => Role::Train,
                 Split::Test => Role::Test,
             };
-            flights.push(load_flight(
+            let csv = manifest.read_flight(dir, &mf.file)?;
+            flights.push(flight_of(
+                csv,
                 &dir.join(&mf.file),
                 &mf.name,
                 role,
@@ -384,10 +386,15 @@ pub fn spread_rows<'a>(flights: &[&'a Flight], max_rows: usize) -> Vec<(&'a Flig
         .collect()
 }
 
-/// Reads one flight CSV, applies `faults` to its frames (`hil_sim::faults`, none for a healthy
-/// flight) and derives the estimator's inputs from them.
-pub fn load_flight(path: &Path, name: &str, role: Role, faults: &[Fault]) -> Result<Flight> {
-    let csv = hil_sim::dataset::Flight::read_csv(path)?;
+/// One flight CSV as read from `path`: applies `faults` to its frames (`hil_sim::faults`, none for
+/// a healthy flight) and derives the estimator's inputs from them.
+fn flight_of(
+    csv: hil_sim::dataset::Flight,
+    path: &Path,
+    name: &str,
+    role: Role,
+    faults: &[Fault],
+) -> Result<Flight> {
     // Training and scoring need the truth on every row: a NaN would turn every mean into NaN.
     for (k, s) in csv.samples.iter().enumerate() {
         let targets = Target::ALL.map(|t| (t.column(), t.of(&s.truth)));

@@ -486,6 +486,27 @@ impl Manifest {
         self.suites().contains(&suite)
     }
 
+    /// Reads the flight CSV `file` of the dataset in `dir` ([`Flight::read_csv`]) and refuses one
+    /// that lacks what the manifest promises: a dataset that lists `egi120` has the 120 Hz
+    /// sub-samples in every flight.
+    pub fn read_flight(&self, dir: &Path, file: &str) -> Result<Flight, DatasetError> {
+        let path = dir.join(file);
+        let flight = Flight::read_csv(&path)?;
+        let no_sub = |s: &Sample| s.sub.iter().flatten().all(|v| v.is_nan());
+        if self.carries(Suite::Egi120) && flight.samples.first().is_some_and(no_sub) {
+            return Err(DatasetError::Csv {
+                path,
+                message: format!(
+                    "no 120 Hz sub-sample columns (`{}` …), though {} lists the egi120 suite; \
+                     regenerate the flight with `hil-sim generate`",
+                    SUB_COLUMNS.first().map_or("", String::as_str),
+                    dir.join("manifest.json").display()
+                ),
+            });
+        }
+        Ok(flight)
+    }
+
     pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
         let path = dir.join("manifest.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| DatasetError::Manifest {
@@ -527,7 +548,20 @@ impl Manifest {
         if let Some(bad) = m.suites.iter().find(|n| Suite::from_name(n).is_none()) {
             return Err(DatasetError::Manifest {
                 path,
-                message: format!("unknown sensor suite `{bad}` (this build knows table1, egi)"),
+                message: format!(
+                    "unknown sensor suite `{bad}` (this build knows {})",
+                    Self::written_suites().join(", ")
+                ),
+            });
+        }
+        if m.format < 5 && m.carries(Suite::Egi120) {
+            return Err(DatasetError::Manifest {
+                path,
+                message: format!(
+                    "format {} has no 120 Hz sub-samples, yet it lists the egi120 suite; \
+                     regenerate the dataset with this build's `hil-sim generate`",
+                    m.format
+                ),
             });
         }
         if m.format < 4 && m.suites != table1_only() {
@@ -797,6 +831,29 @@ mod tests {
         write(n4 + SUB_CHANNELS.len());
         let err = Flight::read_csv(&p).unwrap_err().to_string();
         assert!(err.contains("gyro_p_rps_sub1"), "{err}");
+        // A manifest that lists egi120 promises the sub-samples: a flight without them is refused,
+        // and so is such a manifest of a format before 5.
+        write(n4);
+        let mut m = Manifest {
+            format: Manifest::FORMAT,
+            suites: Manifest::written_suites(),
+            preset: "t".into(),
+            jsbsim_version: String::new(),
+            git_rev: String::new(),
+            config: serde_json::Value::Null,
+            flights: Vec::new(),
+            files: Default::default(),
+            aircraft: None,
+        };
+        let err = m.read_flight(&dir, "old.csv").unwrap_err().to_string();
+        assert!(err.contains("gyro_p_rps_sub0") && err.contains("egi120"), "{err}");
+        m.suites = vec!["table1".into(), "egi".into()];
+        assert!(m.read_flight(&dir, "old.csv").is_ok());
+        m.format = 4;
+        m.suites = Manifest::written_suites();
+        m.write(&dir).unwrap();
+        let err = Manifest::read(&dir).unwrap_err().to_string();
+        assert!(err.contains("format 4") && err.contains("egi120"), "{err}");
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -413,7 +413,7 @@ pub fn write_report(dir: &Path) -> Result<Report, DatasetError> {
         &manifest.flights,
         workers,
         || {},
-        |entry| Flight::read_csv(&dir.join(&entry.file)),
+        |entry| manifest.read_flight(dir, &entry.file),
     );
     let flights = read.into_iter().collect::<Result<Vec<_>, _>>()?;
     write_report_of(dir, manifest, flights)
