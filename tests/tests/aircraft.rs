@@ -14,8 +14,7 @@ fn root() -> PathBuf {
 
 /// `scripts/gen-aircraft --validate` on `text`: exit success and stderr.
 fn validate(text: &str, name: &str) -> (bool, String) {
-    let dir = std::env::temp_dir().join(format!("gen-aircraft-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tests::scratch(&format!("gen-aircraft-{name}"));
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();
     let o = Command::new(root().join("scripts/gen-aircraft"))

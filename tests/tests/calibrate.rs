@@ -39,9 +39,7 @@ fn calibration(ft: &Path, model: &Path, out: &Path) -> serde_json::Value {
 
 #[test]
 fn calibration_reads_no_truth_and_finds_the_variants_scales() {
-    let dir = std::env::temp_dir().join(format!("calibrate-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tests::scratch("calibrate");
     let aircraft = dir.join("c");
     ok(Command::new(root().join("scripts/airframe-variant"))
         .arg(root().join("airframes/f16-variants/c-pure-scales.toml"))

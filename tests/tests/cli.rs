@@ -52,10 +52,7 @@ fn ok(o: &Output) {
 }
 
 fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch dir");
-    d
+    tests::scratch(&format!("cli-{tag}"))
 }
 
 /// The `ci` preset (5 flights of 3 minutes), generated once for every test here.

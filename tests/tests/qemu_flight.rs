@@ -46,8 +46,7 @@ fn the_flight_image_in_qemu_answers_the_test_flight_as_the_host_does() {
 
 #[test]
 fn the_flight_image_in_qemu_takes_alpha_from_the_filter_as_the_host_does() {
-    let dir = std::env::temp_dir().join(format!("qemu-flight-mass-low-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tests::scratch("qemu-flight-mass-low");
     let m = maneuver::generate_case(
         &maneuver::Profile::preset(maneuver::ProfileKind::Gentle),
         1,
