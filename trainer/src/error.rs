@@ -47,7 +47,7 @@ pub enum Error {
         carries: Vec<String>,
         suite: &'static str,
     },
-    #[error("unknown sensor suite `{0}` (known: table1, egi)")]
+    #[error("unknown sensor suite `{0}` (known: table1, egi, egi120)")]
     UnknownSuite(String),
     #[error("model file {path}: {msg}")]
     Model { path: PathBuf, msg: String },

@@ -204,7 +204,7 @@ struct SweepGrid {
     /// Feature sets (repeat the flag for several), as `trainer train --features`.
     #[arg(long = "features", default_value = "table1")]
     features: Vec<String>,
-    /// Sensor suites (repeat the flag for several): table1, egi.
+    /// Sensor suites (repeat the flag for several): table1, egi, egi120.
     #[arg(long = "suite", default_value = "table1")]
     suites: Vec<String>,
     /// Seeds, comma-separated.
@@ -481,9 +481,9 @@ enum Cmd {
         /// shipped estimator behaves in distribution, e.g. how often its flags fire).
         #[arg(long, default_value = "test")]
         split: String,
-        /// Sensor suite of the frames the model is stepped with (table1 or egi): as a sender of that
-        /// suite delivers them. A model that reads a channel the suite lacks is refused. Default: the
-        /// suite the compiled-in model reads.
+        /// Sensor suite of the frames the model is stepped with (table1, egi or egi120): as a
+        /// sender of that suite delivers them. A model that reads a channel the suite lacks is
+        /// refused. Default: the suite the compiled-in model reads.
         #[arg(long)]
         suite: Option<String>,
         /// Print exactly one JSON object.

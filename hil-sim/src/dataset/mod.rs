@@ -846,7 +846,10 @@ mod tests {
             aircraft: None,
         };
         let err = m.read_flight(&dir, "old.csv").unwrap_err().to_string();
-        assert!(err.contains("gyro_p_rps_sub0") && err.contains("egi120"), "{err}");
+        assert!(
+            err.contains("gyro_p_rps_sub0") && err.contains("egi120"),
+            "{err}"
+        );
         m.suites = vec!["table1".into(), "egi".into()];
         assert!(m.read_flight(&dir, "old.csv").is_ok());
         m.format = 4;

@@ -64,8 +64,9 @@ pub struct RunArgs {
     /// As fast as the firmware answers: the default, kept so that older commands still parse.
     #[arg(long, hide = true, conflicts_with = "realtime")]
     pub fast: bool,
-    /// Sensor suite sent, i.e. the sensor frame kind: table1 (the paper's inputs, wire kind 1) or
-    /// egi (Table 1 + EGI attitude, velocity and fuel, wire kind 3). The firmware takes both.
+    /// Sensor suite sent, i.e. the sensor frame kind: table1 (the paper's inputs, wire kind 1),
+    /// egi (Table 1 + EGI attitude, velocity and fuel, wire kind 3) or egi120 (egi + the period's
+    /// 120 Hz sub-samples of the IMU and the surfaces, wire kind 4). The firmware takes all three.
     /// Default: the suite the compiled-in (shipped) estimator reads.
     #[arg(long, value_parser = parse_suite)]
     pub suite: Option<estimator_core::Suite>,
