@@ -183,17 +183,22 @@ def beta_from_cy_body(cy_body, alpha_rad, mach, aileron_rad, rudder_rad, p_rps, 
 
 
 # ---------------------------------------------------------------------------------------------
-# The IMU's anti-alias path (hil_sim::sensors): 3 ms first-order lag then 2nd-order Butterworth
-# at 6 Hz, both at 120 Hz. Applied to a 120 Hz signal.
-def imu_filter_120(x, lag_tau=0.003, fc=6.0):
-    dt = 1.0 / 120.0
-    a = 1.0 - np.exp(-dt / lag_tau)
+# The IMU's anti-alias path (hil_sim::sensors): 3 ms first-order lag (the unit's, per 120 Hz step)
+# then the flight computer's 2nd-order Butterworth at 6 Hz. Applied to a 120 Hz signal.
+def imu_lag_120(x, lag_tau=0.003):
+    """The IMU unit's lag alone: its 120 Hz outputs (the dataset's `*_sub*` columns) of `x`."""
+    a = 1.0 - np.exp(-(1.0 / 120.0) / lag_tau)
     y = np.empty_like(x)
     s = x[0]
     for i, v in enumerate(x):
         s = s + a * (v - s)
         y[i] = s
-    k = np.tan(np.pi * fc * dt)
+    return y
+
+
+def butter_120(y, fc=6.0):
+    """The flight computer's biquad alone, primed on the first input (hil_sim's Biquad)."""
+    k = np.tan(np.pi * fc / 120.0)
     q = 1 / np.sqrt(2)
     norm = 1 / (1 + k / q + k * k)
     b0 = k * k * norm
@@ -207,6 +212,10 @@ def imu_filter_120(x, lag_tau=0.003, fc=6.0):
         y2, y1 = y1, o
         out[i] = o
     return out
+
+
+def imu_filter_120(x, lag_tau=0.003, fc=6.0):
+    return butter_120(imu_lag_120(x, lag_tau), fc)
 
 
 def upsample_120(t20, x20):

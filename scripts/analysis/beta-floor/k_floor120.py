@@ -22,41 +22,13 @@ import sys
 
 import numpy as np
 
-from common import FT, LEVER, S_M2, flights, imu_filter_120, mae, side_parts
+from common import FT, LEVER, S_M2, butter_120, flights, imu_filter_120, imu_lag_120, mae, side_parts
 from d_turb import parts
 from f_floor import TESTS, lags
 from frames import table
 
-DT = 1 / 120.0
 SLUG_KG = 14.593902937
 PSF_PA = 47.880258889
-
-
-def lag120(x, tau=0.003):
-    a = 1.0 - np.exp(-DT / tau)
-    y = np.empty_like(x)
-    s = x[0]
-    for i, v in enumerate(x):
-        s = s + a * (v - s)
-        y[i] = s
-    return y
-
-
-def butter6(x, fc=6.0):
-    """The flight computer's biquad alone (primed on the first input, as hil_sim's Biquad)."""
-    k = np.tan(np.pi * fc * DT)
-    q = 1 / np.sqrt(2)
-    norm = 1 / (1 + k / q + k * k)
-    b0 = k * k * norm
-    a1, a2 = 2 * (k * k - 1) * norm, (1 - k / q + k * k) * norm
-    out = np.empty_like(x)
-    x1 = x2 = y1 = y2 = x[0]
-    for i, v in enumerate(x):
-        o = b0 * v + 2 * b0 * x1 + b0 * x2 - a1 * y1 - a2 * y2
-        x2, x1 = x1, v
-        y2, y1 = y1, o
-        out[i] = o
-    return out
 
 
 def sub_series(d, ch, n120):
@@ -86,9 +58,9 @@ def prep(n):
     rx, ry, rz = LEVER
     fy_imu = fy_cg + (rd * rx - pd * rz) + (q * (p * rx + q * ry + rr * rz) - ry * (p * p + q * q + rr * rr))
     u = sub_series(d, "accel_y_mps2", n120)
-    e_ay = u - lag120(fy_imu)
+    e_ay = u - imu_lag_120(fy_imu)
     # consistency: the 20 Hz channel is the biquad over the unit's outputs
-    chk = np.max(np.abs(butter6(u)[i] - d["accel_y_mps2"]))
+    chk = np.max(np.abs(butter_120(u)[i] - d["accel_y_mps2"]))
     # m/s² → β (deg), oracle truth
     qs = r["aero__qbar_psf"] * 300.0
     cd = r["forces__fwx_aero_lbs"] / qs
@@ -99,8 +71,8 @@ def prep(n):
     slow = np.convolve(e_ay, np.ones(w) / w, mode="same")
     e_b_white = (e_ay - slow) * k_beta
     # 6 Hz channel with its real error: (channel − Butterworth∘lag of the truth) in β at the frames
-    e20 = (d["accel_y_mps2"] - butter6(lag120(fy_imu))[i]) * k_beta[i]
-    lagged = lag120(bt)
+    e20 = (d["accel_y_mps2"] - butter_120(imu_lag_120(fy_imu))[i]) * k_beta[i]
+    lagged = imu_lag_120(bt)
     return dict(
         i=i, bt=bt[i], b_nt=b_nt[i], b_all=b_all[i],
         f6=imu_filter_120(bt, fc=6.0)[i],
