@@ -3,13 +3,14 @@
 
 use std::path::PathBuf;
 
-/// A fresh, empty scratch directory for one test: `<temp>/synthetic-air-data-tests/<pid>/<tag>`.
-/// Test binaries cannot clean up after their last test, so each one removes, on its first call,
-/// the directories left by test processes that are no longer running: a run leaves at most its
-/// own scratch behind, never that of every run before it.
-pub fn scratch(tag: &str) -> PathBuf {
+/// A fresh, empty scratch directory for one test: `<tmp>/scratch/<pid>/<tag>`, where `tmp` is
+/// the test's `env!("CARGO_TARGET_TMPDIR")` (inside the user's own target directory). Test
+/// binaries cannot clean up after their last test, so each one removes, on its first call, the
+/// directories left by test processes that are no longer running: a run leaves at most its own
+/// scratch behind, never that of every run before it.
+pub fn scratch(tmp: &str, tag: &str) -> PathBuf {
     static SWEPT: std::sync::Once = std::sync::Once::new();
-    let base = std::env::temp_dir().join("synthetic-air-data-tests");
+    let base = std::path::Path::new(tmp).join("scratch");
     SWEPT.call_once(|| sweep(&base));
     let d = base.join(std::process::id().to_string()).join(tag);
     let _ = std::fs::remove_dir_all(&d);

@@ -14,7 +14,7 @@ fn root() -> PathBuf {
 
 /// `scripts/gen-aircraft --validate` on `text`: exit success and stderr.
 fn validate(text: &str, name: &str) -> (bool, String) {
-    let dir = tests::scratch(&format!("gen-aircraft-{name}"));
+    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), &format!("gen-aircraft-{name}"));
     let file = dir.join(format!("{name}.toml"));
     std::fs::write(&file, text).unwrap();
     let o = Command::new(root().join("scripts/gen-aircraft"))

@@ -39,7 +39,7 @@ fn calibration(ft: &Path, model: &Path, out: &Path) -> serde_json::Value {
 
 #[test]
 fn calibration_reads_no_truth_and_finds_the_variants_scales() {
-    let dir = tests::scratch("calibrate");
+    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "calibrate");
     let aircraft = dir.join("c");
     ok(Command::new(root().join("scripts/airframe-variant"))
         .arg(root().join("airframes/f16-variants/c-pure-scales.toml"))

@@ -52,7 +52,7 @@ fn ok(o: &Output) {
 }
 
 fn scratch(tag: &str) -> PathBuf {
-    tests::scratch(&format!("cli-{tag}"))
+    tests::scratch(env!("CARGO_TARGET_TMPDIR"), &format!("cli-{tag}"))
 }
 
 /// The `ci` preset (5 flights of 3 minutes), generated once for every test here.

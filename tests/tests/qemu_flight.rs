@@ -46,7 +46,7 @@ fn the_flight_image_in_qemu_answers_the_test_flight_as_the_host_does() {
 
 #[test]
 fn the_flight_image_in_qemu_takes_alpha_from_the_filter_as_the_host_does() {
-    let dir = tests::scratch("qemu-flight-mass-low");
+    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "qemu-flight-mass-low");
     let m = maneuver::generate_case(
         &maneuver::Profile::preset(maneuver::ProfileKind::Gentle),
         1,

@@ -263,7 +263,7 @@ impl Flight {
     /// absent (invalid) in its frames. A flight before format 5 has no sub-samples:
     /// [`NO_SUBSAMPLES`]. Some but not all of the columns of a format is an error.
     pub fn read_csv(path: &Path) -> Result<Flight, DatasetError> {
-        Flight::read(path, true)
+        Flight::read(path, true).map(|(f, _)| f)
     }
 
     /// Reads a flight log (docs/flight-log.md): `time_s` and every Table 1 sensed column are
@@ -271,10 +271,26 @@ impl Flight {
     /// column optional (absent or empty: NaN, not scored). An empty sensed cell is a sensor that
     /// gave nothing (NaN: sent invalid).
     pub fn read_log(path: &Path) -> Result<Flight, DatasetError> {
-        Flight::read(path, false)
+        Flight::read(path, false).map(|(f, _)| f)
     }
 
-    fn read(path: &Path, truth_required: bool) -> Result<Flight, DatasetError> {
+    /// [`Flight::read_log`] of a file that may be a dataset's flight: when a `manifest.json`
+    /// beside it lists the file, the manifest's promises hold ([`Manifest::read_flight`]).
+    pub fn read_log_in_dataset(path: &Path) -> Result<Flight, DatasetError> {
+        let (flight, has_sub) = Flight::read(path, false)?;
+        let Some(dir) = path.parent().filter(|d| d.join("manifest.json").is_file()) else {
+            return Ok(flight);
+        };
+        let m = Manifest::read(dir)?;
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        if m.flights.iter().any(|f| Some(&f.file) == name.as_ref()) {
+            m.check_subsamples(dir, path, has_sub)?;
+        }
+        Ok(flight)
+    }
+
+    /// The flight, and whether its file has the sub-sample columns.
+    fn read(path: &Path, truth_required: bool) -> Result<(Flight, bool), DatasetError> {
         let f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
             action: "open",
             path: path.to_path_buf(),
@@ -349,7 +365,7 @@ impl Flight {
                 sub,
             });
         }
-        Ok(Flight {
+        let flight = Flight {
             name: path
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -357,7 +373,8 @@ impl Flight {
             samples,
             cut: None,
             zones: None,
-        })
+        };
+        Ok((flight, !no_sub))
     }
 }
 
@@ -488,23 +505,30 @@ impl Manifest {
 
     /// Reads the flight CSV `file` of the dataset in `dir` ([`Flight::read_csv`]) and refuses one
     /// that lacks what the manifest promises: a dataset that lists `egi120` has the 120 Hz
-    /// sub-samples in every flight.
+    /// sub-sample columns in every flight.
     pub fn read_flight(&self, dir: &Path, file: &str) -> Result<Flight, DatasetError> {
         let path = dir.join(file);
-        let flight = Flight::read_csv(&path)?;
-        let no_sub = |s: &Sample| s.sub.iter().flatten().all(|v| v.is_nan());
-        if self.carries(Suite::Egi120) && flight.samples.first().is_some_and(no_sub) {
-            return Err(DatasetError::Csv {
-                path,
-                message: format!(
-                    "no 120 Hz sub-sample columns (`{}` …), though {} lists the egi120 suite; \
-                     regenerate the flight with `hil-sim generate`",
-                    SUB_COLUMNS.first().map_or("", String::as_str),
-                    dir.join("manifest.json").display()
-                ),
-            });
-        }
+        let (flight, has_sub) = Flight::read(&path, true)?;
+        self.check_subsamples(dir, &path, has_sub)?;
         Ok(flight)
+    }
+
+    /// Refuses the flight at `path` of the dataset in `dir` when the manifest lists `egi120` and
+    /// the file has no sub-sample columns.
+    fn check_subsamples(&self, dir: &Path, path: &Path, has_sub: bool) -> Result<(), DatasetError> {
+        if has_sub || !self.carries(Suite::Egi120) {
+            return Ok(());
+        }
+        Err(DatasetError::Csv {
+            path: path.to_path_buf(),
+            message: format!(
+                "no 120 Hz sub-sample columns (`{}` …), though {} lists the egi120 suite: \
+                 regenerate the dataset with this build's `hil-sim generate` (or `fly`), or \
+                 take egi120 out of the manifest's `suites`",
+                SUB_COLUMNS.first().map_or("", String::as_str),
+                dir.join("manifest.json").display()
+            ),
+        })
     }
 
     pub fn write(&self, dir: &Path) -> Result<PathBuf, DatasetError> {
@@ -850,6 +874,38 @@ mod tests {
             err.contains("gyro_p_rps_sub0") && err.contains("egi120"),
             "{err}"
         );
+        // The columns count, not their values: a flight whose sub-samples are all empty (a dead
+        // sensor bus) has them.
+        let empty_subs = format!(
+            "{},{}\n{}{}\n",
+            cols[..n4].join(","),
+            cols[n4..].join(","),
+            (0..n4)
+                .map(|k| format!("{},", k as f64 * 0.25))
+                .collect::<String>(),
+            vec!["NaN"; cols.len() - n4].join(",")
+        );
+        std::fs::write(dir.join("dead.csv"), empty_subs).unwrap();
+        assert!(m.read_flight(&dir, "dead.csv").is_ok());
+        // `hil-sim run --dataset` of a flight listed in the manifest beside it: the same check.
+        m.flights = vec![FlightEntry {
+            file: "old.csv".into(),
+            name: "old".into(),
+            split: Split::Test,
+            profile: "gentle".into(),
+            seed: 0,
+            duration_s: 0.05,
+            samples: 1,
+            sha256: String::new(),
+            cut: None,
+            zones: None,
+            faults: Vec::new(),
+            boom: None,
+        }];
+        m.write(&dir).unwrap();
+        let err = Flight::read_log_in_dataset(&p).unwrap_err().to_string();
+        assert!(err.contains("egi120"), "{err}");
+        assert!(Flight::read_log_in_dataset(&dir.join("dead.csv")).is_ok());
         m.suites = vec!["table1".into(), "egi".into()];
         assert!(m.read_flight(&dir, "old.csv").is_ok());
         m.format = 4;

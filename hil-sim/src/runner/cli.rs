@@ -193,7 +193,7 @@ pub fn flight_on(
         ));
     }
     let mut f = match (&source.dataset, &source.script) {
-        (Some(csv), _) => Flight::read_log(csv)?,
+        (Some(csv), _) => Flight::read_log_in_dataset(csv)?,
         (None, Some(script)) => crate::fly::fly_script(
             script,
             &crate::fly::FlyConfig {

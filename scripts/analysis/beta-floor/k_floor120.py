@@ -13,8 +13,8 @@ Accelerometer error ("real"): e_Ay = accel_y_mps2_sub* (the unit's output, reass
 (the inputs hil-sim feeds the sensor model). It carries every error of the model (scale factor,
 misalignment, turn-on and in-run bias, white noise, Δv quantization). Converted to β with the
 oracle's truth: δβ = e_Ay·m / (q̄·S·(∂C_Y,body/∂β)), ∂C_Y,body/∂β ≈ CYβ(M) − C_D (wind-axis drag).
-"White" variant: e_Ay minus its 2-s centred moving mean (bias/misalignment removed; noise and
-quantization kept).
+"White" variant: e_Ay minus its 2-s centred moving mean (its slow part, bias and the misalignment
+and scale-factor errors on slow forces, removed; noise, quantization and the fast part kept).
 
 usage: DATA=... WORK=... nice -n 19 <repo>/.venv/bin/python k_floor120.py > "$WORK/out/k_floor120.md"
 """
