@@ -35,7 +35,17 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 12] = [
+    let cases: [(&str, &str, &str); 14] = [
+        (
+            "low_fuel_per_tank_lb = 300.0",
+            "low_fuel_per_tank_lb = 700.0",
+            "ood.low_fuel_per_tank_lb 700.0 must be at least 0 and below the profiles' lowest fuel per tank (600.0)",
+        ),
+        (
+            "turbulence_severity = 7\n",
+            "turbulence_severity = 8\n",
+            "ood.turbulence_severity: JSBSim's turbulence severity is 0..=7",
+        ),
         (
             "fuel_per_tank_lb = 1800.0",
             "fuel_per_tank_lb = 4000.0",

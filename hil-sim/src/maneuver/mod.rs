@@ -176,38 +176,74 @@ const PILOT_LBS: f64 = AIRCRAFT.mass.pilot_lb;
 /// How many internal and external tanks the description names.
 const INTERNAL_TANKS: f64 = AIRCRAFT.mass.internal_tanks.len() as f64;
 const EXTERNAL_TANKS: f64 = AIRCRAFT.mass.external_tanks.len() as f64;
-/// The training mass range: empty + pilot + (600 … 3,000) lb of fuel in each internal tank.
-const TRAINED_MASS_LBS: Range = (
-    EMPTY_WEIGHT_LBS + PILOT_LBS + INTERNAL_TANKS * 600.0,
-    EMPTY_WEIGHT_LBS + PILOT_LBS + INTERNAL_TANKS * 3_000.0,
-);
 const INTERNAL_TANK_CAPACITY_LBS: f64 = AIRCRAFT.mass.internal_tank_capacity_lb;
-const OOD_MASS_MARGIN: f64 = 0.15;
-const OOD_LOW_FUEL_PER_TANK_LBS: f64 = 300.0;
-const OOD_WIND_FPS: f64 = 25.0 / crate::flight::FT_TO_M;
-const OOD_TURBULENCE_SEVERITY: u32 = 7;
-const OOD_GUST_FPS: f64 = 15.0 / crate::flight::FT_TO_M;
+/// How far the `ood` preset leaves the training ranges (the description's `[ood]`).
+const OOD: OodSizes = presets::OOD;
+
+/// The `ood` preset's sizes for an airframe (its description's `[ood]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OodSizes {
+    /// The mass cases' margin beyond the training mass range, each way (0.15: 15 %).
+    pub mass_margin: f64,
+    /// Fuel in each internal tank of the light case, lb (below the profiles' lowest).
+    pub low_fuel_per_tank_lb: f64,
+    /// The steady wind of the `wind-25` case, m/s.
+    pub wind_mps: f64,
+    /// Milspec severity of the `turb-plus` case.
+    pub turbulence_severity: u32,
+    /// Every discrete gust's size in the `gust-15` case, m/s.
+    pub gust_mps: f64,
+}
+
+/// The union of the preset profiles' ranges of `field` (a profile's fuel per tank, wind, …).
+fn profiles_range<T: PartialOrd + Copy>(field: impl Fn(&Profile) -> (T, T)) -> (T, T) {
+    let widest = |(lo, hi): (T, T), (a, b): (T, T)| {
+        (if a < lo { a } else { lo }, if b > hi { b } else { hi })
+    };
+    ProfileKind::ALL
+        .iter()
+        .map(|k| field(&Profile::preset(*k)))
+        .fold(field(&Profile::preset(ProfileKind::Gentle)), widest)
+}
+
+/// The training mass range: empty + pilot + the preset profiles' fuel per internal tank.
+fn trained_mass_lbs() -> Range {
+    let fuel = profiles_range(|p| p.fuel_per_tank_lbs);
+    (
+        EMPTY_WEIGHT_LBS + PILOT_LBS + INTERNAL_TANKS * fuel.0,
+        EMPTY_WEIGHT_LBS + PILOT_LBS + INTERNAL_TANKS * fuel.1,
+    )
+}
 
 impl OodCase {
     fn mass(self) -> Option<MassOverride> {
         match self {
             OodCase::MassLow => {
-                let target = TRAINED_MASS_LBS.0 * (1.0 - OOD_MASS_MARGIN);
-                let structure = target - INTERNAL_TANKS * OOD_LOW_FUEL_PER_TANK_LBS;
+                let target = trained_mass_lbs().0 * (1.0 - OOD.mass_margin);
+                let structure = target - INTERNAL_TANKS * OOD.low_fuel_per_tank_lb;
                 Some(MassOverride {
-                    internal_lbs: OOD_LOW_FUEL_PER_TANK_LBS,
+                    internal_lbs: OOD.low_fuel_per_tank_lb,
                     external_lbs: 0.0,
                     pointmass: Some((structure - EMPTY_WEIGHT_LBS, EMPTY_CG_X_IN)),
                 })
             }
             OodCase::MassHigh => {
-                let target = TRAINED_MASS_LBS.1 * (1.0 + OOD_MASS_MARGIN);
+                let target = trained_mass_lbs().1 * (1.0 + OOD.mass_margin);
                 let fuel = target - EMPTY_WEIGHT_LBS - PILOT_LBS;
-                Some(MassOverride {
-                    internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
-                    external_lbs: (fuel - INTERNAL_TANKS * INTERNAL_TANK_CAPACITY_LBS)
-                        / EXTERNAL_TANKS,
-                    pointmass: None,
+                let beyond_internal = fuel - INTERNAL_TANKS * INTERNAL_TANK_CAPACITY_LBS;
+                // An airframe without external tanks carries the rest as ballast at its empty CG.
+                Some(if EXTERNAL_TANKS > 0.0 {
+                    MassOverride {
+                        internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
+                        external_lbs: beyond_internal / EXTERNAL_TANKS,
+                        pointmass: None,
+                    }
+                } else {
+                    MassOverride {
+                        internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
+                        external_lbs: 0.0,
+                        pointmass: Some((beyond_internal, EMPTY_CG_X_IN)),
+                    }
                 })
             }
             _ => None,
@@ -357,7 +393,7 @@ pub struct FlightTestCard {
 /// The generated profiles of this build's aircraft (build.rs picks the file).
 #[rustfmt::skip]
 mod presets {
-    use super::{ControlLaws, FlightTestCard, Profile, ProfileKind};
+    use super::{ControlLaws, FlightTestCard, OodSizes, Profile, ProfileKind};
     include!(env!("HIL_PROFILES_FILE"));
 }
 
@@ -525,8 +561,8 @@ fn wind(s: &mut String, p: &Profile, rng: &mut ChaCha12Rng, ood: Option<OodCase>
     let mut sev = rng.random_range(p.turb_severity.0..=p.turb_severity.1.max(p.turb_severity.0));
     let mut wind = draw(rng, p.steady_wind_fps);
     match ood {
-        Some(OodCase::TurbulencePlus) => sev = OOD_TURBULENCE_SEVERITY,
-        Some(OodCase::Wind25) => wind = OOD_WIND_FPS,
+        Some(OodCase::TurbulencePlus) => sev = OOD.turbulence_severity,
+        Some(OodCase::Wind25) => wind = OOD.wind_mps / crate::flight::FT_TO_M,
         _ => {}
     }
     let wdir = draw(rng, (0.0, std::f64::consts::TAU));
@@ -1083,7 +1119,7 @@ fn gusts(
     while t < duration_s {
         let drawn = draw(rng, p.gust_fps);
         let mag = if ood == Some(OodCase::Gust15) {
-            OOD_GUST_FPS
+            OOD.gust_mps / crate::flight::FT_TO_M
         } else {
             drawn
         };
@@ -1553,9 +1589,9 @@ impl Default for Campaign {
             hours: 100.0,
             flight_min: 20.0,
             ranges: ProfileRanges {
-                fuel_per_tank_lbs: (600.0, 3_000.0),
-                steady_wind_fps: (0.0, 40.0),
-                turb_severity: Some((0, 6)),
+                fuel_per_tank_lbs: profiles_range(|p| p.fuel_per_tank_lbs),
+                steady_wind_fps: profiles_range(|p| p.steady_wind_fps),
+                turb_severity: Some(profiles_range(|p| p.turb_severity)),
             },
         }
     }
