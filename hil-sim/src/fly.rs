@@ -9,8 +9,8 @@ use crate::flight::{
     ZoneTimes,
 };
 use crate::plant::{
-    AIRBORNE_AGL_FT, FLAPERON_DEG_PER_NORM, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan,
-    TEF_DEG_PER_UNIT, TRUTH_ONLY, WATCH, at, load_runscript, truth_of,
+    AIRBORNE_AGL_FT, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan, TRUTH_ONLY, WATCH, at,
+    load_runscript, truth_of,
 };
 use crate::sensors::{InputSchedule, SensorConfig, SensorInput, SensorModel};
 
@@ -43,13 +43,9 @@ fn sensor_input(r: &[f64]) -> SensorInput {
         ],
         gps_speed_mps: r[at::GPS_SPEED] * FT_TO_M,
         alt_msl_m: r[at::H_SL] * FT_TO_M,
-        elevator_deg: r[at::ELEVATOR],
-        aileron_deg: r[at::AILERON].to_degrees(),
-        rudder_deg: r[at::RUDDER],
-        lef_deg: r[at::LEF],
-        tef_deg: r[at::TEF] * TEF_DEG_PER_UNIT,
-        flaperon_deg: r[at::FLAPERON] * FLAPERON_DEG_PER_NORM,
-        speedbrake_deg: r[at::SPEEDBRAKE],
+        surfaces_deg: std::array::from_fn(|i| {
+            r[at::SURFACES + i] * estimator_core::aircraft::AIRCRAFT.surfaces[i].deg_per_unit
+        }),
         throttle_norm: r[at::THROTTLE],
         euler_rad: [r[at::PHI], r[at::THETA], r[at::PSI]],
         omega_earth_rps: [r[at::P], r[at::Q], r[at::R]],

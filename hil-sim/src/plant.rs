@@ -517,14 +517,10 @@ pub(crate) mod at {
     pub const FBZ: usize = 22;
     pub const MASS: usize = 23;
     pub const GPS_SPEED: usize = 24;
-    pub const ELEVATOR: usize = 25;
-    pub const AILERON: usize = 26;
-    pub const RUDDER: usize = 27;
-    pub const LEF: usize = 28;
-    pub const TEF: usize = 29;
-    pub const FLAPERON: usize = 30;
-    pub const SPEEDBRAKE: usize = 31;
-    pub const THROTTLE: usize = 32;
+    /// The surface positions, one per `aircraft::SURFACE_CHANNELS` from here on (their sensors'
+    /// properties, the aircraft description's).
+    pub const SURFACES: usize = 25;
+    pub const THROTTLE: usize = SURFACES + estimator_core::aircraft::SURFACE_CHANNELS.len();
     pub const LAT: usize = 33;
     pub const LON: usize = 34;
     pub const PI: usize = 35;
@@ -573,13 +569,11 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::FBZ] = "forces/fbz-total-lbs";
     w[at::MASS] = "inertia/mass-slugs";
     w[at::GPS_SPEED] = "velocities/ned-velocity-mag-fps";
-    w[at::ELEVATOR] = "fcs/elevator-pos-deg";
-    w[at::AILERON] = "fcs/aileron-pos-rad";
-    w[at::RUDDER] = "fcs/rudder-pos-deg";
-    w[at::LEF] = "fcs/lef-pos-deg";
-    w[at::TEF] = "fcs/tef-control";
-    w[at::FLAPERON] = "fcs/left-flaperon-norm";
-    w[at::SPEEDBRAKE] = "fcs/speedbrake-pos-deg";
+    let mut i = 0;
+    while i < AIRCRAFT.surfaces.len() {
+        w[at::SURFACES + i] = AIRCRAFT.surfaces[i].property;
+        i += 1;
+    }
     w[at::THROTTLE] = "fcs/throttle-cmd-norm";
     w[at::LAT] = "position/lat-geod-deg";
     w[at::LON] = "position/long-gc-deg";
@@ -626,11 +620,6 @@ pub(crate) const TRUTH_ONLY: [usize; 13] = [
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
 pub(crate) const PSF_TO_PA: f64 = 47.880_258_98;
 pub(crate) const G0_FPS2: f64 = 32.174_048_56;
-/// Flaperon travel for `fcs/*-flaperon-norm` = ±1 (the aircraft description's; F-16: 20° each
-/// way); the model has no deg property.
-pub const FLAPERON_DEG_PER_NORM: f64 = AIRCRAFT.surfaces.flaperon_deg_per_norm;
-/// Degrees of trailing-edge flap at `fcs/tef-control` = 1 (the aircraft description's; F-16: 20°).
-pub const TEF_DEG_PER_UNIT: f64 = AIRCRAFT.surfaces.tef_deg_per_unit;
 
 /// What `<use aircraft=… initialize=…/>` of a runscript says.
 #[derive(Debug, PartialEq)]

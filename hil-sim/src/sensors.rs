@@ -20,6 +20,7 @@
 use std::collections::VecDeque;
 use std::path::Path;
 
+use estimator_core::aircraft::SURFACE_CHANNELS;
 use estimator_core::{CHANNELS, Channel};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
@@ -474,13 +475,8 @@ pub struct SensorInput {
     pub f_cg_mps2: [f64; 3],
     pub gps_speed_mps: f64,
     pub alt_msl_m: f64,
-    pub elevator_deg: f64,
-    pub aileron_deg: f64,
-    pub rudder_deg: f64,
-    pub lef_deg: f64,
-    pub tef_deg: f64,
-    pub flaperon_deg: f64,
-    pub speedbrake_deg: f64,
+    /// Surface positions, degrees, in `aircraft::SURFACE_CHANNELS` order.
+    pub surfaces_deg: [f64; SURFACE_CHANNELS.len()],
     pub throttle_norm: f64,
     /// Euler angles φ, θ, ψ (3-2-1, body to local NED), rad; ψ in [0, 2π).
     pub euler_rad: [f64; 3],
@@ -864,7 +860,7 @@ pub struct SensorModel {
     gps_every_steps: u64,
     gps_held: (f64, f64),
     /// Anti-alias filters of the seven surface channels, in [`SensorModel::step`]'s order.
-    surface_aa: [Option<Biquad>; 7],
+    surface_aa: [Option<Biquad>; SURFACE_CHANNELS.len()],
     steps: u64,
     egi: EgiModel,
     /// The 120 Hz outputs of the last step, in [`Channel`] order (NaN for the channels without
@@ -1031,16 +1027,8 @@ impl SensorModel {
         out[Channel::GpsAlt.index()] = self.gps_held.1;
 
         let s = &self.cfg.surfaces;
-        let surfaces = [
-            (Channel::Elevator, t.elevator_deg),
-            (Channel::Aileron, t.aileron_deg),
-            (Channel::Rudder, t.rudder_deg),
-            (Channel::Lef, t.lef_deg),
-            (Channel::Tef, t.tef_deg),
-            (Channel::Flaperon, t.flaperon_deg),
-            (Channel::Speedbrake, t.speedbrake_deg),
-        ];
-        for ((c, v), aa) in surfaces.into_iter().zip(self.surface_aa.iter_mut()) {
+        let surfaces = SURFACE_CHANNELS.into_iter().zip(t.surfaces_deg);
+        for ((c, v), aa) in surfaces.zip(self.surface_aa.iter_mut()) {
             let filtered = aa.as_mut().map_or(v, |f| f.step(v));
             let n: f64 = StandardNormal.sample(&mut self.rng);
             out[c.index()] = quantize(filtered + s.noise_sigma_deg * n, s.quantum_deg);
@@ -1130,16 +1118,21 @@ mod tests {
             f_cg_mps2: [w(0.3, 2.0, 1.0), w(1.7, 1.0, 0.0), w(0.5, 5.0, -9.8)],
             gps_speed_mps: w(0.2, 30.0, 180.0),
             alt_msl_m: w(0.1, 300.0, 3000.0),
-            elevator_deg: w(0.9, 5.0, -2.0),
-            aileron_deg: w(1.5, 4.0, 0.0),
-            rudder_deg: w(2.5, 3.0, 0.0),
-            lef_deg: w(0.4, 6.0, 8.0),
+            // Elevator, aileron, rudder, LEF (`SURFACE_CHANNELS` order); the rest stay at 0.
+            surfaces_deg: [
+                w(0.9, 5.0, -2.0),
+                w(1.5, 4.0, 0.0),
+                w(2.5, 3.0, 0.0),
+                w(0.4, 6.0, 8.0),
+                0.0,
+                0.0,
+                0.0,
+            ],
             throttle_norm: w(0.05, 0.3, 0.5),
             euler_rad: [w(0.6, 0.8, 0.0), w(0.35, 0.3, 0.05), w(0.15, 3.0, 3.2)],
             omega_earth_rps: [w(1.1, 0.3, 0.0), w(0.7, 0.2, 0.01), w(1.9, 0.1, 0.0)],
             v_ned_mps: [w(0.15, 150.0, 0.0), w(0.12, 150.0, 0.0), w(0.35, 20.0, 0.0)],
             fuel_kg: 3000.0 - 0.5 * t,
-            ..SensorInput::default()
         }
     }
 
@@ -1159,7 +1152,8 @@ mod tests {
             let out = m.step(&wandering(k));
             let fast = m.fast_output();
             let t = wandering(k);
-            for (c, truth) in [(6, t.elevator_deg), (8, t.rudder_deg), (9, t.lef_deg)] {
+            let [elevator, _, rudder, lef, ..] = t.surfaces_deg;
+            for (c, truth) in [(6, elevator), (8, rudder), (9, lef)] {
                 assert!(
                     (fast[c] - truth).abs() < 0.2,
                     "step {k} {c}: {} vs {truth}",
@@ -1419,9 +1413,9 @@ mod surface_tests {
             let mut m = SensorModel::new(&cfg, 1);
             (0..1200)
                 .map(|k| {
+                    let rudder = if k % 2 == 0 { 30.0 } else { -30.0 };
                     let t = SensorInput {
-                        rudder_deg: if k % 2 == 0 { 30.0 } else { -30.0 },
-                        elevator_deg: 2.0,
+                        surfaces_deg: [2.0, 0.0, rudder, 0.0, 0.0, 0.0, 0.0],
                         ..SensorInput::default()
                     };
                     m.step(&t)
@@ -1443,7 +1437,7 @@ mod surface_tests {
         cfg.surfaces.noise_sigma_deg = 0.0;
         let mut m = SensorModel::new(&cfg, 1);
         let t = SensorInput {
-            elevator_deg: 2.0,
+            surfaces_deg: [2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ..SensorInput::default()
         };
         let o = (0..600).map(|_| m.step(&t)).last().unwrap();

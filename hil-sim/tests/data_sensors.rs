@@ -19,7 +19,8 @@ fn level_input() -> SensorInput {
         f_cg_mps2: [0.0, 0.0, -9.80665],
         gps_speed_mps: 200.0,
         alt_msl_m: 5000.0,
-        elevator_deg: -1.234,
+        // The elevator (first of `SURFACE_CHANNELS`) off neutral; the other surfaces at 0.
+        surfaces_deg: [-1.234, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         throttle_norm: 0.4321,
         ..SensorInput::default()
     }

@@ -29,10 +29,10 @@ pub mod tables {
 pub use tables::MODEL;
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
-/// the aircraft description (hil-sim's `plant::FLAPERON_DEG_PER_NORM`). JSBSim's model has no degree
-/// property for it.
+/// the aircraft description (its sensor's `deg_per_unit`). JSBSim's model has no degree property
+/// for it.
 pub const FLAPERON_DEG_PER_NORM: f32 =
-    crate::aircraft::AIRCRAFT.surfaces.flaperon_deg_per_norm as f32;
+    crate::aircraft::AIRCRAFT.deg_per_unit(crate::Channel::Flaperon) as f32;
 
 const FT_TO_M: f32 = 0.3048;
 

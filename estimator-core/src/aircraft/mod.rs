@@ -3,8 +3,10 @@
 //! (`ESTIMATOR_AIRCRAFT=NAME`, default `f16`). What the flight code and the simulator know of an
 //! airframe beyond its aerodynamic tables (`aero`) and the maneuver generator's profiles and laws
 //! (hil-sim's `maneuver`) comes from here: mass properties and tanks, where the IMU and the
-//! flight-test boom sit, the surfaces' units, the flight-test points, and the flight-control
+//! flight-test boom sit, what the surface sensors read, the flight-test points, and the flight-control
 //! logic the filter reproduces (LEF schedule, flaperon mix).
+
+use crate::Channel;
 
 /// An aircraft description.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,7 +18,8 @@ pub struct Aircraft {
     pub jsbsim_model: &'static str,
     pub mass: Mass,
     pub installation: Installation,
-    pub surfaces: SurfaceScales,
+    /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order.
+    pub surfaces: [SurfaceSensor; SURFACE_CHANNELS.len()],
     /// The `flight-test` preset's test points.
     pub flight_test_points: &'static [TestPoint],
     /// The flight-control system's surface logic the filter reproduces for surfaces no channel
@@ -102,13 +105,44 @@ impl Installation {
     }
 }
 
-/// The units of surface channels whose JSBSim property is not in degrees.
+/// The surface position channels, in the order of [`Aircraft::surfaces`].
+pub const SURFACE_CHANNELS: [Channel; 7] = [
+    Channel::Elevator,
+    Channel::Aileron,
+    Channel::Rudder,
+    Channel::Lef,
+    Channel::Tef,
+    Channel::Flaperon,
+    Channel::Speedbrake,
+];
+
+/// A surface position sensor: the JSBSim property it reads and that property's unit, which the
+/// channel carries in degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfaceScales {
-    /// Degrees of one flaperon at `fcs/*-flaperon-norm` = ±1.
-    pub flaperon_deg_per_norm: f64,
-    /// Degrees of trailing-edge flap at `fcs/tef-control` = 1.
-    pub tef_deg_per_unit: f64,
+pub struct SurfaceSensor {
+    pub channel: Channel,
+    /// The JSBSim property (e.g. `fcs/elevator-pos-deg`).
+    pub property: &'static str,
+    /// Degrees per unit of the property: 1 for a `-deg` property, 180/π for a `-rad` one, the
+    /// surface's travel for a normalised one.
+    pub deg_per_unit: f64,
+}
+
+impl Aircraft {
+    /// Degrees per unit of the property the sensor of surface channel `c` reads (NaN when `c` is
+    /// no surface channel; `scripts/gen-aircraft` gives every surface channel a sensor).
+    // `i < SURFACE_CHANNELS.len()` (7): in bounds, and the increment cannot overflow.
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
+    pub const fn deg_per_unit(&self, c: Channel) -> f64 {
+        let mut i = 0;
+        while i < self.surfaces.len() {
+            if self.surfaces[i].channel as u8 == c as u8 {
+                return self.surfaces[i].deg_per_unit;
+            }
+            i += 1;
+        }
+        f64::NAN
+    }
 }
 
 /// A flight-test point: trimmed start altitude and calibrated airspeed.
@@ -150,5 +184,23 @@ mod tests {
         }
         assert!(!AIRCRAFT.jsbsim_model.is_empty());
         assert!(!AIRCRAFT.flight_test_points.is_empty());
+    }
+
+    #[test]
+    fn every_surface_channel_has_its_sensor_in_order() {
+        for (s, c) in AIRCRAFT.surfaces.iter().zip(SURFACE_CHANNELS) {
+            assert_eq!(s.channel, c);
+            assert_eq!(AIRCRAFT.deg_per_unit(c), s.deg_per_unit);
+            assert!(s.deg_per_unit > 0.0 && !s.property.is_empty());
+        }
+        assert!(AIRCRAFT.deg_per_unit(Channel::GyroP).is_nan());
+        if AIRCRAFT.name == "f16" {
+            // The aileron's property is in radians: its sensor converts exactly as `to_degrees`.
+            let rad = 0.123_456_789_f64;
+            assert_eq!(
+                rad * AIRCRAFT.deg_per_unit(Channel::Aileron),
+                rad.to_degrees()
+            );
+        }
     }
 }
