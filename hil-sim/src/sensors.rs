@@ -243,7 +243,8 @@ pub struct FuelConfig {
 impl Default for FuelConfig {
     fn default() -> Self {
         FuelConfig {
-            // The internal tanks the generator fills (the F-16's: 2 × 3486 lb, f16.xml).
+            // The internal tanks the generator fills, and the gauge's resolution (the aircraft
+            // description's).
             full_scale_kg: estimator_core::aircraft::AIRCRAFT
                 .mass
                 .internal_fuel_capacity_lb()
@@ -252,8 +253,10 @@ impl Default for FuelConfig {
             scale_factor_sigma: 0.01,
             gm_sigma_fs: 0.003,
             gm_tau_s: 10.0,
-            // 10 lb
-            quantum_kg: 10.0 * crate::flight::LB_TO_KG,
+            quantum_kg: estimator_core::aircraft::AIRCRAFT
+                .mass
+                .fuel_gauge_quantum_lb
+                * crate::flight::LB_TO_KG,
             update_hz: 1.0,
         }
     }

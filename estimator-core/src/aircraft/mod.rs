@@ -17,6 +17,7 @@ pub struct Aircraft {
     /// JSBSim's model: `<use aircraft=…>`, and `DIR/MODEL/MODEL.xml` in an aircraft directory.
     pub jsbsim_model: &'static str,
     pub mass: Mass,
+    pub filter: FilterLimits,
     pub installation: Installation,
     /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order.
     pub surfaces: [SurfaceSensor; SURFACE_CHANNELS.len()],
@@ -72,8 +73,17 @@ pub struct Mass {
     pub internal_tank_capacity_lb: f64,
     /// The tanks only an out-of-distribution heavy case fills.
     pub external_tanks: &'static [u8],
+    /// The fuel gauge's resolution, lb.
+    pub fuel_gauge_quantum_lb: f64,
     /// `gear/gear-pos-norm` in every flight (the filter's drag and side force read it).
     pub gear_norm: f64,
+}
+
+/// The air-data filter's settings that belong to the airframe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterLimits {
+    /// Below this airspeed the filter flags `SLOW`, m/s.
+    pub min_airspeed_mps: f64,
 }
 
 impl Mass {

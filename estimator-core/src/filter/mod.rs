@@ -169,7 +169,7 @@ pub const CONFIG: Config = Config {
     empty_mass_kg: AIRCRAFT.mass.empty_mass_kg(),
     max_sigma_rad: 0.0175,
     max_wind_var: 400.0,
-    min_airspeed_mps: 30.0,
+    min_airspeed_mps: AIRCRAFT.filter.min_airspeed_mps as f32,
     // JSBSim's F-16 starts with the gear down and neither the generated maneuver scripts nor the
     // stock F-16 scripts retract it: every flight the plant flies is gear-down (CDgear 0.027,
     // part of the body side force at sideslip).
