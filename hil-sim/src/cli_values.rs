@@ -21,3 +21,18 @@ pub fn at_least_one(s: &str) -> std::result::Result<usize, String> {
         Err(_) => Err(format!("`{s}` is not a whole number")),
     }
 }
+
+/// `--aircraft NAME`: the aircraft this build is for (its description `aircraft/NAME.toml`). A
+/// build carries one aircraft; another name is refused with how to build for it.
+pub fn this_builds_aircraft(s: &str) -> std::result::Result<String, String> {
+    let ours = estimator_core::aircraft::AIRCRAFT;
+    if s == ours.name {
+        return Ok(s.to_string());
+    }
+    Err(format!(
+        "this build is for `{}` ({}), not `{s}`: a build carries one aircraft. Build for `{s}` with \
+         ESTIMATOR_AIRCRAFT={s} (its description aircraft/{s}.toml, docs/aircraft.md), e.g. \
+         `ESTIMATOR_AIRCRAFT={s} CARGO_TARGET_DIR=target/{s} cargo build --release`",
+        ours.name, ours.title
+    ))
+}

@@ -8,6 +8,12 @@ use hil_sim::commands::{BenchArgs, FlyArgs, GenerateArgs, MergeArgs};
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// The aircraft (its description, `aircraft/NAME.toml`). A build carries one aircraft, the
+    /// default; another name is refused with how to build for it.
+    #[arg(long, global = true, value_name = "NAME", value_parser = hil_sim::cli_values::this_builds_aircraft)]
+    // Checked by its value parser: a parsed value is this build's aircraft.
+    #[allow(dead_code)]
+    aircraft: Option<String>,
 }
 
 #[derive(Subcommand)]

@@ -94,6 +94,28 @@ fn sensed_only(h: &str) -> bool {
     h == "time_s" || !hil_sim::flight::TRUTH_COLUMNS.contains(&h)
 }
 
+/// `--aircraft` on every command of both binaries: this build's aircraft is accepted, another one
+/// refused before anything runs, with how to build for it.
+#[test]
+fn another_aircraft_is_refused_with_how_to_build_for_it() {
+    for (b, args) in [
+        ("hil-sim", &["run", "--script", "nowhere.xml"][..]),
+        (
+            "hil-sim",
+            &["fly", "--script", "nowhere.xml", "--out", "nowhere"][..],
+        ),
+        ("trainer", &["eval", "--data", "nowhere"][..]),
+    ] {
+        let o = run(b, &[args, &["--aircraft", "c172p"]].concat());
+        refused(&o, "this build is for `f16`");
+        refused(&o, "ESTIMATOR_AIRCRAFT=c172p");
+        // The build's own aircraft passes the flag, and the command goes on (to its own error).
+        let o = run(b, &[args, &["--aircraft", "f16"]].concat());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("this build is for"), "{stderr}");
+    }
+}
+
 #[test]
 fn both_binaries_have_a_version() {
     for b in ["hil-sim", "trainer"] {

@@ -65,6 +65,12 @@ fn seed_list(s: &str) -> std::result::Result<Seeds, String> {
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
+    /// The aircraft (its description, `aircraft/NAME.toml`). A build carries one aircraft, the
+    /// default; another name is refused with how to build for it.
+    #[arg(long, global = true, value_name = "NAME", value_parser = hil_sim::cli_values::this_builds_aircraft)]
+    // Checked by its value parser: a parsed value is this build's aircraft.
+    #[allow(dead_code)]
+    aircraft: Option<String>,
 }
 
 /// `--replicas`, shared by `train`, `bench-epoch` and `bench-train`.
