@@ -324,23 +324,43 @@ pub const SUBSAMPLES: usize = 6;
 /// Number of [`SUB_CHANNELS`].
 pub const SUB_CHANNEL_COUNT: usize = 13;
 
+/// `N` consecutive channels of [`Channel::ALL`] from `first` on.
+// Every use below stays inside `Channel::ALL` (a constant evaluation that left it would fail the
+// build), so the indexing and the addition cannot fail.
+#[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
+const fn consecutive<const N: usize>(first: Channel) -> [Channel; N] {
+    let mut out = [first; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = Channel::ALL[first as usize + i];
+        i += 1;
+    }
+    out
+}
+
+/// The IMU's six axes: gyro p, q, r, accelerometer x, y, z.
+pub const IMU_CHANNELS: [Channel; 6] = consecutive(Channel::GyroP);
+
+/// The surface position channels: elevator, aileron, rudder, LEF, TEF, flaperon, speedbrake.
+pub const SURFACE_CHANNELS: [Channel; 7] = consecutive(Channel::Elevator);
+
 /// The channels a sensor bus may also deliver at 120 Hz ([`Subsamples`]): the IMU's six axes and
 /// the seven surface positions, before the anti-alias filter that makes their 20 Hz values.
-pub const SUB_CHANNELS: [Channel; SUB_CHANNEL_COUNT] = [
-    Channel::GyroP,
-    Channel::GyroQ,
-    Channel::GyroR,
-    Channel::AccelX,
-    Channel::AccelY,
-    Channel::AccelZ,
-    Channel::Elevator,
-    Channel::Aileron,
-    Channel::Rudder,
-    Channel::Lef,
-    Channel::Tef,
-    Channel::Flaperon,
-    Channel::Speedbrake,
-];
+// `i < SUB_CHANNEL_COUNT` = 6 + 7: every index is in bounds.
+#[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
+pub const SUB_CHANNELS: [Channel; SUB_CHANNEL_COUNT] = {
+    let mut out = [Channel::GyroP; SUB_CHANNEL_COUNT];
+    let mut i = 0;
+    while i < SUB_CHANNEL_COUNT {
+        out[i] = if i < IMU_CHANNELS.len() {
+            IMU_CHANNELS[i]
+        } else {
+            SURFACE_CHANNELS[i - IMU_CHANNELS.len()]
+        };
+        i += 1;
+    }
+    out
+};
 
 /// The 120 Hz outputs of the [`SUB_CHANNELS`] over one frame period.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -553,6 +573,18 @@ pub fn quantize(v: f64, lsb: f64, range: (i32, i32)) -> Option<i32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_channel_groups_are_the_named_channels() {
+        use Channel::*;
+        assert_eq!(IMU_CHANNELS, [GyroP, GyroQ, GyroR, AccelX, AccelY, AccelZ]);
+        assert_eq!(
+            SURFACE_CHANNELS,
+            [Elevator, Aileron, Rudder, Lef, Tef, Flaperon, Speedbrake]
+        );
+        assert_eq!(SUB_CHANNELS[..6], IMU_CHANNELS);
+        assert_eq!(SUB_CHANNELS[6..], SURFACE_CHANNELS);
+    }
 
     #[test]
     fn nan_inf_and_out_of_range_become_invalid_channels() {

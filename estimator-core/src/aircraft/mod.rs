@@ -116,15 +116,7 @@ impl Installation {
 }
 
 /// The surface position channels, in the order of [`Aircraft::surfaces`].
-pub const SURFACE_CHANNELS: [Channel; 7] = [
-    Channel::Elevator,
-    Channel::Aileron,
-    Channel::Rudder,
-    Channel::Lef,
-    Channel::Tef,
-    Channel::Flaperon,
-    Channel::Speedbrake,
-];
+pub use crate::channels::SURFACE_CHANNELS;
 
 /// A surface position sensor: the JSBSim property it reads and that property's unit, which the
 /// channel carries in degrees.
