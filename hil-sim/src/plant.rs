@@ -574,7 +574,10 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
         w[at::SURFACES + i] = AIRCRAFT.surfaces[i].property;
         i += 1;
     }
-    w[at::THROTTLE] = "fcs/throttle-cmd-norm";
+    w[at::THROTTLE] = match AIRCRAFT.throttle_properties.first() {
+        Some(p) => p,
+        None => panic!("the aircraft description names no throttle (gen-aircraft refuses that)"),
+    };
     w[at::LAT] = "position/lat-geod-deg";
     w[at::LON] = "position/long-gc-deg";
     // Body rates relative to inertial space (Earth rate included): what a gyro measures.

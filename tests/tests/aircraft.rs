@@ -35,7 +35,12 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 14] = [
+    let cases: [(&str, &str, &str); 15] = [
+        (
+            "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
+            "throttle_properties = [\"fcs/throttle cmd\"]",
+            "propulsion.throttle_properties[0] = 'fcs/throttle cmd' is not a JSBSim property path",
+        ),
         (
             "low_fuel_per_tank_lb = 300.0",
             "low_fuel_per_tank_lb = 700.0",

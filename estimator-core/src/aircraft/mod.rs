@@ -17,6 +17,9 @@ pub struct Aircraft {
     /// JSBSim's model: `<use aircraft=…>`, and `DIR/MODEL/MODEL.xml` in an aircraft directory.
     pub jsbsim_model: &'static str,
     pub mass: Mass,
+    /// Every engine's throttle command (JSBSim properties), moved together; the throttle channel
+    /// reads the first.
+    pub throttle_properties: &'static [&'static str],
     pub filter: FilterLimits,
     pub installation: Installation,
     /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order.

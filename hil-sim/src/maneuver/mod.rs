@@ -799,33 +799,37 @@ fn control_laws(s: &mut String, p: &Profile) {
     // Flight Zone: the random draws, down to idle (0) as a speed-holding pilot or autothrottle flies
     // it. Danger: by airspeed, idle when fast. Re-climb: at least military power, afterburner as
     // the speed falls toward the recovery speed.
-    law(
-        s,
-        "throttle: random, by airspeed in Danger, power up in Re-climb",
-        "fcs/throttle-cmd-norm",
-        &format!(
-            "          {}\n",
-            clamp(
-                0.0,
-                1.0,
-                &blend(
-                    "<property>maneuver/throttle</property>",
-                    &format!(
-                        "<sum><value>{}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
-                        k.danger_throttle,
-                        k.danger_throttle_per_kt,
-                        p.recover_vc_kts + k.danger_throttle_margin_kts
-                    ),
-                    &format!(
-                        "<max><value>{t}</value><sum><value>{t}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum></max>",
-                        k.reclimb_throttle_per_kt,
-                        p.recover_vc_kts + k.reclimb_throttle_margin_kts,
-                        t = k.reclimb_throttle
-                    )
+    let throttle = format!(
+        "          {}\n",
+        clamp(
+            0.0,
+            1.0,
+            &blend(
+                "<property>maneuver/throttle</property>",
+                &format!(
+                    "<sum><value>{}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum>",
+                    k.danger_throttle,
+                    k.danger_throttle_per_kt,
+                    p.recover_vc_kts + k.danger_throttle_margin_kts
+                ),
+                &format!(
+                    "<max><value>{t}</value><sum><value>{t}</value><product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product></sum></max>",
+                    k.reclimb_throttle_per_kt,
+                    p.recover_vc_kts + k.reclimb_throttle_margin_kts,
+                    t = k.reclimb_throttle
                 )
             )
-        ),
+        )
     );
+    // Every engine's throttle moves together (one law each: an event sets one property).
+    for (engine, prop) in AIRCRAFT.throttle_properties.iter().enumerate() {
+        let name = if engine == 0 {
+            "throttle: random, by airspeed in Danger, power up in Re-climb".to_string()
+        } else {
+            format!("throttle of engine {engine}: as engine 0's")
+        };
+        law(s, &name, prop, &throttle);
+    }
     law(
         s,
         "speedbrake: random in the Flight Zone only",
