@@ -198,7 +198,7 @@ fn fly_with_an_aircraft_dir_is_what_stock_jsbsim_flies_with_that_aircraft_path()
     let flight = Flight::read_csv(&out.join(&m.flights[0].file)).unwrap();
     let xml = variant.join("f16/f16.xml");
     assert_eq!(
-        m.aircraft.as_ref().map(|a| a.f16_xml_sha256.clone()),
+        m.aircraft.as_ref().map(|a| a.model_xml_sha256.clone()),
         Some(dataset::sha256_file(&xml).unwrap())
     );
     let stock = stock_run_on(&script, Some(&init), Some(&variant), &dir.join("stock.tsv"));

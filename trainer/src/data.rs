@@ -227,7 +227,11 @@ impl Dataset {
         }
         // Flights of two aircraft never train one model silently. A dataset written before the
         // aircraft was recorded flew JSBSim's own F-16, which a recorded one may name as well.
-        let sha = |d: &Dataset| d.aircraft.as_ref().map(|a| a.f16_xml_sha256.clone());
+        let sha = |d: &Dataset| {
+            d.aircraft
+                .as_ref()
+                .map(|a| (a.name.clone(), a.model_xml_sha256.clone()))
+        };
         let other_aircraft = matches!((sha(self), sha(&other)), (Some(a), Some(b)) if a != b);
         if other_aircraft && !mixed_aircraft {
             return Err(Error::Split(
@@ -246,7 +250,7 @@ impl Dataset {
             .aircraft
             .as_ref()
             .filter(|_| other_aircraft)
-            .map(|a| format!("@{}", a.f16_xml_sha256.get(..8).unwrap_or("")))
+            .map(|a| format!("@{}", a.model_xml_sha256.get(..8).unwrap_or("")))
             .unwrap_or_default();
         let added: Vec<Flight> = other
             .flights
@@ -520,7 +524,8 @@ mod tests {
         let mut m = Manifest::read(dir).unwrap();
         m.aircraft = Some(hil_sim::dataset::AircraftRecord {
             dir: Some(format!("airframes/{sha}")),
-            f16_xml_sha256: sha.repeat(64 / sha.len()),
+            name: "f16".into(),
+            model_xml_sha256: sha.repeat(64 / sha.len()),
         });
         m.write(dir).unwrap();
     }

@@ -465,9 +465,9 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
             return Err(differs("JSBSim version"));
         }
         if let (Some(a), Some(b)) = (&r.aircraft, &first.aircraft)
-            && a.f16_xml_sha256 != b.f16_xml_sha256
+            && (a.model_xml_sha256 != b.model_xml_sha256 || a.name != b.name)
         {
-            return Err(differs("aircraft (f16.xml)"));
+            return Err(differs("aircraft (description or model XML)"));
         }
         match seen.get_mut(r.shard.index) {
             Some(s) if !*s => *s = true,

@@ -440,33 +440,47 @@ pub struct Manifest {
     pub aircraft: Option<AircraftRecord>,
 }
 
-/// Which F-16 model a dataset's flights flew: `dir` the `--aircraft-dir` (none: JSBSim's own
-/// aircraft folder) and the SHA-256 of the `f16/f16.xml` loaded. Datasets of different aircraft
-/// are never mixed silently: the SHA-256 is compared wherever two datasets meet.
+/// Which aircraft a dataset's flights flew: `name` its description (`aircraft/NAME.toml`), `dir`
+/// the `--aircraft-dir` (none: JSBSim's own aircraft folder) and the SHA-256 of the model XML
+/// loaded (`MODEL/MODEL.xml`). Datasets of different aircraft are never mixed silently: the
+/// SHA-256 is compared wherever two datasets meet.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct AircraftRecord {
+    /// The aircraft description (absent in manifests written before it was recorded: `f16`).
+    #[serde(default = "f16_name")]
+    pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dir: Option<String>,
-    pub f16_xml_sha256: String,
+    /// (Named `f16_xml_sha256` in manifests written before the aircraft was a description.)
+    #[serde(alias = "f16_xml_sha256")]
+    pub model_xml_sha256: String,
+}
+
+fn f16_name() -> String {
+    "f16".into()
 }
 
 impl AircraftRecord {
-    /// The record of the `f16.xml` at `xml` flown from `dir` (`--aircraft-dir`, or none).
+    /// The record of the model XML at `xml` flown from `dir` (`--aircraft-dir`, or none), of this
+    /// build's aircraft.
     pub fn of(dir: Option<&Path>, xml: &Path) -> Result<AircraftRecord, DatasetError> {
         Ok(AircraftRecord {
+            name: estimator_core::aircraft::AIRCRAFT.name.into(),
             dir: dir.map(|d| d.display().to_string()),
-            f16_xml_sha256: sha256_file(xml)?,
+            model_xml_sha256: sha256_file(xml)?,
         })
     }
 
-    /// How a message names it: the directory (or "JSBSim's own F-16") and the hash's first digits.
+    /// How a message names it: the description, the directory (or JSBSim's own folder) and the
+    /// hash's first digits.
     pub fn describe(r: Option<&AircraftRecord>) -> String {
         match r {
             None => "JSBSim's own F-16 (not recorded)".into(),
             Some(r) => format!(
-                "{} (f16.xml sha256 {})",
-                r.dir.as_deref().unwrap_or("JSBSim's own F-16"),
-                r.f16_xml_sha256.get(..12).unwrap_or(&r.f16_xml_sha256)
+                "`{}` from {} (model XML sha256 {})",
+                r.name,
+                r.dir.as_deref().unwrap_or("JSBSim's own aircraft folder"),
+                r.model_xml_sha256.get(..12).unwrap_or(&r.model_xml_sha256)
             ),
         }
     }
@@ -822,6 +836,16 @@ mod tests {
         // The hash taken on the way out is the file's.
         assert_eq!(hash, sha256_file(&p).unwrap());
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn an_aircraft_record_of_before_the_descriptions_reads_as_the_f16() {
+        let old: AircraftRecord =
+            serde_json::from_str(r#"{"dir": "x", "f16_xml_sha256": "ab"}"#).unwrap();
+        assert_eq!(old.name, "f16");
+        assert_eq!(old.model_xml_sha256, "ab");
+        let text = serde_json::to_string(&old).unwrap();
+        assert_eq!(text, r#"{"name":"f16","dir":"x","model_xml_sha256":"ab"}"#);
     }
 
     #[test]
