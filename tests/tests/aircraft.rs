@@ -117,6 +117,12 @@ fn descriptions_are_validated_key_by_key() {
         assert!(!ok, "`{from}` -> `{to}` was accepted");
         assert!(err.contains(says), "`{from}` -> `{to}`: {err}");
     }
+    // An airframe without external tanks (the c172p, the f15) is a valid description.
+    let (ok, err) = validate(
+        &f16.replacen("external_tanks = [2, 3]", "external_tanks = []", 1),
+        "f16",
+    );
+    assert!(ok, "no external tanks refused: {err}");
 }
 
 #[test]

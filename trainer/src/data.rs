@@ -176,6 +176,18 @@ impl Dataset {
     /// preset's. A flight's manifest `faults` are applied to its frames before anything reads them.
     pub fn load_any(dir: &Path, val_fraction: f64) -> Result<Dataset> {
         let manifest = Manifest::read(dir)?;
+        // A build trains and scores one aircraft: another description's flights are refused.
+        let ours = estimator_core::aircraft::AIRCRAFT.name;
+        if let Some(a) = manifest.aircraft.as_ref().filter(|a| a.name != ours) {
+            return Err(Error::Split(
+                dir.to_path_buf(),
+                format!(
+                    "its flights flew the aircraft `{}`, and this build is for `{ours}`: build \
+                     the trainer with ESTIMATOR_AIRCRAFT={} (docs/aircraft.md)",
+                    a.name, a.name
+                ),
+            ));
+        }
         let manifest_sha256 = sha256_file(&dir.join("manifest.json"))?;
         let train_names: Vec<&str> = manifest
             .flights
@@ -563,7 +575,21 @@ mod tests {
             names.contains(&"a0") && names.contains(&"a0@bbbbbbbb"),
             "{names:?}"
         );
-        for d in [main, other, same, twin] {
+        // Another description's dataset is refused outright: this build evaluates its own
+        // aircraft's model.
+        let c172p = tiny_dataset("air-c172p", &[("d0", Train), ("dt", Test)], &both);
+        let mut m = Manifest::read(&c172p).unwrap();
+        m.aircraft = Some(hil_sim::dataset::AircraftRecord {
+            name: "c172p".into(),
+            dir: None,
+            model_xml_sha256: "c".repeat(64),
+        });
+        m.write(&c172p).unwrap();
+        match Dataset::load(&c172p, 0.5) {
+            Err(Error::Split(_, msg)) => assert!(msg.contains("ESTIMATOR_AIRCRAFT=c172p"), "{msg}"),
+            r => panic!("another aircraft's dataset loaded: {:?}", r.err()),
+        }
+        for d in [main, other, same, twin, c172p] {
             let _ = std::fs::remove_dir_all(d);
         }
     }

@@ -231,7 +231,8 @@ impl OodCase {
                 let target = trained_mass_lbs().1 * (1.0 + OOD.mass_margin);
                 let fuel = target - EMPTY_WEIGHT_LBS - PILOT_LBS;
                 let beyond_internal = fuel - INTERNAL_TANKS * INTERNAL_TANK_CAPACITY_LBS;
-                // An airframe without external tanks carries the rest as ballast at its empty CG.
+                // An airframe without external tanks carries the rest as ballast at its empty CG,
+                // in the pilot's point mass (so the ballast includes the pilot).
                 Some(if EXTERNAL_TANKS > 0.0 {
                     MassOverride {
                         internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
@@ -242,7 +243,7 @@ impl OodCase {
                     MassOverride {
                         internal_lbs: INTERNAL_TANK_CAPACITY_LBS,
                         external_lbs: 0.0,
-                        pointmass: Some((beyond_internal, EMPTY_CG_X_IN)),
+                        pointmass: Some((beyond_internal + PILOT_LBS, EMPTY_CG_X_IN)),
                     }
                 })
             }
