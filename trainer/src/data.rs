@@ -237,13 +237,10 @@ impl Dataset {
         for s in &self.suites {
             other.require(*s)?;
         }
-        // Flights of two aircraft never train one model silently. A dataset written before the
-        // aircraft was recorded flew JSBSim's own F-16, which a recorded one may name as well.
-        let sha = |d: &Dataset| {
-            d.aircraft
-                .as_ref()
-                .map(|a| (a.name.clone(), a.model_xml_sha256.clone()))
-        };
+        // Flights of two aircraft never train one model silently (both are this build's
+        // description, `load_any` sees to that; their models may differ). A dataset written before
+        // the aircraft was recorded flew JSBSim's own F-16, which a recorded one may name as well.
+        let sha = |d: &Dataset| d.aircraft.as_ref().map(|a| a.model_xml_sha256.clone());
         let other_aircraft = matches!((sha(self), sha(&other)), (Some(a), Some(b)) if a != b);
         if other_aircraft && !mixed_aircraft {
             return Err(Error::Split(

@@ -278,12 +278,7 @@ impl Flight {
     /// beside it lists the file, the manifest's promises hold ([`Manifest::read_flight`]).
     pub fn read_log_in_dataset(path: &Path) -> Result<Flight, DatasetError> {
         let (flight, has_sub) = Flight::read(path, false)?;
-        let Some(dir) = path.parent().filter(|d| d.join("manifest.json").is_file()) else {
-            return Ok(flight);
-        };
-        let m = Manifest::read(dir)?;
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
-        if m.flights.iter().any(|f| Some(&f.file) == name.as_ref()) {
+        if let Some((dir, m, _)) = Manifest::listing(path)? {
             m.check_subsamples(dir, path, has_sub)?;
         }
         Ok(flight)
@@ -515,6 +510,22 @@ impl Manifest {
     /// Whether every flight carries `suite`'s channels.
     pub fn carries(&self, suite: Suite) -> bool {
         self.suites().contains(&suite)
+    }
+
+    /// The `manifest.json` beside the flight CSV at `csv` and its entry for the file, when there is
+    /// such a manifest and it lists the file (with the dataset's directory).
+    pub fn listing(csv: &Path) -> Result<Option<(&Path, Manifest, FlightEntry)>, DatasetError> {
+        let Some(dir) = csv.parent().filter(|d| d.join("manifest.json").is_file()) else {
+            return Ok(None);
+        };
+        let m = Manifest::read(dir)?;
+        let name = csv.file_name().map(|n| n.to_string_lossy().into_owned());
+        let entry = m
+            .flights
+            .iter()
+            .find(|f| Some(&f.file) == name.as_ref())
+            .cloned();
+        Ok(entry.map(|e| (dir, m, e)))
     }
 
     /// Reads the flight CSV `file` of the dataset in `dir` ([`Flight::read_csv`]) and refuses one

@@ -160,18 +160,10 @@ impl RunArgs {
 /// The faults `manifest.json` beside a dataset CSV lists for it (the `ood` preset's sensor-fault
 /// flights); none when there is no manifest or no entry for the file.
 fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
-    let Some(dir) = csv.parent() else {
-        return Ok(Vec::new());
-    };
-    if !dir.join("manifest.json").is_file() {
-        return Ok(Vec::new());
+    match crate::dataset::Manifest::listing(csv)? {
+        Some((_, _, entry)) => entry.faults().map_err(RunError::Fault),
+        None => Ok(Vec::new()),
     }
-    let m = crate::dataset::Manifest::read(dir)?;
-    let name = csv.file_name().map(|n| n.to_string_lossy().into_owned());
-    let Some(entry) = m.flights.iter().find(|f| Some(&f.file) == name.as_ref()) else {
-        return Ok(Vec::new());
-    };
-    entry.faults().map_err(RunError::Fault)
 }
 
 /// Loads or flies the flight (a script on JSBSim's own F-16).
