@@ -377,7 +377,7 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
-        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, lift_offset_psd, lift_offset_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
@@ -1027,8 +1027,6 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
             "side_scale_psd" => c.side_scale_psd = v,
             "side_scale_sigma0" => c.side_scale_sigma0 = v,
-            "lift_offset_psd" => c.lift_offset_psd = v,
-            "lift_offset_sigma0" => c.lift_offset_sigma0 = v,
             "subsamples" => {
                 c.subsamples = match v as u8 {
                     0 => estimator_core::filter::SubsampleUse::Off,
@@ -1298,7 +1296,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
         print_metrics("β trusted", &e.beta_trusted);
         for s in &e.flags {
             println!(
-                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}, lift offset {:+.4}",
+                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}",
                 s.flight,
                 100.0 * s.no_input,
                 100.0 * s.gated,
@@ -1307,8 +1305,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
                 s.mean_sigma_alpha_deg,
                 s.mean_sigma_beta_deg,
                 s.final_lift_scale,
-                s.final_side_scale,
-                s.final_lift_offset
+                s.final_side_scale
             );
         }
     }

@@ -41,11 +41,10 @@ use crate::aero::{self, AirState, MODEL, Surfaces};
 use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 
-/// Number of states: mean wind (3), gust (3), lift scale, side-force scale, lift offset.
-pub const STATES: usize = 9;
+/// Number of states: mean wind (3), gust (3), lift scale, side-force scale.
+pub const STATES: usize = 8;
 const K: usize = 6;
 const KY: usize = 7;
-const KO: usize = 8;
 
 type Vec7 = SVector<f32, STATES>;
 type Mat7 = SMatrix<f32, STATES, STATES>;
@@ -88,10 +87,6 @@ pub struct Config {
     /// (1/s) and initial 1σ. Both 0 (the default) hold it at 1: the filter of seven states.
     pub side_scale_psd: f32,
     pub side_scale_sigma0: f32,
-    /// Lift-coefficient offset ΔC_L, added to the model's lift: random-walk PSD (1/s) and initial
-    /// 1σ. Both 0 hold it at 0.
-    pub lift_offset_psd: f32,
-    pub lift_offset_sigma0: f32,
     /// Measurement 1σ of the y and z specific force at the CG, m/s² (model error dominates).
     pub accel_sigma: [f32; 2],
     /// Normalised-innovation gate (χ², 2 degrees of freedom).
@@ -152,9 +147,6 @@ const SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
 #[cfg(filter_no_side_scale)]
 const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
 
-/// The lift offset's random-walk PSD and initial 1σ in [`CONFIG`].
-const LIFT_OFFSET: [f32; 2] = [0.0, 0.0];
-
 /// The filter for the build's aircraft in hil-sim's installation: the IMU lever arm, empty weight,
 /// pilot and gear of its description ([`crate::aircraft`]; the F-16's, `aircraft/f16.toml`), the
 /// anti-alias filter of `docs/sensors.md`. The measurement noise and the accelerometer delay are
@@ -169,8 +161,6 @@ pub const CONFIG: Config = Config {
     lift_scale_sigma0: 0.05,
     side_scale_psd: SIDE_SCALE[0],
     side_scale_sigma0: SIDE_SCALE[1],
-    lift_offset_psd: LIFT_OFFSET[0],
-    lift_offset_sigma0: LIFT_OFFSET[1],
     accel_sigma: [0.8, 1.5],
     gate: 25.0,
     gate_run: 20,
@@ -350,8 +340,6 @@ pub struct Output {
     pub lift_scale: f32,
     /// Side-force scale (1 unless [`Config::side_scale_sigma0`] lets it move).
     pub side_scale: f32,
-    /// Lift-coefficient offset (0 unless [`Config::lift_offset_sigma0`] lets it move).
-    pub lift_offset: f32,
     /// 1σ of α and β from the covariance, rad.
     pub sigma_alpha_rad: f32,
     pub sigma_beta_rad: f32,
@@ -641,7 +629,6 @@ impl AirDataFilter {
             sq(c.gust_sigma),
             sq(c.lift_scale_sigma0),
             sq(c.side_scale_sigma0),
-            sq(c.lift_offset_sigma0),
         ]));
         self.gated_run = 0;
         self.turb_ms = 0.0;
@@ -697,15 +684,10 @@ impl AirDataFilter {
         self.x.get(KY).copied().unwrap_or(1.0)
     }
 
-    /// The lift-coefficient offset (0 unless [`Config::lift_offset_sigma0`] lets it move).
-    pub fn lift_offset(&self) -> f32 {
-        self.x.get(KO).copied().unwrap_or(0.0)
-    }
-
     fn predict(&mut self, dt: f32) {
         let c = &self.cfg;
         let phi = libm::expf(-dt / c.gust_tau_s);
-        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0, 1.0, 1.0]));
+        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0, 1.0]));
         let gust_q = c.gust_sigma * c.gust_sigma * (1.0 - phi * phi);
         let [qn, qe, qd] = c.mean_wind_psd;
         let q = Mat7::from_diagonal(&Vec7::from([
@@ -717,7 +699,6 @@ impl AirDataFilter {
             gust_q,
             c.lift_scale_psd * dt,
             c.side_scale_psd * dt,
-            c.lift_offset_psd * dt,
         ]));
         self.x = f * self.x;
         self.p = f * self.p * f.transpose() + q;
@@ -773,17 +754,7 @@ impl AirDataFilter {
                 *e = k * f;
             }
         }
-        // The lift offset's specific force along body z: a lift coefficient of 1 acts against the
-        // body-z air velocity's share, −q̄S/m · cos α (its derivative in the wind is left out: the
-        // offset is a few hundredths).
-        let lz = -qs_over_m(rho, vb.norm(), mass) * vb.x / vb.norm();
-        if let Some(e) = h.get_mut((1, KO)) {
-            *e = lz;
-        }
-        let nu = Vector2::new(
-            f_cg.y - k * ky * f0.y,
-            f_cg.z - k * f0.z - self.lift_offset() * lz,
-        );
+        let nu = Vector2::new(f_cg.y - k * ky * f0.y, f_cg.z - k * f0.z);
         let hph = h * self.p * h.transpose();
         let r = self.measurement_variance(&hph);
         let rm = Matrix2::new(r[0], 0.0, 0.0, r[1]);
@@ -858,7 +829,6 @@ impl AirDataFilter {
             && self.x.iter().all(|v| v.is_finite())
             && (0.5..=1.5).contains(&k)
             && (0.5..=1.5).contains(&ky)
-            && (-0.2..=0.2).contains(&self.lift_offset())
     }
 
     /// One step on a sensor frame; `dt_s` is the time since the previous frame.
@@ -1012,7 +982,6 @@ impl AirDataFilter {
             airspeed_mps: v,
             lift_scale: self.lift_scale(),
             side_scale: self.side_scale(),
-            lift_offset: self.lift_offset(),
             sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
             sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
             nis,

@@ -314,53 +314,6 @@ fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
 }
 
 #[test]
-fn learns_a_lift_offset_when_allowed_and_holds_it_at_zero_otherwise() {
-    // A lift coefficient 0.02 above the model's, through a turn in a steady wind; the lift scale
-    // is held so that the offset is the only lift state.
-    let w = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
-        k: 1.0,
-    };
-    let base = Config {
-        lift_scale_psd: 0.0,
-        lift_scale_sigma0: 0.0,
-        ..cfg()
-    };
-    let learning = Config {
-        lift_offset_psd: 1e-7,
-        lift_offset_sigma0: 0.03,
-        ..base
-    };
-    let run = |c: Config| {
-        let mut f = AirDataFilter::new(c);
-        let mut t = 0.0;
-        let mut worst_alpha = 0f32;
-        while t < 600.0 {
-            let (mut inp, truth) = w.frame(t, &c);
-            let (rho, _) = isa(inp.alt_m);
-            let lift_z = -qs_over_m(rho, 150.0, c.mass_kg(inp.fuel_kg))
-                * libm::cosf(truth.alpha)
-                * libm::cosf(truth.beta);
-            inp.accel_mps2[2] += 0.02 * lift_z;
-            let out = f.step(&inp, true);
-            if t > 500.0 {
-                worst_alpha = worst_alpha.max((out.alpha_rad - truth.alpha).abs());
-            }
-            t += DT;
-        }
-        (f.lift_offset(), worst_alpha.to_degrees())
-    };
-    let (held, held_err) = run(base);
-    assert_eq!(held, 0.0, "a filter without the state holds the offset");
-    let (dcl, err) = run(learning);
-    assert!((dcl - 0.02).abs() < 0.004, "lift offset {dcl}");
-    assert!(
-        err < 0.1 && err < held_err / 2.0,
-        "α error {err}° learning, {held_err}° held"
-    );
-}
-
-#[test]
 fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
     // 4 % more force per unit of model coefficient than mass and model predict.
     let w = World {
