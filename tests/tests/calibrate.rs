@@ -119,5 +119,25 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         o.abs() < 0.005 && o.abs() <= 2.0 * se,
         "lift offset {o} ± {se}, truth 0"
     );
+    // C has the model's stall: the lift over α, where the card's stall approach reached a knot,
+    // is the lift scale's (1) within 2σ, and the card reaches past the first knots.
+    let stall = with_truth["scales"]["stall"].as_array().unwrap();
+    let knots: Vec<(f64, f64)> = stall
+        .iter()
+        .filter(|k| !k.is_null())
+        .map(|k| {
+            (
+                k["value"].as_f64().unwrap(),
+                k["std_error"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert!(knots.len() >= 2, "stall knots identified: {stall:?}");
+    for (v, se) in knots {
+        assert!(
+            (v - 1.0).abs() < 0.02 && (v - 1.0).abs() <= 2.0 * se,
+            "lift over α {v} ± {se}, truth 1"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

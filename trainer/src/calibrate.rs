@@ -45,9 +45,23 @@ use serde::Serialize;
 use std::path::Path;
 
 /// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
-const MIN_QBAR_PA: f64 = 5_000.0;
-/// Frames beyond this α (deg) are left out (the vanes and the model's stall region).
-const MAX_ALPHA_DEG: f64 = 20.0;
+const MIN_QBAR_PA: f64 = 3_000.0;
+/// Frames beyond this α (deg) are left out (beyond the card's stall approach).
+const MAX_ALPHA_DEG: f64 = 25.0;
+/// The lift's scale over α: 1 (the lift scale k_L alone) up to the first knot, then one parameter
+/// per knot, linear between knots and held beyond the last (a `[stall]` table of the spec). A
+/// knot is identified when at least [`MIN_STALL_FRAMES`] quasi-steady frames lie nearer to it
+/// than to its neighbours, and every knot before it is.
+pub const STALL_KNOTS_DEG: [f64; 5] = [10.0, 13.0, 16.0, 19.0, 22.0];
+/// Drag is not identified (thrust is unknown), and at high α its body-z share, D·sin α, reads as
+/// lift: a stall knot's 1σ includes this share of the drag's normal force there, the drag error a
+/// wind-tunnel model carries (docs/calibration.md).
+const DRAG_PRIOR: f64 = 0.10;
+/// See [`STALL_KNOTS_DEG`]: 3 s of frames pooled over the flights, 1 s in one flight's own fit.
+const MIN_STALL_FRAMES: usize = 60;
+const MIN_STALL_FRAMES_PER_FLIGHT: usize = 20;
+/// Parameters of the stall table: the knots after the first.
+pub const STALL_PARAMS: usize = STALL_KNOTS_DEG.len() - 1;
 /// The boom step and the lift read quasi-steady frames only: the boom's vane lag, the IMU's anti-alias
 /// filter and the surfaces' sampling delay the signals differently, so during a fast input
 /// (a doublet's edge) they disagree. Angular acceleration below this, rad/s²…
@@ -98,6 +112,8 @@ pub struct Calibration {
     pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
     pub scales: Scales,
+    /// Near each stall knot, the drag's normal force over the lift's ([`DRAG_PRIOR`]).
+    pub stall_drag_share: [f64; STALL_PARAMS],
 }
 
 /// The identified aerodynamic corrections with their 1σ.
@@ -113,6 +129,9 @@ pub struct Scales {
     pub sideslip: Estimate,
     /// The other side-force terms (surfaces, body rates), × this.
     pub side_controls: Estimate,
+    /// The lift's scale at each of [`STALL_KNOTS_DEG`] after the first, over `lift` (1: the
+    /// model's stall); `None` where the card did not reach it.
+    pub stall: [Option<Estimate>; STALL_PARAMS],
 }
 
 impl Scales {
@@ -134,8 +153,57 @@ impl Scales {
             },
             sideslip: ratio(self.sideslip, model.sideslip),
             side_controls: ratio(self.side_controls, model.side_controls),
+            stall: core::array::from_fn(|j| match (self.stall[j], model.stall[j]) {
+                (Some(a), Some(b)) => Some(ratio(a, b)),
+                _ => None,
+            }),
         }
     }
+}
+
+/// The weight of stall knot `j` (an index into [`STALL_KNOTS_DEG`], ≥ 1) at `alpha_deg` when the
+/// knots up to `last` are fitted: a tent from the knot before to the knot after, and 1 beyond
+/// `last` (the `[stall]` table holds its last value).
+fn stall_basis(j: usize, last: usize, alpha_deg: f64) -> f64 {
+    let k = &STALL_KNOTS_DEG;
+    let (Some(&lo), Some(&at)) = (k.get(j - 1), k.get(j)) else {
+        return 0.0;
+    };
+    if alpha_deg <= lo {
+        0.0
+    } else if alpha_deg <= at {
+        (alpha_deg - lo) / (at - lo)
+    } else {
+        match k.get(j + 1).filter(|_| j < last) {
+            Some(&hi) if alpha_deg < hi => (hi - alpha_deg) / (hi - at),
+            Some(_) => 0.0,
+            None => 1.0,
+        }
+    }
+}
+
+/// The drag's normal force over the lift's, |D_z| / |L_z|, mean over the quasi-steady frames near
+/// stall knot `j`.
+fn drag_share(rows: &[&EqRow], j: usize) -> f64 {
+    let near: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.steady && stall_basis(j, j + 1, r.alpha_deg) >= 0.5)
+        .map(|r| r.parts.drag[2].abs() / (r.parts.lift[2] + r.parts.flap[2]).abs().max(1e-6))
+        .collect();
+    near.iter().sum::<f64>() / near.len().max(1) as f64
+}
+
+/// How many stall knots `rows` identify: the leading knots with at least `min` quasi-steady
+/// frames nearer to them than to their neighbours.
+fn stall_knots(rows: &[&EqRow], min: usize) -> usize {
+    (1..STALL_KNOTS_DEG.len())
+        .take_while(|&j| {
+            rows.iter()
+                .filter(|r| r.steady && stall_basis(j, j + 1, r.alpha_deg) >= 0.5)
+                .count()
+                >= min
+        })
+        .count()
 }
 
 /// The corrections identified from one flight alone.
@@ -150,6 +218,8 @@ pub struct PerFlight {
     /// its lift is then fitted with the side force at the pooled scales.
     pub sideslip: Option<f64>,
     pub side_controls: Option<f64>,
+    /// The lift's scale at the stall knots over the lift scale, where this flight reaches them.
+    pub stall: [Option<f64>; STALL_PARAMS],
 }
 
 /// A fit's parameter `name` with its 1σ raised to `spread`'s standard deviation over √n (the
@@ -162,6 +232,11 @@ fn with_scatter(fit: &Fit, name: &str, spread: &[f64]) -> Estimate {
         },
         |(_, e)| *e,
     );
+    raised_to_scatter(e, spread)
+}
+
+/// `e` with its 1σ raised to `spread`'s standard deviation over √n, when there are two or more.
+fn raised_to_scatter(e: Estimate, spread: &[f64]) -> Estimate {
     let n = spread.len() as f64;
     if spread.len() < 2 {
         return e;
@@ -447,6 +522,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         };
         eq.push(EqRow {
             flight: r.flight,
+            alpha_deg: alpha.to_degrees(),
             steady,
             rolling,
             parts,
@@ -472,7 +548,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             )));
         }
     }
-    let lift = lift_fit(&all_eq, k_b, k_y).ok_or_else(|| {
+    let knots = stall_knots(&all_eq, MIN_STALL_FRAMES);
+    let lift = lift_fit(&all_eq, k_b, k_y, knots).ok_or_else(|| {
         Error::Numeric(format!(
             "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
             count(|r| r.steady)
@@ -487,7 +564,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             let rows: Vec<&EqRow> = eq.iter().filter(|r| r.flight == k).collect();
             let s = side_fit(&rows);
             let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
-            let l = lift_fit(&rows, kb, ky);
+            let n = stall_knots(&rows, MIN_STALL_FRAMES_PER_FLIGHT).min(knots);
+            let l = lift_fit(&rows, kb, ky, n);
             PerFlight {
                 flight: name.clone(),
                 lift: l.as_ref().map(|l| l.get("k_lift")),
@@ -495,6 +573,10 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 offset: l.as_ref().map(|l| l.get("offset_cl")),
                 sideslip: s.as_ref().map(|s| s.get("k_sideslip")),
                 side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
+                stall: core::array::from_fn(|j| {
+                    let l = l.as_ref().filter(|_| j < n)?;
+                    Some(1.0 + l.get(&stall_name(j + 1)) / l.get("k_lift"))
+                }),
             }
         })
         .collect();
@@ -506,8 +588,21 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
         sideslip: with_scatter(&side, "k_sideslip", &spread(|f| f.sideslip)),
         side_controls: with_scatter(&side, "k_side_controls", &spread(|f| f.side_controls)),
+        stall: core::array::from_fn(|j| {
+            (j < knots).then(|| {
+                stall_scale(
+                    &lift,
+                    j + 1,
+                    &per_flight
+                        .iter()
+                        .filter_map(|f| f.stall[j])
+                        .collect::<Vec<_>>(),
+                )
+            })
+        }),
     };
     Ok(Calibration {
+        stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
         boom_alpha,
         boom_beta,
@@ -522,6 +617,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
 /// One frame of the force equations.
 struct EqRow {
     flight: usize,
+    /// The corrected boom α, deg.
+    alpha_deg: f64,
     /// Quasi-steady ([`quasi_steady`]): the lift fit reads it.
     steady: bool,
     /// Rolling ([`MIN_ROLL_RATE_RPS`]): the side-force fit reads it.
@@ -558,18 +655,53 @@ fn side_fit(all: &[&EqRow]) -> Option<Fit> {
     )
 }
 
-/// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`.
-fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64) -> Option<Fit> {
+/// The name of stall knot `j`'s parameter in the lift fit.
+fn stall_name(j: usize) -> String {
+    format!(
+        "stall_{}deg",
+        STALL_KNOTS_DEG.get(j).copied().unwrap_or(f64::NAN)
+    )
+}
+
+/// The lift's scale at stall knot `j` over the lift scale, `1 + d_j / k_L`, its 1σ by the delta
+/// method (the two taken as independent: k_L's 1σ is a few parts per thousand), raised to the
+/// scatter of `per_flight`.
+fn stall_scale(lift: &Fit, j: usize, per_flight: &[f64]) -> Estimate {
+    let k = lift.get("k_lift");
+    let d = with_scatter(lift, &stall_name(j), &[]);
+    raised_to_scatter(
+        Estimate {
+            value: 1.0 + d.value / k,
+            std_error: d.std_error / k.abs(),
+        },
+        per_flight,
+    )
+}
+
+/// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`, and the
+/// first `knots` stall knots' lift changes `d_j · lift_z · basis_j(α)` ([`STALL_KNOTS_DEG`]).
+fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, knots: usize) -> Option<Fit> {
     let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
     let ones = vec![1.0; rows.len()];
+    let stall_names: Vec<String> = (1..=knots).map(stall_name).collect();
+    let mut names = vec!["k_lift", "k_flap", "offset_cl", "bias_mps2"];
+    names.extend(stall_names.iter().map(String::as_str));
+    let mut x = vec![
+        rows.iter().map(|r| r.parts.lift[2]).collect(),
+        rows.iter().map(|r| r.parts.flap[2]).collect(),
+        rows.iter().map(|r| r.parts.unit_lift[2]).collect(),
+        ones,
+    ];
+    for j in 1..=knots {
+        x.push(
+            rows.iter()
+                .map(|r| r.parts.lift[2] * stall_basis(j, knots, r.alpha_deg))
+                .collect(),
+        );
+    }
     least_squares(
-        &["k_lift", "k_flap", "offset_cl", "bias_mps2"],
-        &[
-            rows.iter().map(|r| r.parts.lift[2]).collect(),
-            rows.iter().map(|r| r.parts.flap[2]).collect(),
-            rows.iter().map(|r| r.parts.unit_lift[2]).collect(),
-            ones,
-        ],
+        &names,
+        &x,
         &rows
             .iter()
             .map(|r| {
@@ -708,6 +840,22 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
             first.name
         ));
     }
+    // The lift over α beyond the first knot, where the card reached it: 1 at the first knot.
+    let stall: Vec<(f64, f64)> = STALL_KNOTS_DEG
+        .iter()
+        .skip(1)
+        .zip(&scales.stall)
+        .map_while(|(a, s)| s.map(|s| (*a, s.value)))
+        .collect();
+    if !stall.is_empty() {
+        let list = |v: Vec<String>| v.join(", ");
+        t.push_str(&format!(
+            "[stall]\nalpha_deg = [{:.1}, {}]\nlift_scale = [1.0, {}]\n",
+            STALL_KNOTS_DEG[0],
+            list(stall.iter().map(|(a, _)| format!("{a:.1}")).collect()),
+            list(stall.iter().map(|(_, s)| format!("{s:.5}")).collect())
+        ));
+    }
     t
 }
 
@@ -726,14 +874,22 @@ pub struct Report {
     pub offset_term: Option<String>,
     /// The side-force terms the sideslip scale applies to (JSBSim function names).
     pub sideslip_terms: Vec<String>,
+    /// The α (deg) of the stall table's knots: the first holds 1, [`Scales::stall`] the others.
+    pub stall_knots_deg: Vec<f64>,
 }
 
 impl Report {
     pub fn new(flight_test: Calibration, model_card: Option<Calibration>) -> Report {
-        let scales = match &model_card {
+        let mut scales = match &model_card {
             Some(m) => flight_test.scales.over(&m.scales),
             None => flight_test.scales,
         };
+        // The drag the flight test's lift reads at high α, which no card identifies.
+        for (s, share) in scales.stall.iter_mut().zip(flight_test.stall_drag_share) {
+            if let Some(e) = s {
+                e.std_error = e.std_error.hypot(DRAG_PRIOR * share);
+            }
+        }
         Report {
             scales,
             flight_test,
@@ -741,6 +897,7 @@ impl Report {
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
             sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
+            stall_knots_deg: STALL_KNOTS_DEG.to_vec(),
         }
     }
 }
@@ -772,6 +929,41 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
+    m.push_str(&format!(
+        "\nThe lift over α, over the lift scale (1 up to {}°; –: the card did not reach the knot):\n\n| | {} |\n|---|{}\n",
+        STALL_KNOTS_DEG[0],
+        STALL_KNOTS_DEG
+            .iter()
+            .skip(1)
+            .map(|a| format!("{a}°"))
+            .collect::<Vec<_>>()
+            .join(" | "),
+        "---|".repeat(STALL_PARAMS)
+    ));
+    let stall_row = |what: &str, s: &Scales| {
+        let cells: Vec<String> = s
+            .stall
+            .iter()
+            .map(|x| x.as_ref().map_or("–".to_string(), e))
+            .collect();
+        format!("| {what} | {} |\n", cells.join(" | "))
+    };
+    m.push_str(&stall_row("flight test", &c.scales));
+    if let Some(mc) = &r.model_card {
+        m.push_str(&stall_row("the same card flown on the model", &mc.scales));
+    }
+    m.push_str(&stall_row("**calibrated aircraft**", &r.scales));
+    m.push_str(&format!(
+        "\nThe calibrated aircraft's 1σ at each knot includes {:.0} % of the drag's normal force there \
+         (D·sin α, which reads as lift and which no card identifies: {}).\n",
+        100.0 * DRAG_PRIOR,
+        c.stall_drag_share
+            .iter()
+            .zip(STALL_KNOTS_DEG.iter().skip(1))
+            .map(|(s, a)| format!("{a}° {:.3} of the lift", s))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
     let f = |p: &PerFlight| {
         let v = |x: Option<f64>, signed: bool| match (x, signed) {
             (Some(x), true) => format!("{x:+.4}"),
@@ -895,9 +1087,15 @@ mod tests {
             };
             let (kb, ky) = (0.9, 1.1);
             let f_y = kb * b + ky * rest + 0.01;
-            let f_z = -0.95 * lift + 0.1 * kb * b + 0.05 * ky * rest - 0.3 * (0.9 * t).cos();
+            // α sweeps 5°…20°; the lift loses 10 % between 10° and 19°, linearly (the stall
+            // knots' shape).
+            let alpha_deg = 5.0 + 15.0 * k as f64 / 400.0;
+            let stall = 1.0 - 0.1 * ((alpha_deg - 10.0) / 9.0).clamp(0.0, 1.0);
+            let f_z =
+                -0.95 * stall * lift + 0.1 * kb * b + 0.05 * ky * rest - 0.3 * (0.9 * t).cos();
             EqRow {
                 flight: 0,
+                alpha_deg,
                 steady,
                 rolling: !steady,
                 parts,
@@ -912,12 +1110,19 @@ mod tests {
             (kb - 0.9).abs() < 1e-9 && (ky - 1.1).abs() < 1e-9,
             "{kb} {ky}"
         );
-        let lift = lift_fit(&all, kb, ky).unwrap();
+        // Three knots (13°, 16°, 19°) have their frames; 22° is beyond the sweep.
+        let knots = stall_knots(&all, 10);
+        assert_eq!(knots, 3);
+        let lift = lift_fit(&all, kb, ky, knots).unwrap();
         assert!(
             (lift.get("k_lift") - 0.95).abs() < 1e-9,
             "{}",
             lift.get("k_lift")
         );
+        for (j, truth) in [(1, 1.0 - 0.1 / 3.0), (2, 1.0 - 0.2 / 3.0), (3, 0.9)] {
+            let s = stall_scale(&lift, j, &[]).value;
+            assert!((s - truth).abs() < 1e-9, "knot {j}: {s}, truth {truth}");
+        }
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
         assert!(side_fit(&steady).is_none());

@@ -378,6 +378,13 @@ pub struct FlightTestCard {
     /// Pull-up then push-over: pitch-attitude offsets per unit of pass scale.
     pub pull_up_theta_deg: f64,
     pub push_over_theta_deg: f64,
+    /// Once per flight, after the second pass: a stall approach, `stall_approach_s` at idle with
+    /// the speedbrake out while the altitude is held, so that α rises as the speed decays, then
+    /// wings level the α target raised from [`FlightTestCard::windup_alpha_deg`] at
+    /// `stall_approach_rate_deg_s` to `stall_approach_alpha_deg`.
+    pub stall_approach_s: f64,
+    pub stall_approach_alpha_deg: f64,
+    pub stall_approach_rate_deg_s: f64,
     /// Between inputs: pitch attitude `hold_pitch_deg` plus `altitude_hold_per_ft` per ft below the
     /// test point (within ±`altitude_hold_limit_deg`), throttle `speed_hold_throttle` plus
     /// `speed_hold_per_kt` per kt below its speed; the throttle the card starts from.
@@ -1016,6 +1023,36 @@ fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
     t + 65.0
 }
 
+/// The card's stall approach from `t0` (see [`FlightTestCard::stall_approach_s`]): the speed
+/// hold off, the throttle at idle and the speedbrake out while the pitch attitude keeps holding
+/// the altitude, so that α rises as the speed decays, as in a 1-g stall approach; then full
+/// throttle with the speedbrake in, and the speed hold back on. Returns the time it ends.
+fn stall_approach(t0: f64, seq: &mut CardSeq) -> f64 {
+    let c = &presets::CARD;
+    let (decel_s, recover_s) = (c.stall_approach_s, 20.0);
+    let (from, to) = (c.windup_alpha_deg, c.stall_approach_alpha_deg);
+    let steps = ((to - from) / c.stall_approach_rate_deg_s).ceil().max(1.0);
+    let pull_s = steps + 1.0;
+    seq.hold.push((t0, 0.0, decel_s + pull_s + recover_s));
+    seq.throttle.push((t0, 0.0, decel_s + pull_s));
+    seq.speedbrake.push((t0, 1.0, decel_s));
+    seq.speedbrake.push((t0 + decel_s, 0.0, pull_s));
+    let t1 = t0 + decel_s;
+    seq.bank.push((t1 - 3.0, c.windup_bank_deg, pull_s + 3.0));
+    seq.bank.push((t1 + pull_s, 0.0, recover_s));
+    seq.mode.push((t1, 1.0, pull_s));
+    for k in 0..=steps as usize {
+        let a = (from + (to - from) * k as f64 / steps).min(to);
+        seq.alpha.push((t1 + k as f64, a, 1.0));
+    }
+    seq.alpha.push((t1 + pull_s, c.windup_alpha_end_deg, 8.0));
+    seq.mode.push((t1 + pull_s + 3.0, 0.0, recover_s));
+    seq.throttle.push((t1 + pull_s, 1.0, recover_s));
+    let end = t1 + pull_s + recover_s;
+    seq.hold.push((end, 1.0, 10.0));
+    end
+}
+
 /// The card's held values per channel (`(t, value, hold)`, as [`schedule`] takes them).
 #[derive(Default)]
 struct CardSeq {
@@ -1039,7 +1076,8 @@ fn card_tables(duration_s: f64, point: &TestPoint) -> String {
     let mut seq = CardSeq::default();
     let c = &presets::CARD;
     let end = card_inputs(1.0, COMMANDS_START_S + 10.0, &mut seq);
-    card_inputs(c.second_pass_scale, end + 10.0, &mut seq);
+    let end = card_inputs(c.second_pass_scale, end + 10.0, &mut seq);
+    stall_approach(end + 5.0, &mut seq);
     let keep = |v: Vec<(f64, f64, f64)>| -> Vec<(f64, f64, f64)> {
         v.into_iter().filter(|(t, _, _)| *t < duration_s).collect()
     };
@@ -1549,7 +1587,7 @@ pub enum Preset {
     /// A flight campaign of any size: its flight-hours and the mass, wind and turbulence ranges of
     /// every profile (`hil-sim generate --preset campaign --hours H ...`).
     Campaign,
-    /// Flight-test cards for calibration, 28 min in calm air: at three altitude/speed points, pitch,
+    /// Flight-test cards for calibration, 30 min in calm air: at three altitude/speed points, pitch,
     /// roll and rudder doublets, 3-2-1-1 multisteps, steady-heading sideslips, a wind-up turn, a
     /// push-over/pull-up and an accel/decel, flown twice; each flight records the flight-test nose
     /// boom (α/β vanes, pitot-static) in NAME.boom.csv (docs/sensors.md).
@@ -1716,7 +1754,7 @@ pub fn test_points() -> impl Iterator<Item = TestPoint> {
 }
 
 /// Length of one test point's flight (the card flown twice, the second time with larger inputs), s.
-pub const CARD_FLIGHT_S: f64 = 560.0;
+pub const CARD_FLIGHT_S: f64 = 600.0;
 
 impl PlannedFlight {
     /// The profile this flight is drawn from, with the campaign's ranges if it has them.
