@@ -74,7 +74,7 @@ const MAX_ANGLE_STEP_DEG: f64 = 0.05;
 const MIN_ROLL_RATE_RPS: f64 = 0.2;
 
 /// One identified parameter.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Estimate {
     pub value: f64,
     /// 1σ, inflated for residual autocorrelation.
@@ -182,27 +182,27 @@ fn stall_basis(j: usize, last: usize, alpha_deg: f64) -> f64 {
     }
 }
 
-/// The drag's normal force over the lift's, |D_z| / |L_z|, mean over the quasi-steady frames near
-/// stall knot `j`.
+/// A quasi-steady frame nearer to stall knot `j` than to its neighbours.
+fn near_knot(r: &EqRow, j: usize) -> bool {
+    r.steady && stall_basis(j, j + 1, r.alpha_deg) >= 0.5
+}
+
+/// The drag's normal force over the lift's, |D_z| / |L_z|, mean over the frames near stall knot
+/// `j` ([`near_knot`]).
 fn drag_share(rows: &[&EqRow], j: usize) -> f64 {
     let near: Vec<f64> = rows
         .iter()
-        .filter(|r| r.steady && stall_basis(j, j + 1, r.alpha_deg) >= 0.5)
+        .filter(|r| near_knot(r, j))
         .map(|r| r.parts.drag[2].abs() / (r.parts.lift[2] + r.parts.flap[2]).abs().max(1e-6))
         .collect();
     near.iter().sum::<f64>() / near.len().max(1) as f64
 }
 
-/// How many stall knots `rows` identify: the leading knots with at least `min` quasi-steady
-/// frames nearer to them than to their neighbours.
+/// How many stall knots `rows` identify: the leading knots with at least `min` frames near them
+/// ([`near_knot`]).
 fn stall_knots(rows: &[&EqRow], min: usize) -> usize {
     (1..STALL_KNOTS_DEG.len())
-        .take_while(|&j| {
-            rows.iter()
-                .filter(|r| r.steady && stall_basis(j, j + 1, r.alpha_deg) >= 0.5)
-                .count()
-                >= min
-        })
+        .take_while(|&j| rows.iter().filter(|r| near_knot(r, j)).count() >= min)
         .count()
 }
 
@@ -225,14 +225,7 @@ pub struct PerFlight {
 /// A fit's parameter `name` with its 1σ raised to `spread`'s standard deviation over √n (the
 /// flight-by-flight values), when there are two or more.
 fn with_scatter(fit: &Fit, name: &str, spread: &[f64]) -> Estimate {
-    let e = fit.params.iter().find(|(n, _)| n == name).map_or(
-        Estimate {
-            value: 0.0,
-            std_error: 0.0,
-        },
-        |(_, e)| *e,
-    );
-    raised_to_scatter(e, spread)
+    raised_to_scatter(fit.estimate(name).unwrap_or_default(), spread)
 }
 
 /// `e` with its 1σ raised to `spread`'s standard deviation over √n, when there are two or more.
@@ -316,12 +309,14 @@ pub fn least_squares(names: &[&str], x: &[Vec<f64>], y: &[f64]) -> Option<Fit> {
 }
 
 impl Fit {
+    /// Parameter `name` with its 1σ (`None` when absent).
+    pub fn estimate(&self, name: &str) -> Option<Estimate> {
+        self.params.iter().find(|(n, _)| n == name).map(|(_, e)| *e)
+    }
+
     /// The value of parameter `name` (0 when absent).
     pub fn get(&self, name: &str) -> f64 {
-        self.params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(0.0, |(_, e)| e.value)
+        self.estimate(name).map_or(0.0, |e| e.value)
     }
 }
 
@@ -575,7 +570,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
                 stall: core::array::from_fn(|j| {
                     let l = l.as_ref().filter(|_| j < n)?;
-                    Some(1.0 + l.get(&stall_name(j + 1)) / l.get("k_lift"))
+                    Some(stall_scale(l, j + 1, &[]).value)
                 }),
             }
         })
@@ -668,7 +663,7 @@ fn stall_name(j: usize) -> String {
 /// scatter of `per_flight`.
 fn stall_scale(lift: &Fit, j: usize, per_flight: &[f64]) -> Estimate {
     let k = lift.get("k_lift");
-    let d = with_scatter(lift, &stall_name(j), &[]);
+    let d = lift.estimate(&stall_name(j)).unwrap_or_default();
     raised_to_scatter(
         Estimate {
             value: 1.0 + d.value / k,

@@ -379,9 +379,10 @@ pub struct FlightTestCard {
     pub pull_up_theta_deg: f64,
     pub push_over_theta_deg: f64,
     /// Once per flight, after the second pass: a stall approach, `stall_approach_s` at idle with
-    /// the speedbrake out while the altitude is held, so that α rises as the speed decays, then
-    /// wings level the α target raised from [`FlightTestCard::windup_alpha_deg`] at
-    /// `stall_approach_rate_deg_s` to `stall_approach_alpha_deg`.
+    /// the speedbrake out while the altitude is held, so that the speed decays, then a wind-up
+    /// turn at [`FlightTestCard::windup_bank_deg`] with the α target raised from
+    /// [`FlightTestCard::windup_alpha_deg`] at `stall_approach_rate_deg_s` toward
+    /// `stall_approach_alpha_deg`.
     pub stall_approach_s: f64,
     pub stall_approach_alpha_deg: f64,
     pub stall_approach_rate_deg_s: f64,
@@ -1025,8 +1026,9 @@ fn card_inputs(scale: f64, t0: f64, seq: &mut CardSeq) -> f64 {
 
 /// The card's stall approach from `t0` (see [`FlightTestCard::stall_approach_s`]): the speed
 /// hold off, the throttle at idle and the speedbrake out while the pitch attitude keeps holding
-/// the altitude, so that α rises as the speed decays, as in a 1-g stall approach; then full
-/// throttle with the speedbrake in, and the speed hold back on. Returns the time it ends.
+/// the altitude; at the slow speed, the banked α sweep in one-second steps (still at idle, so the
+/// speed keeps falling); then full throttle, wings level, and the speed hold back on. Returns the
+/// time it ends.
 fn stall_approach(t0: f64, seq: &mut CardSeq) -> f64 {
     let c = &presets::CARD;
     let (decel_s, recover_s) = (c.stall_approach_s, 20.0);
@@ -1042,7 +1044,7 @@ fn stall_approach(t0: f64, seq: &mut CardSeq) -> f64 {
     seq.bank.push((t1 + pull_s, 0.0, recover_s));
     seq.mode.push((t1, 1.0, pull_s));
     for k in 0..=steps as usize {
-        let a = (from + (to - from) * k as f64 / steps).min(to);
+        let a = from + (to - from) * k as f64 / steps;
         seq.alpha.push((t1 + k as f64, a, 1.0));
     }
     seq.alpha.push((t1 + pull_s, c.windup_alpha_end_deg, 8.0));
