@@ -44,7 +44,10 @@ fn sensor_input(r: &[f64]) -> SensorInput {
         gps_speed_mps: r[at::GPS_SPEED] * FT_TO_M,
         alt_msl_m: r[at::H_SL] * FT_TO_M,
         surfaces_deg: std::array::from_fn(|i| {
-            r[at::SURFACES + i] * estimator_core::aircraft::AIRCRAFT.surfaces[i].deg_per_unit
+            match estimator_core::aircraft::AIRCRAFT.surfaces[i] {
+                Some(s) => r[at::SURFACES + i] * s.deg_per_unit,
+                None => 0.0,
+            }
         }),
         throttle_norm: r[at::THROTTLE],
         euler_rad: [r[at::PHI], r[at::THETA], r[at::PSI]],
@@ -151,13 +154,14 @@ fn fly_planned(
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
                 break 'outer;
             }
-            // The optional zone column (last) is NaN for scripts without a generator state; the
-            // properties not read at this step are NaN and are checked where they are read (a
-            // diverging JSBSim state shows first in the forces and rates, read at every step).
-            if r[..at::ZONE]
-                .iter()
+            // Optional properties (`?` in `WATCH`: the zone, NaN for scripts without a generator
+            // state, and the surfaces an airframe does not have) are not checked; the properties
+            // not read at this step are NaN and are checked where they are read (a diverging
+            // JSBSim state shows first in the forces and rates, read at every step).
+            if r.iter()
                 .zip(read)
-                .any(|(v, read)| *read && !v.is_finite())
+                .zip(WATCH)
+                .any(|((v, read), name)| *read && !name.starts_with('?') && !v.is_finite())
             {
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;

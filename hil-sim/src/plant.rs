@@ -571,7 +571,12 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::GPS_SPEED] = "velocities/ned-velocity-mag-fps";
     let mut i = 0;
     while i < AIRCRAFT.surfaces.len() {
-        w[at::SURFACES + i] = AIRCRAFT.surfaces[i].property;
+        // A surface the airframe does not have reads nothing (an optional name that is never
+        // there: NaN, and its channel carries 0).
+        w[at::SURFACES + i] = match AIRCRAFT.surfaces[i] {
+            Some(s) => s.property,
+            None => "?hil-sim/no-such-surface",
+        };
         i += 1;
     }
     w[at::THROTTLE] = match AIRCRAFT.throttle_properties.first() {

@@ -20,7 +20,7 @@
 use std::collections::VecDeque;
 use std::path::Path;
 
-use estimator_core::aircraft::SURFACE_CHANNELS;
+use estimator_core::aircraft::{AIRCRAFT, SURFACE_CHANNELS};
 use estimator_core::{CHANNELS, Channel};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha12Rng;
@@ -1032,6 +1032,12 @@ impl SensorModel {
         let s = &self.cfg.surfaces;
         let surfaces = SURFACE_CHANNELS.into_iter().zip(t.surfaces_deg);
         for ((c, v), aa) in surfaces.zip(self.surface_aa.iter_mut()) {
+            // A surface the airframe does not have has no sensor: its channel is 0.
+            if AIRCRAFT.surface(c).is_none() {
+                out[c.index()] = 0.0;
+                self.fast_out[c.index()] = 0.0;
+                continue;
+            }
             let filtered = aa.as_mut().map_or(v, |f| f.step(v));
             let n: f64 = StandardNormal.sample(&mut self.rng);
             out[c.index()] = quantize(filtered + s.noise_sigma_deg * n, s.quantum_deg);

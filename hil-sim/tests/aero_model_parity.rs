@@ -25,7 +25,7 @@ use estimator_core::aero::{
 /// one unit of the XML's last digit (1e-4) in a table cell the flight uses is ~6e-5 of it.
 const TOLERANCE: f64 = 1e-6;
 
-const INPUTS: [&str; 26] = [
+const INPUTS: [&str; 27] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -49,6 +49,7 @@ const INPUTS: [&str; 26] = [
     "fcs/flaperon-mix-rad",
     "fcs/left-flaperon-norm",
     "fcs/right-flaperon-norm",
+    "fcs/tef-control",
     "gear/gear-pos-norm",
     "simulation/sim-time-sec",
     "aero/function/kCLge",
@@ -136,6 +137,11 @@ impl Step {
             flaperon_left_deg: flaperon("fcs/left-flaperon-norm"),
             flaperon_right_deg: flaperon("fcs/right-flaperon-norm"),
             speedbrake_deg: g("fcs/speedbrake-pos-deg") as f32,
+            // What the trailing-edge flap channel's sensor reads (the F-16's model reads its flaps
+            // through the flaperons, not as a degree property).
+            flap_deg: estimator_core::aircraft::AIRCRAFT
+                .surface(estimator_core::Channel::Tef)
+                .map_or(0.0, |t| (g(t.property) * t.deg_per_unit) as f32),
             gear_norm: g("gear/gear-pos-norm") as f32,
         };
         (air, s)

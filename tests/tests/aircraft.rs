@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 15] = [
+    let cases: [(&str, &str, &str); 17] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -103,6 +103,16 @@ fn descriptions_are_validated_key_by_key() {
             "control_laws: missing g_protect_per_g",
         ),
         (
+            "elevator_deg = { property",
+            "elevator = { property",
+            "surfaces: missing elevator_deg; unknown elevator",
+        ),
+        (
+            "speedbrake_deg = { property",
+            "airbrake_deg = { property",
+            "surfaces: unknown airbrake_deg",
+        ),
+        (
             "pilot_pointmass = 0",
             "pilot_pointmass = \"0\"",
             "pilot_pointmass must be an index",
@@ -123,6 +133,30 @@ fn descriptions_are_validated_key_by_key() {
         "f16",
     );
     assert!(ok, "no external tanks refused: {err}");
+    // Nor is one without a leading-edge flap, flaperons or speedbrake (their channels carry 0).
+    let mut bare = f16.clone();
+    for line in [
+        "lef_deg = {",
+        "tef_deg = {",
+        "flaperon_deg = {",
+        "speedbrake_deg = {",
+    ] {
+        let start = bare.find(line).unwrap();
+        let end = start + bare[start..].find('\n').unwrap() + 1;
+        bare.replace_range(start..end, "");
+    }
+    let (ok, err) = validate(&bare, "f16");
+    assert!(
+        ok,
+        "a description with only the primary controls refused: {err}"
+    );
+    // Every shipped description is valid.
+    for entry in std::fs::read_dir(root().join("aircraft")).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_str().unwrap().to_string();
+        let (ok, err) = validate(&std::fs::read_to_string(&path).unwrap(), &name);
+        assert!(ok, "{}: {err}", path.display());
+    }
 }
 
 #[test]

@@ -30,9 +30,12 @@ pub use tables::MODEL;
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
 /// the aircraft description (its sensor's `deg_per_unit`). JSBSim's model has no degree property
-/// for it.
+/// for it. 1 on an airframe without flaperons (their channel carries 0, the mix is 0).
 pub const FLAPERON_DEG_PER_NORM: f32 =
-    crate::aircraft::AIRCRAFT.deg_per_unit(crate::Channel::Flaperon) as f32;
+    match crate::aircraft::AIRCRAFT.surface(crate::Channel::Flaperon) {
+        Some(s) => s.deg_per_unit as f32,
+        None => 1.0,
+    };
 
 const FT_TO_M: f32 = 0.3048;
 
@@ -215,6 +218,9 @@ pub struct Surfaces {
     pub flaperon_right_deg: f32,
     /// Speedbrake (`fcs/speedbrake-pos-deg`).
     pub speedbrake_deg: f32,
+    /// Trailing-edge flap, degrees (the `Tef` channel): what a model with `fcs/flap-pos-deg`
+    /// reads (a light aircraft's flap; the F-16's model reads its flaps through the flaperons).
+    pub flap_deg: f32,
     /// Landing gear, 0 up … 1 down (`gear/gear-pos-norm`).
     pub gear_norm: f32,
 }
@@ -239,6 +245,7 @@ impl Point {
             s.flaperon_left_deg,
             s.flaperon_right_deg,
             s.speedbrake_deg,
+            s.flap_deg,
             s.gear_norm,
         ]
         .iter()
@@ -269,11 +276,11 @@ impl Point {
             h_over_b: air.h_over_b,
             mag_beta_rad: libm::fabsf(air.beta_rad),
             mag_elevator_rad: libm::fabsf(elevator_rad),
-            // Not sensed yet (the F-16's model reads none of them): the left aileron is the one
-            // aileron channel; no α̇, no flap channel, no stall latch.
+            // The left aileron is the one aileron channel. Not computed yet (the F-16's model reads
+            // neither): no α̇, no stall latch.
             left_aileron_rad: s.aileron_deg.to_radians(),
             alpha_dot_rps: 0.0,
-            flap_deg: 0.0,
+            flap_deg: s.flap_deg,
             stall_hyst_norm: 0.0,
         };
         // The inputs are finite (above), and so are their conversions; only the quotients by the
@@ -778,58 +785,48 @@ mod tests {
         assert_eq!(look(7.0, -1.0).value, 1.0);
     }
 
-    /// Central differences over a step that stays inside one table segment.
+    /// The analytic slopes against differences over α from −10° to 43° (60 points) and β from −9° to 11°: a
+    /// one-sided difference, forward or backward, whichever stays inside the tables' segments (a
+    /// breakpoint may lie on one side of the point, never on both within the step).
     #[test]
     fn slopes_are_the_derivatives_of_the_model() {
         let h = 1e-3_f32;
-        let alphas = F16_ALPHA_MIDPOINTS;
-        for (i, &a) in alphas.iter().enumerate() {
+        for i in 0..60 {
+            // A stride of no breakpoint spacing, so the points fall anywhere in the segments.
+            let a = -0.175 + 0.0155 * i as f32;
             let b = [-0.15_f32, -0.02, 0.0, 0.07, 0.2][i % 5];
             let c = MODEL.coefficients_at(&at(a, b));
             assert!(c.valid);
-            let fd = |da: f32, db: f32| {
-                let hi = MODEL.coefficients_at(&at(a + da, b + db));
-                let lo = MODEL.coefficients_at(&at(a - da, b - db));
-                let d = |x: f32, y: f32| (x - y) / (2.0 * h);
-                (
-                    [
-                        d(hi.wind.drag, lo.wind.drag),
-                        d(hi.wind.side, lo.wind.side),
-                        d(hi.wind.lift, lo.wind.lift),
-                    ],
-                    [
-                        d(hi.body.x, lo.body.x),
-                        d(hi.body.y, lo.body.y),
-                        d(hi.body.z, lo.body.z),
-                    ],
-                )
+            let all = |c: &Coefficients, d: &dyn Fn(&Coefficients) -> (Wind, Body)| {
+                let (w, b) = d(c);
+                [w.drag, w.side, w.lift, b.x, b.y, b.z]
             };
-            let w = |w: Wind| [w.drag, w.side, w.lift];
-            let bd = |b: Body| [b.x, b.y, b.z];
-            for (what, analytic, (fw, fb)) in [
-                ("alpha", (w(c.wind_d_alpha), bd(c.body_d_alpha)), fd(h, 0.0)),
-                ("beta", (w(c.wind_d_beta), bd(c.body_d_beta)), fd(0.0, h)),
+            let value = |c: &Coefficients| (c.wind, c.body);
+            for (what, da, db, slope) in [
+                ("alpha", h, 0.0, (c.wind_d_alpha, c.body_d_alpha)),
+                ("beta", 0.0, h, (c.wind_d_beta, c.body_d_beta)),
             ] {
-                for (k, (x, y)) in analytic
-                    .0
-                    .iter()
-                    .chain(&analytic.1)
-                    .zip(fw.iter().chain(&fb))
-                    .enumerate()
-                {
+                let at_step =
+                    |s: f32| all(&MODEL.coefficients_at(&at(a + s * da, b + s * db)), &value);
+                let (here, analytic) = (all(&c, &value), all(&c, &|_| slope));
+                let steps = [-1.0, -0.5, 0.5, 1.0].map(at_step);
+                for k in 0..6 {
+                    // Central, and the one-sided differences of second order (Richardson: twice
+                    // the half step's less the whole step's).
+                    let d = |s: f32, i: usize| (steps[i][k] - here[k]) / (s * h);
+                    let central = (steps[3][k] - steps[0][k]) / (2.0 * h);
+                    let fwd = 2.0 * d(0.5, 2) - d(1.0, 3);
+                    let bwd = 2.0 * d(-0.5, 1) - d(-1.0, 0);
+                    let x = analytic[k];
+                    let near = |y: f32| (x - y).abs() <= 2e-3 * (1.0 + y.abs());
                     assert!(
-                        (x - y).abs() <= 2e-3 * (1.0 + y.abs()),
-                        "d/d{what} component {k} at α {a} β {b}: analytic {x}, differences {y}"
+                        near(central) || near(fwd) || near(bwd),
+                        "d/d{what} component {k} at α {a} β {b}: analytic {x}, differences {central} / {fwd} / {bwd}"
                     );
                 }
             }
         }
     }
-
-    /// Midpoints of the F-16's α segments (every α table shares these breakpoints).
-    const F16_ALPHA_MIDPOINTS: [f32; 11] = [
-        -0.131, -0.0435, 0.0435, 0.131, 0.2185, 0.3055, 0.3925, 0.48, 0.5675, 0.6545, 0.7415,
-    ];
 
     #[test]
     fn bad_inputs_give_zeros_and_invalid() {

@@ -22,8 +22,9 @@ pub struct Aircraft {
     pub throttle_properties: &'static [&'static str],
     pub filter: FilterLimits,
     pub installation: Installation,
-    /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order.
-    pub surfaces: [SurfaceSensor; SURFACE_CHANNELS.len()],
+    /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order; `None`
+    /// where the airframe has no such surface (the channel then carries 0).
+    pub surfaces: [Option<SurfaceSensor>; SURFACE_CHANNELS.len()],
     /// The `flight-test` preset's test points.
     pub flight_test_points: &'static [TestPoint],
     /// The flight-control system's surface logic the filter reproduces for surfaces no channel
@@ -134,19 +135,30 @@ pub struct SurfaceSensor {
 }
 
 impl Aircraft {
-    /// Degrees per unit of the property the sensor of surface channel `c` reads (NaN when `c` is
-    /// no surface channel; `scripts/gen-aircraft` gives every surface channel a sensor).
+    /// The sensor of surface channel `c`: `None` when `c` is no surface channel or the airframe
+    /// has no such surface.
     // `i < SURFACE_CHANNELS.len()` (7): in bounds, and the increment cannot overflow.
     #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
-    pub const fn deg_per_unit(&self, c: Channel) -> f64 {
+    pub const fn surface(&self, c: Channel) -> Option<SurfaceSensor> {
         let mut i = 0;
         while i < self.surfaces.len() {
-            if self.surfaces[i].channel as u8 == c as u8 {
-                return self.surfaces[i].deg_per_unit;
+            if let Some(s) = self.surfaces[i]
+                && s.channel as u8 == c as u8
+            {
+                return Some(s);
             }
             i += 1;
         }
-        f64::NAN
+        None
+    }
+
+    /// Degrees per unit of the property the sensor of surface channel `c` reads (NaN where
+    /// [`Aircraft::surface`] is `None`).
+    pub const fn deg_per_unit(&self, c: Channel) -> f64 {
+        match self.surface(c) {
+            Some(s) => s.deg_per_unit,
+            None => f64::NAN,
+        }
     }
 }
 
@@ -192,11 +204,20 @@ mod tests {
     }
 
     #[test]
-    fn every_surface_channel_has_its_sensor_in_order() {
+    fn every_surface_sensor_is_in_its_channels_slot() {
         for (s, c) in AIRCRAFT.surfaces.iter().zip(SURFACE_CHANNELS) {
-            assert_eq!(s.channel, c);
-            assert_eq!(AIRCRAFT.deg_per_unit(c), s.deg_per_unit);
-            assert!(s.deg_per_unit > 0.0 && !s.property.is_empty());
+            match s {
+                Some(s) => {
+                    assert_eq!(s.channel, c);
+                    assert_eq!(AIRCRAFT.deg_per_unit(c), s.deg_per_unit);
+                    assert!(s.deg_per_unit > 0.0 && !s.property.is_empty());
+                }
+                None => assert!(AIRCRAFT.surface(c).is_none() && AIRCRAFT.deg_per_unit(c).is_nan()),
+            }
+        }
+        // Every airframe has the three primary controls.
+        for c in [Channel::Elevator, Channel::Aileron, Channel::Rudder] {
+            assert!(AIRCRAFT.surface(c).is_some(), "{c:?}");
         }
         assert!(AIRCRAFT.deg_per_unit(Channel::GyroP).is_nan());
         if AIRCRAFT.name == "f16" {

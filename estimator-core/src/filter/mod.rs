@@ -505,6 +505,7 @@ pub fn surfaces(inp: &Input, alpha_rad: f32, mach: f32, gear_norm: f32) -> Surfa
         flaperon_left_deg: inp.flaperon_left_deg,
         flaperon_right_deg: flaperon_right_deg(inp, mach),
         speedbrake_deg: inp.speedbrake_deg,
+        flap_deg: inp.tef_deg,
         gear_norm,
     }
 }

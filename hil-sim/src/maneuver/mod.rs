@@ -46,31 +46,9 @@ pub const ZONE_FLIGHT: f64 = 0.0;
 pub const ZONE_DANGER: f64 = 1.0;
 pub const ZONE_RECLIMB: f64 = 2.0;
 
-/// Danger Zone trigger: the low-altitude limit applies to the height this many seconds ahead along
-/// the sink rate.
-const TRIGGER_LOOKAHEAD_S: f64 = 8.0;
-/// Danger → Re-climb (the immediate hazard is over), each with hysteresis against the trigger:
-/// a longer sink look-ahead that must stay this far above the floor, this far below the ceiling,
-/// bank and α well inside the trigger's limits, pitch at most this (and 20° inside the trigger),
-/// and this much above the slow limit.
-const CALM_LOOKAHEAD_S: f64 = 15.0;
-const CALM_FLOOR_MARGIN_FT: f64 = 500.0;
-const CALM_CEILING_MARGIN_FT: f64 = 500.0;
-const CALM_BANK_DEG: f64 = 30.0;
-const CALM_ALPHA_DEG: Range = (-3.0, 12.0);
-const CALM_PITCH_DEG: f64 = 25.0;
-const CALM_VC_MARGIN_KTS: f64 = 30.0;
-/// Re-climb → Flight (back well inside the Flight Zone): this far above the floor and below the
-/// ceiling (with the recovery speed and the calm attitude and α).
-const SAFE_FLOOR_MARGIN_FT: f64 = 2_500.0;
-const SAFE_CEILING_MARGIN_FT: f64 = 3_000.0;
-/// Re-climb law: it aims this far beyond the safe band (so the exit is crossed still climbing),
-/// with this pitch gain, a descent (from above the ceiling) no steeper than this, and the nose
-/// lowered while within this margin of the slow limit.
-const RECLIMB_OVERSHOOT_FT: f64 = 1_000.0;
-const RECLIMB_PITCH_PER_FT: f64 = 0.006;
-const RECLIMB_DESCENT_PITCH_DEG: f64 = 8.0;
-const RECLIMB_VC_MARGIN_KTS: f64 = 50.0;
+/// The zones' hysteresis and the Re-climb law of this build's aircraft (its description's
+/// `[zones]`).
+const Z: Zones = presets::ZONES;
 
 /// The four training profiles of the paper preset.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -399,10 +377,47 @@ pub struct FlightTestCard {
     pub fuel_per_tank_lb: f64,
 }
 
+/// How the generator moves between its zones on an airframe (its description's `[zones]`): the
+/// Danger Zone trigger's look-ahead, the hysteresis that ends the Danger Zone and the Re-climb
+/// Zone against the profile's limits, and the Re-climb law's targets. Sizes of the airframe's
+/// speeds and attitudes: a light aircraft's speed margins are a fraction of a fighter's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Zones {
+    /// Danger Zone trigger: the low-altitude limit applies to the height this many seconds ahead
+    /// along the sink rate.
+    pub trigger_lookahead_s: f64,
+    /// Danger → Re-climb (the immediate hazard is over), each with hysteresis against the
+    /// trigger: a longer sink look-ahead that must stay `calm_floor_margin_ft` above the floor,
+    /// `calm_ceiling_margin_ft` below the ceiling, bank within `calm_bank_deg`, α within
+    /// `calm_alpha_deg`, pitch within `calm_pitch_deg` and `calm_pitch_inside_deg` inside the
+    /// trigger's, the speed `calm_vc_margin_kts` above the slow limit.
+    pub calm_lookahead_s: f64,
+    pub calm_floor_margin_ft: f64,
+    pub calm_ceiling_margin_ft: f64,
+    pub calm_bank_deg: f64,
+    pub calm_alpha_deg: Range,
+    pub calm_pitch_deg: f64,
+    pub calm_pitch_inside_deg: f64,
+    pub calm_vc_margin_kts: f64,
+    /// Re-climb → Flight (back well inside the Flight Zone): this far above the floor and below
+    /// the ceiling, pitch within `safe_pitch_deg` (with the recovery speed and the calm bank and
+    /// α).
+    pub safe_floor_margin_ft: f64,
+    pub safe_ceiling_margin_ft: f64,
+    pub safe_pitch_deg: f64,
+    /// Re-climb law: it aims this far beyond the safe band (so the exit is crossed still
+    /// climbing), with this pitch gain per foot, a descent (from above the ceiling) no steeper
+    /// than this, and the nose lowered while within this margin of the slow limit.
+    pub reclimb_overshoot_ft: f64,
+    pub reclimb_pitch_per_ft: f64,
+    pub reclimb_descent_pitch_deg: f64,
+    pub reclimb_vc_margin_kts: f64,
+}
+
 /// The generated profiles of this build's aircraft (build.rs picks the file).
 #[rustfmt::skip]
 mod presets {
-    use super::{ControlLaws, FlightTestCard, OodSizes, Profile, ProfileKind};
+    use super::{ControlLaws, FlightTestCard, OodSizes, Profile, ProfileKind, Zones};
     include!(env!("HIL_PROFILES_FILE"));
 }
 
@@ -597,7 +612,8 @@ fn zone_laws(s: &mut String, p: &Profile) {
     // The low-altitude limit looks 8 s ahead along the sink rate: fast dives overshot a plain
     // height limit.
     let trigger = format!(
-        "<or><lt><sum><property>position/h-agl-ft</property><product><value>{TRIGGER_LOOKAHEAD_S}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
+        "<or><lt><sum><property>position/h-agl-ft</property><product><value>{}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></lt><gt><property>position/h-sl-ft</property><value>{}</value></gt><gt><abs><property>attitude/phi-deg</property></abs><value>{}</value></gt><gt><abs><property>attitude/theta-deg</property></abs><value>{}</value></gt><lt><property>velocities/vc-kts</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt></or>",
+        Z.trigger_lookahead_s,
         p.min_agl_ft,
         p.ceiling_ft,
         p.max_bank_deg,
@@ -615,13 +631,15 @@ fn zone_laws(s: &mut String, p: &Profile) {
     // Every limit with hysteresis against the trigger: a longer sink look-ahead and a floor margin,
     // a ceiling margin, bank and α well inside, pitch at least 20° inside, a speed margin.
     let hazard_over = format!(
-        "<and><gt><sum><property>position/h-agl-ft</property><product><value>{CALM_LOOKAHEAD_S}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{CALM_BANK_DEG}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>{}</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
-        p.min_agl_ft + CALM_FLOOR_MARGIN_FT,
-        p.ceiling_ft - CALM_CEILING_MARGIN_FT,
-        (p.max_pitch_deg - 20.0).min(CALM_PITCH_DEG),
-        p.min_vc_kts + CALM_VC_MARGIN_KTS,
-        CALM_ALPHA_DEG.1,
-        CALM_ALPHA_DEG.0,
+        "<and><gt><sum><property>position/h-agl-ft</property><product><value>{}</value><min><value>0</value><property>velocities/h-dot-fps</property></min></product></sum><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>{}</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
+        Z.calm_lookahead_s,
+        p.min_agl_ft + Z.calm_floor_margin_ft,
+        p.ceiling_ft - Z.calm_ceiling_margin_ft,
+        Z.calm_bank_deg,
+        (p.max_pitch_deg - Z.calm_pitch_inside_deg).min(Z.calm_pitch_deg),
+        p.min_vc_kts + Z.calm_vc_margin_kts,
+        Z.calm_alpha_deg.1,
+        Z.calm_alpha_deg.0,
     );
     law(
         s,
@@ -630,12 +648,14 @@ fn zone_laws(s: &mut String, p: &Profile) {
         &format!("          {hazard_over}\n"),
     );
     let recovered = format!(
-        "<and><gt><property>position/h-agl-ft</property><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{CALM_BANK_DEG}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>20</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
-        p.min_agl_ft + SAFE_FLOOR_MARGIN_FT,
-        p.ceiling_ft - SAFE_CEILING_MARGIN_FT,
+        "<and><gt><property>position/h-agl-ft</property><value>{}</value></gt><lt><property>position/h-sl-ft</property><value>{}</value></lt><lt><abs><property>attitude/phi-deg</property></abs><value>{}</value></lt><lt><abs><property>attitude/theta-deg</property></abs><value>{}</value></lt><gt><property>velocities/vc-kts</property><value>{}</value></gt><lt><property>aero/alpha-deg</property><value>{}</value></lt><gt><property>aero/alpha-deg</property><value>{}</value></gt></and>",
+        p.min_agl_ft + Z.safe_floor_margin_ft,
+        p.ceiling_ft - Z.safe_ceiling_margin_ft,
+        Z.calm_bank_deg,
+        Z.safe_pitch_deg,
         p.recover_vc_kts,
-        CALM_ALPHA_DEG.1,
-        CALM_ALPHA_DEG.0,
+        Z.calm_alpha_deg.1,
+        Z.calm_alpha_deg.0,
     );
     law(
         s,
@@ -697,14 +717,15 @@ fn zone_laws(s: &mut String, p: &Profile) {
         &format!(
             "          {}\n",
             clamp(
-                -RECLIMB_DESCENT_PITCH_DEG,
+                -Z.reclimb_descent_pitch_deg,
                 p.reclimb_pitch_deg,
                 &format!(
-                    "<difference><product><value>{RECLIMB_PITCH_PER_FT}</value><difference><max><value>0</value><difference><value>{:.0}</value><property>position/h-agl-ft</property></difference></max><max><value>0</value><difference><property>position/h-sl-ft</property><value>{:.0}</value></difference></max></difference></product><product><value>{}</value><max><value>0</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></max></product></difference>",
-                    p.min_agl_ft + SAFE_FLOOR_MARGIN_FT + RECLIMB_OVERSHOOT_FT,
-                    p.ceiling_ft - SAFE_CEILING_MARGIN_FT - RECLIMB_OVERSHOOT_FT,
+                    "<difference><product><value>{}</value><difference><max><value>0</value><difference><value>{:.0}</value><property>position/h-agl-ft</property></difference></max><max><value>0</value><difference><property>position/h-sl-ft</property><value>{:.0}</value></difference></max></difference></product><product><value>{}</value><max><value>0</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></max></product></difference>",
+                    Z.reclimb_pitch_per_ft,
+                    p.min_agl_ft + Z.safe_floor_margin_ft + Z.reclimb_overshoot_ft,
+                    p.ceiling_ft - Z.safe_ceiling_margin_ft - Z.reclimb_overshoot_ft,
                     k.reclimb_pitch_per_kt,
-                    p.min_vc_kts + RECLIMB_VC_MARGIN_KTS,
+                    p.min_vc_kts + Z.reclimb_vc_margin_kts,
                 )
             )
         ),
