@@ -20,7 +20,7 @@ pub struct Aircraft {
     /// Every engine's throttle command (JSBSim properties), moved together; the throttle channel
     /// reads the first.
     pub throttle_properties: &'static [&'static str],
-    pub filter: FilterLimits,
+    pub filter: FilterSettings,
     pub installation: Installation,
     /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order; `None`
     /// where the airframe has no such surface (the channel then carries 0).
@@ -83,11 +83,19 @@ pub struct Mass {
     pub gear_norm: f64,
 }
 
-/// The air-data filter's settings that belong to the airframe.
+/// The air-data filter's settings that belong to the airframe (`filter::Config`'s fields of the
+/// same names): its slow limit, and the noise sizes tuned on the airframe's training flights.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FilterLimits {
+pub struct FilterSettings {
     /// Below this airspeed the filter flags `SLOW`, m/s.
     pub min_airspeed_mps: f64,
+    /// 1σ of the y and z specific-force measurement (model error and unmodelled forces), m/s².
+    pub accel_sigma_mps2: [f32; 2],
+    /// The gust states' 1σ, m/s, and their correlation time, s.
+    pub gust_sigma_mps: f32,
+    pub gust_tau_s: f32,
+    /// `LOW_CONFIDENCE` above this 1σ of α or β, rad.
+    pub max_sigma_rad: f32,
 }
 
 impl Mass {
