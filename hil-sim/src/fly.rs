@@ -24,8 +24,8 @@ pub struct FlyConfig {
     pub max_time_s: Option<f64>,
     /// Name stored with the flight (default: the script file stem).
     pub name: Option<String>,
-    /// The JSBSim aircraft directory whose `f16/f16.xml` is flown (`--aircraft-dir`); `None`:
-    /// JSBSim's own F-16.
+    /// The JSBSim aircraft directory whose `MODEL/MODEL.xml` (the build's aircraft's) is flown
+    /// (`--aircraft-dir`); `None`: the jsbsim package's own.
     pub aircraft_dir: Option<std::path::PathBuf>,
 }
 
@@ -95,7 +95,7 @@ fn read_plan(s: &InputSchedule) -> ReadPlan {
     ReadPlan::new(&when)
 }
 
-/// Flies a JSBSim runscript (aircraft `f16`) to its end (or `cfg.max_time_s`) at 120 Hz and returns
+/// Flies a JSBSim runscript (of the build's aircraft) to its end (or `cfg.max_time_s`) at 120 Hz and returns
 /// the 20 Hz flight. The initialize file is taken from beside the script when it is there, else
 /// JSBSim looks in the aircraft folder (where the stock `reset*` files live). A flight that hits the
 /// ground or goes NaN is cut there and says so in [`Flight::cut`].

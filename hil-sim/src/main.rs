@@ -21,7 +21,7 @@ enum Cmd {
     /// Stream a flight through the simulated serial link to the firmware (in-process, QEMU or a
     /// board) and score its estimates.
     Run(Box<hil_sim::runner::cli::RunArgs>),
-    /// Fly one JSBSim runscript (aircraft f16) and write a one-flight dataset (CSV + manifest).
+    /// Fly one JSBSim runscript (of the build's aircraft) and write a one-flight dataset (CSV + manifest).
     Fly(FlyArgs),
     /// Generate a random-maneuver dataset (maneuver XML, CSV per flight, manifest, plots, report).
     Generate(GenerateArgs),

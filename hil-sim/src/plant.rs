@@ -115,9 +115,10 @@ pub fn aircraft_dir(dir: &Path) -> Result<PathBuf, PlantError> {
 /// `--aircraft-dir`, on every command that flies.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct AircraftArgs {
-    /// A JSBSim aircraft directory holding f16/f16.xml (and what it includes): the F-16 model to
-    /// fly, loaded as stock JSBSim's set_aircraft_path loads it (scripts/airframe-variant writes
-    /// one) [default: JSBSim's own F-16].
+    /// A JSBSim aircraft directory holding MODEL/MODEL.xml (and what it includes) for the build's
+    /// aircraft (its description's JSBSim model, e.g. f16/f16.xml): the model to fly, loaded as
+    /// stock JSBSim's set_aircraft_path loads it (scripts/airframe-variant writes one) [default:
+    /// the jsbsim package's own].
     #[arg(long = "aircraft-dir", value_name = "DIR")]
     pub dir: Option<PathBuf>,
 }

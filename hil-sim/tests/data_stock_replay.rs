@@ -4,7 +4,7 @@
 //! `scripts/jsbsim-stock`, which is the pinned `jsbsim` package and nothing else
 //! (`load_script(script, 0.0, initfile)`, `run_ic()`, `run()` to the end). Truth α and β must agree
 //! to 1e-9° at every recorded instant, and the recorded time must be JSBSim's own clock. Covered:
-//! every flight of a generated `ci` dataset, the project's test flight, the package's own
+//! every flight of a generated `ci` dataset, the build's aircraft's test flight, the package's own
 //! `scripts/f16_test.xml` (declared at dt 0.00833333, not 1/120: flown at its own rate), and
 //! `hil-sim fly --aircraft-dir` on an airframe variant against stock JSBSim with that aircraft path.
 
@@ -124,21 +124,24 @@ fn generated_dataset_is_what_stock_jsbsim_flies() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The build's aircraft's 20-minute test flight, `flights/NAME_test_flight.xml` with its
+/// `NAME_cruise_init.xml`.
 #[test]
 fn project_test_flight_is_what_stock_jsbsim_flies() {
     let dir = tmp("test-flight");
-    let script = root().join("flights/f16_test_flight.xml");
+    let name = estimator_core::aircraft::AIRCRAFT.name;
+    let script = root().join(format!("flights/{name}_test_flight.xml"));
     let xml = std::fs::read_to_string(&script).unwrap();
     assert!(xml.contains("dt=\"0.008333333333333333\""));
     let flight = fly::fly_script(&script, &FlyConfig::default()).unwrap();
     assert!(flight.cut.is_none(), "{:?}", flight.cut);
     let stock = stock_run(
         &script,
-        Some(&root().join("flights/f16_cruise_init.xml")),
+        Some(&root().join(format!("flights/{name}_cruise_init.xml"))),
         &dir.join("stock.tsv"),
     );
     assert_eq!(
-        assert_same_truth("f16_test_flight", &flight, &stock),
+        assert_same_truth(&format!("{name}_test_flight"), &flight, &stock),
         24_000
     );
     std::fs::remove_dir_all(&dir).ok();

@@ -376,7 +376,7 @@ enum Cmd {
         #[arg(long, default_value = "test")]
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
-        /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate,
+        /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate, max_sigma_rad,
         /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
@@ -1018,6 +1018,7 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "accel_sigma_z" => c.accel_sigma[1] = v,
             "accel_delay_s" => c.accel_delay_s = v,
             "gate" => c.gate = v,
+            "max_sigma_rad" => c.max_sigma_rad = v,
             "mean_wind_psd_h" => {
                 c.mean_wind_psd[0] = v;
                 c.mean_wind_psd[1] = v;

@@ -27,7 +27,7 @@ pub struct Source {
     /// sensed columns (truth columns optional, scored where present; docs/flight-log.md).
     #[arg(long, value_name = "CSV")]
     pub dataset: Option<PathBuf>,
-    /// A JSBSim runscript (aircraft f16) flown now, then streamed (generated maneuvers are scripts too).
+    /// A JSBSim runscript (of the build's aircraft) flown now, then streamed (generated maneuvers are scripts too).
     #[arg(long)]
     pub script: Option<PathBuf>,
 }
@@ -166,7 +166,8 @@ fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
     }
 }
 
-/// Loads or flies the flight (a script on JSBSim's own F-16).
+/// Loads or flies the flight (a script on the package's model of the build's aircraft, or on
+/// `--aircraft-dir`'s).
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
     flight_on(source, None, seed, max_time_s)
 }
