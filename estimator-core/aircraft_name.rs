@@ -1,12 +1,21 @@
 // The build's aircraft, for the build scripts of estimator-core and hil-sim (both `include!` this
 // file, so the two crates always read the same variable the same way).
 
-/// The build's aircraft: `ESTIMATOR_AIRCRAFT` (default `f16`), a name as in `aircraft/NAME.toml`.
+/// The aircraft a build is for when `ESTIMATOR_AIRCRAFT` is not set, and the one whose networks,
+/// 1σ weights and test vectors are committed (`estimator-core/src/model/weights.rs`, `sigma.rs`,
+/// `tests/vectors/shipped.txt`): a build for another aircraft compiles no model unless
+/// `ESTIMATOR_WEIGHTS` names that aircraft's own, so an estimate is never computed with another
+/// airframe's networks.
+#[allow(dead_code)]
+const DEFAULT_AIRCRAFT: &str = "f16";
+
+/// The build's aircraft: `ESTIMATOR_AIRCRAFT` (default [`DEFAULT_AIRCRAFT`]), a name as in
+/// `aircraft/NAME.toml`.
 fn aircraft_name() -> String {
     println!("cargo:rerun-if-env-changed=ESTIMATOR_AIRCRAFT");
     let name = std::env::var("ESTIMATOR_AIRCRAFT").unwrap_or_default();
     let name = if name.is_empty() {
-        "f16".to_string()
+        DEFAULT_AIRCRAFT.to_string()
     } else {
         name
     };

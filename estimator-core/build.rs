@@ -31,7 +31,15 @@ fn main() {
         "a weights file written by trainer train --export",
     );
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
-    if path.is_file() {
+    let named = std::env::var_os("ESTIMATOR_WEIGHTS").is_some_and(|p| !p.is_empty());
+    println!("cargo:rustc-env=ESTIMATOR_DEFAULT_AIRCRAFT={DEFAULT_AIRCRAFT}");
+    if !named && aircraft_name() != DEFAULT_AIRCRAFT {
+        println!(
+            "cargo:warning=the committed networks are the {DEFAULT_AIRCRAFT}'s: this {} build has no \
+             model (it flags NO_MODEL) until ESTIMATOR_WEIGHTS names one trained on its flights",
+            aircraft_name()
+        );
+    } else if path.is_file() {
         println!("cargo:rustc-cfg=estimator_weights");
         println!("cargo:rustc-env=ESTIMATOR_WEIGHTS_FILE={}", path.display());
     } else {

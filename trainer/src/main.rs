@@ -702,7 +702,8 @@ fn compiled_in_model() -> Result<(&'static str, Suite)> {
     ) {
         (Some(prov), Some(suite)) => Ok((prov, suite)),
         _ => bail!(
-            "this build has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs)"
+            "this build ({}) has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs), or score a trained model with `--model DIR`. The committed networks belong to one aircraft; a build for another has none until ESTIMATOR_WEIGHTS names its own (docs/aircraft.md)",
+            estimator_core::aircraft::AIRCRAFT.name
         ),
     }
 }
@@ -1451,6 +1452,7 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
 /// Features in the Spearman heatmap (besides the targets): beyond about 40 labels it is unreadable.
 const HEATMAP_FEATURES: usize = 36;
 
+#[cfg_attr(not(trainer_has_model), allow(dead_code))]
 struct ShapArgs {
     seed: u64,
     explain: usize,
