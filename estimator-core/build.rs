@@ -33,6 +33,10 @@ fn main() {
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
     let named = std::env::var_os("ESTIMATOR_WEIGHTS").is_some_and(|p| !p.is_empty());
     println!("cargo:rustc-env=ESTIMATOR_DEFAULT_AIRCRAFT={DEFAULT_AIRCRAFT}");
+    println!(
+        "cargo:rustc-env=ESTIMATOR_BUILD_AIRCRAFT={}",
+        aircraft_name()
+    );
     if !named && aircraft_name() != DEFAULT_AIRCRAFT {
         println!(
             "cargo:warning=the committed networks are the {DEFAULT_AIRCRAFT}'s: this {} build has no \
