@@ -1,8 +1,10 @@
 //! Chooses the generated files the crate compiles in.
 //!
-//! * Weights, in `src/model/mod.rs`. Default: `src/model/weights.rs`, written by `trainer train` and
-//!   committed. `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small
-//!   model and checks it end to end without touching the shipped weights).
+//! * Weights, in `src/model/mod.rs` (`weights_file` in `aircraft_name.rs`, shared with the
+//!   trainer's build). Default: `src/model/weights.rs`, written by `trainer train` and committed,
+//!   for `DEFAULT_AIRCRAFT` only: another aircraft's build has no model.
+//!   `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small model and
+//!   checks it end to end without touching the shipped weights).
 //! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/sigma.rs`, written by
 //!   `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against another fit.
 //! * The aircraft description, in `src/aircraft/mod.rs`: `src/aircraft/NAME.rs`, written by
@@ -25,54 +27,25 @@ fn main() {
     aero_tables(&manifest);
     sigma_weights(&manifest);
     filter_side_scale();
-    let path = chosen(
-        "ESTIMATOR_WEIGHTS",
-        manifest.join("src/model/weights.rs"),
-        "a weights file written by trainer train --export",
-    );
-    println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
-    let named = std::env::var_os("ESTIMATOR_WEIGHTS").is_some_and(|p| !p.is_empty());
+    let name = aircraft_name();
     println!("cargo:rustc-env=ESTIMATOR_DEFAULT_AIRCRAFT={DEFAULT_AIRCRAFT}");
-    println!(
-        "cargo:rustc-env=ESTIMATOR_BUILD_AIRCRAFT={}",
-        aircraft_name()
-    );
-    if !named && aircraft_name() != DEFAULT_AIRCRAFT {
-        println!(
-            "cargo:warning=the committed networks are the {DEFAULT_AIRCRAFT}'s: this {} build has no \
-             model (it flags NO_MODEL) until ESTIMATOR_WEIGHTS names one trained on its flights",
-            aircraft_name()
-        );
-    } else if path.is_file() {
-        println!("cargo:rustc-cfg=estimator_weights");
-        println!("cargo:rustc-env=ESTIMATOR_WEIGHTS_FILE={}", path.display());
-    } else {
-        println!(
+    println!("cargo:rustc-env=ESTIMATOR_BUILD_AIRCRAFT={name}");
+    println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
+    match weights_file(manifest.join("src/model/weights.rs")) {
+        None => println!(
+            "cargo:warning=the committed networks are the {DEFAULT_AIRCRAFT}'s: this {name} build has \
+             no model (it flags NO_MODEL) until ESTIMATOR_WEIGHTS names one trained on its flights"
+        ),
+        Some(path) if path.is_file() => {
+            println!("cargo:rustc-cfg=estimator_weights");
+            println!("cargo:rustc-env=ESTIMATOR_WEIGHTS_FILE={}", path.display());
+        }
+        Some(path) => println!(
             "cargo:warning=no estimator weights at {} yet: the crate builds without a shipped model \
              (run `trainer train` to write one)",
             path.display()
-        );
+        ),
     }
-}
-
-/// The file the variable `var` names, or `default`; rebuilt when either changes. A file asked for
-/// by name must exist (a failed build, not a build without it); `what` says what it should be.
-fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
-    println!("cargo:rerun-if-env-changed={var}");
-    let path = match std::env::var_os(var) {
-        Some(p) if !p.is_empty() => {
-            let p = PathBuf::from(p);
-            assert!(
-                p.is_absolute() && p.is_file(),
-                "{var}: {} is not an absolute path to {what}",
-                p.display()
-            );
-            p
-        }
-        _ => default,
-    };
-    println!("cargo:rerun-if-changed={}", path.display());
-    path
 }
 
 /// `ESTIMATOR_FILTER_SIDE_SCALE=off` builds the air-data filter without its side-force scale

@@ -9,8 +9,8 @@ use crate::flight::{
     ZoneTimes,
 };
 use crate::plant::{
-    AIRBORNE_AGL_FT, GROUND_CUT_AGL_FT, Loaded, Plant, PlantError, ReadPlan, TRUTH_ONLY, WATCH, at,
-    load_runscript, truth_of,
+    AIRBORNE_AGL_FT, GROUND_CUT_AGL_FT, Loaded, OPTIONAL, Plant, PlantError, ReadPlan, TRUTH_ONLY,
+    WATCH, at, load_runscript, truth_of,
 };
 use crate::sensors::{InputSchedule, SensorConfig, SensorInput, SensorModel};
 
@@ -154,14 +154,13 @@ fn fly_planned(
             if cfg.max_time_s.is_some_and(|max| t > max + 1e-9) {
                 break 'outer;
             }
-            // Optional properties (`?` in `WATCH`: the zone, NaN for scripts without a generator
-            // state, and the surfaces an airframe does not have) are not checked; the properties
-            // not read at this step are NaN and are checked where they are read (a diverging
-            // JSBSim state shows first in the forces and rates, read at every step).
+            // The optional properties ([`OPTIONAL`]) are not checked; the properties not read at
+            // this step are NaN and are checked where they are read (a diverging JSBSim state
+            // shows first in the forces and rates, read at every step).
             if r.iter()
                 .zip(read)
-                .zip(WATCH)
-                .any(|((v, read), name)| *read && !name.starts_with('?') && !v.is_finite())
+                .zip(OPTIONAL)
+                .any(|((v, read), optional)| *read && !optional && !v.is_finite())
             {
                 flight.cut = Some(format!("non-finite JSBSim state at t={t:.3} s"));
                 break 'outer;

@@ -608,6 +608,18 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w
 };
 
+/// Which [`WATCH`] properties are optional (`?`: the generator's zone, NaN for scripts without
+/// it, and the surfaces the airframe does not have): a flight is not cut on their NaN.
+pub(crate) const OPTIONAL: [bool; at::COUNT] = {
+    let mut m = [false; at::COUNT];
+    let mut i = 0;
+    while i < at::COUNT {
+        m[i] = matches!(WATCH[i].as_bytes().first(), Some(b'?'));
+        i += 1;
+    }
+    m
+};
+
 /// The [`WATCH`] positions only [`truth_of`] reads: air data, position, wind. They are needed at the
 /// 20 Hz sample instants only.
 pub(crate) const TRUTH_ONLY: [usize; 13] = [

@@ -1030,10 +1030,13 @@ impl SensorModel {
         out[Channel::GpsAlt.index()] = self.gps_held.1;
 
         let s = &self.cfg.surfaces;
-        let surfaces = SURFACE_CHANNELS.into_iter().zip(t.surfaces_deg);
-        for ((c, v), aa) in surfaces.zip(self.surface_aa.iter_mut()) {
+        let surfaces = SURFACE_CHANNELS
+            .into_iter()
+            .zip(AIRCRAFT.surfaces)
+            .zip(t.surfaces_deg);
+        for (((c, sensor), v), aa) in surfaces.zip(self.surface_aa.iter_mut()) {
             // A surface the airframe does not have has no sensor: its channel is 0.
-            if AIRCRAFT.surface(c).is_none() {
+            if sensor.is_none() {
                 out[c.index()] = 0.0;
                 self.fast_out[c.index()] = 0.0;
                 continue;
