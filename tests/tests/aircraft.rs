@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 17] = [
+    let cases: [(&str, &str, &str); 18] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -113,6 +113,11 @@ fn descriptions_are_validated_key_by_key() {
             "surfaces: unknown airbrake_deg",
         ),
         (
+            "flap_share = 0.0",
+            "flap_share = 0.3",
+            "profiles.base.flap_share is 0.3 but the description has no [flaps]",
+        ),
+        (
             "pilot_pointmass = 0",
             "pilot_pointmass = \"0\"",
             "pilot_pointmass must be an index",
@@ -149,6 +154,21 @@ fn descriptions_are_validated_key_by_key() {
     assert!(
         ok,
         "a description with only the primary controls refused: {err}"
+    );
+    // A pilot-set flap: valid with its settings within (0, 1], refused outside.
+    let flaps = format!(
+        "{}\n[flaps]\ncommand_property = \"fcs/flap-cmd-norm\"\nsettings = [0.5, 1.0]\nmax_vc_kts = 200.0\nretract_band_kts = 5.0\n",
+        f16.replacen("flap_share = 0.0", "flap_share = 0.3", 1)
+    );
+    let (ok, err) = validate(&flaps, "f16");
+    assert!(ok, "a description with [flaps] refused: {err}");
+    let (ok, err) = validate(
+        &flaps.replacen("settings = [0.5, 1.0]", "settings = [0.5, 1.5]", 1),
+        "f16",
+    );
+    assert!(
+        !ok && err.contains("flaps.settings are flap commands within (0, 1]"),
+        "{err}"
     );
     // Every shipped description is valid.
     for entry in std::fs::read_dir(root().join("aircraft")).unwrap() {

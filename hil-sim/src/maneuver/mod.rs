@@ -259,6 +259,10 @@ pub struct Profile {
     pub throttle_hold_s: Range,
     /// Probability that a speedbrake segment deploys it.
     pub speedbrake_share: f64,
+    /// Probability that a flap segment lowers the flap (to one of the description's `[flaps]`
+    /// settings, below its flap speed); 0 where the aircraft has no pilot-set flap.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub flap_share: f64,
     /// Danger Zone limits.
     pub min_agl_ft: f64,
     pub ceiling_ft: f64,
@@ -284,6 +288,23 @@ pub struct Profile {
     /// 1-cosine gusts: magnitude (ft/s) and interval between gusts (s).
     pub gust_fps: Range,
     pub gust_interval_s: Range,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// The flap the pilot sets (the description's `[flaps]`): random segments in the Flight Zone lower
+/// it to one of `settings`, and it retracts as the calibrated airspeed rises through the
+/// `retract_band_kts` below `max_vc_kts`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flaps {
+    /// The flap command (a JSBSim property, 0 = up).
+    pub command_property: &'static str,
+    /// The commands of the flap's detents, each within (0, 1].
+    pub settings: &'static [f64],
+    pub max_vc_kts: f64,
+    pub retract_band_kts: f64,
 }
 
 impl Profile {
@@ -417,7 +438,7 @@ pub struct Zones {
 /// The generated profiles of this build's aircraft (build.rs picks the file).
 #[rustfmt::skip]
 mod presets {
-    use super::{ControlLaws, FlightTestCard, OodSizes, Profile, ProfileKind, Zones};
+    use super::{ControlLaws, Flaps, FlightTestCard, OodSizes, Profile, ProfileKind, Zones};
     include!(env!("HIL_PROFILES_FILE"));
 }
 
@@ -548,6 +569,9 @@ fn script_head(p: &Profile, seed: u64, name: &str, init_name: &str, duration_s: 
         ("maneuver/g-protect", 0.0),
     ] {
         let _ = writeln!(s, "    <property value=\"{v}\"> {prop} </property>");
+    }
+    if presets::FLAPS.is_some() {
+        let _ = writeln!(s, "    <property value=\"0\"> maneuver/flap </property>");
     }
 
     s
@@ -873,7 +897,34 @@ fn control_laws(s: &mut String, p: &Profile) {
             )
         ),
     );
+    // The flap: the random setting in the Flight Zone and kept through a Danger recovery (no flap
+    // change while recovering), up for the Re-climb; whatever the zone, retracted as the speed
+    // rises through the band below the flap speed.
+    if let Some(f) = presets::FLAPS {
+        let gate = clamp(
+            0.0,
+            1.0,
+            &format!(
+                "<product><value>{}</value><difference><value>{}</value><property>velocities/vc-kts</property></difference></product>",
+                1.0 / f.retract_band_kts,
+                f.max_vc_kts
+            ),
+        );
+        let setting = format!("<product><property>maneuver/flap</property>{gate}</product>");
+        law(
+            s,
+            "flap: random in the Flight Zone below the flap speed, held in Danger, up in Re-climb",
+            f.command_property,
+            &format!(
+                "          {}\n",
+                blend(&setting, &setting, "<value>0</value>")
+            ),
+        );
+    }
 }
+
+/// How long a flap segment holds its setting, s.
+const FLAP_HOLD_S: Range = (20.0, 90.0);
 
 /// First time a random command may change, s.
 const COMMANDS_START_S: f64 = 8.0;
@@ -969,6 +1020,23 @@ fn command_tables(p: &Profile, rng: &mut ChaCha12Rng, duration_s: f64, throttle0
     channel("maneuver/speedbrake", 0.0, (15.0, 60.0), 0.0, &mut |r| {
         if r.random_bool(sb) { 1.0 } else { 0.0 }
     });
+    // Flap segments (long: a pilot sets the flap for a phase of flight), each down to a random
+    // detent with the profile's share.
+    if let Some(f) = presets::FLAPS {
+        let share = p.flap_share.clamp(0.0, 1.0);
+        channel(
+            "maneuver/flap",
+            0.0,
+            FLAP_HOLD_S,
+            0.0,
+            &mut |r| match f.settings.len() {
+                n if n > 0 && r.random_bool(share) => {
+                    f.settings.get(r.random_range(0..n)).copied().unwrap_or(0.0)
+                }
+                _ => 0.0,
+            },
+        );
+    }
     tables
 }
 
@@ -1437,21 +1505,49 @@ mod tests {
                 s == nominal
             );
             assert_eq!(without(&s, keys), without(&nominal, keys), "{case:?}");
+            // The aircraft's weight as the script sets it: empty, the pilot's point mass (as
+            // set, else the description's pilot) and every tank's fuel.
+            let weight = || {
+                let value = |l: &str| -> f64 {
+                    let v = &l[l.find("value=\"").unwrap() + 7..];
+                    v[..v.find('"').unwrap()].parse().unwrap()
+                };
+                let set = |key: &str| -> Vec<f64> {
+                    s.lines().filter(|l| l.contains(key)).map(value).collect()
+                };
+                let pilot = set("pointmass-weight-lbs")
+                    .first()
+                    .copied()
+                    .unwrap_or(PILOT_LBS);
+                EMPTY_WEIGHT_LBS + pilot + set("contents-lbs").iter().sum::<f64>()
+            };
+            let (trained_low, trained_high) = trained_mass_lbs();
             match case {
                 OodCase::MassLow => {
-                    assert!(s.contains("pointmass-weight-lbs[0]\" value=\"-1994.5\""));
-                    assert!(s.contains("tank[0]/contents-lbs\" value=\"300.0\""));
+                    let target = trained_low * (1.0 - OOD.mass_margin);
+                    assert!((weight() - target).abs() < 1.0, "{} vs {target}", weight());
+                    assert!(s.contains(&format!(
+                        "tank[{}]/contents-lbs\" value=\"{:.1}\"",
+                        AIRCRAFT.mass.internal_tanks[0], OOD.low_fuel_per_tank_lb
+                    )));
                 }
                 OodCase::MassHigh => {
-                    assert!(s.contains("tank[1]/contents-lbs\" value=\"3486.0\""));
-                    assert!(s.contains("tank[3]/contents-lbs\" value=\"1286.2\""));
+                    let target = trained_high * (1.0 + OOD.mass_margin);
+                    assert!((weight() - target).abs() < 1.0, "{} vs {target}", weight());
                 }
-                OodCase::TurbulencePlus => assert!(s.contains("milspec/severity\" value=\"7\"")),
-                OodCase::Gust15 => assert!(
-                    s.lines()
-                        .filter(|l| l.contains("magnitude-ft_sec"))
-                        .all(|l| l.contains("value=\"49.2126\""))
-                ),
+                OodCase::TurbulencePlus => assert!(s.contains(&format!(
+                    "milspec/severity\" value=\"{}\"",
+                    OOD.turbulence_severity
+                ))),
+                OodCase::Gust15 => {
+                    let gust = format!("value=\"{:.4}\"", OOD.gust_mps / crate::flight::FT_TO_M);
+                    assert!(
+                        s.lines()
+                            .filter(|l| l.contains("magnitude-ft_sec"))
+                            .all(|l| l.contains(&gust)),
+                        "{gust}"
+                    )
+                }
                 _ => {}
             }
             assert!(
@@ -1552,6 +1648,60 @@ mod tests {
             ] {
                 assert!(elev.contains(p), "{kind:?}: elevator law without {p}");
             }
+        }
+    }
+
+    #[test]
+    fn the_flap_follows_the_description() {
+        for kind in ProfileKind::ALL {
+            let p = Profile::preset(kind);
+            let x = generate(&p, 7, "f", 1200.0).unwrap().script_xml;
+            let Some(f) = presets::FLAPS else {
+                assert!(
+                    !x.contains("maneuver/flap"),
+                    "{kind:?}: a flap without [flaps]"
+                );
+                continue;
+            };
+            assert!(x.contains("<property value=\"0\"> maneuver/flap </property>"));
+            // One law sets the command, after the table it reads; it reads the speed (the
+            // retraction band) and the zone flags.
+            let set = format!("<set name=\"{}\">", f.command_property);
+            assert_eq!(x.matches(&set).count(), 1, "{kind:?}");
+            let table = x.find("<event name=\"maneuver/flap schedule\"").unwrap();
+            let law = x.find(&set).unwrap();
+            assert!(table < law, "{kind:?}: the law before its table");
+            let law_xml = &x[law..law + x[law..].find("</event>").unwrap()];
+            for needle in [
+                "velocities/vc-kts",
+                "maneuver/reclimb",
+                &format!("<value>{}</value>", f.max_vc_kts),
+            ] {
+                assert!(
+                    law_xml.contains(needle),
+                    "{kind:?}: flap law without {needle}"
+                );
+            }
+            // Every scheduled value is up or one of the detents; some are down where the profile
+            // lowers the flap, none where it does not.
+            let rows = &x[table..];
+            let rows =
+                &rows[rows.find("<tableData>").unwrap() + 11..rows.find("</tableData>").unwrap()];
+            let values: Vec<f64> = rows
+                .lines()
+                .filter_map(|l| l.split_whitespace().nth(1))
+                .map(|v| v.parse().unwrap())
+                .collect();
+            assert!(values.len() > 20, "{kind:?}: {} rows", values.len());
+            for v in &values {
+                assert!(
+                    *v == 0.0 || f.settings.iter().any(|s| (s - v).abs() < 1e-4),
+                    "{kind:?}: flap command {v} is no detent of {:?}",
+                    f.settings
+                );
+            }
+            let down = values.iter().filter(|v| **v > 0.0).count();
+            assert_eq!(down > 0, p.flap_share > 0.0, "{kind:?}: {down} rows down");
         }
     }
 
