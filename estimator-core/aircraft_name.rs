@@ -1,12 +1,7 @@
 // The build's aircraft, for the build scripts of estimator-core, hil-sim and the trainer (all
 // `include!` this file, so the crates always read the same variables the same way).
 
-/// The aircraft a build is for when `ESTIMATOR_AIRCRAFT` is not set, and the one whose networks,
-/// 1σ weights and test vectors are committed (`estimator-core/src/model/weights.rs`, `sigma.rs`,
-/// `tests/vectors/shipped.txt`): a build for another aircraft compiles no model unless
-/// `ESTIMATOR_WEIGHTS` names that aircraft's own, so an estimate is never computed with another
-/// airframe's networks.
-#[allow(dead_code)]
+/// The aircraft a build is for when `ESTIMATOR_AIRCRAFT` is not set.
 const DEFAULT_AIRCRAFT: &str = "f16";
 
 /// The build's aircraft: `ESTIMATOR_AIRCRAFT` (default [`DEFAULT_AIRCRAFT`]), a name as in
@@ -27,25 +22,32 @@ fn aircraft_name() -> String {
     name
 }
 
-/// The networks the build compiles in: the file `ESTIMATOR_WEIGHTS` names, else the `committed`
-/// one when the build is for [`DEFAULT_AIRCRAFT`], else none: another airframe's build takes no
-/// committed networks.
+/// The committed model of the build's aircraft: `estimator-core/src/model/NAME/FILE` (`weights.rs`
+/// of `trainer train --export`, `sigma.rs` of `trainer fit-sigma`); `estimator_core` is the crate's
+/// directory.
 #[allow(dead_code)]
-fn weights_file(committed: std::path::PathBuf) -> Option<std::path::PathBuf> {
-    let named = std::env::var_os("ESTIMATOR_WEIGHTS").is_some_and(|p| !p.is_empty());
-    if !named && aircraft_name() != DEFAULT_AIRCRAFT {
-        println!("cargo:rerun-if-env-changed=ESTIMATOR_WEIGHTS");
-        return None;
-    }
-    Some(chosen(
-        "ESTIMATOR_WEIGHTS",
-        committed,
-        "a weights file written by trainer train --export",
-    ))
+fn committed_model_file(estimator_core: &std::path::Path, file: &str) -> std::path::PathBuf {
+    estimator_core
+        .join("src/model")
+        .join(aircraft_name())
+        .join(file)
 }
 
-/// The file the variable `var` names, or `default`; rebuilt when either changes. A file asked for
-/// by name must exist (a failed build, not a build without it); `what` says what it should be.
+/// The networks the build compiles in: the file `ESTIMATOR_WEIGHTS` names, else the build's
+/// aircraft's committed `weights.rs` if it has one, else none (the build flags `NO_MODEL`): a
+/// build never takes another airframe's networks.
+#[allow(dead_code)]
+fn weights_file(estimator_core: &std::path::Path) -> Option<std::path::PathBuf> {
+    let path = chosen(
+        "ESTIMATOR_WEIGHTS",
+        committed_model_file(estimator_core, "weights.rs"),
+        "a weights file written by trainer train --export",
+    );
+    path.is_file().then_some(path)
+}
+
+/// The file the variable `var` names, or `default`; rebuilt when either changes (or appears). A
+/// file asked for by name must exist (a failed build, not a build without it); `what` says what it should be.
 #[allow(dead_code)]
 fn chosen(var: &str, default: std::path::PathBuf, what: &str) -> std::path::PathBuf {
     println!("cargo:rerun-if-env-changed={var}");
@@ -61,6 +63,13 @@ fn chosen(var: &str, default: std::path::PathBuf, what: &str) -> std::path::Path
         }
         _ => default,
     };
-    println!("cargo:rerun-if-changed={}", path.display());
+    // A committed file that is not there yet (an aircraft without its own model): watch the
+    // nearest folder that is, so that the build notices the file when it comes.
+    let watched = path
+        .ancestors()
+        .find(|p| p.exists())
+        .unwrap_or(&path)
+        .to_path_buf();
+    println!("cargo:rerun-if-changed={}", watched.display());
     path
 }

@@ -1,12 +1,14 @@
 //! Chooses the generated files the crate compiles in.
 //!
 //! * Weights, in `src/model/mod.rs` (`weights_file` in `aircraft_name.rs`, shared with the
-//!   trainer's build). Default: `src/model/weights.rs`, written by `trainer train` and committed,
-//!   for `DEFAULT_AIRCRAFT` only: another aircraft's build has no model.
+//!   trainer's build). Default: the build's aircraft's `src/model/NAME/weights.rs`, written by
+//!   `trainer train --export` and committed; an aircraft without one has no model (`NO_MODEL`).
 //!   `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small model and
 //!   checks it end to end without touching the shipped weights).
-//! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/sigma.rs`, written by
-//!   `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against another fit.
+//! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/NAME/sigma.rs`,
+//!   written by `trainer fit-sigma` and committed; `ESTIMATOR_SIGMA=/abs/path.rs` builds against
+//!   another fit. An aircraft without a fit gets `uncertainty::UNFITTED` (every estimate
+//!   `UNCERTAIN`).
 //! * The aircraft description, in `src/aircraft/mod.rs`: `src/aircraft/NAME.rs`, written by
 //!   `scripts/gen-aircraft` from `aircraft/NAME.toml` and committed, for `ESTIMATOR_AIRCRAFT=NAME`
 //!   (default `f16`).
@@ -28,23 +30,26 @@ fn main() {
     sigma_weights(&manifest);
     filter_side_scale();
     let name = aircraft_name();
-    println!("cargo:rustc-env=ESTIMATOR_DEFAULT_AIRCRAFT={DEFAULT_AIRCRAFT}");
-    println!("cargo:rustc-env=ESTIMATOR_BUILD_AIRCRAFT={name}");
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
-    match weights_file(manifest.join("src/model/weights.rs")) {
+    match weights_file(&manifest) {
         None => println!(
-            "cargo:warning=the committed networks are the {DEFAULT_AIRCRAFT}'s: this {name} build has \
-             no model (it flags NO_MODEL) until ESTIMATOR_WEIGHTS names one trained on its flights"
+            "cargo:warning=no networks for the {name}: this build has no model (every estimate flags \
+             NO_MODEL) until `trainer train --aircraft {name} --export` writes {} or ESTIMATOR_WEIGHTS \
+             names one trained on its flights",
+            committed_model_file(&manifest, "weights.rs").display()
         ),
-        Some(path) if path.is_file() => {
+        Some(path) => {
+            // A file from before weights named their aircraft: say so, not a missing item.
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(
+                text.contains("pub const AIRCRAFT_NAME: &str"),
+                "{} names no aircraft (`AIRCRAFT_NAME`): it was exported before weights named \
+                 theirs; export it again with `trainer train --aircraft {name} --export`",
+                path.display()
+            );
             println!("cargo:rustc-cfg=estimator_weights");
             println!("cargo:rustc-env=ESTIMATOR_WEIGHTS_FILE={}", path.display());
         }
-        Some(path) => println!(
-            "cargo:warning=no estimator weights at {} yet: the crate builds without a shipped model \
-             (run `trainer train` to write one)",
-            path.display()
-        ),
     }
 }
 
@@ -64,16 +69,27 @@ fn filter_side_scale() {
     }
 }
 
-/// `ESTIMATOR_SIGMA_FILE`: the estimate's 1σ weights `src/model/mod.rs` includes. Committed;
-/// a missing file is a failed build (every estimate carries a 1σ).
+/// `ESTIMATOR_SIGMA_FILE`: the estimate's 1σ weights `src/model/mod.rs` includes, the build's
+/// aircraft's committed fit; without one, `cfg(estimator_no_sigma_fit)`: the crate's `UNFITTED`
+/// weights, which make every estimate `UNCERTAIN`.
 fn sigma_weights(manifest: &std::path::Path) {
-    required(
-        manifest,
+    println!("cargo::rustc-check-cfg=cfg(estimator_no_sigma_fit)");
+    let path = chosen(
         "ESTIMATOR_SIGMA",
-        "src/model/sigma.rs",
+        committed_model_file(manifest, "sigma.rs"),
         "a file written by trainer fit-sigma",
-        "run scripts/fit-sigma (or git checkout it)",
     );
+    if path.is_file() {
+        println!("cargo:rustc-env=ESTIMATOR_SIGMA_FILE={}", path.display());
+    } else {
+        println!("cargo:rustc-cfg=estimator_no_sigma_fit");
+        println!(
+            "cargo:warning=no 1σ fit for the {}: every estimate of this build is UNCERTAIN until \
+             `trainer fit-sigma` writes {}",
+            aircraft_name(),
+            path.display()
+        );
+    }
 }
 
 /// `ESTIMATOR_AIRCRAFT_FILE`: the aircraft description `src/aircraft/mod.rs` includes,

@@ -13,7 +13,7 @@
 //! with one weight per term and angle ([`Coefficients`], Q8). The weights are not chosen by hand:
 //! `trainer fit-sigma` fits them (Gaussian likelihood, then one common factor for 95 % of the
 //! frames within 2σ) on flights no network trained on, of randomised airframes and of JSBSim's
-//! own, and writes `src/model/sigma.rs` (docs/results/uncertainty.md). A held or missing angle
+//! own, and writes `src/model/NAME/sigma.rs` (docs/results/uncertainty.md). A held or missing angle
 //! has no 1σ: [`SIGMA_UNKNOWN`].
 //!
 //! Integer arithmetic throughout: every term is clamped to [`TERM_MAX`], so each product fits 64
@@ -133,6 +133,14 @@ pub struct Coefficients {
     pub alpha: [u16; TERMS],
     pub beta: [u16; TERMS],
 }
+
+/// The weights of a build whose aircraft has no 1σ fit yet: every term at the largest weight, so
+/// that every computed angle's 1σ is [`SIGMA_MAX`] (its base term is never 0) and every estimate is
+/// `UNCERTAIN`: nothing is known of its error until `trainer fit-sigma` has measured it.
+pub const UNFITTED: Coefficients = Coefficients {
+    alpha: [u16::MAX; TERMS],
+    beta: [u16::MAX; TERMS],
+};
 
 impl Coefficients {
     pub const fn of(&self, angle: Angle) -> &[u16; TERMS] {

@@ -29,8 +29,13 @@ fn compiled_in_model_matches_the_trainer_vectors() {
     if !estimator_core::model::HAS_MODEL {
         panic!("this build has no weights: run `trainer train` (see README) before the tests");
     }
+    // The committed vectors of the build's aircraft (`tests/vectors/NAME.txt`).
     let path = VECTORS.map(String::from).unwrap_or_else(|| {
-        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/vectors/shipped.txt").to_string()
+        format!(
+            "{}/tests/vectors/{}.txt",
+            env!("CARGO_MANIFEST_DIR"),
+            estimator_core::aircraft::AIRCRAFT.name
+        )
     });
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("read {path}: {e}"));
     let mut checked = 0;

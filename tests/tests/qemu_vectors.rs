@@ -16,11 +16,12 @@ use trainer::quant::{Vector, parse_vectors};
 /// out here.
 #[test]
 fn qemu_reproduces_the_trainer_vectors() {
-    let path = concat!(
+    let path = format!(
+        "{}/../estimator-core/tests/vectors/{}.txt",
         env!("CARGO_MANIFEST_DIR"),
-        "/../estimator-core/tests/vectors/shipped.txt"
+        estimator_core::aircraft::AIRCRAFT.name
     );
-    let text = std::fs::read_to_string(path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
     let vectors = parse_vectors(&text).expect("malformed vector line");
     // Runs of consecutive frames: a reset line followed by non-reset lines (at least two lines).
     let runs: Vec<&[Vector]> = vectors

@@ -1,6 +1,6 @@
 //! Trainer of the synthetic air data estimator: dataset loading with the estimator's exact input
 //! contract, feature sets and leakage guard, burn models, quantization and code generation of
-//! `estimator-core/src/model/weights.rs`, an independent integer reference and test vectors,
+//! `estimator-core/src/model/NAME/weights.rs`, an independent integer reference and test vectors,
 //! baselines, feature analysis and reports.
 pub mod adam;
 pub mod analysis;

@@ -263,12 +263,14 @@ enum Cmd {
         /// estimator-core, hil-sim and the firmware carries this model.
         #[arg(long)]
         export: bool,
-        /// Where --export writes the generated weights.
-        #[arg(long, default_value = "estimator-core/src/model/weights.rs")]
-        weights_out: PathBuf,
-        /// Where --export writes the bit-exactness test vectors.
-        #[arg(long, default_value = "estimator-core/tests/vectors/shipped.txt")]
-        vectors_out: PathBuf,
+        /// Where --export writes the generated weights [default: the build's aircraft's
+        /// estimator-core/src/model/NAME/weights.rs].
+        #[arg(long, value_name = "FILE")]
+        weights_out: Option<PathBuf>,
+        /// Where --export writes the bit-exactness test vectors [default:
+        /// estimator-core/tests/vectors/NAME.txt].
+        #[arg(long, value_name = "FILE")]
+        vectors_out: Option<PathBuf>,
     },
     /// Table 2 baselines (linear regression, gradient boosting, plain MLP) on the test flights.
     Baselines {
@@ -457,13 +459,10 @@ enum Cmd {
         /// coverage is reported on every frame.
         #[arg(long, default_value_t = 5)]
         every: usize,
-        /// The generated file to write.
-        #[arg(
-            long,
-            value_name = "FILE",
-            default_value = "estimator-core/src/model/sigma.rs"
-        )]
-        out: PathBuf,
+        /// The generated file to write [default: the build's aircraft's
+        /// estimator-core/src/model/NAME/sigma.rs].
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
         /// Also write every row (dataset, angle, the terms, the 1σ of the weights compiled in, the
         /// error; millidegrees) as CSV, to study which terms follow the error.
         #[arg(long, value_name = "CSV")]
@@ -702,7 +701,7 @@ fn compiled_in_model() -> Result<(&'static str, Suite)> {
     ) {
         (Some(prov), Some(suite)) => Ok((prov, suite)),
         _ => bail!(
-            "this build ({}) has no compiled-in model: run `trainer train` first (it writes estimator-core/src/model/weights.rs), or score a trained model with `--model DIR`. The committed networks belong to one aircraft; a build for another has none until ESTIMATOR_WEIGHTS names its own (docs/aircraft.md)",
+            "this build ({}) has no compiled-in model: run `trainer train` first with --export (it writes estimator-core/src/model/NAME/weights.rs), or score a trained model with `--model DIR`. A build carries only its own aircraft's networks (docs/aircraft.md)",
             estimator_core::aircraft::AIRCRAFT.name
         ),
     }
@@ -1750,6 +1749,14 @@ fn main() -> std::process::ExitCode {
     hil_sim::error_text::exit(run())
 }
 
+/// `path`, else the build's aircraft's committed file `estimator-core/PATTERN` (`{}` = its name).
+fn committed(path: &Option<PathBuf>, pattern: &str) -> PathBuf {
+    path.clone().unwrap_or_else(|| {
+        PathBuf::from("estimator-core")
+            .join(pattern.replace("{}", estimator_core::aircraft::AIRCRAFT.name))
+    })
+}
+
 fn run() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
@@ -1759,7 +1766,13 @@ fn run() -> Result<()> {
             weights_out,
             vectors_out,
             export,
-        } => cmd_train(args, out, weights_out, vectors_out, *export),
+        } => cmd_train(
+            args,
+            out,
+            &committed(weights_out, "src/model/{}/weights.rs"),
+            &committed(vectors_out, "tests/vectors/{}.txt"),
+            *export,
+        ),
         Cmd::Eval {
             data,
             model: Some(model),
@@ -1786,7 +1799,13 @@ fn run() -> Result<()> {
             out,
             rows,
             json,
-        } => cmd_fit_sigma(data, *every, out, rows.as_deref(), *json),
+        } => cmd_fit_sigma(
+            data,
+            *every,
+            &committed(out, "src/model/{}/sigma.rs"),
+            rows.as_deref(),
+            *json,
+        ),
         Cmd::Calibrate {
             flight_test,
             model_flight_test,

@@ -383,7 +383,9 @@ fn static_item(name: &str, q: &QCascade, out: &mut String) {
     );
 }
 
-/// The complete `weights.rs`: header, `ALPHA`, `BETA`, `PROVENANCE`.
+/// The complete `weights.rs`: header, `ALPHA`, `BETA`, `PROVENANCE`, `AIRCRAFT_NAME` (the build's
+/// aircraft, whose flights the trainer reads: estimator-core compiles the file only into a build
+/// for the same aircraft).
 pub fn generate(alpha: &QCascade, beta: &QCascade, provenance: &str) -> String {
     let mut out = String::new();
     out.push_str(
@@ -398,6 +400,12 @@ pub fn generate(alpha: &QCascade, beta: &QCascade, provenance: &str) -> String {
         out,
         "/// Where this model came from: dataset, seed, command, git revision and its test metrics.\n\
          pub const PROVENANCE: &str = {provenance:?};"
+    );
+    let _ = writeln!(
+        out,
+        "\n/// The aircraft whose flights trained this model (`aircraft/NAME.toml`).\n\
+         pub const AIRCRAFT_NAME: &str = {:?};",
+        estimator_core::aircraft::AIRCRAFT.name
     );
     out
 }

@@ -1,4 +1,4 @@
-//! The compiled-in model (estimator-core/src/model/weights.rs) reproduces the test vectors the trainer
+//! The compiled-in model (estimator-core/src/model/NAME/weights.rs) reproduces the test vectors the trainer
 //! wrote next to it with its independent integer reference, through `Estimator::shipped()` stepped over
 //! each run of consecutive frames (fresh at every `reset`).
 use estimator_core::Estimator;
@@ -10,11 +10,12 @@ fn shipped_model_matches_its_vectors() {
         eprintln!("no compiled-in model: nothing to check");
         return;
     }
-    let path = concat!(
+    let path = format!(
+        "{}/../estimator-core/tests/vectors/{}.txt",
         env!("CARGO_MANIFEST_DIR"),
-        "/../estimator-core/tests/vectors/shipped.txt"
+        estimator_core::aircraft::AIRCRAFT.name
     );
-    let text = std::fs::read_to_string(path)
+    let text = std::fs::read_to_string(&path)
         .expect("vectors written by `trainer train` next to weights.rs");
     let vs = parse_vectors(&text).expect("well-formed vectors");
     assert!(vs.len() > 50);

@@ -1,6 +1,8 @@
-//! The compiled-in model: `weights.rs`, written by `trainer train`, and `sigma.rs`, written by
-//! `trainer fit-sigma`, never edited by hand. `ESTIMATOR_WEIGHTS=/path/weights.rs` and
-//! `ESTIMATOR_SIGMA=/path/sigma.rs` at build time select others (see `build.rs`).
+//! The compiled-in model of the build's aircraft: `NAME/weights.rs`, written by `trainer train
+//! --export`, and `NAME/sigma.rs`, written by `trainer fit-sigma`, never edited by hand.
+//! `ESTIMATOR_WEIGHTS=/path/weights.rs` and `ESTIMATOR_SIGMA=/path/sigma.rs` at build time select
+//! others (see `build.rs`). The networks name the aircraft they were trained for, and a build for
+//! another aircraft does not compile.
 
 #[cfg(estimator_weights)]
 mod generated {
@@ -10,11 +12,41 @@ mod generated {
 #[cfg(estimator_weights)]
 pub use generated::*;
 
-/// The weights of the estimate's 1σ (`src/model/sigma.rs`, written by `trainer fit-sigma`;
+/// Networks trained on another aircraft's flights are no model of this one: a build whose weights
+/// name another aircraft than its description fails here.
+#[cfg(estimator_weights)]
+const _: () = assert!(
+    same(generated::AIRCRAFT_NAME, crate::aircraft::AIRCRAFT.name),
+    "the weights were trained for another aircraft than this build's (ESTIMATOR_AIRCRAFT)"
+);
+
+/// Byte equality, at compile time.
+#[cfg(estimator_weights)]
+const fn same(a: &str, b: &str) -> bool {
+    const fn bytes(a: &[u8], b: &[u8]) -> bool {
+        match (a, b) {
+            ([], []) => true,
+            ([x, a @ ..], [y, b @ ..]) => *x == *y && bytes(a, b),
+            _ => false,
+        }
+    }
+    bytes(a.as_bytes(), b.as_bytes())
+}
+
+/// The weights of the estimate's 1σ (`src/model/NAME/sigma.rs`, written by `trainer fit-sigma`;
 /// `ESTIMATOR_SIGMA=/path/sigma.rs` selects another fit, see `build.rs`).
+#[cfg(not(estimator_no_sigma_fit))]
 mod sigma {
     #![allow(clippy::all, clippy::unreadable_literal)]
     include!(env!("ESTIMATOR_SIGMA_FILE"));
+}
+/// No 1σ fit for the build's aircraft yet: every estimate `UNCERTAIN`.
+#[cfg(estimator_no_sigma_fit)]
+mod sigma {
+    pub const SIGMA: crate::uncertainty::Coefficients = crate::uncertainty::UNFITTED;
+    pub const SIGMA_PROVENANCE: &str =
+        "no fit for this aircraft: every estimate's 1σ is the largest (run trainer fit-sigma)";
+    pub const SIGMA_MODEL_PROVENANCE: &str = "";
 }
 pub use sigma::{SIGMA, SIGMA_MODEL_PROVENANCE, SIGMA_PROVENANCE};
 
@@ -37,13 +69,40 @@ pub const SHIPPED_PROVENANCE: Option<&str> = None;
 
 #[cfg(test)]
 mod tests {
-    /// A build for another aircraft than the one the committed networks are for carries no model
-    /// unless `ESTIMATOR_WEIGHTS` named one: its estimates are never another airframe's networks'.
+    /// A build compiles in the networks of its own aircraft, from its own folder: the committed
+    /// `src/model/NAME/weights.rs` when there is one, none when there is not (unless
+    /// `ESTIMATOR_WEIGHTS` named a file, which must name the same aircraft: see `AIRCRAFT_NAME`).
     #[test]
-    fn another_aircrafts_build_does_not_take_the_committed_networks() {
+    fn a_build_takes_only_its_own_aircrafts_networks() {
         let named = option_env!("ESTIMATOR_WEIGHTS").is_some_and(|p| !p.is_empty());
-        if env!("ESTIMATOR_BUILD_AIRCRAFT") != env!("ESTIMATOR_DEFAULT_AIRCRAFT") && !named {
-            assert_eq!((super::HAS_MODEL, super::SHIPPED_PROVENANCE), (false, None));
+        let name = crate::aircraft::AIRCRAFT.name;
+        let committed = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("src/model")
+            .join(name)
+            .join("weights.rs");
+        if !named {
+            assert_eq!(
+                super::HAS_MODEL,
+                committed.is_file(),
+                "{}",
+                committed.display()
+            );
+        }
+        #[cfg(estimator_weights)]
+        assert_eq!(super::AIRCRAFT_NAME, name);
+        // Every committed model lives in the folder of a described aircraft.
+        let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/model");
+        for entry in std::fs::read_dir(&models).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                let dir = path.file_name().unwrap().to_str().unwrap().to_string();
+                let description = models.join(format!("../../../aircraft/{dir}.toml"));
+                assert!(
+                    description.is_file(),
+                    "{}: no aircraft/{dir}.toml",
+                    path.display()
+                );
+            }
         }
     }
 
@@ -54,7 +113,7 @@ mod tests {
     fn the_sigma_weights_were_fitted_for_the_compiled_in_networks() {
         assert!(
             !super::HAS_MODEL || super::sigma_fitted_for_this_model(),
-            "src/model/sigma.rs was fitted for other networks: run scripts/fit-sigma"
+            "src/model/NAME/sigma.rs was fitted for other networks: run trainer fit-sigma"
         );
     }
 }
