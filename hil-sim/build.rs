@@ -13,6 +13,11 @@ fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     println!("cargo:rerun-if-changed=../estimator-core/aircraft_name.rs");
     let name = aircraft_name();
+    // The build's target directory (OUT_DIR is DIR/PROFILE/build/hil-sim-HASH/out), where
+    // `cargo fw` of the same build puts the flight image of the same aircraft.
+    let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
+    let target_dir = out.ancestors().nth(4).unwrap();
+    println!("cargo:rustc-env=HIL_TARGET_DIR={}", target_dir.display());
     let path = manifest.join("src/maneuver").join(format!("{name}.rs"));
     println!("cargo:rerun-if-changed={}", path.display());
     assert!(

@@ -39,7 +39,8 @@ pub struct RunArgs {
     /// Which firmware answers [default: host; serial with --port].
     #[arg(long, value_enum)]
     pub firmware: Option<FirmwareKind>,
-    /// Firmware image for --firmware qemu (default: target/thumbv7em-none-eabihf/firmware/firmware).
+    /// Firmware image for --firmware qemu (default: the image `cargo fw` of this build puts in its
+    /// target directory, thumbv7em-none-eabihf/firmware/firmware: this build's aircraft).
     #[arg(long)]
     pub elf: Option<PathBuf>,
     /// QEMU binary.

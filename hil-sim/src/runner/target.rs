@@ -124,10 +124,9 @@ impl Reader {
     }
 }
 
-/// Where `cargo fw` puts the image.
+/// Where `cargo fw` of this build (its target directory, so its aircraft) puts the image.
 pub fn default_elf() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    root.join("target/thumbv7em-none-eabihf/firmware/firmware")
+    Path::new(env!("HIL_TARGET_DIR")).join("thumbv7em-none-eabihf/firmware/firmware")
 }
 
 /// How hil-sim talks to the flight image in QEMU (`firmware::transport`).
