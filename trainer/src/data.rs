@@ -119,6 +119,8 @@ pub struct Dataset {
     pub aircraft: Option<hil_sim::dataset::AircraftRecord>,
     /// The datasets whose test flights replaced this one's ([`Dataset::test_on`]).
     pub test_from: Vec<ExtraData>,
+    /// An `ood` dataset's cases: name and what it flies (manifest `config.ood_cases`).
+    pub ood_cases: Vec<(String, String)>,
 }
 
 /// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
@@ -224,6 +226,11 @@ impl Dataset {
             extra: Vec::new(),
             test_from: Vec::new(),
             aircraft: manifest.aircraft.clone(),
+            ood_cases: manifest
+                .config
+                .get("ood_cases")
+                .and_then(|c| serde_json::from_value(c.clone()).ok())
+                .unwrap_or_default(),
         })
     }
 

@@ -108,6 +108,8 @@ pub struct OodReport {
     pub dataset: String,
     pub manifest_sha256: String,
     pub model: Option<String>,
+    /// Each case's name and what it flies (the manifest's `ood_cases`).
+    pub cases: Vec<(String, String)>,
     pub estimators: Vec<EstimatorScores>,
 }
 
@@ -171,6 +173,7 @@ pub fn run(ds: &Dataset) -> OodReport {
         dataset: ds.dir.display().to_string(),
         manifest_sha256: ds.manifest_sha256.clone(),
         model: crate::pipeline::shipped_provenance().map(str::to_string),
+        cases: ds.ood_cases.clone(),
         estimators: estimators().iter().map(|e| score(ds, e)).collect(),
     }
 }
@@ -202,16 +205,17 @@ pub fn markdown(r: &OodReport) -> String {
         r.dataset, r.manifest_sha256
     );
     s.push_str(
-        "Cases (`OodCase` of hil-sim's maneuver generator; each flight has its twin's seed, so the same maneuver \
-         draws; 6 min each, gentle and high-α profiles):\n\
-         - `mass-low`: 16,006 lb, 15 % below the lightest trained mass (18,830 lb); `mass-high`: \
-         27,175 lb, 15 % above the heaviest (23,630 lb).\n\
-         - `wind-25`: a steady 25 m/s wind (trained: at most 12.2 m/s, every direction).\n\
-         - `turbulence-plus`: MIL-spec severity 7, one above the highest trained (6).\n\
-         - `gust-15`: every 1-cosine gust at 15 m/s (trained: at most 7.6 m/s).\n\
-         - `gps-outage`: the twin's flight with no GPS fix from 120 s to 150 s.\n\
-         - `imu-stuck`: the twin's flight with the normal accelerometer stuck from 120 s to 130 s.\n\n",
+        "Cases (`OodCase` of hil-sim's maneuver generator, sized by the aircraft description's `[ood]`; \
+         each flight has its twin's seed, so the same maneuver draws; 6 min each, gentle and high-α \
+         profiles), as the dataset's manifest describes them:\n",
     );
+    if r.cases.is_empty() {
+        s.push_str("- (the manifest describes none: a dataset written before manifests described their cases)\n");
+    }
+    for (name, text) in &r.cases {
+        let _ = writeln!(s, "- `{name}`: {text}.");
+    }
+    s.push('\n');
     for e in &r.estimators {
         let _ = writeln!(s, "### {}\n", e.estimator);
         s.push_str("| flight | case | α MAE | α ×twin | α max | β MAE | β ×twin | β max | flagged | α from filter | silent frames (longest) |\n|---|---|---|---|---|---|---|---|---|---|---|\n");

@@ -244,6 +244,16 @@ fn assemble(
         config["boom"] = serde_json::to_value(crate::boom::BoomConfig::default())
             .map_err(|e| GenerateError::Shard(e.to_string()))?;
     }
+    // An `ood` dataset says what each of its cases flies on this aircraft (`trainer ood` prints it).
+    if plan.iter().any(|f| f.ood.is_some()) {
+        config["ood_cases"] = serde_json::to_value(
+            maneuver::OodCase::ALL
+                .iter()
+                .map(|c| (c.name(), c.describe()))
+                .collect::<Vec<_>>(),
+        )
+        .map_err(|e| GenerateError::Shard(e.to_string()))?;
+    }
     // Only a campaign says what it was asked for (the other presets' manifests stay as they were).
     if let Some(c) = &spec.campaign {
         config["campaign"] =

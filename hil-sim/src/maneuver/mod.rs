@@ -193,7 +193,63 @@ fn trained_mass_lbs() -> Range {
     )
 }
 
+/// Whole pounds with thousands separators (16,006).
+fn lbs(x: f64) -> String {
+    let digits = format!("{:.0}", x.abs());
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    if x < -0.5 { format!("-{out}") } else { out }
+}
+
 impl OodCase {
+    /// What the case flies on this build's aircraft, beside what its training flights cover (one
+    /// Markdown line, for the out-of-distribution table).
+    pub fn describe(self) -> String {
+        let (light, heavy) = trained_mass_lbs();
+        let fps = crate::flight::FT_TO_M;
+        match self {
+            OodCase::MassLow => format!(
+                "{} lb, {:.0} % below the lightest trained mass ({} lb)",
+                lbs(light * (1.0 - OOD.mass_margin)),
+                100.0 * OOD.mass_margin,
+                lbs(light)
+            ),
+            OodCase::MassHigh => format!(
+                "{} lb, {:.0} % above the heaviest trained mass ({} lb)",
+                lbs(heavy * (1.0 + OOD.mass_margin)),
+                100.0 * OOD.mass_margin,
+                lbs(heavy)
+            ),
+            OodCase::Wind25 => format!(
+                "a steady {:.1} m/s wind (trained: at most {:.1} m/s, every direction)",
+                OOD.wind_mps,
+                profiles_range(|p| p.steady_wind_fps).1 * fps
+            ),
+            OodCase::TurbulencePlus => format!(
+                "MIL-spec severity {} (trained: at most {})",
+                OOD.turbulence_severity,
+                profiles_range(|p| p.turb_severity).1
+            ),
+            OodCase::Gust15 => format!(
+                "every 1-cosine gust at {:.1} m/s (trained: at most {:.1} m/s)",
+                OOD.gust_mps,
+                profiles_range(|p| p.gust_fps).1 * fps
+            ),
+            OodCase::GpsOutage => {
+                "the twin's flight with no GPS fix from 120 s to 150 s".to_string()
+            }
+            OodCase::ImuStuck => {
+                "the twin's flight with the normal accelerometer stuck from 120 s to 130 s"
+                    .to_string()
+            }
+        }
+    }
+
     fn mass(self) -> Option<MassOverride> {
         match self {
             OodCase::MassLow => {
@@ -1648,6 +1704,34 @@ mod tests {
             ] {
                 assert!(elev.contains(p), "{kind:?}: elevator law without {p}");
             }
+        }
+    }
+
+    #[test]
+    fn ood_cases_describe_their_sizes() {
+        assert_eq!(
+            [lbs(999.0), lbs(1_000.0), lbs(16_005.7), lbs(1_234_567.0)],
+            ["999", "1,000", "16,006", "1,234,567"]
+        );
+        let light = trained_mass_lbs().0;
+        assert!(OodCase::MassLow.describe().starts_with(&format!(
+            "{} lb, {:.0} % below the lightest trained mass ({} lb)",
+            lbs(light * (1.0 - OOD.mass_margin)),
+            100.0 * OOD.mass_margin,
+            lbs(light)
+        )));
+        assert!(
+            OodCase::Wind25
+                .describe()
+                .starts_with(&format!("a steady {:.1} m/s wind", OOD.wind_mps))
+        );
+        assert!(
+            OodCase::TurbulencePlus
+                .describe()
+                .contains(&format!("severity {}", OOD.turbulence_severity))
+        );
+        for case in OodCase::ALL {
+            assert!(!case.describe().is_empty() && !case.describe().contains('\n'));
         }
     }
 
