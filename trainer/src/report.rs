@@ -610,9 +610,24 @@ impl Report {
     }
 }
 
-/// Bin edges of the error-by-regime pictures: true α in 2.5° steps, true dynamic pressure in 5 kPa.
+/// Bin width of the error-by-α picture: true α in 2.5° steps.
 const ALPHA_BIN_DEG: f64 = 2.5;
-const QBAR_BIN_KPA: f64 = 5.0;
+/// The error-by-dynamic-pressure picture has about this many bins over the test flights' range
+/// (an F-16 flies 3–60 kPa, a light single 1–4: no one width fits every aircraft).
+const QBAR_BINS: f64 = 12.0;
+
+/// The round width (1, 2 or 5 × a power of ten) at or above `raw`; 1 for a range that is empty.
+pub fn round_bin_width(raw: f64) -> f64 {
+    if !(raw.is_finite() && raw > 0.0) {
+        return 1.0;
+    }
+    let decade = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .find(|m| m * decade >= raw * (1.0 - 1e-9))
+        .unwrap_or(10.0);
+    step * decade
+}
 
 /// Binned mean |error| of `pred` against `truth`, by `x` in bins of `width`: (bin centre, MAE,
 /// frames) for every bin that has frames.
@@ -744,6 +759,13 @@ impl Report {
         let ta = concat(&|f| f.truth(Target::AlphaDeg));
         let tb = concat(&|f| f.truth(Target::BetaDeg));
         let qbar_kpa: Vec<f64> = concat(&|f| &f.qbar_pa).iter().map(|q| q / 1000.0).collect();
+        let (q_lo, q_hi) = qbar_kpa
+            .iter()
+            .filter(|q| q.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &q| {
+                (lo.min(q), hi.max(q))
+            });
+        let qbar_bin_kpa = round_bin_width((q_hi - q_lo) / QBAR_BINS);
         let flat =
             |p: &Answers| -> Vec<f64> { p.iter().flat_map(|(_, v)| v.iter().copied()).collect() };
         for (xs, width, xl, file) in [
@@ -755,7 +777,7 @@ impl Report {
             ),
             (
                 &qbar_kpa,
-                QBAR_BIN_KPA,
+                qbar_bin_kpa,
                 "true dynamic pressure, kPa",
                 "table2_error_by_qbar.png",
             ),
@@ -1260,7 +1282,7 @@ impl Report {
              ![α estimates per row](table2_estimates_alpha.png)\n\n\
              ![β estimates per row](table2_estimates_beta.png)\n\n\
              Error by regime over every test frame: MAE binned by true α (2.5° bins) and by true \
-             dynamic pressure (5 kPa bins), with the test frames per bin, so the thin corners of the \
+             dynamic pressure (about twelve bins of a round width over the test flights' range), with the test frames per bin, so the thin corners of the \
              envelope show:\n\n\
              ![error by α](table2_error_by_alpha.png)\n\n\
              ![error by dynamic pressure](table2_error_by_qbar.png)\n",
@@ -1379,6 +1401,15 @@ fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<f64, D::E
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn dynamic_pressure_bins_have_a_round_width() {
+        // F-16 test flights (3-60 kPa) keep their 5 kPa bins; a light single's 1-4 kPa gets 0.5.
+        assert_eq!(super::round_bin_width(57.0 / 12.0), 5.0);
+        assert_eq!(super::round_bin_width(3.0 / 12.0), 0.5);
+        assert_eq!(super::round_bin_width(0.2), 0.2);
+        assert_eq!(super::round_bin_width(0.0), 1.0);
+    }
+
     use super::*;
 
     fn fm(name: &str, mae: f64) -> FlightMetrics {
