@@ -3,7 +3,7 @@
 # (docs/results/c172p.md, "β and turbulence"): the `paper` preset's test flights with seeds 11-18,
 # none of which trained either shipped estimator, each aircraft's shipped estimator on them
 # (`trainer eval --json`, beside each dataset as DIR.eval.json), then table.py. The c172p skips
-# seed 15: its aggressive test flight draws a start (130 KCAS) JSBSim's c172p cannot trim.
+# seed 15: its aggressive test flight draws a start JSBSim's c172p cannot trim (docs/aircraft.md).
 # Needs the release builds of both aircraft (the F-16's in target/, the c172p's in target/c172p:
 # ESTIMATOR_AIRCRAFT=c172p CARGO_TARGET_DIR=target/c172p cargo build --release -p hil-sim -p trainer)
 # and the project's .venv (scripts/bootstrap). Writes into out/turb/; about 2 min on 2 cores.
