@@ -30,6 +30,18 @@ pub enum GenerateError {
          reported (a cut flight records fewer samples: `hil-sim generate` prints why it was cut)"
     )]
     NotComparable(String),
+    /// Every draw of a flight's start failed JSBSim's trim.
+    #[error(
+        "no start of profile {profile} trimmed in {draws} draws (each a new altitude and speed \
+         from its init_alt_ft and init_vc_kts): the profile asks for more than the aircraft holds \
+         in level flight; narrow those ranges in the aircraft's description (docs/aircraft.md). \
+         Last: {last}"
+    )]
+    Untrimmable {
+        profile: String,
+        draws: u64,
+        last: Box<GenerateError>,
+    },
     #[error("flight {name}: {source}")]
     Flight {
         name: String,
@@ -49,8 +61,12 @@ pub fn sensor_seed(flight_seed: u64) -> u64 {
     flight_seed ^ 0x5e45_5e45_5e45_5e45
 }
 
-/// Re-draws of a flight whose random initial condition JSBSim cannot trim, before giving up.
-pub const TRIM_RETRIES: u64 = 3;
+/// Re-draws of a flight whose random initial condition JSBSim cannot trim, before giving up. A
+/// re-draw changes only flights whose earlier draws all failed, so a larger budget leaves every
+/// dataset that was written before as it was; ten make a lost dataset unlikely even for a profile
+/// a third of whose starts its airframe cannot hold level (the c172p's fastest: 0.3^11 ≈ 2·10⁻⁶ per
+/// flight).
+pub const TRIM_RETRIES: u64 = 10;
 
 /// Maneuver seed of re-draw `attempt` (0 = the planned seed).
 pub fn redraw_seed(planned: u64, attempt: u64) -> u64 {
@@ -146,6 +162,13 @@ fn fly_plan(
                     };
                     match crate::fly::fly_script_with(&mut plant, &script, &cfg) {
                         Err(e) if e.is_trim_failure() && attempt < TRIM_RETRIES => attempt += 1,
+                        Err(e) if e.is_trim_failure() => {
+                            break Err(GenerateError::Untrimmable {
+                                profile: f.profile.name().to_string(),
+                                draws: attempt + 1,
+                                last: Box::new(e.into()),
+                            });
+                        }
                         r => {
                             let flight = r?;
                             let mut entry =
