@@ -570,3 +570,24 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
     }
     Ok(manifest)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What a larger re-draw budget relies on to leave earlier datasets as they were: draw 0 is the
+    /// planned seed and draw k's seed depends on k alone, so a flight that trimmed on draw k flies
+    /// the same seed whatever the budget; the draws a budget allows are all different.
+    #[test]
+    fn redraws_are_fixed_by_their_index_and_all_different() {
+        for planned in [0u64, 15_503, u64::MAX] {
+            assert_eq!(redraw_seed(planned, 0), planned);
+            let seeds: std::collections::BTreeSet<u64> = (0..=TRIM_RETRIES)
+                .map(|k| redraw_seed(planned, k))
+                .collect();
+            assert_eq!(seeds.len() as u64, TRIM_RETRIES + 1, "{planned}");
+        }
+        // The c172p's paper test flight of seed 15 that needed its 6th draw.
+        assert_eq!(redraw_seed(15_503, 5), 5_060_936_715_665_947_791);
+    }
+}
