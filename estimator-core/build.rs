@@ -1,8 +1,7 @@
 //! Chooses the generated files the crate compiles in.
 //!
-//! * Weights, in `src/model/mod.rs` (`weights_file` in `aircraft_name.rs`, shared with the
-//!   trainer's build). Default: the build's aircraft's `src/model/NAME/weights.rs`, written by
-//!   `trainer train --export` and committed; an aircraft without one has no model (`NO_MODEL`).
+//! * Weights, in `src/model/mod.rs` ([`weights_file`]). Default: the build's aircraft's
+//!   `src/model/NAME/weights.rs`, written by `trainer train --export` and committed; an aircraft without one has no model (`NO_MODEL`).
 //!   `ESTIMATOR_WEIGHTS=/abs/path.rs` builds against another export (CI trains a small model and
 //!   checks it end to end without touching the shipped weights).
 //! * The estimate's 1σ weights, in `src/model/mod.rs`. Default: `src/model/NAME/sigma.rs`,
@@ -108,6 +107,55 @@ fn aircraft(manifest: &std::path::Path) {
 }
 
 include!("aircraft_name.rs");
+
+/// The committed model of the build's aircraft: `estimator-core/src/model/NAME/FILE` (`weights.rs`
+/// of `trainer train --export`, `sigma.rs` of `trainer fit-sigma`); `estimator_core` is the crate's
+/// directory.
+fn committed_model_file(estimator_core: &std::path::Path, file: &str) -> PathBuf {
+    estimator_core
+        .join("src/model")
+        .join(aircraft_name())
+        .join(file)
+}
+
+/// The networks the build compiles in: the file `ESTIMATOR_WEIGHTS` names, else the build's
+/// aircraft's committed `weights.rs` if it has one, else none (the build flags `NO_MODEL`): a
+/// build never takes another airframe's networks.
+fn weights_file(estimator_core: &std::path::Path) -> Option<PathBuf> {
+    let path = chosen(
+        "ESTIMATOR_WEIGHTS",
+        committed_model_file(estimator_core, "weights.rs"),
+        "a weights file written by trainer train --export",
+    );
+    path.is_file().then_some(path)
+}
+
+/// The file the variable `var` names, or `default`; rebuilt when either changes (or appears). A
+/// file asked for by name must exist (a failed build, not a build without it); `what` says what it should be.
+fn chosen(var: &str, default: PathBuf, what: &str) -> PathBuf {
+    println!("cargo:rerun-if-env-changed={var}");
+    let path = match std::env::var_os(var) {
+        Some(p) if !p.is_empty() => {
+            let p = PathBuf::from(p);
+            assert!(
+                p.is_absolute() && p.is_file(),
+                "{var}: {} is not an absolute path to {what}",
+                p.display()
+            );
+            p
+        }
+        _ => default,
+    };
+    // A committed file that is not there yet (an aircraft without its own model): watch the
+    // nearest folder that is, so that the build notices the file when it comes.
+    let watched = path
+        .ancestors()
+        .find(|p| p.exists())
+        .unwrap_or(&path)
+        .to_path_buf();
+    println!("cargo:rerun-if-changed={}", watched.display());
+    path
+}
 
 /// `ESTIMATOR_AERO_FILE`: the tables `src/aero/mod.rs` includes. A missing file is a failed build
 /// (the filter has no model without them), with the variable named.

@@ -1451,7 +1451,6 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
 /// Features in the Spearman heatmap (besides the targets): beyond about 40 labels it is unreadable.
 const HEATMAP_FEATURES: usize = 36;
 
-#[cfg_attr(not(trainer_has_model), allow(dead_code))]
 struct ShapArgs {
     seed: u64,
     explain: usize,
@@ -1513,22 +1512,19 @@ fn cmd_features(data: &Path, out: &Path, rows: usize, shap: &ShapArgs) -> Result
 }
 
 /// SHAP of the compiled-in α and β cascades (integer path, `AngleNet::run`, exactly as deployed).
-#[cfg(trainer_has_model)]
 fn shap_section(ds: &Dataset, out: &Path, a: &ShapArgs) -> Result<String> {
-    use estimator_core::AngleNet;
     use trainer::analysis::{rng, sample_rows, shapley};
+    let (Some([alpha, beta]), Some(prov)) = (
+        estimator_core::model::shipped_networks(),
+        estimator_core::model::SHIPPED_PROVENANCE,
+    ) else {
+        return Ok("## SHAP\n\nNot computed: this build has no compiled-in model (run `trainer train` first).\n".into());
+    };
     let bg = sample_rows(ds, &[Role::Train, Role::Val], a.background);
     let xs = sample_rows(ds, &[Role::Test], a.explain);
-    let prov = estimator_core::model::PROVENANCE
-        .lines()
-        .next()
-        .unwrap_or("");
+    let prov = prov.lines().next().unwrap_or("");
     let mut charts = Vec::new();
-    let nets: [(&str, &dyn AngleNet); 2] = [
-        ("alpha", &estimator_core::model::ALPHA),
-        ("beta", &estimator_core::model::BETA),
-    ];
-    for (name, net) in nets {
+    for (name, net) in [("alpha", alpha), ("beta", beta)] {
         let feats = net.features().to_vec();
         let f = |v: &estimator_core::FeatureValues| net.run(v).1 as f64 / 1000.0;
         let mut r = rng(a.seed);
@@ -1569,11 +1565,6 @@ fn shap_section(ds: &Dataset, out: &Path, a: &ShapArgs) -> Result<String> {
         a.seed,
         &charts,
     ))
-}
-
-#[cfg(not(trainer_has_model))]
-fn shap_section(_: &Dataset, _: &Path, _: &ShapArgs) -> Result<String> {
-    Ok("## SHAP\n\nNot computed: this build has no compiled-in model (run `trainer train` first).\n".into())
 }
 
 fn cmd_bench(

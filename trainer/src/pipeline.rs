@@ -369,12 +369,5 @@ pub fn shipped_suite() -> Option<Suite> {
 
 /// PROVENANCE of the compiled-in model, if this build has one.
 pub fn shipped_provenance() -> Option<&'static str> {
-    #[cfg(trainer_has_model)]
-    {
-        Some(estimator_core::model::PROVENANCE)
-    }
-    #[cfg(not(trainer_has_model))]
-    {
-        None
-    }
+    estimator_core::model::SHIPPED_PROVENANCE
 }

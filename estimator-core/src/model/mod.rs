@@ -60,6 +60,19 @@ pub fn sigma_fitted_for_this_model() -> bool {
 /// Whether this build has a model.
 pub const HAS_MODEL: bool = cfg!(estimator_weights);
 
+/// The compiled-in α and β networks, `None` in a build without a model (for the host tools, which
+/// cannot see this crate's build configuration).
+#[cfg(estimator_weights)]
+pub fn shipped_networks() -> Option<[&'static dyn crate::AngleNet; 2]> {
+    Some([&ALPHA, &BETA])
+}
+/// The compiled-in α and β networks, `None` in a build without a model (for the host tools, which
+/// cannot see this crate's build configuration).
+#[cfg(not(estimator_weights))]
+pub fn shipped_networks() -> Option<[&'static dyn crate::AngleNet; 2]> {
+    None
+}
+
 /// How the compiled-in model was trained (its `PROVENANCE`), `None` in a build without a model.
 #[cfg(estimator_weights)]
 pub const SHIPPED_PROVENANCE: Option<&str> = Some(PROVENANCE);
