@@ -346,18 +346,26 @@ mod tests {
         truncated.remove(20);
         let mut estimate_kind = [0u8; MAX_FRAME];
         let n = EstimateFrame::default().encode(&mut estimate_kind).unwrap();
+        // A sound frame (CRC, COBS, layout) of another aircraft: refused like a corrupted one.
+        let suite = Estimator::shipped().suite().unwrap_or(Suite::Table1);
+        let mut body = [0u8; MAX_FRAME];
+        let len = frame(6).emit_body(suite, &mut body).unwrap();
+        body[8..12].copy_from_slice(&estimator_core::wire::aircraft_tag("another").to_le_bytes());
+        let mut other_aircraft = [0u8; MAX_FRAME];
+        let m = estimator_core::wire::encode(&body[..len], &mut other_aircraft).unwrap();
         let bytes = [
             good,
             flipped,
             truncated,
             estimate_kind[..n].to_vec(),
-            wire(6),
+            other_aircraft[..m].to_vec(),
+            wire(7),
         ]
         .concat();
         let r = feed(&mut a, &bytes);
-        assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [3, 6]);
-        assert_eq!(r[1].health.rx_corrupt, 3);
-        assert_eq!(r[1].health.rx_lost, 2);
+        assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [3, 7]);
+        assert_eq!(r[1].health.rx_corrupt, 4);
+        assert_eq!(r[1].health.rx_lost, 3);
     }
 
     #[test]

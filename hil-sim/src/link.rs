@@ -276,7 +276,7 @@ mod tests {
         let per_s = |bytes: usize| bytes as f64 * 10.0 * frames_per_s;
         let baud = f64::from(LinkConfig::default().baud);
         assert_eq!(baud, 115_200.0);
-        assert_eq!(sensor::EGI120_BODY_LEN, 316);
+        assert_eq!(sensor::EGI120_BODY_LEN, 320);
         // CRC, COBS (one byte per 254) and the delimiter.
         assert_eq!(MAX_FRAME, sensor::EGI120_BODY_LEN + 4 + 2 + 1);
         let share = per_s(MAX_FRAME) / baud;

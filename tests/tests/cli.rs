@@ -116,6 +116,34 @@ fn another_aircraft_is_refused_with_how_to_build_for_it() {
     }
 }
 
+/// A dataset's flight whose manifest names another aircraft is not streamed to this build's
+/// estimator: its frames would carry this build's aircraft and be read with its networks.
+#[test]
+fn run_refuses_a_dataset_flight_of_another_aircraft() {
+    let d = scratch("other-aircraft");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::copy(test_csv(), d.join("test_aggressive_00.csv")).unwrap();
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ci().join("manifest.json")).unwrap())
+            .unwrap();
+    m["aircraft"]["name"] = "c172p".into();
+    std::fs::write(d.join("manifest.json"), m.to_string()).unwrap();
+    let out = d.join("run");
+    let o = run(
+        "hil-sim",
+        &[
+            "run",
+            "--dataset",
+            d.join("test_aggressive_00.csv").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    refused(&o, "flew the aircraft `c172p`");
+    refused(&o, "ESTIMATOR_AIRCRAFT=c172p");
+    assert!(!out.exists(), "a refused run wrote {}", out.display());
+}
+
 #[test]
 fn both_binaries_have_a_version() {
     for b in ["hil-sim", "trainer"] {

@@ -235,11 +235,23 @@ mod tests {
         let mut body = [0u8; BODY_LEN];
         f.emit(&mut body);
         assert_eq!(body[0], super::super::VERSION);
-        assert_eq!(&body[8 + 31..8 + 35], &0x0102_0304u32.to_le_bytes());
-        assert_eq!(&body[8 + 35..8 + 39], &0x0506_0708u32.to_le_bytes());
-        assert_eq!(&body[8 + 39..8 + 41], &0x0a0bu16.to_le_bytes());
-        assert_eq!(&body[8 + 41..8 + 43], &0x0c0du16.to_le_bytes());
-        assert_eq!(BODY_LEN, 8 + 43);
+        assert_eq!(
+            &body[HEADER_LEN + 31..HEADER_LEN + 35],
+            &0x0102_0304u32.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 35..HEADER_LEN + 39],
+            &0x0506_0708u32.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 39..HEADER_LEN + 41],
+            &0x0a0bu16.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 41..HEADER_LEN + 43],
+            &0x0c0du16.to_le_bytes()
+        );
+        assert_eq!(BODY_LEN, HEADER_LEN + 43);
     }
 
     /// Version 1 estimate frames were 8 bytes shorter (no `rx_overruns`, no 1σ), versions 2 and 3
@@ -252,19 +264,25 @@ mod tests {
         f.emit(&mut body);
         let mut v1 = body;
         v1[0] = 1;
-        assert_eq!(EstimateFrame::parse(&v1[..8 + 35]), Err(Error::Version(1)));
+        assert_eq!(
+            EstimateFrame::parse(&v1[..HEADER_LEN + 35]),
+            Err(Error::Version(1))
+        );
         assert_eq!(EstimateFrame::parse(&v1), Err(Error::Version(1)));
         let mut v3 = body;
         v3[0] = 3;
-        assert_eq!(EstimateFrame::parse(&v3[..8 + 39]), Err(Error::Version(3)));
-        for other in [2, 3, 4, 6] {
+        assert_eq!(
+            EstimateFrame::parse(&v3[..HEADER_LEN + 39]),
+            Err(Error::Version(3))
+        );
+        for other in [2, 3, 4, 5, 7] {
             let mut v = body;
             v[0] = other;
             assert_eq!(EstimateFrame::parse(&v), Err(Error::Version(other)));
         }
         // Through the whole stream too: the receiver decodes the frame (CRC fine) and refuses it.
         let mut wire = [0u8; super::super::MAX_FRAME];
-        let n = super::super::encode(&v1[..8 + 35], &mut wire).unwrap();
+        let n = super::super::encode(&v1[..HEADER_LEN + 35], &mut wire).unwrap();
         let mut acc = super::super::Accumulator::<{ super::super::MAX_FRAME }>::new();
         let got: Vec<_> = wire[..n]
             .iter()
@@ -273,7 +291,7 @@ mod tests {
         assert_eq!(got, [Err(Error::Version(1))]);
         assert_eq!(
             std::format!("{}", Error::Version(1)),
-            "wire format version 1, but this build speaks version 5"
+            "wire format version 1, but this build speaks version 6"
         );
     }
 }

@@ -2,9 +2,9 @@
 //!
 //! ```text
 //! on the wire:  COBS( body | crc32 ) 0x00
-//! body:         header (8 bytes) | payload (sensor: 50 bytes, sensor-egi: 78 bytes,
+//! body:         header (12 bytes) | payload (sensor: 50 bytes, sensor-egi: 78 bytes,
 //!               sensor-egi120: 308 bytes, estimate: 43 bytes)
-//! header:       version u8 | kind u8 | seq u16 | time_ms u32          (all little-endian)
+//! header:       version u8 | kind u8 | seq u16 | time_ms u32 | aircraft u32   (all little-endian)
 //! crc32:        CRC-32/ISO-HDLC of the body, little-endian
 //! ```
 //!
@@ -14,6 +14,12 @@
 //! bits in these lengths). Each payload has a zero-copy checked view (`*Packet<T: AsRef<[u8]>>`) and a
 //! validated representation that parses from and emits into it ([`SensorFrame`](crate::SensorFrame),
 //! [`EstimateFrame`](estimate::EstimateFrame)). Nothing here panics on any input.
+//!
+//! The kind names the sensor suite (or an estimate), and the aircraft field the airframe: the
+//! CRC-32 of its description's name ([`aircraft_tag`]; `f16` 0xBAFCFCAB). A build carries one
+//! aircraft's features, scaling and networks, so it refuses a frame of another aircraft as
+//! [`Error::Aircraft`]: an F-16 image never computes an estimate from a light single's frame, which
+//! has the same layout and very different numbers.
 //!
 //! The version byte names the layout of every frame kind. A receiver refuses a frame of another
 //! version as [`Error::Version`] whatever its length (another version's frames may be longer or
@@ -26,22 +32,22 @@
 //! | 3 | sensor suites: kind 3 `SensorEgi` (the 50-byte sensor payload + EGI attitude, velocity, fuel and their validity: 78 bytes) next to kind 1 `Sensor` (the Table 1 suite, layout unchanged); estimate frames unchanged |
 //! | 4 | estimate frames carry the 1σ of α and β (payload 43 bytes); sensor frames unchanged |
 //! | 5 | kind 4 `SensorEgi120` (the 78-byte EGI payload + the 120 Hz sub-samples of the frame period: 308 bytes) next to kinds 1 and 3 (layouts unchanged); estimate frames unchanged |
+//! | 6 | the header names the aircraft (4 bytes more: 12); payloads unchanged |
 //!
-//! A receiver of version 5 takes the three sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
+//! A receiver of version 6 takes the three sensor kinds ([`SensorFrame::parse`](crate::SensorFrame::parse)):
 //! a kind-1 frame decodes with the EGI channels marked invalid, a kind-1 or kind-3 frame without
-//! sub-samples. Frames of versions 2 to 4 are refused as `Error::Version(v)`, like any other
-//! version (a version-4 sender's kinds 1 and 3 have the same layout here, but a version-4 receiver
-//! cannot read kind 4, so the two builds must not be mixed silently).
+//! sub-samples. Frames of versions 1 to 5 are refused as `Error::Version(v)`, like any other
+//! version (their headers do not name an aircraft).
 
 pub mod estimate;
 pub mod sensor;
 
 /// Wire format version carried in every header (the table in the module docs).
-pub const VERSION: u8 = 5;
+pub const VERSION: u8 = 6;
 /// Frame delimiter.
 pub const DELIMITER: u8 = 0;
 /// Header length.
-pub const HEADER_LEN: usize = 8;
+pub const HEADER_LEN: usize = 12;
 /// CRC length.
 pub const CRC_LEN: usize = 4;
 /// Longest body (header + payload) of any frame kind.
@@ -51,6 +57,15 @@ pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_BODY + CRC_LEN) + 1;
 
 const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
+/// The tag of the aircraft description `name` in a frame header: the CRC-32 of the name.
+pub const fn aircraft_tag(name: &str) -> u32 {
+    CRC.checksum(name.as_bytes())
+}
+
+/// The tag of this build's aircraft ([`crate::aircraft::AIRCRAFT`]): every frame it sends carries
+/// it, and it takes no frame without it.
+pub const AIRCRAFT_TAG: u32 = aircraft_tag(crate::aircraft::AIRCRAFT.name);
+
 /// Byte offsets of the header.
 pub(crate) mod field {
     use core::ops::Range;
@@ -58,6 +73,7 @@ pub(crate) mod field {
     pub const KIND: usize = 1;
     pub const SEQ: Range<usize> = 2..4;
     pub const TIME: Range<usize> = 4..8;
+    pub const AIRCRAFT: Range<usize> = 8..12;
 }
 
 /// Why a frame was rejected.
@@ -76,6 +92,8 @@ pub enum Error {
     Version(u8),
     /// The header names another frame kind.
     Kind(u8),
+    /// The header names another aircraft (its [`aircraft_tag`]).
+    Aircraft(u32),
     /// The output buffer is too small.
     Buffer,
 }
@@ -92,6 +110,11 @@ impl core::fmt::Display for Error {
                 "wire format version {v}, but this build speaks version {VERSION}"
             ),
             Error::Kind(k) => write!(f, "unexpected frame kind {k}"),
+            Error::Aircraft(t) => write!(
+                f,
+                "frame of another aircraft (tag {t:#010x}); this build is for {} (tag {AIRCRAFT_TAG:#010x})",
+                crate::aircraft::AIRCRAFT.name
+            ),
             Error::Buffer => f.write_str("output buffer too small"),
         }
     }
@@ -161,6 +184,10 @@ pub(crate) fn check_header(body: &[u8], kind: Kind, payload_len: usize) -> Resul
     if k != kind as u8 {
         return Err(Error::Kind(k));
     }
+    let tag = read_u32(body, field::AIRCRAFT);
+    if tag != AIRCRAFT_TAG {
+        return Err(Error::Aircraft(tag));
+    }
     Ok(())
 }
 
@@ -173,6 +200,7 @@ pub(crate) fn emit_header(body: &mut [u8], kind: Kind, seq: u16, time_ms: u32) {
     write(body, field::KIND..field::KIND + 1, &[kind as u8]);
     write(body, field::SEQ, &seq.to_le_bytes());
     write(body, field::TIME, &time_ms.to_le_bytes());
+    write(body, field::AIRCRAFT, &AIRCRAFT_TAG.to_le_bytes());
 }
 
 /// Appends the CRC to `body`, COBS-encodes it and the delimiter into `out`. Returns the encoded length.
@@ -365,10 +393,48 @@ mod tests {
             assert_eq!(results, [Err(Error::Version(2))]);
             let text = std::format!("{}", Error::Version(2));
             assert!(
-                text.contains("version 2") && text.contains("version 5"),
+                text.contains("version 2") && text.contains("version 6"),
                 "{text}"
             );
         }
+    }
+
+    #[test]
+    fn a_frame_of_another_aircraft_is_refused_naming_its_tag() {
+        // The same bytes with another description's tag, CRC and COBS intact: refused, for every
+        // suite, never read as this aircraft's sensor frame.
+        let other = aircraft_tag("another-aircraft");
+        assert_ne!(other, AIRCRAFT_TAG);
+        for suite in Suite::ALL {
+            let mut body = [0u8; MAX_BODY];
+            let n = frame(7)
+                .emit_body(suite, &mut body)
+                .expect("a sensor body fits MAX_BODY");
+            assert_eq!(&body[field::AIRCRAFT], &AIRCRAFT_TAG.to_le_bytes());
+            body[field::AIRCRAFT].copy_from_slice(&other.to_le_bytes());
+            let mut wire = [0u8; MAX_FRAME];
+            let len = encode(&body[..n], &mut wire).unwrap();
+            let mut acc = Accumulator::<MAX_FRAME>::new();
+            let got: std::vec::Vec<_> = wire[..len]
+                .iter()
+                .filter_map(|b| acc.push(*b).map(|r| r.and_then(SensorFrame::parse)))
+                .collect();
+            assert_eq!(got, [Err(Error::Aircraft(other))]);
+        }
+        let text = std::format!("{}", Error::Aircraft(other));
+        assert!(
+            text.contains(crate::aircraft::AIRCRAFT.name) && text.contains("another aircraft"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn the_tag_is_the_crc32_of_the_name() {
+        // CRC-32/ISO-HDLC check value.
+        assert_eq!(aircraft_tag("123456789"), 0xCBF4_3926);
+        // The tags the module docs and docs/firmware.md give for the descriptions in the repo.
+        assert_eq!(aircraft_tag("f16"), 0xBAFC_FCAB);
+        assert_eq!(aircraft_tag("c172p"), 0xCC76_B31C);
     }
 
     #[test]

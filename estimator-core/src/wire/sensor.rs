@@ -346,10 +346,26 @@ mod tests {
             &body[..8],
             &[version, 1, 0x02, 0x01, 0x06, 0x05, 0x04, 0x03]
         );
-        assert_eq!(&body[8 + 8..8 + 12], &(-2i32).to_le_bytes());
-        assert_eq!(&body[8 + 36..8 + 38], &(-3i16).to_le_bytes());
-        assert_eq!(&body[8 + 46..8 + 48], &60000u16.to_le_bytes());
-        assert_eq!(&body[8 + 48..8 + 50], &0xFFFFu16.to_le_bytes());
+        assert_eq!(
+            &body[8..HEADER_LEN],
+            &super::super::AIRCRAFT_TAG.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 8..HEADER_LEN + 12],
+            &(-2i32).to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 36..HEADER_LEN + 38],
+            &(-3i16).to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 46..HEADER_LEN + 48],
+            &60000u16.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 48..HEADER_LEN + 50],
+            &0xFFFFu16.to_le_bytes()
+        );
         let back = SensorFrame::parse(&body).unwrap();
         assert_eq!(back, f.restricted_to(Suite::Table1));
         // A Table 1 frame decodes as Table 1: the EGI channels are absent, not zeros read as data.
@@ -369,11 +385,26 @@ mod tests {
         assert_eq!(body[1], 3);
         // Same 50 payload bytes as the Table 1 frame, then the EGI block.
         assert_eq!(&body[2..BODY_LEN], &t1[2..]);
-        assert_eq!(&body[8 + 50..8 + 54], &(-4i32).to_le_bytes());
-        assert_eq!(&body[8 + 58..8 + 62], &6_283_000i32.to_le_bytes());
-        assert_eq!(&body[8 + 70..8 + 74], &(-5i32).to_le_bytes());
-        assert_eq!(&body[8 + 74..8 + 76], &65_000u16.to_le_bytes());
-        assert_eq!(&body[8 + 76..8 + 78], &0x007Fu16.to_le_bytes());
+        assert_eq!(
+            &body[HEADER_LEN + 50..HEADER_LEN + 54],
+            &(-4i32).to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 58..HEADER_LEN + 62],
+            &6_283_000i32.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 70..HEADER_LEN + 74],
+            &(-5i32).to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 74..HEADER_LEN + 76],
+            &65_000u16.to_le_bytes()
+        );
+        assert_eq!(
+            &body[HEADER_LEN + 76..HEADER_LEN + 78],
+            &0x007Fu16.to_le_bytes()
+        );
         let back = SensorFrame::parse(&body).unwrap();
         assert_eq!(back.raw, f.raw);
         assert_eq!(back.valid, ALL_VALID);
@@ -391,19 +422,22 @@ mod tests {
         let mut egi = [0u8; EGI_BODY_LEN];
         f.emit_body(Suite::Egi, &mut egi).unwrap();
         let mut body = [0u8; EGI120_BODY_LEN];
-        assert_eq!(f.emit_body(Suite::Egi120, &mut body), Ok(8 + 308));
+        assert_eq!(f.emit_body(Suite::Egi120, &mut body), Ok(HEADER_LEN + 308));
         assert_eq!(body[1], 4);
         // The EGI frame's payload byte for byte, then the sub-samples' validity and values.
         assert_eq!(&body[2..EGI_BODY_LEN], &egi[2..]);
-        assert_eq!(&body[8 + 78..8 + 80], &0x1EFFu16.to_le_bytes());
+        assert_eq!(
+            &body[HEADER_LEN + 78..HEADER_LEN + 80],
+            &0x1EFFu16.to_le_bytes()
+        );
         // Sub-sample 5, specific force y (i = 4): 504 at 80 + 38·5 + 16.
         assert_eq!(
-            &body[8 + 80 + 190 + 16..8 + 80 + 190 + 20],
+            &body[HEADER_LEN + 80 + 190 + 16..HEADER_LEN + 80 + 190 + 20],
             &504i32.to_le_bytes()
         );
         // Sub-sample 2, rudder (i = 8): 208 as i16 at 80 + 38·2 + 24 + 4.
         assert_eq!(
-            &body[8 + 80 + 76 + 28..8 + 80 + 76 + 30],
+            &body[HEADER_LEN + 80 + 76 + 28..HEADER_LEN + 80 + 76 + 30],
             &208i16.to_le_bytes()
         );
         let back = SensorFrame::parse(&body).unwrap();
@@ -414,7 +448,7 @@ mod tests {
         assert_eq!(back.sub.get(5, Channel::AccelX), -503);
         // Bits above the 13 sub-channels name nothing and are ignored; a surface out of the i16
         // range is saturated and invalid; an EGI frame carries none.
-        body[8 + 79] |= 0xE0;
+        body[HEADER_LEN + 79] |= 0xE0;
         assert_eq!(SensorFrame::parse(&body).unwrap().sub.valid, f.sub.valid);
         f.sub.raw[3][6] = 40_000;
         f.emit_body(Suite::Egi120, &mut body).unwrap();
@@ -430,9 +464,12 @@ mod tests {
         f.valid = ALL_VALID & !Channel::Pitch.bit() & !Channel::Elevator.bit();
         let mut body = [0u8; EGI_BODY_LEN];
         f.emit_body(Suite::Egi, &mut body).unwrap();
-        assert_eq!(&body[8 + 76..8 + 78], &0b111_1101u16.to_le_bytes());
+        assert_eq!(
+            &body[HEADER_LEN + 76..HEADER_LEN + 78],
+            &0b111_1101u16.to_le_bytes()
+        );
         // Bits above the seven EGI channels name nothing and are ignored.
-        body[8 + 77] = 0xFF;
+        body[HEADER_LEN + 77] = 0xFF;
         let back = SensorFrame::parse(&body).unwrap();
         assert_eq!(back.valid, f.valid);
     }
@@ -480,7 +517,7 @@ mod tests {
         b[1] = Kind::Sensor as u8;
         assert_eq!(SensorFrame::parse(&b), Err(Error::TooLong));
         // Another version is refused as such whatever the kind and length.
-        for v in [1, 2, 3, 4, 6, 255] {
+        for v in [1, 2, 3, 4, 5, 7, 255] {
             b[0] = v;
             b[1] = Kind::SensorEgi as u8;
             assert_eq!(SensorFrame::parse(&b), Err(Error::Version(v)));
