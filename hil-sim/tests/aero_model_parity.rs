@@ -25,7 +25,7 @@ use estimator_core::aero::{
 /// one unit of the XML's last digit (1e-4) in a table cell the flight uses is ~6e-5 of it.
 const TOLERANCE: f64 = 1e-6;
 
-const INPUTS: [&str; 27] = [
+const INPUTS: [&str; 29] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -53,6 +53,8 @@ const INPUTS: [&str; 27] = [
     "gear/gear-pos-norm",
     "simulation/sim-time-sec",
     "aero/function/kCLge",
+    "aero/alphadot-rad_sec",
+    "aero/stall-hyst-norm",
 ];
 const FORCES: [&str; 6] = [
     "forces/fwx-aero-lbs",
@@ -126,6 +128,8 @@ impl Step {
             q_rps: g("velocities/q-aero-rad_sec") as f32,
             r_rps: g("velocities/r-aero-rad_sec") as f32,
             h_over_b: g("aero/h_b-mac-ft") as f32,
+            alpha_dot_rps: g("aero/alphadot-rad_sec") as f32,
+            stall_latched: g("aero/stall-hyst-norm") > 0.5,
         };
         let flaperon = |p: &str| (g(p) * f64::from(aero::FLAPERON_DEG_PER_NORM)) as f32;
         let s = Surfaces {

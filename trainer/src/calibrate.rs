@@ -773,6 +773,8 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
         mach as f32,
         tas as f32,
         cfg.gear_norm,
+        // The identification reads quasi-steady frames of the card: no α̇, and below the stall.
+        filter::Unsteady::default(),
     )?;
     let c = MODEL.coefficients_at(&point);
     if !c.valid {
@@ -1153,6 +1155,7 @@ mod tests {
             q_rps: 0.02,
             r_rps: -0.01,
             h_over_b: AirState::NO_GROUND_EFFECT,
+            ..AirState::default()
         };
         let gear = CONFIG.gear_norm;
         let c = MODEL.coefficients(

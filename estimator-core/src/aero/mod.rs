@@ -193,6 +193,11 @@ pub struct AirState {
     /// `aero/h_b-mac-ft`, a ratio despite its name). Ground effect on lift ends at 1.1: any larger
     /// value (e.g. [`AirState::NO_GROUND_EFFECT`]) is out of ground effect.
     pub h_over_b: f32,
+    /// Rate of change of α, rad/s (JSBSim's `aero/alphadot-rad_sec`), for models with an α̇ term.
+    pub alpha_dot_rps: f32,
+    /// JSBSim's stall-hysteresis latch (`aero/stall-hyst-norm` = 1): set once α rose above the
+    /// model's upper hysteresis limit, until it falls below the lower one ([`Model::stall_latch`]).
+    pub stall_latched: bool,
 }
 
 impl AirState {
@@ -238,6 +243,7 @@ impl Point {
             air.q_rps,
             air.r_rps,
             air.h_over_b,
+            air.alpha_dot_rps,
             s.elevator_deg,
             s.aileron_deg,
             s.rudder_deg,
@@ -276,12 +282,11 @@ impl Point {
             h_over_b: air.h_over_b,
             mag_beta_rad: libm::fabsf(air.beta_rad),
             mag_elevator_rad: libm::fabsf(elevator_rad),
-            // The left aileron is the one aileron channel. Not computed yet (the F-16's model reads
-            // neither): no α̇, no stall latch.
+            // The left aileron is the one aileron channel.
             left_aileron_rad: s.aileron_deg.to_radians(),
-            alpha_dot_rps: 0.0,
+            alpha_dot_rps: air.alpha_dot_rps,
             flap_deg: s.flap_deg,
-            stall_hyst_norm: 0.0,
+            stall_hyst_norm: if air.stall_latched { 1.0 } else { 0.0 },
         };
         // The inputs are finite (above), and so are their conversions; only the quotients by the
         // airspeed and the flaperon mix can still overflow.
@@ -512,6 +517,20 @@ pub struct Model<'a> {
     /// JSBSim's stall latch `aero/stall-hyst-norm` (its `<hysteresis_limits>`): cleared below the
     /// first α (rad), set above the second; `None` when no term reads it.
     pub stall_hysteresis_rad: Option<(f32, f32)>,
+}
+
+impl Model<'_> {
+    /// The stall latch after a step at `alpha_rad`, as JSBSim's `FGAerodynamics` moves it: set
+    /// above the upper hysteresis limit, cleared below the lower one, held between them; always
+    /// clear for a model without limits. A non-finite α holds it.
+    pub fn stall_latch(&self, latched: bool, alpha_rad: f32) -> bool {
+        match self.stall_hysteresis_rad {
+            Some((_, hi)) if alpha_rad > hi => true,
+            Some((lo, _)) if alpha_rad < lo => false,
+            Some(_) => latched,
+            None => false,
+        }
+    }
 }
 
 /// Wind-axis coefficients with JSBSim's signs: drag positive aft, lift positive up, side positive
@@ -829,6 +848,27 @@ mod tests {
     }
 
     #[test]
+    fn the_stall_latch_sets_above_the_upper_limit_and_clears_below_the_lower() {
+        let m = Model {
+            stall_hysteresis_rad: Some((0.09, 0.36)),
+            ..MODEL
+        };
+        let mut latched = false;
+        let mut seen = [false; 6];
+        for (i, a) in [0.2, 0.37, 0.2, 0.1, 0.08, 0.2].into_iter().enumerate() {
+            latched = m.stall_latch(latched, a);
+            seen[i] = latched;
+        }
+        assert_eq!(seen, [false, true, true, true, false, false]);
+        assert!(m.stall_latch(true, f32::NAN));
+        let none = Model {
+            stall_hysteresis_rad: None,
+            ..MODEL
+        };
+        assert!(!none.stall_latch(true, 0.5));
+    }
+
+    #[test]
     fn bad_inputs_give_zeros_and_invalid() {
         let air = AirState {
             alpha_rad: 0.1,
@@ -839,6 +879,8 @@ mod tests {
             q_rps: 0.0,
             r_rps: 0.0,
             h_over_b: AirState::NO_GROUND_EFFECT,
+            alpha_dot_rps: 0.0,
+            stall_latched: false,
         };
         let s = Surfaces::default();
         assert!(MODEL.coefficients(&air, &s).valid);
@@ -861,6 +903,10 @@ mod tests {
             },
             AirState {
                 q_rps: f32::NEG_INFINITY,
+                ..air
+            },
+            AirState {
+                alpha_dot_rps: f32::NAN,
                 ..air
             },
             // Finite but overflowing: q·c/(2V) is +Inf in f32.

@@ -383,6 +383,8 @@ pub struct AirDataFilter {
     /// Time, s, of accepted updates folded into `nu_ms` since the last start, restart or step
     /// without inputs: the adapted noise applies once it reaches [`Config::r_adapt_tau_s`].
     r_adapt_age_s: f32,
+    /// The model's stall latch ([`aero::Model::stall_latch`]) as the filter's α moved it.
+    stall_latched: bool,
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -520,6 +522,8 @@ pub fn body_velocity(inp: &Input) -> [f32; 3] {
 /// true airspeed in m/s), with the gyro's body rates as the aero rates (calm air), the surfaces of
 /// [`surfaces`] and no ground effect: where the filter and the flight-test calibration evaluate
 /// the model (`None` if an input is not finite or the airspeed not positive).
+/// `unsteady` is what the model reads beyond the air-data point: α̇ ([`alpha_rate`]) and the
+/// stall latch ([`aero::Model::stall_latch`]).
 #[allow(clippy::too_many_arguments)]
 pub fn model_point(
     inp: &Input,
@@ -529,6 +533,7 @@ pub fn model_point(
     mach: f32,
     tas_mps: f32,
     gear_norm: f32,
+    unsteady: Unsteady,
 ) -> Option<aero::Point> {
     let air = AirState {
         alpha_rad,
@@ -539,9 +544,48 @@ pub fn model_point(
         q_rps: gyro[1],
         r_rps: gyro[2],
         h_over_b: AirState::NO_GROUND_EFFECT,
+        alpha_dot_rps: unsteady.alpha_dot_rps,
+        stall_latched: unsteady.stall_latched,
     };
     aero::Point::new(&MODEL, &air, &surfaces(inp, alpha_rad, mach, gear_norm))
 }
+
+/// What the force model reads beyond the air-data point, for models with such terms (JSBSim's
+/// `aero/alphadot-rad_sec` and `aero/stall-hyst-norm`; a model without them ignores both).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Unsteady {
+    /// α̇, rad/s.
+    pub alpha_dot_rps: f32,
+    /// The stall-hysteresis latch.
+    pub stall_latched: bool,
+}
+
+/// α̇ (rad/s) as JSBSim defines `aero/alphadot-rad_sec`: the body-axis rate of change of the
+/// aircraft's velocity (specific force `f_cg` plus gravity, less ω × v, all body axes) against the
+/// air velocity `vb_air` (body axes), `(u·ẇ − w·u̇) / (u² + w²)`. A steady wind moves the air
+/// velocity as the inertial one, so the IMU and the EGI give it without differencing the noisy α;
+/// 0 below 1 m/s of airspeed in the symmetry plane.
+pub fn alpha_rate(
+    vb_air: &Vector3<f32>,
+    cbn: &Matrix3<f32>,
+    vel_ned_mps: [f32; 3],
+    f_cg: &Vector3<f32>,
+    gyro_rps: [f32; 3],
+) -> f32 {
+    let v = cbn * Vector3::from(vel_ned_mps);
+    let g = cbn * Vector3::new(0.0, 0.0, GRAVITY_MPS2);
+    let vdot = f_cg + g - Vector3::from(gyro_rps).cross(&v);
+    let uw2 = vb_air.x * vb_air.x + vb_air.z * vb_air.z;
+    let rate = (vb_air.x * vdot.z - vb_air.z * vdot.x) / uw2;
+    if uw2 > 1.0 && rate.is_finite() {
+        rate
+    } else {
+        0.0
+    }
+}
+
+/// Standard gravity, m/s² (JSBSim's F-16 and c172p fly a constant-gravity earth near the ground).
+const GRAVITY_MPS2: f32 = 9.80665;
 
 /// Dynamic pressure times the wing area over the mass: the specific force (m/s²) of a unit force
 /// coefficient at density `rho` (kg/m³) and true airspeed `tas_mps`.
@@ -576,6 +620,7 @@ fn model_force(
     a_sound: f32,
     mass_kg: f32,
     gear_norm: f32,
+    unsteady: Unsteady,
 ) -> Option<Vector3<f32>> {
     let v = vb.norm();
     if v.is_nan() || v <= 1.0 {
@@ -584,7 +629,9 @@ fn model_force(
     let alpha = libm::atan2f(vb.z, vb.x);
     let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
     let mach = v / a_sound;
-    let c = MODEL.coefficients_at(&model_point(inp, gyro, alpha, beta, mach, v, gear_norm)?);
+    let c = MODEL.coefficients_at(&model_point(
+        inp, gyro, alpha, beta, mach, v, gear_norm, unsteady,
+    )?);
     if !c.valid {
         return None;
     }
@@ -606,6 +653,7 @@ impl AirDataFilter {
             nis_mean: cfg.gate,
             nu_ms: [0.0; 2],
             r_adapt_age_s: 0.0,
+            stall_latched: false,
         };
         f.restart();
         f
@@ -634,6 +682,7 @@ impl AirDataFilter {
         self.gated_run = 0;
         self.turb_ms = 0.0;
         self.last.turbulence_rad = 0.0;
+        self.stall_latched = false;
         self.nu_ms = c.accel_sigma.map(sq);
         self.unsettle();
     }
@@ -723,7 +772,21 @@ impl AirDataFilter {
 
         let cbn = c_bn(u.euler_rad);
         let vb = cbn * (Vector3::from(u.vel_ned_mps) - self.wind());
-        let f0 = model_force(&vb, &u, inp.gyro_rps, rho, a_sound, mass, c.gear_norm)?;
+        // α̇ and the latch are inputs of the model here, not functions of the state.
+        let unsteady = Unsteady {
+            alpha_dot_rps: alpha_rate(&vb, &cbn, u.vel_ned_mps, &f_cg, inp.gyro_rps),
+            stall_latched: self.stall_latched,
+        };
+        let f0 = model_force(
+            &vb,
+            &u,
+            inp.gyro_rps,
+            rho,
+            a_sound,
+            mass,
+            c.gear_norm,
+            unsteady,
+        )?;
         let k = self.lift_scale();
         // d f / d v_body by forward differences, then d h / d wind = −k · (df/dvb) · C_bn.
         const D: f32 = 0.01;
@@ -733,7 +796,16 @@ impl AirDataFilter {
             if let Some(e) = vj.get_mut(j) {
                 *e += D;
             }
-            let fj = model_force(&vj, &u, inp.gyro_rps, rho, a_sound, mass, c.gear_norm)?;
+            let fj = model_force(
+                &vj,
+                &u,
+                inp.gyro_rps,
+                rho,
+                a_sound,
+                mass,
+                c.gear_norm,
+                unsteady,
+            )?;
             dfdvb.set_column(j, &((fj - f0) / D));
         }
         let ky = self.side_scale();
@@ -938,6 +1010,7 @@ impl AirDataFilter {
                 }
                 out.turbulence_rad =
                     self.turbulence(Vector3::from(out.wind_ned_mps), out.airspeed_mps, dt);
+                self.stall_latched = MODEL.stall_latch(self.stall_latched, out.alpha_rad);
                 out.flags = flags;
                 self.last = out;
                 out

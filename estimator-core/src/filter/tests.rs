@@ -65,7 +65,18 @@ impl World {
         };
         let (rho, a) = isa(inp.alt_m);
         let mass = cfg.empty_mass_kg + inp.fuel_kg;
-        let f = model_force(&vb, &inp, inp.gyro_rps, rho, a, mass, cfg.gear_norm).unwrap() * self.k;
+        let f = model_force(
+            &vb,
+            &inp,
+            inp.gyro_rps,
+            rho,
+            a,
+            mass,
+            cfg.gear_norm,
+            Unsteady::default(),
+        )
+        .unwrap()
+            * self.k;
         inp.accel_mps2 = [f.x, f.y, f.z];
         (inp, Truth { alpha, beta })
     }
@@ -99,7 +110,17 @@ fn cruise_speed(cfg: &Config) -> f32 {
             v * libm::sinf(beta),
             v * libm::sinf(alpha) * libm::cosf(beta),
         );
-        let f = model_force(&vb, &inp, [0.0; 3], rho, a, mass, cfg.gear_norm).unwrap();
+        let f = model_force(
+            &vb,
+            &inp,
+            [0.0; 3],
+            rho,
+            a,
+            mass,
+            cfg.gear_norm,
+            Unsteady::default(),
+        )
+        .unwrap();
         v *= libm::sqrtf(1.2 * 9.81 / libm::fabsf(f.z));
     }
     v
@@ -612,4 +633,37 @@ fn a_gps_altitude_outage_is_bridged_for_max_alt_coast_s_then_the_filter_stops() 
     let mut g = level_frame(5001, false);
     g.valid &= !Channel::VelDown.bit();
     assert!(f.step_frame(&g, 0.05).flags & flags::NO_INPUT != 0);
+}
+
+/// α̇ as JSBSim defines it: 0 in a steady turn (the body velocity does not change, whatever the
+/// rates), and `u·ẇ / V²` under a pure body-z acceleration `ẇ`; a steady wind does not move it.
+#[test]
+fn alpha_rate_is_the_rate_of_the_body_velocity() {
+    let alpha = 0.1f32;
+    let v = 120.0f32;
+    let euler = [0.5f32, alpha, 1.0];
+    let cbn = c_bn(euler);
+    let vb = Vector3::new(v * libm::cosf(alpha), 0.0, v * libm::sinf(alpha));
+    let vel_ned = cbn.transpose() * vb;
+    let gyro = [0.02f32, 0.08, 0.05];
+    let g_body = cbn * Vector3::new(0.0, 0.0, GRAVITY_MPS2);
+    // Steady: the specific force holds the body velocity (f + g = ω × v).
+    let f_steady = Vector3::from(gyro).cross(&vb) - g_body;
+    let ned = [vel_ned.x, vel_ned.y, vel_ned.z];
+    let steady = alpha_rate(&vb, &cbn, ned, &f_steady, gyro);
+    assert!(steady.abs() < 1e-5, "{steady}");
+    // 3 m/s² more along body z: α̇ = u · 3 / (u² + w²).
+    let f_pull = f_steady + Vector3::new(0.0, 0.0, 3.0);
+    let want = vb.x * 3.0 / (v * v);
+    let got = alpha_rate(&vb, &cbn, ned, &f_pull, gyro);
+    assert!((got - want).abs() < 1e-5, "{got} {want}");
+    // A steady wind of 10 m/s from ahead changes the air velocity, not the acceleration.
+    let vb_air = vb + Vector3::new(10.0, 0.0, 0.0);
+    let with_wind = alpha_rate(&vb_air, &cbn, ned, &f_steady, gyro);
+    assert!(with_wind.abs() < 1e-5, "{with_wind}");
+    // Below 1 m/s in the symmetry plane, and for non-finite inputs: 0.
+    let slow = Vector3::new(0.5, 30.0, 0.5);
+    assert_eq!(alpha_rate(&slow, &cbn, ned, &f_pull, gyro), 0.0);
+    let nan = Vector3::new(f32::NAN, 0.0, 0.0);
+    assert_eq!(alpha_rate(&vb, &cbn, ned, &nan, gyro), 0.0);
 }
