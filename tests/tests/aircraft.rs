@@ -132,7 +132,7 @@ fn descriptions_are_validated_key_by_key() {
         assert!(!ok, "`{from}` -> `{to}` was accepted");
         assert!(err.contains(says), "`{from}` -> `{to}`: {err}");
     }
-    // An airframe without external tanks (the c172p, the f15) is a valid description.
+    // An airframe without external tanks (internal fuel only) is a valid description.
     let (ok, err) = validate(
         &f16.replacen("external_tanks = [2, 3]", "external_tanks = []", 1),
         "f16",

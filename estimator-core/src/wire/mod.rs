@@ -435,6 +435,7 @@ mod tests {
         // The tags the module docs and docs/firmware.md give for the descriptions in the repo.
         assert_eq!(aircraft_tag("f16"), 0xBAFC_FCAB);
         assert_eq!(aircraft_tag("c172p"), 0xCC76_B31C);
+        assert_eq!(aircraft_tag("f15"), 0x23F5_AD11);
     }
 
     #[test]

@@ -12,7 +12,7 @@ pub mod c172p {
 #[rustfmt::skip]
 #[allow(non_snake_case)]
 pub mod f15 {
-    include!("f15_tables.rs");
+    include!("../../../estimator-core/src/aero/f15_tables.rs");
 }
 
 /// Every fixture: the model's name (its `NAME_parity.xml` flight) and its force model.
