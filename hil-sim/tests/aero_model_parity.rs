@@ -17,7 +17,8 @@ use std::sync::OnceLock;
 mod stock_flight;
 
 use estimator_core::aero::{
-    self, AirState, Coefficients, Factor, MODEL, Model, Point, Surfaces, Table2, Term, tables,
+    self, AirState, Coefficients, Factor, MODEL, Model, Point, Surfaces, Table2, Term, Unsteady,
+    tables,
 };
 
 /// Largest error allowed, as a fraction of the coefficient's range over the flight. f32 rounding of
@@ -128,8 +129,10 @@ impl Step {
             q_rps: g("velocities/q-aero-rad_sec") as f32,
             r_rps: g("velocities/r-aero-rad_sec") as f32,
             h_over_b: g("aero/h_b-mac-ft") as f32,
-            alpha_dot_rps: g("aero/alphadot-rad_sec") as f32,
-            stall_latched: g("aero/stall-hyst-norm") > 0.5,
+            unsteady: Unsteady {
+                alpha_dot_rps: g("aero/alphadot-rad_sec") as f32,
+                stall_latched: g("aero/stall-hyst-norm") > 0.5,
+            },
         };
         let flaperon = |p: &str| (g(p) * f64::from(aero::FLAPERON_DEG_PER_NORM)) as f32;
         let s = Surfaces {

@@ -774,7 +774,7 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
         tas as f32,
         cfg.gear_norm,
         // The identification reads quasi-steady frames of the card: no α̇, and below the stall.
-        filter::Unsteady::default(),
+        estimator_core::aero::Unsteady::default(),
     )?;
     let c = MODEL.coefficients_at(&point);
     if !c.valid {

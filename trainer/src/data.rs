@@ -179,16 +179,8 @@ impl Dataset {
     pub fn load_any(dir: &Path, val_fraction: f64) -> Result<Dataset> {
         let manifest = Manifest::read(dir)?;
         // A build trains and scores one aircraft: another description's flights are refused.
-        let ours = estimator_core::aircraft::AIRCRAFT.name;
-        if let Some(a) = manifest.aircraft.as_ref().filter(|a| a.name != ours) {
-            return Err(Error::Split(
-                dir.to_path_buf(),
-                format!(
-                    "its flights flew the aircraft `{}`, and this build is for `{ours}`: build \
-                     the trainer with ESTIMATOR_AIRCRAFT={} (docs/aircraft.md)",
-                    a.name, a.name
-                ),
-            ));
+        if let Some(why) = manifest.other_aircraft() {
+            return Err(Error::Split(dir.to_path_buf(), why));
         }
         let manifest_sha256 = sha256_file(&dir.join("manifest.json"))?;
         let train_names: Vec<&str> = manifest

@@ -696,7 +696,7 @@ fn load_split(data: &Path, role: Role) -> Result<Dataset> {
 /// get one.
 fn compiled_in_model() -> Result<(&'static str, Suite)> {
     match (
-        trainer::pipeline::shipped_provenance(),
+        estimator_core::model::SHIPPED_PROVENANCE,
         trainer::pipeline::shipped_suite(),
     ) {
         (Some(prov), Some(suite)) => Ok((prov, suite)),

@@ -172,7 +172,7 @@ pub fn run(ds: &Dataset) -> OodReport {
     OodReport {
         dataset: ds.dir.display().to_string(),
         manifest_sha256: ds.manifest_sha256.clone(),
-        model: crate::pipeline::shipped_provenance().map(str::to_string),
+        model: estimator_core::model::SHIPPED_PROVENANCE.map(str::to_string),
         cases: ds.ood_cases.clone(),
         estimators: estimators().iter().map(|e| score(ds, e)).collect(),
     }

@@ -270,7 +270,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
         regimes: crate::metrics::Regimes::of(&a, &b),
         flagged,
         sigma: pairs.map(|p| crate::uncertainty::Coverage::of(p.into_iter())),
-        provenance: shipped_provenance(),
+        provenance: estimator_core::model::SHIPPED_PROVENANCE,
     }
 }
 
@@ -365,9 +365,4 @@ fn sigma_errors<'a>(
 /// own answer, `Estimator::suite`).
 pub fn shipped_suite() -> Option<Suite> {
     Estimator::shipped().suite()
-}
-
-/// PROVENANCE of the compiled-in model, if this build has one.
-pub fn shipped_provenance() -> Option<&'static str> {
-    estimator_core::model::SHIPPED_PROVENANCE
 }

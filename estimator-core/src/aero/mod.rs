@@ -193,7 +193,15 @@ pub struct AirState {
     /// `aero/h_b-mac-ft`, a ratio despite its name). Ground effect on lift ends at 1.1: any larger
     /// value (e.g. [`AirState::NO_GROUND_EFFECT`]) is out of ground effect.
     pub h_over_b: f32,
-    /// Rate of change of α, rad/s (JSBSim's `aero/alphadot-rad_sec`), for models with an α̇ term.
+    /// What the model reads beyond the air-data point: α̇ and the stall latch.
+    pub unsteady: Unsteady,
+}
+
+/// What a force model reads beyond the air-data point, for models with such terms (JSBSim's
+/// `aero/alphadot-rad_sec` and `aero/stall-hyst-norm`; a model without them ignores both).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Unsteady {
+    /// Rate of change of α, rad/s.
     pub alpha_dot_rps: f32,
     /// JSBSim's stall-hysteresis latch (`aero/stall-hyst-norm` = 1): set once α rose above the
     /// model's upper hysteresis limit, until it falls below the lower one ([`Model::stall_latch`]).
@@ -243,7 +251,7 @@ impl Point {
             air.q_rps,
             air.r_rps,
             air.h_over_b,
-            air.alpha_dot_rps,
+            air.unsteady.alpha_dot_rps,
             s.elevator_deg,
             s.aileron_deg,
             s.rudder_deg,
@@ -284,9 +292,9 @@ impl Point {
             mag_elevator_rad: libm::fabsf(elevator_rad),
             // The left aileron is the one aileron channel.
             left_aileron_rad: s.aileron_deg.to_radians(),
-            alpha_dot_rps: air.alpha_dot_rps,
+            alpha_dot_rps: air.unsteady.alpha_dot_rps,
             flap_deg: s.flap_deg,
-            stall_hyst_norm: if air.stall_latched { 1.0 } else { 0.0 },
+            stall_hyst_norm: if air.unsteady.stall_latched { 1.0 } else { 0.0 },
         };
         // The inputs are finite (above), and so are their conversions; only the quotients by the
         // airspeed and the flaperon mix can still overflow.
@@ -879,8 +887,7 @@ mod tests {
             q_rps: 0.0,
             r_rps: 0.0,
             h_over_b: AirState::NO_GROUND_EFFECT,
-            alpha_dot_rps: 0.0,
-            stall_latched: false,
+            unsteady: Unsteady::default(),
         };
         let s = Surfaces::default();
         assert!(MODEL.coefficients(&air, &s).valid);
@@ -906,7 +913,10 @@ mod tests {
                 ..air
             },
             AirState {
-                alpha_dot_rps: f32::NAN,
+                unsteady: Unsteady {
+                    alpha_dot_rps: f32::NAN,
+                    stall_latched: false,
+                },
                 ..air
             },
             // Finite but overflowing: q·c/(2V) is +Inf in f32.

@@ -37,7 +37,7 @@
 
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
 
-use crate::aero::{self, AirState, MODEL, Surfaces};
+use crate::aero::{self, AirState, MODEL, Surfaces, Unsteady};
 use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 
@@ -544,20 +544,9 @@ pub fn model_point(
         q_rps: gyro[1],
         r_rps: gyro[2],
         h_over_b: AirState::NO_GROUND_EFFECT,
-        alpha_dot_rps: unsteady.alpha_dot_rps,
-        stall_latched: unsteady.stall_latched,
+        unsteady,
     };
     aero::Point::new(&MODEL, &air, &surfaces(inp, alpha_rad, mach, gear_norm))
-}
-
-/// What the force model reads beyond the air-data point, for models with such terms (JSBSim's
-/// `aero/alphadot-rad_sec` and `aero/stall-hyst-norm`; a model without them ignores both).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Unsteady {
-    /// α̇, rad/s.
-    pub alpha_dot_rps: f32,
-    /// The stall-hysteresis latch.
-    pub stall_latched: bool,
 }
 
 /// α̇ (rad/s) as JSBSim defines `aero/alphadot-rad_sec`: the body-axis rate of change of the

@@ -279,6 +279,12 @@ impl Flight {
     pub fn read_log_in_dataset(path: &Path) -> Result<Flight, DatasetError> {
         let (flight, has_sub) = Flight::read(path, false)?;
         if let Some((dir, m, _)) = Manifest::listing(path)? {
+            if let Some(why) = m.other_aircraft() {
+                return Err(DatasetError::Manifest {
+                    path: dir.join("manifest.json"),
+                    message: format!("{} not read: {why}", path.display()),
+                });
+            }
             m.check_subsamples(dir, path, has_sub)?;
         }
         Ok(flight)
@@ -510,6 +516,19 @@ impl Manifest {
     /// Whether every flight carries `suite`'s channels.
     pub fn carries(&self, suite: Suite) -> bool {
         self.suites().contains(&suite)
+    }
+
+    /// Why this build may not read the dataset's flights, when they flew another aircraft
+    /// description than the build's (one aircraft per build: its features, scaling and networks),
+    /// with how to build for theirs; `None` when they are this build's (or the record predates
+    /// descriptions: the F-16).
+    pub fn other_aircraft(&self) -> Option<String> {
+        let theirs = self.aircraft.as_ref()?;
+        let how = crate::cli_values::this_builds_aircraft(&theirs.name).err()?;
+        Some(format!(
+            "its flights flew the aircraft `{}`; {how}",
+            theirs.name
+        ))
     }
 
     /// The `manifest.json` beside the flight CSV at `csv` and its entry for the file, when there is

@@ -167,26 +167,6 @@ fn manifest_faults(csv: &Path) -> Result<Vec<crate::faults::Fault>, RunError> {
     }
 }
 
-/// A dataset's flight that flew another aircraft description (its manifest says so) is refused:
-/// the frames this build sends and the estimator that reads them are its own aircraft's.
-fn refuse_other_aircraft(csv: &Path) -> Result<(), RunError> {
-    let Some((_, manifest, _)) = crate::dataset::Manifest::listing(csv)? else {
-        return Ok(());
-    };
-    match manifest.aircraft {
-        Some(a) if a.name != estimator_core::aircraft::AIRCRAFT.name => {
-            let why = crate::cli_values::this_builds_aircraft(&a.name).err();
-            Err(RunError::Usage(format!(
-                "{} flew the aircraft `{}` (its dataset's manifest says so); {}",
-                csv.display(),
-                a.name,
-                why.unwrap_or_default()
-            )))
-        }
-        _ => Ok(()),
-    }
-}
-
 /// Loads or flies the flight (a script on the package's model of the build's aircraft, or on
 /// `--aircraft-dir`'s).
 pub fn flight(source: &Source, seed: u64, max_time_s: Option<f64>) -> Result<Flight, RunError> {
@@ -207,10 +187,7 @@ pub fn flight_on(
         ));
     }
     let mut f = match (&source.dataset, &source.script) {
-        (Some(csv), _) => {
-            refuse_other_aircraft(csv)?;
-            Flight::read_log_in_dataset(csv)?
-        }
+        (Some(csv), _) => Flight::read_log_in_dataset(csv)?,
         (None, Some(script)) => crate::fly::fly_script(
             script,
             &crate::fly::FlyConfig {
