@@ -25,6 +25,7 @@ fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     println!("cargo:rerun-if-changed=aircraft_name.rs");
     aircraft(&manifest);
+    descriptions(&manifest);
     aero_tables(&manifest);
     sigma_weights(&manifest);
     filter_side_scale();
@@ -104,6 +105,23 @@ fn aircraft(manifest: &std::path::Path) {
         path.display()
     );
     println!("cargo:rustc-env=ESTIMATOR_AIRCRAFT_FILE={}", path.display());
+}
+
+/// `ESTIMATOR_DESCRIPTIONS`: the names of every aircraft description generated into
+/// `src/aircraft/` (`NAME.rs` of `aircraft/NAME.toml`), sorted and comma-separated, for a message
+/// that names the aircraft this tree can be built for and for tests that need another one.
+fn descriptions(manifest: &std::path::Path) {
+    let dir = manifest.join("src/aircraft");
+    println!("cargo:rerun-if-changed={}", dir.display());
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .filter_map(|p| p.file_stem().and_then(|s| s.to_str()).map(str::to_string))
+        .filter(|n| n != "mod")
+        .collect();
+    names.sort();
+    println!("cargo:rustc-env=ESTIMATOR_DESCRIPTIONS={}", names.join(","));
 }
 
 include!("aircraft_name.rs");

@@ -23,11 +23,19 @@ pub fn at_least_one(s: &str) -> std::result::Result<usize, String> {
 }
 
 /// `--aircraft NAME`: the aircraft this build is for (its description `aircraft/NAME.toml`). A
-/// build carries one aircraft; another name is refused with how to build for it.
+/// build carries one aircraft; another described one is refused with how to build for it, a name
+/// no description has with the names there are.
 pub fn this_builds_aircraft(s: &str) -> std::result::Result<String, String> {
     let ours = estimator_core::aircraft::AIRCRAFT;
     if s == ours.name {
         return Ok(s.to_string());
+    }
+    if !estimator_core::aircraft::is_described(s) {
+        return Err(format!(
+            "no aircraft is described as `{s}`: this tree describes {} (aircraft/NAME.toml); to \
+             add one, docs/aircraft.md",
+            estimator_core::aircraft::DESCRIPTIONS.replace(',', ", ")
+        ));
     }
     Err(format!(
         "this build is for `{}` ({}), not `{s}`: a build carries one aircraft. Build for `{s}` with \

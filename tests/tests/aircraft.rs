@@ -192,3 +192,27 @@ fn the_build_is_for_the_f16_description() {
         (31.0, 90.0, 45_000.0)
     );
 }
+
+/// Every frame names its aircraft by the CRC-32 of the description's name (`wire::aircraft_tag`):
+/// docs/architecture.md gives each description's tag, and the build lists every description.
+#[test]
+fn every_description_has_the_tag_the_docs_give() {
+    let doc = std::fs::read_to_string(root().join("docs/architecture.md")).unwrap();
+    let names: Vec<&str> = estimator_core::aircraft::DESCRIPTIONS.split(',').collect();
+    let mut files: Vec<String> = std::fs::read_dir(root().join("aircraft"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| p.file_stem().unwrap().to_str().unwrap().to_string())
+        .collect();
+    files.sort();
+    assert_eq!(
+        names, files,
+        "aircraft/*.toml against the generated descriptions"
+    );
+    for name in names {
+        let tag = estimator_core::wire::aircraft_tag(name);
+        let said = format!("`{name}` 0x{tag:08X}");
+        assert!(doc.contains(&said), "docs/architecture.md lacks {said}");
+    }
+}

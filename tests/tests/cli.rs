@@ -94,10 +94,20 @@ fn sensed_only(h: &str) -> bool {
     h == "time_s" || !hil_sim::flight::TRUTH_COLUMNS.contains(&h)
 }
 
+/// An aircraft description of this tree that is not the build's.
+fn other_aircraft() -> &'static str {
+    estimator_core::aircraft::DESCRIPTIONS
+        .split(',')
+        .find(|n| *n != estimator_core::aircraft::AIRCRAFT.name)
+        .expect("the tree describes more than one aircraft")
+}
+
 /// `--aircraft` on every command of both binaries: this build's aircraft is accepted, another one
-/// refused before anything runs, with how to build for it.
+/// refused before anything runs, with how to build for it; a name no description has is refused
+/// with the names there are.
 #[test]
 fn another_aircraft_is_refused_with_how_to_build_for_it() {
+    let other = other_aircraft();
     for (b, args) in [
         ("hil-sim", &["run", "--script", "nowhere.xml"][..]),
         (
@@ -106,9 +116,15 @@ fn another_aircraft_is_refused_with_how_to_build_for_it() {
         ),
         ("trainer", &["eval", "--data", "nowhere"][..]),
     ] {
-        let o = run(b, &[args, &["--aircraft", "c172p"]].concat());
+        let o = run(b, &[args, &["--aircraft", other]].concat());
         refused(&o, "this build is for `f16`");
-        refused(&o, "ESTIMATOR_AIRCRAFT=c172p");
+        refused(&o, &format!("ESTIMATOR_AIRCRAFT={other}"));
+        let o = run(b, &[args, &["--aircraft", "f61"]].concat());
+        refused(&o, "no aircraft is described as `f61`");
+        refused(
+            &o,
+            &estimator_core::aircraft::DESCRIPTIONS.replace(',', ", "),
+        );
         // The build's own aircraft passes the flag, and the command goes on (to its own error).
         let o = run(b, &[args, &["--aircraft", "f16"]].concat());
         let stderr = String::from_utf8_lossy(&o.stderr);
@@ -120,13 +136,14 @@ fn another_aircraft_is_refused_with_how_to_build_for_it() {
 /// estimator: its frames would carry this build's aircraft and be read with its networks.
 #[test]
 fn run_refuses_a_dataset_flight_of_another_aircraft() {
+    let other = other_aircraft();
     let d = scratch("other-aircraft");
     std::fs::create_dir_all(&d).unwrap();
     std::fs::copy(test_csv(), d.join("test_aggressive_00.csv")).unwrap();
     let mut m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(ci().join("manifest.json")).unwrap())
             .unwrap();
-    m["aircraft"]["name"] = "c172p".into();
+    m["aircraft"]["name"] = other.into();
     std::fs::write(d.join("manifest.json"), m.to_string()).unwrap();
     let out = d.join("run");
     let o = run(
@@ -139,8 +156,8 @@ fn run_refuses_a_dataset_flight_of_another_aircraft() {
             out.to_str().unwrap(),
         ],
     );
-    refused(&o, "flew the aircraft `c172p`");
-    refused(&o, "ESTIMATOR_AIRCRAFT=c172p");
+    refused(&o, &format!("flew the aircraft `{other}`"));
+    refused(&o, &format!("ESTIMATOR_AIRCRAFT={other}"));
     assert!(!out.exists(), "a refused run wrote {}", out.display());
 }
 

@@ -573,19 +573,25 @@ mod tests {
         );
         // Another description's dataset is refused outright: this build evaluates its own
         // aircraft's model.
-        let c172p = tiny_dataset("air-c172p", &[("d0", Train), ("dt", Test)], &both);
-        let mut m = Manifest::read(&c172p).unwrap();
+        let name = estimator_core::aircraft::DESCRIPTIONS
+            .split(',')
+            .find(|n| *n != estimator_core::aircraft::AIRCRAFT.name)
+            .unwrap();
+        let elsewhere = tiny_dataset("air-elsewhere", &[("d0", Train), ("dt", Test)], &both);
+        let mut m = Manifest::read(&elsewhere).unwrap();
         m.aircraft = Some(hil_sim::dataset::AircraftRecord {
-            name: "c172p".into(),
+            name: name.into(),
             dir: None,
             model_xml_sha256: "c".repeat(64),
         });
-        m.write(&c172p).unwrap();
-        match Dataset::load(&c172p, 0.5) {
-            Err(Error::Split(_, msg)) => assert!(msg.contains("ESTIMATOR_AIRCRAFT=c172p"), "{msg}"),
+        m.write(&elsewhere).unwrap();
+        match Dataset::load(&elsewhere, 0.5) {
+            Err(Error::Split(_, msg)) => {
+                assert!(msg.contains(&format!("ESTIMATOR_AIRCRAFT={name}")), "{msg}")
+            }
             r => panic!("another aircraft's dataset loaded: {:?}", r.err()),
         }
-        for d in [main, other, same, twin, c172p] {
+        for d in [main, other, same, twin, elsewhere] {
             let _ = std::fs::remove_dir_all(d);
         }
     }

@@ -188,6 +188,16 @@ mod generated {
 
 pub use generated::AIRCRAFT;
 
+/// The names of every aircraft description this tree can be built for (`src/aircraft/NAME.rs`,
+/// generated from `aircraft/NAME.toml`), sorted and comma-separated; the build carries one of them,
+/// [`AIRCRAFT`].
+pub const DESCRIPTIONS: &str = env!("ESTIMATOR_DESCRIPTIONS");
+
+/// Whether `name` is one of [`DESCRIPTIONS`].
+pub fn is_described(name: &str) -> bool {
+    DESCRIPTIONS.split(',').any(|n| n == name)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -573,7 +573,8 @@ pub fn alpha_rate(
     }
 }
 
-/// Standard gravity, m/s² (JSBSim's F-16 and c172p fly a constant-gravity earth near the ground).
+/// Standard gravity, m/s² (the JSBSim models flown here fly a constant-gravity earth near the
+/// ground).
 const GRAVITY_MPS2: f32 = 9.80665;
 
 /// Dynamic pressure times the wing area over the mass: the specific force (m/s²) of a unit force

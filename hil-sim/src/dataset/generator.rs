@@ -64,8 +64,8 @@ pub fn sensor_seed(flight_seed: u64) -> u64 {
 /// Re-draws of a flight whose random initial condition JSBSim cannot trim, before giving up. A
 /// re-draw changes only flights whose earlier draws all failed, so a larger budget leaves every
 /// dataset that was written before as it was; ten make a lost dataset unlikely even for a profile
-/// a third of whose starts its airframe cannot hold level (the c172p's fastest: 0.3^11 ≈ 2·10⁻⁶ per
-/// flight).
+/// a third of whose starts its airframe cannot hold level (0.3^11 ≈ 2·10⁻⁶ per flight; the light
+/// single's fastest profile is such a one).
 pub const TRIM_RETRIES: u64 = 10;
 
 /// Maneuver seed of re-draw `attempt` (0 = the planned seed).
@@ -587,7 +587,7 @@ mod tests {
                 .collect();
             assert_eq!(seeds.len() as u64, TRIM_RETRIES + 1, "{planned}");
         }
-        // The c172p's paper test flight of seed 15 that needed its 6th draw.
+        // A `paper` test flight of seed 15 that needed its 6th draw (on the light single).
         assert_eq!(redraw_seed(15_503, 5), 5_060_936_715_665_947_791);
     }
 }
