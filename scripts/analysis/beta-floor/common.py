@@ -1,8 +1,10 @@
 """Shared helpers for the β error analysis (analysis only; nothing here is used by the project).
 
-Computes nothing by itself: dataset I/O (with an .npz cache in $WORK/cache), ISA, the F-16 side and
-drag coefficients parsed from estimator-core/src/aero/f16_tables.rs, the memoryless β inversion of
-the lateral force, the IMU's anti-alias filter at 120 Hz, MAE and a zero-phase band split.
+Computes nothing by itself: dataset I/O (with an .npz cache in $WORK/cache), the aircraft's geometry
+and IMU lever arm ($AIRCRAFT: aircraft/<name>.toml and its JSBSim model), ISA, the slope of the body
+lateral force in β from a replay's JSBSim terms (any aircraft), the F-16 side and drag coefficients
+parsed from estimator-core/src/aero/f16_tables.rs (F-16 only), the memoryless β inversion of the
+lateral force, the IMU's anti-alias filter at 120 Hz, MAE and a zero-phase band split.
 
 Data: $DATA (hil-sim generate --preset large --seed 1; default <repo>/out/data/large), the
 shipped estimator's per-frame answers in $WORK/run-<flight>/estimates.csv (run_all.sh). See paths.py.
@@ -11,22 +13,58 @@ import csv
 import json
 import os
 import re
+import tomllib
+import xml.etree.ElementTree as ET
 
+import jsbsim
 import numpy as np
 
-from paths import DATA, HERE, REPO, WORK  # noqa: F401 (re-exported)
+from paths import AIRCRAFT, DATA, HERE, REPO, WORK  # noqa: F401 (re-exported)
 FT = 0.3048
 G0 = 9.80665
-S_M2 = 300.0 * FT * FT
-B_M = 30.0 * FT
-C_M = 11.32 * FT
-EMPTY_KG = (17_400.0 + 230.0) * 0.45359237
-LEVER = np.array([0.5, 0.0, 0.2])
+LB_KG = 0.45359237
+
+
+# ---------------------------------------------------------------------------------------------
+# The aircraft ($AIRCRAFT): its description aircraft/<name>.toml and its JSBSim model (the pinned
+# package's aircraft/<model>/<model>.xml, which the dataset's scripts <use>).
+def _aircraft():
+    path = os.path.join(REPO, "aircraft", AIRCRAFT + ".toml")
+    if not os.path.exists(path):
+        raise SystemExit(f"AIRCRAFT={AIRCRAFT}: no {path}")
+    with open(path, "rb") as f:
+        desc = tomllib.load(f)
+    model = desc["jsbsim"]["model"]
+    xml = os.path.join(jsbsim.get_default_root_dir(), "aircraft", model, model + ".xml")
+    return desc, xml, ET.parse(xml).getroot()
+
+
+AIRCRAFT_DESC, AIRCRAFT_XML, _MODEL = _aircraft()
+JSBSIM_MODEL = AIRCRAFT_DESC["jsbsim"]["model"]
+
+
+def _metric(tag):
+    """A <metrics> length (m) or area (m²) of the JSBSim model."""
+    e = _MODEL.find("metrics/" + tag)
+    unit = e.get("unit", "FT2" if tag == "wingarea" else "FT")
+    v = float(e.text)
+    return {"FT": v * FT, "FT2": v * FT * FT, "M": v, "M2": v}[unit]
+
+
+S_M2 = _metric("wingarea")
+B_M = _metric("wingspan")
+C_M = _metric("chord")
+EMPTY_KG = (AIRCRAFT_DESC["mass"]["empty_weight_lb"] + AIRCRAFT_DESC["mass"]["pilot_lb"]) * LB_KG
+LEVER = np.array(AIRCRAFT_DESC["installation"]["imu_lever_arm_m"], dtype=float)
 
 
 def manifest():
     with open(os.path.join(DATA, "manifest.json")) as f:
-        return json.load(f)
+        m = json.load(f)
+    flown = (m.get("aircraft") or {}).get("name")
+    if flown is not None and flown != AIRCRAFT:
+        raise SystemExit(f"{DATA} was flown on the {flown}, not AIRCRAFT={AIRCRAFT}: set AIRCRAFT={flown}")
+    return m
 
 
 def flights(split=None):
@@ -101,8 +139,66 @@ def isa(alt_m):
 
 
 # ---------------------------------------------------------------------------------------------
+# The slope of the body-axis lateral aerodynamic force in β, from JSBSim's own terms (any aircraft
+# whose aerodynamics are in wind axes: DRAG, SIDE, LIFT). F_y,body = Y·cosβ − D·sinβ (JSBSim's Tw2b),
+# so ∂F_y,body/∂β = ∂Y/∂β·cosβ − Y·sinβ − D·cosβ − ∂D/∂β·sinβ ≈ ∂Y/∂β − D − β·∂D/∂β for small β.
+# The terms that read β are each of degree 1 in it (β or |β| times factors free of β, or a table
+# linear in β through 0: F-16 CYb, CYb_M; f15 CYb, CDbeta; c172p CYb for |β| < 0.349 rad, CDbeta),
+# so a term's ∂/∂β is its value / β: exact, from the replay's recorded term values.
+_BETA_PROPS = ("aero/beta-rad", "aero/mag-beta-rad", "aero/beta-deg", "aero/mag-beta-deg")
+
+
+def beta_terms():
+    """{'SIDE': [...], 'DRAG': [...]}: the model's aero/coefficient functions of those axes that read β."""
+    aero = _MODEL.find("aerodynamics")
+    axes = {a.get("name") for a in aero.findall("axis")}
+    if not {"DRAG", "SIDE", "LIFT"} <= axes:
+        raise SystemExit(f"{AIRCRAFT_XML}: aerodynamics not in wind axes ({sorted(axes)})")
+    def reads(fn):
+        return [(e.text or "").strip() for e in fn.iter() if e.tag in ("property", "independentVar")]
+    # helper functions (aero/function/...) that read β would hide it from the test below
+    hidden = {fn.get("name") for fn in aero.findall("function") if any("beta" in p for p in reads(fn))}
+    out = {"SIDE": [], "DRAG": []}
+    for a in aero.findall("axis"):
+        if a.get("name") not in out:
+            continue
+        for fn in a.findall("function"):
+            beta = [p for p in reads(fn) if "beta" in p or p in hidden]
+            if any(p not in _BETA_PROPS for p in beta):
+                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads {beta}: not a known degree-1 β term")
+            if beta:
+                out[a.get("name")].append(fn.get("name"))
+    return out
+
+
+def key(prop):
+    """A JSBSim property's key in a replay (replay120.py)."""
+    return prop.replace("/", "__").replace("-", "_")
+
+
+def beta_term_slopes(r):
+    """(∂Y/∂β, ∂D/∂β), lbf per rad, at every step of a replay `r` (replay120.py)."""
+    b = r["aero__beta_rad"]
+    ok = b != 0.0
+    t = beta_terms()
+
+    def per_beta(axis):
+        s = sum(r[key(p)] for p in t[axis]) if t[axis] else np.zeros_like(b)
+        v = np.where(ok, s / np.where(ok, b, 1.0), np.nan)
+        return np.interp(np.arange(len(v)), np.flatnonzero(ok), v[ok])  # β exactly 0: the neighbours'
+    return per_beta("SIDE"), per_beta("DRAG")
+
+
+def side_force_slope_lbs(r):
+    """∂F_y,body/∂β (lbf per rad, small β) at every step of a replay `r` (replay120.py)."""
+    dy, dd = beta_term_slopes(r)
+    return dy - r["forces__fwx_aero_lbs"] - r["aero__beta_rad"] * dd
+
+
+# ---------------------------------------------------------------------------------------------
 # The F-16 side and drag coefficients, parsed from estimator-core/src/aero/f16_tables.rs (read
 # only). JSBSim FGTable semantics: 1-D linear between breakpoints, end values held; 2-D: row first.
+# F-16 only: every function from here to beta_from_cy_body.
 _TABLES = None
 
 
@@ -110,6 +206,8 @@ def _parse_tables():
     global _TABLES
     if _TABLES is not None:
         return _TABLES
+    if AIRCRAFT != "f16":
+        raise SystemExit(f"AIRCRAFT={AIRCRAFT}: common.py's side and drag tables are the F-16's")
     src = open(os.path.join(REPO, "estimator-core", "src", "aero", "f16_tables.rs")).read()
     t = {}
     for m in re.finditer(r"pub static (\w+): Table1<\d+> = Table1 \{\s*key: Var::(\w+),\s*x: \[([^\]]*)\],\s*y: \[([^\]]*)\]", src):

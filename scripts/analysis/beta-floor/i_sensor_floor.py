@@ -1,12 +1,13 @@
 """Physics side of two small questions (no network): (1) how the turbulence floor moves with the IMU
 anti-alias cut-off (F1-style linear deconvolution, fitted on the aggressive training flights);
 (2) what the filter's gear-up assumption (CDgear = 0 while every flight has the gear down) does to
-a β inverted from the true lateral force.
-Needs: $WORK/run-<flight>/ and $WORK/replay/ of the test and the 16 aggressive training flights.
-usage: nice -n 19 <repo>/.venv/bin/python i_sensor_floor.py > "$WORK/out/i_sensor_floor.md"
+a β inverted from the true lateral force. (1) holds for any $AIRCRAFT; (2) uses the F-16's tables and is
+skipped on another aircraft.
+Needs: $WORK/replay/ of the test and the aggressive training flights (16 in `large`, 4 in `paper`).
+usage: [AIRCRAFT=f15] nice -n 19 <repo>/.venv/bin/python i_sensor_floor.py > "$WORK/out/i_sensor_floor.md"
 """
 import numpy as np
-from common import FT, beta_from_cy_body, flights, imu_filter_120, mae
+from common import AIRCRAFT, FT, beta_from_cy_body, flights, imu_filter_120, mae
 from d_turb import parts
 from f_floor import TESTS, lags
 from frames import table
@@ -22,8 +23,8 @@ fcs = [6.0, 10.0, 15.0, 25.0]
 train = [fl["name"] for fl in flights("train") if fl["profile"] == "aggressive"]
 tr = [prep(n, fcs) for n in train]
 te = {n: prep(n, fcs) for n in TESTS}
-print("# (1) Turbulence floor vs IMU anti-alias cut-off (lag 3 ms kept)\n")
-print("β_noturb exact + β_turb from its IMU-filtered samples: 'as filtered' (no deconvolution) / linear deconvolution, lags 0..5 (fit: aggressive training flights).\n")
+print(f"# (1) Turbulence floor vs IMU anti-alias cut-off (lag 3 ms kept), {AIRCRAFT}\n")
+print(f"β_noturb exact + β_turb from its IMU-filtered samples: 'as filtered' (no deconvolution) / linear deconvolution, lags 0..5 (fit: {len(tr)} aggressive training flights).\n")
 print("| cut-off | " + " | ".join(TESTS) + " |")
 print("|---|" + "---|" * len(TESTS))
 for fc in fcs:
@@ -37,6 +38,9 @@ for fc in fcs:
         cells.append(f"{raw:.3f} / {dec:.3f}")
     print(f"| {fc:g} Hz | " + " | ".join(cells) + " |")
 
+if AIRCRAFT != "f16":
+    print("\n# (2) Gear: skipped (the F-16's tables and CDgear)")
+    raise SystemExit(0)
 print("\n# (2) Gear: every flight flies with the gear down (gear/gear-pos-norm = 1, CDgear = 0.027)\n")
 print("β inverted from JSBSim's exact lateral force and aero rates (exact = 0) with the drag term lacking CDgear, as a gear-up model would.\n")
 print("| flight | MAE of the β error | mean abs β | error / abs β |")

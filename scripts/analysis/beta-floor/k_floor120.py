@@ -12,23 +12,29 @@ Accelerometer error ("real"): e_Ay = accel_y_mps2_sub* (the unit's output, reass
 120 Hz series) − lag(f_y,IMU true) where f_IMU true = fb_total/m + ω̇×r + ω×(ω×r) from the replay
 (the inputs hil-sim feeds the sensor model). It carries every error of the model (scale factor,
 misalignment, turn-on and in-run bias, white noise, Δv quantization). Converted to β with the
-oracle's truth: δβ = e_Ay·m / (q̄·S·(∂C_Y,body/∂β)), ∂C_Y,body/∂β ≈ CYβ(M) − C_D (wind-axis drag).
+oracle's truth: δβ = e_Ay·m / (∂F_y,body/∂β), ∂F_y,body/∂β ≈ q̄S·(CYβ − C_D − β·∂C_D/∂β) from the
+replay's JSBSim terms (common.side_force_slope_lbs; on the F-16 CYβ(M) − C_D, its drag having no β
+term; on the f15 and c172p the CDbeta term, of |β|, adds −2·CDβ·|β| to the slope).
 "White" variant: e_Ay minus its 2-s centred moving mean (its slow part, bias and the misalignment
 and scale-factor errors on slow forces, removed; noise, quantization and the fast part kept).
 
-usage: DATA=... WORK=... nice -n 19 <repo>/.venv/bin/python k_floor120.py > "$WORK/out/k_floor120.md"
+The deconvolution is fitted on the dataset's aggressive training flights (16 in `large`, 4 in `paper`).
+
+usage: [AIRCRAFT=f15] DATA=... WORK=... nice -n 19 <repo>/.venv/bin/python k_floor120.py > "$WORK/out/k_floor120.md"
 """
 import sys
 
 import numpy as np
 
-from common import FT, LEVER, S_M2, butter_120, flights, imu_filter_120, imu_lag_120, mae, side_parts
+from common import (AIRCRAFT, FT, LEVER, beta_term_slopes, butter_120, flights, imu_filter_120, imu_lag_120, mae,
+                    manifest, side_force_slope_lbs)
 from d_turb import parts
 from f_floor import TESTS, lags
 from frames import table
 
 SLUG_KG = 14.593902937
 PSF_PA = 47.880258889
+LBF_N = 4.4482216152605
 
 
 def sub_series(d, ch, n120):
@@ -62,10 +68,9 @@ def prep(n):
     # consistency: the 20 Hz channel is the biquad over the unit's outputs
     chk = np.max(np.abs(butter_120(u)[i] - d["accel_y_mps2"]))
     # m/s² → β (deg), oracle truth
-    qs = r["aero__qbar_psf"] * 300.0
-    cd = r["forces__fwx_aero_lbs"] / qs
-    slope, _ = side_parts(r["aero__alpha_rad"], r["velocities__mach"], 0, 0, 0, 0, r["velocities__vt_fps"] * FT)
-    k_beta = np.degrees(ms * SLUG_KG / (r["aero__qbar_psf"] * PSF_PA * S_M2) / (slope - cd))
+    k_beta = np.degrees(ms * SLUG_KG / (side_force_slope_lbs(r) * LBF_N))
+    # the same without the β term of the drag (q̄S·(CYβ − C_D)), for comparison only
+    k_beta0 = np.degrees(ms * SLUG_KG / ((beta_term_slopes(r)[0] - r["forces__fwx_aero_lbs"]) * LBF_N))
     e_b = e_ay * k_beta
     w = 240  # 2 s centred moving mean of e_Ay: its slow part (bias, misalignment·f)
     slow = np.convolve(e_ay, np.ones(w) / w, mode="same")
@@ -80,6 +85,8 @@ def prep(n):
         y120=lagged, y120_real=lagged + e_b, y120_white=lagged + e_b_white,
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
+        f_per_deg=np.median(1 / np.abs(k_beta[i])), f_per_deg0=np.median(1 / np.abs(k_beta0[i])),
+        qbar_kpa=np.mean(r["aero__qbar_psf"][i]) * PSF_PA / 1000, mass_kg=np.mean(ms[i]) * SLUG_KG,
     )
 
 
@@ -92,6 +99,8 @@ def feat120(y, i, L):
 
 
 def main():
+    lever = manifest()["config"]["sensors"]["imu"]["lever_arm_m"]
+    assert np.allclose(lever, LEVER), (lever, LEVER)  # the dataset's IMU is where aircraft/<name>.toml says
     train = [fl["name"] for fl in flights("train") if fl["profile"] == "aggressive"]
     if len(sys.argv) > 1:
         train = train[: int(sys.argv[1])]
@@ -129,7 +138,7 @@ def main():
                 print(f"<!-- weights {key} L=6: {np.array2string(w, precision=4)} -->")
     rows.append(("reference: β_noturb exact, β_turb = 0", score(lambda p: p["b_nt"])))
 
-    print(f"# β floor with 120 Hz IMU outputs (fit: {len(tr)} aggressive training flights; MAE, deg)\n")
+    print(f"# β floor with 120 Hz IMU outputs, {AIRCRAFT} (fit: {len(tr)} aggressive training flights; MAE, deg)\n")
     cols = TESTS + ["overall"]
     print("| oracle | " + " | ".join(c.replace("test_", "") for c in cols) + " |")
     print("|---|" + "---|" * len(cols))
@@ -140,6 +149,11 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for n, p in te.items():
         print(f"| {n} | {nfr[n]} | {p['chk']:.2e} | {p['e_ay_mean']:.2e} | {p['e_ay_std']:.2e} | {p['k_beta']:.3f} | {p['e_b_mae']:.4f} | {p['e_b_white_mae']:.4f} |")
+    print("\n## Lateral specific force per degree of β, test flights (medians over the frames)\n")
+    print("| flight | m/s² per deg | without the drag's β term (CYβ − C_D) | mean q̄ kPa | mean mass kg |")
+    print("|---|---|---|---|---|")
+    for n, p in te.items():
+        print(f"| {n} | {p['f_per_deg']:.3f} | {p['f_per_deg0']:.3f} | {p['qbar_kpa']:.2f} | {p['mass_kg']:.0f} |")
     print("\nTraining flights: max channel check " + f"{max(p['chk'] for p in tr):.2e}, e_Ay std " +
           ", ".join(f"{p['e_ay_std']:.2e}" for p in tr))
 

@@ -1,16 +1,21 @@
 """Re-fly a dataset flight's maneuver in stock JSBSim (the project's pinned .venv) and keep ~70
 properties at every 120 Hz step: the aero side-force terms, turbulence, aero vs inertial rates,
 forces. Analysis only (reads $DATA/<name>.xml and _init.xml, writes $WORK/replay/<name>.npz).
+The script's aircraft must be $AIRCRAFT's JSBSim model (paths.py). The fcs/* and aero/coefficient/*
+names below are the F-16's: on another aircraft those its model lacks are recorded as NaN; the
+model's own β terms of side force and drag (common.beta_terms) are recorded on every aircraft.
 
-usage: nice -n 19 <repo>/.venv/bin/python replay120.py test_aggressive_03 [more names]
+usage: [AIRCRAFT=f15] nice -n 19 <repo>/.venv/bin/python replay120.py test_aggressive_03 [more names]
 """
 import os
 import sys
 import time
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import jsbsim
 
+from common import AIRCRAFT, JSBSIM_MODEL, beta_terms, key
 from paths import DATA, WORK
 
 OUT = os.path.join(WORK, "replay")
@@ -46,12 +51,24 @@ PROPS = [
 ]
 
 
+def props():
+    own = AIRCRAFT == "f16"
+    out = [p if own or p.startswith("?") or not p.startswith(("fcs/", "aero/coefficient/")) else "?" + p
+           for p in PROPS]
+    terms = beta_terms()
+    return out + [p for p in terms["SIDE"] + terms["DRAG"] if p not in out]
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
+    wanted = props()
     for name in sys.argv[1:]:
         t0 = time.time()
         script = os.path.join(DATA, name + ".xml")
         init = os.path.join(DATA, name + "_init.xml")
+        flown = ET.parse(script).getroot().find("use").get("aircraft")
+        if flown != JSBSIM_MODEL:
+            raise SystemExit(f"{script} flies {flown}, not AIRCRAFT={AIRCRAFT} ({JSBSIM_MODEL}): set AIRCRAFT")
         fdm = jsbsim.FGFDMExec(jsbsim.get_default_root_dir())
         fdm.set_debug_level(0)
         if not fdm.load_script(script, 0.0, init):
@@ -59,7 +76,7 @@ def main():
         fdm.run_ic()
         pm = fdm.get_property_manager()
         getters = []
-        for p in PROPS:
+        for p in wanted:
             opt = p.startswith("?")
             n = pm.get_node(p[1:] if opt else p, False)
             if n is None:
@@ -72,7 +89,7 @@ def main():
         while fdm.run():
             rows.append([g() for g in getters])
         a = np.array(rows, dtype=np.float64 if name.startswith("test") else np.float32)
-        keys = [p.lstrip("?").replace("/", "__").replace("-", "_") for p in PROPS]
+        keys = [key(p.lstrip("?")) for p in wanted]
         np.savez_compressed(os.path.join(OUT, name + ".npz"), **{k: a[:, i] for i, k in enumerate(keys)})
         print(f"{name}: {len(rows)} steps in {time.time() - t0:.1f} s", flush=True)
 

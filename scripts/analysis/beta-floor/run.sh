@@ -2,14 +2,19 @@
 # The whole β-floor analysis (docs/results/beta-floor.md) in its original order:
 #   data       hil-sim generate --preset large --seed 1 into $DATA, if $DATA has no manifest.json
 #   estimates  run_all.sh: the shipped hybrid on all 68 flights → $WORK/run-<flight>/
-#   replay     replay120.py: 120 Hz JSBSim internals of the 4 test + 16 aggressive training flights
+#   replay     replay120.py: 120 Hz JSBSim internals of the 4 test + the aggressive training flights
+#              (16 in `large`, 4 in `paper`)
 #   tables     a_where … j_matched, k_floor120 → $WORK/out/*.md
 #   floors     i_sensor_floor, k_floor120 only (the sensor floors: no estimates needed) → $WORK/out/
 #   cf         cf_run.sh, cf_run2.sh: counterfactual re-flights (severity, EGI, anti-alias) → $WORK/cf/
 #   filter     filter_tune.sh + filter_summary.py: the filter alone on the training split
 # usage: scripts/analysis/beta-floor/run.sh [step ...]      (no step: all, in the order above)
-# Environment (see env.sh): DATA, WORK, HIL_SIM, TRAINER, PY; COPY_BINS=1 first copies hil-sim and
-# trainer to $WORK/bin and uses the copies, so a rebuild in target/ cannot change them mid-run.
+#        AIRCRAFT=f15 DATA=out/f15/paper scripts/analysis/beta-floor/run.sh replay floors
+# Environment (see env.sh): AIRCRAFT, DATA, WORK, HIL_SIM, TRAINER, PY; COPY_BINS=1 first copies hil-sim
+# and trainer to $WORK/bin and uses the copies, so a rebuild in target/ cannot change them mid-run.
+# AIRCRAFT (default f16) names the aircraft of DATA (aircraft/<name>.toml); on another aircraft than the
+# F-16 only the steps data (with that aircraft's build), replay and floors apply (floors: i_sensor_floor
+# part 1 and k_floor120; the other tables read the F-16's tables).
 # Needs release builds of hil-sim and trainer from the same checkout (this script does not build)
 # and the project's .venv (scripts/bootstrap: jsbsim, which brings numpy; nothing else is needed).
 # The figures in docs/results/beta-floor.md were measured at git 04512c2, whose dataset had point-
@@ -24,6 +29,7 @@ steps=("$@")
 [ ${#steps[@]} -gt 0 ] || steps=(data estimates replay tables cf filter)
 for s in "${steps[@]}"; do
   case "$s" in data|estimates|replay|tables|floors|cf|filter) ;; *) die "unknown step '$s'" ;; esac
+  case "$AIRCRAFT:$s" in f16:*|*:data|*:replay|*:floors) ;; *) die "step '$s' is the F-16's only (AIRCRAFT=$AIRCRAFT)" ;; esac
 done
 want() { local s; for s in "${steps[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
 
@@ -41,7 +47,7 @@ fi
 if want filter; then
   [ -x "$TRAINER" ] || die "no trainer at $TRAINER; cargo build --release -p trainer (or set TRAINER)"
 fi
-say "DATA=$DATA  WORK=$WORK  HIL_SIM=$HIL_SIM  PY=$PY"
+say "AIRCRAFT=$AIRCRAFT  DATA=$DATA  WORK=$WORK  HIL_SIM=$HIL_SIM  PY=$PY"
 
 if want data; then
   if [ -f "$DATA/manifest.json" ]; then
@@ -60,8 +66,9 @@ fi
 
 if want replay; then
   say "replay: 120 Hz JSBSim internals → $WORK/replay"
+  # shellcheck disable=SC2046  # the training flights' names, one word each
   nice -n 19 "$PY" "$HERE/replay120.py" test_gentle_00 test_high-alpha_01 test_climb-descent_02 test_aggressive_03 \
-    train_aggressive_{00..15}
+    $(cd "$HERE" && "$PY" -c 'import common; print(*(f["name"] for f in common.flights("train") if f["profile"] == "aggressive"))')
 fi
 
 if want tables; then
