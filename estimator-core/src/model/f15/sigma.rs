@@ -3,12 +3,12 @@
 
 /// The 1σ weights (Q8) of the estimate, per term (base, filter_sigma, disagreement, slow_disagreement, turbulence, lift_mismatch, side_mismatch, magnitude, nis_excess, filter_unclear, out_of_envelope, turbulent, caution).
 pub const SIGMA: crate::uncertainty::Coefficients = crate::uncertainty::Coefficients {
-    alpha: [0, 18, 89, 12, 436, 43, 190, 0, 6, 23, 0, 0, 5],
-    beta: [0, 0, 75, 84, 306, 29, 18, 4, 8, 13, 0, 11, 0],
+    alpha: [0, 22, 94, 62, 321, 34, 181, 0, 5, 20, 8, 0, 6],
+    beta: [0, 5, 82, 93, 313, 15, 0, 4, 8, 12, 0, 0, 0],
 };
 
 /// How [`SIGMA`] was fitted.
-pub const SIGMA_PROVENANCE: &str = "command: target/f15/release/trainer fit-sigma --aircraft f15 --data out/f15/sigma-fit\nflights: 20 (every flight of out/f15/sigma-fit; fitted on every 5th frame)\nestimator: dataset: out/f15/large (preset large), manifest sha256 8bd4350fcba82c1df9812a469a64c8c1533e78068a2c315a029d867d26ac22b5\nalpha: 362860 frames, 1σ median 0.072 deg, within 1σ 72.1 %, within 2σ 94.4 %\nbeta: 362860 frames, 1σ median 0.044 deg, within 1σ 74.6 %, within 2σ 94.4 %\n";
+pub const SIGMA_PROVENANCE: &str = "command: target/f15/release/trainer fit-sigma --aircraft f15 --data out/f15/sigma-fit --data out/f15/sigma-campaign\nflights: 44 (every flight of out/f15/sigma-fit, out/f15/sigma-campaign; fitted on every 5th frame)\nestimator: dataset: out/f15/large (preset large), manifest sha256 8bd4350fcba82c1df9812a469a64c8c1533e78068a2c315a029d867d26ac22b5\nalpha: 938860 frames, 1σ median 0.101 deg, within 1σ 73.8 %, within 2σ 94.6 %\nbeta: 938860 frames, 1σ median 0.060 deg, within 1σ 74.2 %, within 2σ 94.6 %\n";
 
 /// The `PROVENANCE` of the networks [`SIGMA`] was fitted for.
 pub const SIGMA_MODEL_PROVENANCE: &str = "dataset: out/f15/large (preset large), manifest sha256 8bd4350fcba82c1df9812a469a64c8c1533e78068a2c315a029d867d26ac22b5\nplus the 108 training flights of out/f15/campaign-40h (preset campaign), manifest sha256 6a3d45f8ffd438f1fa7a4f6298ed8075233a886db3d8e9eebe885480cd9f46ca\nsplit by flight: train 162 flights / 3738300 rows, validation 10 / 209880, test 4 / 31540\nseed: 1; features: egi120; sensor suite: egi120\ncommand: target/f15/release/trainer train --aircraft f15 --data out/f15/large --extra-data out/f15/campaign-40h --out out/f15/train-shipped --seed 1 --export\ngit: a7db27e9e7ded2466131541df95e80c207e7b7d7-dirty\nalpha: hidden 64-32-16 per part, 15042 params, best epoch 26/30; test float MAE 0.153 RMSE 0.216 p95 0.455 max 1.531 deg (n=31540); test int8 MAE 0.155 RMSE 0.227 p95 0.464 max 3.256 deg (n=31540)\nbeta: hidden 64-32-16 per part, 14402 params, best epoch 30/30; test float MAE 0.128 RMSE 0.171 p95 0.343 max 1.395 deg (n=31540); test int8 MAE 0.136 RMSE 0.224 p95 0.355 max 4.320 deg (n=31540)\n";
