@@ -34,7 +34,9 @@ pub fn this_builds_aircraft(s: &str) -> std::result::Result<String, String> {
         return Err(format!(
             "no aircraft is described as `{s}`: this tree describes {} (aircraft/NAME.toml); to \
              add one, docs/aircraft.md",
-            estimator_core::aircraft::DESCRIPTIONS.replace(',', ", ")
+            estimator_core::aircraft::descriptions()
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
     }
     Err(format!(

@@ -198,7 +198,7 @@ fn the_build_is_for_the_f16_description() {
 #[test]
 fn every_description_has_the_tag_the_docs_give() {
     let doc = std::fs::read_to_string(root().join("docs/architecture.md")).unwrap();
-    let names: Vec<&str> = estimator_core::aircraft::DESCRIPTIONS.split(',').collect();
+    let names: Vec<&str> = estimator_core::aircraft::descriptions().collect();
     let mut files: Vec<String> = std::fs::read_dir(root().join("aircraft"))
         .unwrap()
         .map(|e| e.unwrap().path())

@@ -96,8 +96,7 @@ fn sensed_only(h: &str) -> bool {
 
 /// An aircraft description of this tree that is not the build's.
 fn other_aircraft() -> &'static str {
-    estimator_core::aircraft::DESCRIPTIONS
-        .split(',')
+    estimator_core::aircraft::descriptions()
         .find(|n| *n != estimator_core::aircraft::AIRCRAFT.name)
         .expect("the tree describes more than one aircraft")
 }

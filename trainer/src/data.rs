@@ -573,8 +573,7 @@ mod tests {
         );
         // Another description's dataset is refused outright: this build evaluates its own
         // aircraft's model.
-        let name = estimator_core::aircraft::DESCRIPTIONS
-            .split(',')
+        let name = estimator_core::aircraft::descriptions()
             .find(|n| *n != estimator_core::aircraft::AIRCRAFT.name)
             .unwrap();
         let elsewhere = tiny_dataset("air-elsewhere", &[("d0", Train), ("dt", Test)], &both);

@@ -193,9 +193,14 @@ pub use generated::AIRCRAFT;
 /// [`AIRCRAFT`].
 pub const DESCRIPTIONS: &str = env!("ESTIMATOR_DESCRIPTIONS");
 
+/// The names in [`DESCRIPTIONS`], in order.
+pub fn descriptions() -> impl Iterator<Item = &'static str> {
+    DESCRIPTIONS.split(',')
+}
+
 /// Whether `name` is one of [`DESCRIPTIONS`].
 pub fn is_described(name: &str) -> bool {
-    DESCRIPTIONS.split(',').any(|n| n == name)
+    descriptions().any(|n| n == name)
 }
 
 #[cfg(test)]
