@@ -125,15 +125,13 @@ pub fn quantize_mlp(
     offset: i32,
 ) -> Vec<QLayer> {
     let n_hidden = layers.len().saturating_sub(1);
-    // Each layer's inputs on the calibration rows: the rows themselves, then each hidden output.
-    let mut inputs: Vec<Vec<Vec<f32>>> = vec![calib.to_vec()];
-    inputs.extend((0..n_hidden).map(|_| Vec::with_capacity(calib.len())));
+    // Each hidden layer's outputs on the calibration rows: the inputs of the layer after it.
+    let mut hidden_out: Vec<Vec<Vec<f32>>> = vec![Vec::with_capacity(calib.len()); n_hidden];
     for x in calib {
-        float_forward(layers, x, |k, y| inputs[k + 1].push(y.to_vec()));
+        float_forward(layers, x, |k, y| hidden_out[k].push(y.to_vec()));
     }
-    let scales: Vec<f64> = inputs
+    let scales: Vec<f64> = hidden_out
         .iter()
-        .skip(1)
         .map(|rows| {
             let largest = rows.iter().flatten().fold(0f32, |m, a| m.max(a.abs()));
             let p = ACTIVATION_HEADROOM * f64::from(largest);
@@ -151,7 +149,11 @@ pub fn quantize_mlp(
             requant: Vec::new(),
             hidden,
         };
-        for ((row, s_w), b) in round_rows(l, &inputs[k]).into_iter().zip(&l.bias) {
+        let inputs = match k.checked_sub(1) {
+            Some(i) => &hidden_out[i][..],
+            None => calib,
+        };
+        for ((row, s_w), b) in round_rows(l, inputs).into_iter().zip(&l.bias) {
             q.weights.push(row);
             let bq = (*b as f64 / (s_x * s_w))
                 .round()
