@@ -17,6 +17,7 @@
 //! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
 //! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
 //! | the β network's answer and an unflagged filter's β more than 2° and 3σ apart ([`beta_disagrees_with_filter`]) | β computed (the network's), `BETA_DISAGREES` |
+//! | a computed angle's 1σ above [`UNCERTAIN_ALPHA_MDEG`] / [`UNCERTAIN_BETA_MDEG`], or above it within that angle's last [`UNCERTAIN_HOLD_FRAMES`] computed frames | estimate computed, `UNCERTAIN` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
 //! α and β are handled independently: a bad rudder sensor holds β and leaves α live. No input makes
@@ -87,8 +88,9 @@ impl Flags {
     /// filter. β is still the network's.
     pub const BETA_DISAGREES: u16 = 1 << 13;
     /// A computed angle's 1σ is above [`UNCERTAIN_ALPHA_MDEG`] (α) or [`UNCERTAIN_BETA_MDEG`]
-    /// (β): an error as large as a flight-control computer would act on (2° α, 1° β) is then a
-    /// 4σ event or likelier. The estimate is computed; its 1σ says how far to trust it.
+    /// (β), or was within its last [`UNCERTAIN_HOLD_FRAMES`] computed frames: an error as large as
+    /// a flight-control computer would act on (2° α, 1° β) is then a 4σ event or likelier. The
+    /// estimate is computed; its 1σ says how far to trust it.
     pub const UNCERTAIN: u16 = 1 << 14;
 
     /// The flags that say an angle was computed from less than training saw (the 1σ's `Caution`
@@ -407,6 +409,42 @@ pub const UNCERTAIN_ALPHA_MDEG: u16 = 500;
 /// ... and above this β 1σ: a quarter of 1° β.
 pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 
+/// After a computed angle's 1σ was last above its limit, [`Flags::UNCERTAIN`] stays raised for
+/// this many more frames in which that angle is computed (2 s at 20 Hz), whatever its 1σ: set at
+/// once, cleared late. The networks' errors stay correlated for seconds (a lag behind a fast α
+/// change near the stall), so a 1σ that has just come back under the limit does not yet mean the
+/// error has. Chosen on the validation flights of `large` with the shipped estimator: frames with α
+/// off by more than 2° or β by more than 1° and no flag, against the share of frames flagged
+/// `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 19, 10, 3, 2, 1, 1 frames and 8.9,
+/// 11.2, 11.8, 12.2, 12.6, 12.9 % (docs/results/uncertainty.md). Past 40 frames each further
+/// half second buys at most one frame.
+pub const UNCERTAIN_HOLD_FRAMES: u8 = 40;
+
+/// One angle's [`Flags::UNCERTAIN`]: raised at once when its 1σ goes above the limit, lowered
+/// a number of frames ([`UNCERTAIN_HOLD_FRAMES`]) after it last was.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UncertainHold {
+    /// Frames left for which the flag stays raised with the 1σ at or under the limit.
+    left: u8,
+}
+
+impl UncertainHold {
+    /// Whether this frame's computed angle, of 1σ `sigma_mdeg`, raises `UNCERTAIN`, held for
+    /// `hold_frames` after the 1σ was last above `limit_mdeg`. Called once per frame in which the
+    /// angle is computed (a held angle neither raises it nor counts).
+    pub fn uncertain(&mut self, sigma_mdeg: u16, limit_mdeg: u16, hold_frames: u8) -> bool {
+        if above_limit(sigma_mdeg, limit_mdeg) {
+            self.left = hold_frames;
+            true
+        } else if let Some(left) = self.left.checked_sub(1) {
+            self.left = left;
+            true
+        } else {
+            false
+        }
+    }
+}
+
 /// Whether a 1σ raises [`Flags::UNCERTAIN`]: a computed angle's (not [`SIGMA_UNKNOWN`]) above
 /// `limit`.
 pub fn above_limit(sigma_mdeg: u16, limit_mdeg: u16) -> bool {
@@ -450,6 +488,10 @@ pub struct Estimator<'m> {
     terms: [[u32; uncertainty::TERMS]; 2],
     /// The running mean of each angle's disagreement with the filter.
     slow: [uncertainty::SlowMean; 2],
+    /// Per angle, how long `UNCERTAIN` stays raised ([`UNCERTAIN_HOLD_FRAMES`]).
+    uncertain_hold: [UncertainHold; 2],
+    /// [`UNCERTAIN_HOLD_FRAMES`] unless [`Estimator::with_uncertain_hold`] says otherwise.
+    uncertain_hold_frames: u8,
 }
 
 impl<'m> Estimator<'m> {
@@ -468,6 +510,8 @@ impl<'m> Estimator<'m> {
             state: FeatureState::new(needs_filter(alpha) || needs_filter(beta)),
             terms: [[0; uncertainty::TERMS]; 2],
             slow: [uncertainty::SlowMean::default(); 2],
+            uncertain_hold: [UncertainHold::default(); 2],
+            uncertain_hold_frames: UNCERTAIN_HOLD_FRAMES,
         }
     }
 
@@ -498,9 +542,18 @@ impl<'m> Estimator<'m> {
         macs(self.alpha).saturating_add(macs(self.beta))
     }
 
+    /// The same estimator with `UNCERTAIN` held for `frames` instead of [`UNCERTAIN_HOLD_FRAMES`]
+    /// (0: raised exactly when a 1σ is above its limit). For measuring the choice
+    /// (`trainer eval --uncertain-hold`); the firmware keeps the default.
+    pub fn with_uncertain_hold(mut self, frames: u8) -> Self {
+        self.uncertain_hold_frames = frames;
+        self
+    }
+
     /// Forgets health history, past frames and held values (e.g. after a long link outage).
     pub fn reset(&mut self) {
-        *self = Self::with(self.alpha.map(|m| m.net), self.beta.map(|m| m.net));
+        *self = Self::with(self.alpha.map(|m| m.net), self.beta.map(|m| m.net))
+            .with_uncertain_hold(self.uncertain_hold_frames);
     }
 
     /// The 1σ terms of α and β in the last step (`[alpha, beta]`, each in
@@ -623,17 +676,19 @@ impl<'m> Estimator<'m> {
                 UNCERTAIN_BETA_MDEG,
             ),
         ];
-        for ((angle, held, value, sigma, limit), (slow, terms)) in angles
-            .into_iter()
-            .zip(self.slow.iter_mut().zip(self.terms.iter_mut()))
-        {
+        for ((angle, held, value, sigma, limit), ((slow, terms), hold)) in angles.into_iter().zip(
+            self.slow
+                .iter_mut()
+                .zip(self.terms.iter_mut())
+                .zip(self.uncertain_hold.iter_mut()),
+        ) {
             // A missing angle is held too (`NO_ESTIMATE` comes with its held flag).
             if flags & held != 0 {
                 continue;
             }
             *terms = uncertainty::terms(angle, &values, value, indicators, slow.mdeg());
             *sigma = uncertainty::sigma(weights.of(angle), terms);
-            if above_limit(*sigma, limit) {
+            if hold.uncertain(*sigma, limit, self.uncertain_hold_frames) {
                 flags |= Flags::UNCERTAIN;
             }
             slow.track(terms);
@@ -669,6 +724,32 @@ mod tests {
         assert!(above_limit(uncertainty::SIGMA_MAX, UNCERTAIN_BETA_MDEG));
         assert!(!above_limit(SIGMA_UNKNOWN, UNCERTAIN_BETA_MDEG));
         assert!(!above_limit(0, 0));
+    }
+
+    #[test]
+    fn uncertain_is_held_for_exactly_the_hold_frames_after_the_last_sigma_above_the_limit() {
+        const H: u8 = UNCERTAIN_HOLD_FRAMES;
+        let mut h = UncertainHold::default();
+        assert!(!h.uncertain(UNCERTAIN_ALPHA_MDEG, UNCERTAIN_ALPHA_MDEG, H));
+        assert!(h.uncertain(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG, H));
+        for k in 0..UNCERTAIN_HOLD_FRAMES {
+            assert!(h.uncertain(0, UNCERTAIN_ALPHA_MDEG, H), "frame {k} after");
+        }
+        assert!(!h.uncertain(0, UNCERTAIN_ALPHA_MDEG, H));
+        // A 1σ above the limit again restarts the hold; an unknown 1σ is never above it.
+        assert!(h.uncertain(u16::MAX - 1, UNCERTAIN_ALPHA_MDEG, H));
+        for _ in 0..10 {
+            assert!(h.uncertain(0, UNCERTAIN_ALPHA_MDEG, H));
+        }
+        assert!(h.uncertain(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG, H));
+        for _ in 0..UNCERTAIN_HOLD_FRAMES {
+            assert!(h.uncertain(SIGMA_UNKNOWN, UNCERTAIN_ALPHA_MDEG, H));
+        }
+        assert!(!h.uncertain(SIGMA_UNKNOWN, UNCERTAIN_ALPHA_MDEG, H));
+        // A hold of 0 frames: raised exactly when the 1σ is above the limit.
+        let mut h = UncertainHold::default();
+        assert!(h.uncertain(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG, 0));
+        assert!(!h.uncertain(UNCERTAIN_ALPHA_MDEG, UNCERTAIN_ALPHA_MDEG, 0));
     }
 
     #[test]

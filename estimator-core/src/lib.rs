@@ -47,5 +47,6 @@ pub mod wire;
 pub use channels::{CHANNELS, Channel, SensorFrame, Suite};
 pub use estimator::{
     AngleNet, CascadeNet, Estimate, Estimator, Flags, UNCERTAIN_ALPHA_MDEG, UNCERTAIN_BETA_MDEG,
+    UNCERTAIN_HOLD_FRAMES,
 };
 pub use features::{FEATURE_COUNT, Feature, FeatureState, FeatureValues, History, Lag};

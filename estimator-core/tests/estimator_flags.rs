@@ -246,6 +246,8 @@ fn out_of_envelope_inputs_are_clamped_and_flagged() {
 fn extreme_raw_values_never_panic() {
     let (a, b) = nets();
     let mut e = Estimator::new(&a, &b);
+    // Per angle, how many computed frames ago its 1σ was last above its limit.
+    let mut since_above: [Option<u32>; 2] = [None; 2];
     for (s, v) in [i32::MIN, i32::MAX, 0, -1, 1].into_iter().enumerate() {
         let f = SensorFrame {
             seq: s as u16,
@@ -264,17 +266,35 @@ fn extreme_raw_values_never_panic() {
             let unknown = estimator_core::uncertainty::SIGMA_UNKNOWN;
             assert_eq!(out.flags.has(held), sigma == unknown, "{out:?}");
         }
-        // UNCERTAIN says exactly that a computed angle's 1σ is above its limit.
-        let above = |held: u16, sigma: u16, limit: u16| !out.flags.has(held) && sigma > limit;
-        let expected = above(
-            Flags::ALPHA_HELD,
-            out.sigma_alpha_mdeg,
-            estimator_core::UNCERTAIN_ALPHA_MDEG,
-        ) || above(
-            Flags::BETA_HELD,
-            out.sigma_beta_mdeg,
-            estimator_core::UNCERTAIN_BETA_MDEG,
-        );
+        // UNCERTAIN says exactly that a computed angle's 1σ is above its limit, or was within
+        // that angle's last UNCERTAIN_HOLD_FRAMES computed frames.
+        let mut expected = false;
+        for ((held, sigma, limit), since) in [
+            (
+                Flags::ALPHA_HELD,
+                out.sigma_alpha_mdeg,
+                estimator_core::UNCERTAIN_ALPHA_MDEG,
+            ),
+            (
+                Flags::BETA_HELD,
+                out.sigma_beta_mdeg,
+                estimator_core::UNCERTAIN_BETA_MDEG,
+            ),
+        ]
+        .into_iter()
+        .zip(since_above.iter_mut())
+        {
+            if out.flags.has(held) {
+                continue;
+            }
+            *since = if sigma > limit {
+                Some(0)
+            } else {
+                since.map(|n| n + 1)
+            };
+            expected |=
+                since.is_some_and(|n| n <= u32::from(estimator_core::UNCERTAIN_HOLD_FRAMES));
+        }
         assert_eq!(out.flags.has(Flags::UNCERTAIN), expected, "{out:?}");
     }
 }

@@ -491,6 +491,11 @@ enum Cmd {
         /// refused. Default: the suite the compiled-in model reads.
         #[arg(long)]
         suite: Option<String>,
+        /// Frames for which `UNCERTAIN` stays raised after a 1σ was last above its limit (0–255),
+        /// to measure that choice; default: the firmware's, `UNCERTAIN_HOLD_FRAMES`. Not with
+        /// --model (the networks alone carry no flags).
+        #[arg(long, value_name = "FRAMES")]
+        uncertain_hold: Option<u8>,
         /// Print exactly one JSON object.
         #[arg(long)]
         json: bool,
@@ -707,7 +712,13 @@ fn compiled_in_model() -> Result<(&'static str, Suite)> {
     }
 }
 
-fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result<()> {
+fn cmd_eval(
+    data: &Path,
+    split: &str,
+    suite: Option<&str>,
+    uncertain_hold: u8,
+    json: bool,
+) -> Result<()> {
     let role = parse_split(split)?;
     let suite = match suite {
         Some(s) => parse_suite(s)?,
@@ -717,11 +728,12 @@ fn cmd_eval(data: &Path, split: &str, suite: Option<&str>, json: bool) -> Result
     ds.require(suite)?;
     let (prov, needs) = compiled_in_model()?;
     require_suite("the compiled-in model", needs, suite)?;
-    let e = eval_shipped(&ds, role, suite);
+    let e = eval_shipped(&ds, role, suite, uncertain_hold);
     if json {
         let v = serde_json::json!({
             "model": "shipped (Estimator::shipped, int8)",
             "suite": suite.name(),
+            "uncertain_hold_frames": uncertain_hold,
             "split": split,
             "dataset": data.display().to_string(),
             "manifest_sha256": ds.manifest_sha256,
@@ -1765,10 +1777,18 @@ fn run() -> Result<()> {
             *export,
         ),
         Cmd::Eval {
+            model: Some(_),
+            uncertain_hold: Some(_),
+            ..
+        } => bail!(
+            "--uncertain-hold sets a flag of the compiled-in estimator; --model scores networks alone, which carry no flags: drop one of the two"
+        ),
+        Cmd::Eval {
             data,
             model: Some(model),
             split,
             suite,
+            uncertain_hold: None,
             json,
         } => cmd_eval_model(data, model, split, suite.as_deref(), *json),
         Cmd::Eval {
@@ -1776,8 +1796,15 @@ fn run() -> Result<()> {
             model: None,
             split,
             suite,
+            uncertain_hold,
             json,
-        } => cmd_eval(data, split, suite.as_deref(), *json),
+        } => cmd_eval(
+            data,
+            split,
+            suite.as_deref(),
+            uncertain_hold.unwrap_or(estimator_core::UNCERTAIN_HOLD_FRAMES),
+            *json,
+        ),
         Cmd::EvalFilter {
             data,
             split,

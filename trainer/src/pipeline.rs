@@ -228,14 +228,21 @@ pub struct ShippedEval {
 /// firmware would (including held values on invalid or stuck channels), with the frames a sender of
 /// `suite` delivers (`SensorFrame::restricted_to`): a model reading a channel the suite lacks is
 /// held as `INVALID_INPUT`, as on target.
-pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite) -> ShippedEval {
+///
+/// `uncertain_hold`: how many frames `UNCERTAIN` stays raised ([`Estimator::with_uncertain_hold`];
+/// the firmware's is [`estimator_core::UNCERTAIN_HOLD_FRAMES`]).
+pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite, uncertain_hold: u8) -> ShippedEval {
     let mut a = Vec::new();
     let mut b = Vec::new();
     let mut flagged = Vec::new();
     // (1σ, error) per angle: the coverage needs no terms.
     let mut pairs: [Vec<(u16, f64)>; 2] = Default::default();
     for fl in ds.flights(role) {
-        let ans = shipped_answers(fl, suite);
+        let ans = answers_of(
+            Estimator::shipped().with_uncertain_hold(uncertain_hold),
+            fl,
+            suite,
+        );
         let truth = [
             fl.truth(Angle::Alpha.target()),
             fl.truth(Angle::Beta.target()),
@@ -305,7 +312,11 @@ pub struct FlightAnswers {
 /// A fresh `Estimator::shipped()` stepped over `fl`'s frames as a sender of `suite` delivers them,
 /// exactly as the firmware steps it.
 pub fn shipped_answers(fl: &Flight, suite: Suite) -> FlightAnswers {
-    let mut est = Estimator::shipped();
+    answers_of(Estimator::shipped(), fl, suite)
+}
+
+/// `est` stepped over `fl`'s frames as a sender of `suite` delivers them.
+fn answers_of(mut est: Estimator, fl: &Flight, suite: Suite) -> FlightAnswers {
     let mut a = FlightAnswers {
         alpha_deg: Vec::with_capacity(fl.len()),
         beta_deg: Vec::with_capacity(fl.len()),
