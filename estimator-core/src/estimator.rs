@@ -416,7 +416,7 @@ pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 /// error has. Chosen on the validation flights of `large` with the shipped estimator: frames with α
 /// off by more than 2° or β by more than 1° and no flag, against the share of frames flagged
 /// `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 19, 10, 3, 2, 1, 1 frames and 8.9,
-/// 11.2, 11.8, 12.2, 12.6, 12.9 % (docs/results/uncertainty.md). Past 40 frames each further
+/// 11.2, 11.8, 12.2, 12.6, 12.9 % (docs/filter.md). Past 40 frames each further
 /// half second buys at most one frame.
 pub const UNCERTAIN_HOLD_FRAMES: u8 = 40;
 
@@ -750,6 +750,20 @@ mod tests {
         let mut h = UncertainHold::default();
         assert!(h.uncertain(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG, 0));
         assert!(!h.uncertain(UNCERTAIN_ALPHA_MDEG, UNCERTAIN_ALPHA_MDEG, 0));
+    }
+
+    #[test]
+    fn a_reset_ends_a_running_hold_and_keeps_the_hold_length() {
+        let mut e = Estimator::with(None, None).with_uncertain_hold(7);
+        assert!(e.uncertain_hold[0].uncertain(UNCERTAIN_ALPHA_MDEG + 1, UNCERTAIN_ALPHA_MDEG, 7));
+        assert_ne!(e.uncertain_hold[0], UncertainHold::default());
+        e.reset();
+        assert_eq!(e.uncertain_hold, [UncertainHold::default(); 2]);
+        assert_eq!(e.uncertain_hold_frames, 7);
+        assert_eq!(
+            Estimator::with(None, None).uncertain_hold_frames,
+            UNCERTAIN_HOLD_FRAMES
+        );
     }
 
     #[test]
