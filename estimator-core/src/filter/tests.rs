@@ -7,9 +7,9 @@ use proptest::prelude::*;
 
 const DT: f32 = 0.05;
 
-/// The flight: the build's aircraft at 5,000 m with half its fuel, α 6°, β 1°, at the airspeed of
-/// its turn's load there ([`cruise_speed`]: 151 m/s for the F-16), banking ±40° so the heading swings;
-/// wind `wind`.
+/// The flight: the build's aircraft with half its fuel at the point of [`world_point`] (5,000 m,
+/// α 6°, 151 m/s for the F-16), β 1°, banking ±40° so the heading swings; wind `wind` (scaled for
+/// a slow aircraft).
 struct World {
     wind: Vector3<f32>,
     k: f32,
@@ -34,9 +34,8 @@ struct Truth {
 
 impl World {
     fn frame(&self, t: f32, cfg: &Config) -> (Input, Truth) {
-        let alpha = 6f32.to_radians();
+        let WorldPoint { alpha, v, .. } = world_point(cfg);
         let beta = 1f32.to_radians();
-        let v = cruise_speed(cfg);
         let vb = Vector3::new(
             v * libm::cosf(alpha) * libm::cosf(beta),
             v * libm::sinf(beta),
@@ -47,12 +46,12 @@ impl World {
         let psi = wrap_pi(0.8 * t / 10.0 + 0.3 * libm::sinf(t / 7.0));
         let euler = [phi, theta, psi.rem_euclid(2.0 * core::f32::consts::PI)];
         let cbn = c_bn(euler);
-        let v_ned = cbn.transpose() * vb + self.wind;
+        let v_ned = cbn.transpose() * vb + self.wind * world_point(cfg).wind_scale;
         let mut inp = Input {
             dt_s: DT,
             euler_rad: euler,
             vel_ned_mps: [v_ned.x, v_ned.y, v_ned.z],
-            alt_m: ALT_M,
+            alt_m: world_point(cfg).alt_m,
             gyro_rps: [0.0; 3],
             accel_mps2: [0.0; 3],
             elevator_deg: -3.0,
@@ -82,23 +81,82 @@ impl World {
     }
 }
 
-const ALT_M: f32 = 5000.0;
-
 /// Half the aircraft's internal fuel, kg.
 fn fuel_kg() -> f32 {
     0.5 * AIRCRAFT.mass.internal_fuel_capacity_lb() as f32 * crate::aircraft::LB_TO_KG
 }
 
-/// The airspeed at which the model's force at α 6°, β 1° (surfaces neutral) carries 1.2 times the
-/// weight at [`ALT_M`] (the load of the world's turn, banked up to 40°): a flight the aircraft can
-/// fly.
-fn cruise_speed(cfg: &Config) -> f32 {
-    let (alpha, beta) = (6f32.to_radians(), 1f32.to_radians());
-    let (rho, a) = isa(ALT_M);
+/// Where the world flies: α, true airspeed (m/s), altitude (m), and the factor on its winds.
+#[derive(Clone, Copy, Debug)]
+struct WorldPoint {
+    alpha: f32,
+    v: f32,
+    alt_m: f32,
+    wind_scale: f32,
+}
+
+/// The slowest world: below this airspeed a light aircraft's gusts are angles its filter is not
+/// sure of (the c172p's filter is `LOW_CONFIDENCE` at 39 m/s in this turn), m/s.
+const MIN_WORLD_SPEED_MPS: f32 = 55.0;
+
+/// The world for the build's aircraft: α 6° at the airspeed where the model's force (β 1°, surfaces
+/// neutral) carries 1.2 times the weight (the load of the world's turn, banked up to 40°), at
+/// 5,000 m or the aircraft's highest flight-test point if lower: 151 m/s at 5,000 m for the F-16.
+/// An aircraft that flies that turn slower than [`MIN_WORLD_SPEED_MPS`] flies it at that speed, at
+/// the α that carries the load there, and its winds and gusts, sized in m/s for a 150 m/s jet,
+/// are scaled by its speed over 150 m/s, so that they are about the same angles.
+/// Computed once: every `Config` of these tests has the same mass and gear.
+fn world_point(cfg: &Config) -> WorldPoint {
+    static POINT: std::sync::OnceLock<WorldPoint> = std::sync::OnceLock::new();
+    *POINT.get_or_init(|| world_point_of(cfg))
+}
+
+fn world_point_of(cfg: &Config) -> WorldPoint {
+    let top_m = AIRCRAFT
+        .flight_test_points
+        .iter()
+        .map(|p| p.alt_ft as f32 * 0.3048)
+        .fold(0.0, f32::max);
+    let alt_m = if top_m > 0.0 {
+        top_m.min(5000.0)
+    } else {
+        5000.0
+    };
+    let six = 6f32.to_radians();
+    let mut alpha = six;
+    let mut v = cruise_speed(cfg, six, alt_m);
+    if v < MIN_WORLD_SPEED_MPS {
+        // The speed falls as α grows: bisect α in [0, 6°] for the speed.
+        let (mut lo, mut hi) = (0.0f32, six);
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if cruise_speed(cfg, mid, alt_m) > MIN_WORLD_SPEED_MPS {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        alpha = 0.5 * (lo + hi);
+        v = cruise_speed(cfg, alpha, alt_m);
+    }
+    let slow = alpha < six;
+    WorldPoint {
+        alpha,
+        v,
+        alt_m,
+        wind_scale: if slow { v / 150.0 } else { 1.0 },
+    }
+}
+
+/// The airspeed at which the model's force at `alpha`, β 1° (surfaces neutral) carries 1.2 times
+/// the weight at `alt_m`.
+fn cruise_speed(cfg: &Config, alpha: f32, alt_m: f32) -> f32 {
+    let beta = 1f32.to_radians();
+    let (rho, a) = isa(alt_m);
     let mass = cfg.empty_mass_kg + fuel_kg();
     let inp = Input {
         dt_s: DT,
-        alt_m: ALT_M,
+        alt_m,
         fuel_kg: fuel_kg(),
         ..Input::default()
     };
@@ -134,6 +192,11 @@ fn cfg() -> Config {
     }
 }
 
+/// α of the world's turn, rad ([`world_point`]): 6° unless the aircraft is slow.
+pub(crate) fn world_alpha_rad() -> f32 {
+    world_point(&CONFIG).alpha
+}
+
 fn fly(
     f: &mut AirDataFilter,
     w: &World,
@@ -151,8 +214,9 @@ fn fly(
     }
 }
 
-/// `n` 20 Hz sensor frames (`egi` suite) of a turn through a steady 12 m/s wind, whose IMU reads
-/// the filter's own force model for the F-16 installation: a filter fed them ends up consistent,
+/// `n` 20 Hz sensor frames (`egi` suite) of a turn through a steady 12 m/s wind (scaled for a slow
+/// aircraft), whose IMU reads the filter's own force model for the build's aircraft (the world
+/// does not rotate, so the lever arm adds nothing): a filter fed them ends up consistent,
 /// with no flag and a NIS mean far below 2. The noisy channels carry a one-LSB dither, so the
 /// estimator's stuck-channel check leaves them alone. For the estimator's tests.
 pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
@@ -220,7 +284,8 @@ fn finds_a_steady_wind_and_alpha_beta_while_turning() {
         }
     });
     let wind = f.wind();
-    assert!((wind - w.wind).norm() < 1.0, "wind {wind:?}");
+    let truth = w.wind * world_point(&cfg()).wind_scale;
+    assert!((wind - truth).norm() < 1.0, "wind {wind:?}");
     assert!(
         worst.0.to_degrees() < 0.1,
         "α error {}°",
