@@ -15,7 +15,7 @@
 //! | a model reads an EGI channel and the frame is of the Table 1 suite (the channel is absent) | as an invalid channel: `INVALID_INPUT`, held |
 //! | the network's output outside the training range of α/β | clamped to it, `OUT_OF_ENVELOPE` |
 //! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
-//! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
+//! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]), where the aircraft's description allows it (`estimator.alpha_from_filter`) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
 //! | the β network's answer and an unflagged filter's β more than 2° and 3σ apart ([`beta_disagrees_with_filter`]) | β computed (the network's), `BETA_DISAGREES` |
 //! | a computed angle's 1σ above [`UNCERTAIN_ALPHA_MDEG`] / [`UNCERTAIN_BETA_MDEG`], or above it within that angle's last [`UNCERTAIN_HOLD_FRAMES`] computed frames | estimate computed, `UNCERTAIN` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
@@ -628,6 +628,7 @@ impl<'m> Estimator<'m> {
                 flags |= Flags::TURBULENCE;
             }
             if fallback
+                && crate::aircraft::AIRCRAFT.estimator.alpha_from_filter
                 && clamped
                 && m.reads_filter
                 && !turbulent
@@ -889,6 +890,8 @@ mod tests {
         assert!(flagged > 600, "only {flagged} frames flagged");
     }
 
+    /// Where the aircraft's description allows it (`estimator.alpha_from_filter`); where it does
+    /// not, the network's α stands, flagged `OUT_OF_ENVELOPE`, and no frame takes the filter's.
     #[test]
     fn an_alpha_network_out_of_its_envelope_gives_way_to_a_consistent_filter() {
         // 60 s of a turn whose IMU reads the filter's own force model.
@@ -907,6 +910,20 @@ mod tests {
         // the gate, 25, and falls at most by a factor e every 2 s: about 100 frames to reach 2),
         // and β never.
         let out = run(&outside, &outside);
+        if !crate::aircraft::AIRCRAFT.estimator.alpha_from_filter {
+            let mut state = FeatureState::new(true);
+            for (k, (e, f)) in out.iter().zip(&frames).enumerate() {
+                let values = state.next(f);
+                assert!(e.flags.has(Flags::OUT_OF_ENVELOPE), "frame {k}");
+                assert!(!e.flags.has(Flags::ALPHA_FROM_FILTER), "frame {k}");
+                assert_eq!(
+                    (e.w_aero_mms, e.alpha_mdeg),
+                    (outside.run(&values).0, outside.run(&values).1),
+                    "α is the network's, frame {k}"
+                );
+            }
+            return;
+        }
         let mut state = FeatureState::new(true);
         let mut from_filter = 0;
         for (k, (e, f)) in out.iter().zip(&frames).enumerate() {

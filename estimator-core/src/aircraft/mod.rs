@@ -21,6 +21,7 @@ pub struct Aircraft {
     /// reads the first.
     pub throttle_properties: &'static [&'static str],
     pub filter: FilterSettings,
+    pub estimator: EstimatorSettings,
     pub installation: Installation,
     /// What each surface position channel's sensor reads, in [`SURFACE_CHANNELS`] order; `None`
     /// where the airframe has no such surface (the channel then carries 0).
@@ -96,6 +97,15 @@ pub struct FilterSettings {
     pub gust_tau_s: f32,
     /// `LOW_CONFIDENCE` above this 1σ of α or β, rad.
     pub max_sigma_rad: f32,
+}
+
+/// The estimator's choices that belong to the airframe, made on its own validation flights.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EstimatorSettings {
+    /// Whether an α network out of its envelope gives way to a consistent air-data filter's α
+    /// (`ALPHA_FROM_FILTER`, [`crate::estimator::filter_alpha_fallback`]). Either way the estimate
+    /// says `OUT_OF_ENVELOPE`.
+    pub alpha_from_filter: bool,
 }
 
 impl Mass {
