@@ -12,6 +12,9 @@
 //!   valid (nothing in the frame says it is wrong).
 //! * `saturated:accel_z_mps2@100+0.5`: an IMU channel reads its clip level ([`Channel::full_scale`],
 //!   sign of the value before the fault), still marked valid (a shock beyond the sensor's range).
+//! * `bias:accel_z_mps2=-39.2@100+10`: the channel reads its true value plus a constant, in its
+//!   unit, still marked valid: a bias shift, the failure nothing in the frame reveals (an IMU
+//!   channel clips at its full scale).
 //!
 //! Channel names are the dataset column names ([`Channel::name`]).
 
@@ -28,6 +31,8 @@ pub enum FaultKind {
     Dead(Channel),
     Stuck(Channel),
     Saturated(Channel),
+    /// The channel plus this many of its LSBs.
+    Bias(Channel, i32),
 }
 
 impl FaultKind {
@@ -35,7 +40,10 @@ impl FaultKind {
     pub fn channels(self) -> u32 {
         match self {
             FaultKind::GpsLoss => Channel::GpsSpeed.bit() | Channel::GpsAlt.bit(),
-            FaultKind::Dead(c) | FaultKind::Stuck(c) | FaultKind::Saturated(c) => c.bit(),
+            FaultKind::Dead(c)
+            | FaultKind::Stuck(c)
+            | FaultKind::Saturated(c)
+            | FaultKind::Bias(c, _) => c.bit(),
         }
     }
 }
@@ -59,11 +67,15 @@ impl Fault {
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum FaultError {
     #[error(
-        "fault `{0}`: write KIND[:CHANNEL]@START+DURATION in seconds, e.g. gps-loss@300+30 or stuck:gyro_r_rps@100+10"
+        "fault `{0}`: write KIND[:CHANNEL]@START+DURATION in seconds, e.g. gps-loss@300+30, stuck:gyro_r_rps@100+10 or bias:accel_z_mps2=-39.2@100+10"
     )]
     Syntax(String),
-    #[error("fault `{0}`: kinds are gps-loss, dead, stuck, saturated")]
+    #[error("fault `{0}`: kinds are gps-loss, dead, stuck, saturated, bias")]
     Kind(String),
+    #[error(
+        "fault `{0}`: a bias is written bias:CHANNEL=VALUE, VALUE a finite number in the channel's unit that its frame field can hold"
+    )]
+    BiasValue(String),
     #[error(
         "fault `{0}`: unknown channel `{1}`; channels are the dataset column names, e.g. accel_y_mps2"
     )]
@@ -90,6 +102,18 @@ impl FromStr for Fault {
             Some((k, c)) => (k.trim(), Some(c.trim())),
             None => (what.trim(), None),
         };
+        // A bias carries its size after the channel: `bias:CHANNEL=VALUE`.
+        let (chan, value) = match chan.map(|c| c.split_once('=')) {
+            Some(Some((c, v))) => (Some(c.trim()), Some(v.trim())),
+            _ => (chan, None),
+        };
+        if value.is_some() != (kind == "bias") {
+            return Err(if kind == "bias" {
+                FaultError::BiasValue(s.to_string())
+            } else {
+                syntax()
+            });
+        }
         let channel = || -> Result<Channel, FaultError> {
             let c = chan.ok_or_else(syntax)?;
             Channel::ALL
@@ -109,6 +133,16 @@ impl FromStr for Fault {
                 }
                 FaultKind::Saturated(c)
             }
+            "bias" => {
+                let c = channel()?;
+                let bad = || FaultError::BiasValue(s.to_string());
+                let v: f64 = value.ok_or_else(bad)?.parse().map_err(|_| bad())?;
+                let raw = (v / c.lsb()).round();
+                if !(raw.is_finite() && raw.abs() <= f64::from(i32::MAX)) {
+                    return Err(bad());
+                }
+                FaultKind::Bias(c, raw as i32)
+            }
             _ => return Err(FaultError::Kind(s.to_string())),
         };
         Ok(Fault {
@@ -126,6 +160,17 @@ impl fmt::Display for Fault {
             FaultKind::Dead(c) => write!(f, "dead:{}", c.name())?,
             FaultKind::Stuck(c) => write!(f, "stuck:{}", c.name())?,
             FaultKind::Saturated(c) => write!(f, "saturated:{}", c.name())?,
+            FaultKind::Bias(c, raw) => {
+                // As many decimals as the LSB has: the value prints back as written.
+                let decimals = (-c.lsb().log10()).ceil().max(0.0) as usize;
+                let v = format!("{:.*}", decimals, f64::from(raw) * c.lsb());
+                let v = if v.contains('.') {
+                    v.trim_end_matches('0').trim_end_matches('.')
+                } else {
+                    &v
+                };
+                write!(f, "bias:{}={v}", c.name())?
+            }
         }
         write!(f, "@{}+{}", self.start_s, self.duration_s)
     }
@@ -134,7 +179,7 @@ impl fmt::Display for Fault {
 /// Applies `faults` to a flight's frames, `times_s` being each frame's flight time. A stuck or
 /// saturated channel takes its value (or sign) from the last frame before its fault. A faulted
 /// channel's 120 Hz sub-samples fail with it: invalid when it is dead, all six at its stuck or
-/// saturated value.
+/// saturated value, each offset by a bias (an IMU channel's within its full scale).
 pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
     for fault in faults {
         let mut before: Option<i32> = None;
@@ -157,6 +202,20 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
                     };
                     f.set_everywhere(c, sign * c.full_scale().unwrap_or(i32::MAX));
                     f.valid |= c.bit();
+                }
+                FaultKind::Bias(c, raw) if active => {
+                    let limit = c.full_scale().unwrap_or(i32::MAX);
+                    let biased = |v: i32| v.saturating_add(raw).clamp(-limit, limit);
+                    if let Some(r) = f.raw.get_mut(c.index()) {
+                        *r = biased(*r);
+                    }
+                    if let Some(i) = Subsamples::position(c) {
+                        for sample in f.sub.raw.iter_mut() {
+                            if let Some(r) = sample.get_mut(i) {
+                                *r = biased(*r);
+                            }
+                        }
+                    }
                 }
                 FaultKind::Stuck(c) | FaultKind::Saturated(c) => before = Some(f.get(c)),
                 _ => {}
@@ -201,6 +260,9 @@ mod tests {
             "dead:accel_y_mps2@100+10",
             "stuck:gyro_r_rps@1.5+2",
             "saturated:accel_z_mps2@100+0.5",
+            "bias:accel_z_mps2=-39.2266@60+10",
+            "bias:gyro_r_rps=0.01@60+10",
+            "bias:rudder_deg=2@5+1",
         ] {
             assert_eq!(s.parse::<Fault>().map(|f| f.to_string()), Ok(s.to_string()));
         }
@@ -223,6 +285,21 @@ mod tests {
         assert!(matches!(e("dead:rudder_deg@1+0"), FaultError::Window(_)));
         assert!(matches!(e("dead:rudder_deg@-1+1"), FaultError::Window(_)));
         assert!(matches!(e("dead:rudder_deg@x+1"), FaultError::Syntax(_)));
+        assert!(matches!(e("bias:rudder_deg@1+1"), FaultError::BiasValue(_)));
+        assert!(matches!(
+            e("bias:rudder_deg=x@1+1"),
+            FaultError::BiasValue(_)
+        ));
+        assert!(matches!(
+            e("bias:rudder_deg=inf@1+1"),
+            FaultError::BiasValue(_)
+        ));
+        assert!(matches!(
+            e("bias:gyro_p_rps=1e9@1+1"),
+            FaultError::BiasValue(_)
+        ));
+        assert!(matches!(e("dead:rudder_deg=2@1+1"), FaultError::Syntax(_)));
+        assert!(matches!(e("bias:pitot=2@1+1"), FaultError::Channel(_, c) if c == "pitot"));
     }
 
     #[test]
@@ -233,6 +310,7 @@ mod tests {
             ("dead:accel_y_mps2@1+2", Channel::AccelY),
             ("stuck:gyro_r_rps@1+2", Channel::GyroR),
             ("saturated:accel_z_mps2@1+2", Channel::AccelZ),
+            ("bias:rudder_deg=2@1+2", Channel::Rudder),
         ] {
             let fault: Fault = text.parse().unwrap();
             let mut f = clean.clone();
@@ -263,6 +341,11 @@ mod tests {
                         assert!(a.is_valid(c));
                         let sign = clean[19].get(c).signum();
                         assert_eq!(a.get(c), sign * c.full_scale().unwrap());
+                    }
+                    FaultKind::Bias(_, raw) => {
+                        assert!(a.is_valid(c));
+                        assert_eq!(a.get(c), b.get(c) + raw);
+                        assert!((0..6).all(|k| a.sub.get(k, c) == b.sub.get(k, c) + raw));
                     }
                 }
             }

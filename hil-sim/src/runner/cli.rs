@@ -114,9 +114,11 @@ pub struct RunArgs {
     pub burst_len: Option<u32>,
     /// A scripted sensor fault, KIND[:CHANNEL]@START+DURATION in seconds: gps-loss@300+30,
     /// dead:accel_y_mps2@100+10 (sent invalid), stuck:gyro_r_rps@100+10 (frozen, sent valid),
-    /// saturated:accel_z_mps2@100+0.5 (at the IMU's full scale). Repeatable. The summary then scores
-    /// each: flag latency, and seconds until the estimate is back on the fault-free run's (the
-    /// compiled-in estimator on the same flight, in-process).
+    /// saturated:accel_z_mps2@100+0.5 (at the IMU's full scale), bias:accel_z_mps2=-39.2@100+10
+    /// (plus a constant in the channel's unit, sent valid). Repeatable. The summary then scores
+    /// each: flag latency, seconds until the estimate is back on the fault-free run's (the
+    /// compiled-in estimator on the same flight, in-process), and how far it moved estimates that
+    /// carried no flag.
     #[arg(long = "fault")]
     pub faults: Vec<crate::faults::Fault>,
     #[command(flatten)]
@@ -570,17 +572,26 @@ fn table(flight: &str, s: &score::Summary, w: &Written) -> String {
     }
     for f in &s.faults {
         let opt = |v: Option<String>| v.unwrap_or_else(|| "never".to_string());
+        // A bias shows in no frame: no flag is owed at its start, so no latency is reported.
+        let flagged = match f.detectable_frame {
+            None => "not visible in the frames".to_string(),
+            Some(_) => format!(
+                "flagged after {} frames{}",
+                opt(f.flag_latency_frames.map(|v| v.to_string())),
+                if f.flagged_throughout {
+                    ", throughout"
+                } else {
+                    ", NOT throughout"
+                }
+            ),
+        };
         let _ = writeln!(
             t,
-            "  {:<16} {}: flagged after {} frames{}; back {} after the sensor's return (max deviation {:.3}°)",
+            "  {:<16} {}: {flagged}; unflagged estimates moved at most α {:.3}° β {:.3}°; back {} after the sensor's return (max deviation {:.3}°)",
             "fault",
             f.fault,
-            opt(f.flag_latency_frames.map(|v| v.to_string())),
-            if f.flagged_throughout {
-                ", throughout"
-            } else {
-                ", NOT throughout"
-            },
+            f.max_unflagged_dev_deg.0,
+            f.max_unflagged_dev_deg.1,
             opt(f.back_after_s.map(|v| format!("{v:.2} s"))),
             f.max_dev_after_return_deg
         );

@@ -34,6 +34,7 @@ pub struct FaultScore {
     pub fault: String,
     /// Frame index at which the fault first shows in the data: its first frame, or for a stuck
     /// channel the [`STUCK_FRAMES`]th identical value (a frozen value cannot be told apart sooner).
+    /// `None` for a bias: nothing in the frames shows it.
     pub detectable_frame: Option<usize>,
     /// Frames from `detectable_frame` to the first answered estimate carrying a [`FAULT_FLAGS`] bit
     /// (0: flagged on that very frame). `None`: never flagged.
@@ -48,6 +49,10 @@ pub struct FaultScore {
     /// Largest α/β difference from the reference, degrees, over the answered estimates from the
     /// return to the end of the flight (or the next fault).
     pub max_dev_after_return_deg: f64,
+    /// Largest α and β difference from the reference, degrees, over the answered estimates that
+    /// carry no flag at all, from the fault's first frame to the end of the flight (or the next
+    /// fault): how far the fault moved an estimate that did not say so.
+    pub max_unflagged_dev_deg: (f64, f64),
 }
 
 /// Scores each fault: `estimates` the run with the faults, `reference` the same estimator on the
@@ -67,9 +72,10 @@ pub fn score(
         .enumerate()
         .map(|(i, fault)| {
             let first = times_s.iter().position(|&t| fault.active(t));
-            let detectable = first.map(|f| match fault.kind {
-                FaultKind::Stuck(_) => f + usize::from(STUCK_FRAMES) - 1,
-                _ => f,
+            let detectable = first.and_then(|f| match fault.kind {
+                FaultKind::Stuck(_) => Some(f + usize::from(STUCK_FRAMES) - 1),
+                FaultKind::Bias(..) => None,
+                _ => Some(f),
             });
             let ret = first.map(|f| {
                 (f..n)
@@ -117,6 +123,23 @@ pub fn score(
                     .and_then(|k| Some(super::round_ms(times_s.get(k)? - times_s.get(r)?)))
             });
             let max_dev = ret.map_or(0.0, |r| (r..end).filter_map(dev).fold(0.0, f64::max));
+            let unflagged = |k: usize| -> Option<(f64, f64)> {
+                let e = estimates.get(k).copied().flatten()?;
+                let r = reference.get(k)?;
+                (e.flags.0 == 0).then(|| {
+                    (
+                        (e.alpha_deg() - r.alpha_deg()).abs(),
+                        (e.beta_deg() - r.beta_deg()).abs(),
+                    )
+                })
+            };
+            let max_unflagged_dev_deg = first.map_or((0.0, 0.0), |f| {
+                (f..end)
+                    .filter_map(unflagged)
+                    .fold((0.0, 0.0), |(a, b), (x, y)| {
+                        (f64::max(a, x), f64::max(b, y))
+                    })
+            });
             FaultScore {
                 fault: fault.to_string(),
                 detectable_frame: detectable,
@@ -125,6 +148,7 @@ pub fn score(
                 return_frame: ret,
                 back_after_s,
                 max_dev_after_return_deg: max_dev,
+                max_unflagged_dev_deg,
             }
         })
         .collect()
@@ -164,6 +188,32 @@ mod tests {
         assert_eq!(s.return_frame, Some(60));
         assert_eq!(s.back_after_s, Some(10.0 * 0.05));
         assert!((s.max_dev_after_return_deg - 0.3).abs() < 1e-9);
+        // Unflagged from the fault's first frame on: frame 20 (0.05°) and 60–199 (at most 0.3°).
+        let (a, b) = s.max_unflagged_dev_deg;
+        assert!((a - 0.3).abs() < 1e-9 && b == 0.0, "{a} {b}");
+    }
+
+    #[test]
+    fn a_bias_shows_in_no_frame_and_is_scored_by_what_it_moved_unflagged() {
+        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let fault: Fault = "bias:accel_z_mps2=-39.2266@1+2".parse().unwrap();
+        let reference = vec![est(1000, 0); 200];
+        // 2.5° off and unflagged on frame 20, flagged (and 4° off) to 60, then back.
+        let run: Vec<Option<Estimate>> = (0..200)
+            .map(|k| {
+                Some(match k {
+                    20 => est(3500, 0),
+                    21..60 => est(5000, Flags::UNCERTAIN),
+                    _ => est(1000, 0),
+                })
+            })
+            .collect();
+        let s = &score(&[fault], &run, &reference, &times)[0];
+        assert_eq!(s.detectable_frame, None);
+        assert_eq!(s.flag_latency_frames, None);
+        assert_eq!(s.return_frame, Some(60));
+        assert_eq!(s.back_after_s, Some(0.0));
+        assert_eq!(s.max_unflagged_dev_deg, (2.5, 0.0));
     }
 
     #[test]
