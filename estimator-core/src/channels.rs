@@ -499,13 +499,19 @@ impl SensorFrame {
     /// sensor held at one value (a stuck or saturated sensor, an extreme test value). Validity is
     /// left as it is.
     pub fn set_everywhere(&mut self, c: Channel, raw: i32) {
+        self.map_everywhere(c, |_| raw);
+    }
+
+    /// Channel `c`, and each of its 120 Hz sub-samples if it is a sub-sampled channel, through
+    /// `f` (a biased sensor). Validity is left as it is.
+    pub fn map_everywhere(&mut self, c: Channel, f: impl Fn(i32) -> i32) {
         if let Some(r) = self.raw.get_mut(c.index()) {
-            *r = raw;
+            *r = f(*r);
         }
         if let Some(i) = Subsamples::position(c) {
             for sample in self.sub.raw.iter_mut() {
                 if let Some(r) = sample.get_mut(i) {
-                    *r = raw;
+                    *r = f(*r);
                 }
             }
         }

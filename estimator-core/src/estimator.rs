@@ -628,7 +628,6 @@ impl<'m> Estimator<'m> {
                 flags |= Flags::TURBULENCE;
             }
             if fallback
-                && crate::aircraft::AIRCRAFT.estimator.alpha_from_filter
                 && clamped
                 && m.reads_filter
                 && !turbulent
@@ -643,7 +642,14 @@ impl<'m> Estimator<'m> {
             *last = Some((mid, out));
             (mid, out)
         };
-        (e.w_aero_mms, e.alpha_mdeg) = angle(alpha, &mut self.last_alpha, Flags::ALPHA_HELD, true);
+        // α may take the filter's where the aircraft's description allows it; β never.
+        let alpha_fallback = crate::aircraft::AIRCRAFT.estimator.alpha_from_filter;
+        (e.w_aero_mms, e.alpha_mdeg) = angle(
+            alpha,
+            &mut self.last_alpha,
+            Flags::ALPHA_HELD,
+            alpha_fallback,
+        );
         (e.v_aero_mms, e.beta_mdeg) = angle(beta, &mut self.last_beta, Flags::BETA_HELD, false);
         if flags & Flags::BETA_HELD == 0
             && beta.reads_filter
@@ -913,12 +919,12 @@ mod tests {
         if !crate::aircraft::AIRCRAFT.estimator.alpha_from_filter {
             let mut state = FeatureState::new(true);
             for (k, (e, f)) in out.iter().zip(&frames).enumerate() {
-                let values = state.next(f);
+                let (w, a, _) = outside.run(&state.next(f));
                 assert!(e.flags.has(Flags::OUT_OF_ENVELOPE), "frame {k}");
                 assert!(!e.flags.has(Flags::ALPHA_FROM_FILTER), "frame {k}");
                 assert_eq!(
                     (e.w_aero_mms, e.alpha_mdeg),
-                    (outside.run(&values).0, outside.run(&values).1),
+                    (w, a),
                     "α is the network's, frame {k}"
                 );
             }

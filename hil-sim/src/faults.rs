@@ -205,17 +205,7 @@ pub fn apply(faults: &[Fault], frames: &mut [SensorFrame], times_s: &[f64]) {
                 }
                 FaultKind::Bias(c, raw) if active => {
                     let limit = c.full_scale().unwrap_or(i32::MAX);
-                    let biased = |v: i32| v.saturating_add(raw).clamp(-limit, limit);
-                    if let Some(r) = f.raw.get_mut(c.index()) {
-                        *r = biased(*r);
-                    }
-                    if let Some(i) = Subsamples::position(c) {
-                        for sample in f.sub.raw.iter_mut() {
-                            if let Some(r) = sample.get_mut(i) {
-                                *r = biased(*r);
-                            }
-                        }
-                    }
+                    f.map_everywhere(c, |v| v.saturating_add(raw).clamp(-limit, limit));
                 }
                 FaultKind::Stuck(c) | FaultKind::Saturated(c) => before = Some(f.get(c)),
                 _ => {}

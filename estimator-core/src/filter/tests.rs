@@ -34,7 +34,8 @@ struct Truth {
 
 impl World {
     fn frame(&self, t: f32, cfg: &Config) -> (Input, Truth) {
-        let WorldPoint { alpha, v, .. } = world_point(cfg);
+        let world = world_point();
+        let WorldPoint { alpha, v, .. } = world;
         let beta = 1f32.to_radians();
         let vb = Vector3::new(
             v * libm::cosf(alpha) * libm::cosf(beta),
@@ -46,12 +47,12 @@ impl World {
         let psi = wrap_pi(0.8 * t / 10.0 + 0.3 * libm::sinf(t / 7.0));
         let euler = [phi, theta, psi.rem_euclid(2.0 * core::f32::consts::PI)];
         let cbn = c_bn(euler);
-        let v_ned = cbn.transpose() * vb + self.wind * world_point(cfg).wind_scale;
+        let v_ned = cbn.transpose() * vb + self.wind * world.wind_scale;
         let mut inp = Input {
             dt_s: DT,
             euler_rad: euler,
             vel_ned_mps: [v_ned.x, v_ned.y, v_ned.z],
-            alt_m: world_point(cfg).alt_m,
+            alt_m: world.alt_m,
             gyro_rps: [0.0; 3],
             accel_mps2: [0.0; 3],
             elevator_deg: -3.0,
@@ -105,13 +106,14 @@ const MIN_WORLD_SPEED_MPS: f32 = 55.0;
 /// An aircraft that flies that turn slower than [`MIN_WORLD_SPEED_MPS`] flies it at that speed, at
 /// the α that carries the load there, and its winds and gusts, sized in m/s for a 150 m/s jet,
 /// are scaled by its speed over 150 m/s, so that they are about the same angles.
-/// Computed once: every `Config` of these tests has the same mass and gear.
-fn world_point(cfg: &Config) -> WorldPoint {
+/// Computed once, with [`CONFIG`]'s mass and gear (every `Config` of these tests has them).
+fn world_point() -> WorldPoint {
     static POINT: std::sync::OnceLock<WorldPoint> = std::sync::OnceLock::new();
-    *POINT.get_or_init(|| world_point_of(cfg))
+    *POINT.get_or_init(world_point_of)
 }
 
-fn world_point_of(cfg: &Config) -> WorldPoint {
+fn world_point_of() -> WorldPoint {
+    let cfg = &CONFIG;
     let top_m = AIRCRAFT
         .flight_test_points
         .iter()
@@ -123,28 +125,32 @@ fn world_point_of(cfg: &Config) -> WorldPoint {
         5000.0
     };
     let six = 6f32.to_radians();
-    let mut alpha = six;
-    let mut v = cruise_speed(cfg, six, alt_m);
-    if v < MIN_WORLD_SPEED_MPS {
-        // The speed falls as α grows: bisect α in [0, 6°] for the speed.
-        let (mut lo, mut hi) = (0.0f32, six);
-        for _ in 0..30 {
-            let mid = 0.5 * (lo + hi);
-            if cruise_speed(cfg, mid, alt_m) > MIN_WORLD_SPEED_MPS {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        alpha = 0.5 * (lo + hi);
-        v = cruise_speed(cfg, alpha, alt_m);
+    let v = cruise_speed(cfg, six, alt_m);
+    if v >= MIN_WORLD_SPEED_MPS {
+        return WorldPoint {
+            alpha: six,
+            v,
+            alt_m,
+            wind_scale: 1.0,
+        };
     }
-    let slow = alpha < six;
+    // The speed falls as α grows: bisect α in [0, 6°] for the speed.
+    let (mut lo, mut hi) = (0.0f32, six);
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if cruise_speed(cfg, mid, alt_m) > MIN_WORLD_SPEED_MPS {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let alpha = 0.5 * (lo + hi);
+    let v = cruise_speed(cfg, alpha, alt_m);
     WorldPoint {
         alpha,
         v,
         alt_m,
-        wind_scale: if slow { v / 150.0 } else { 1.0 },
+        wind_scale: v / 150.0,
     }
 }
 
@@ -194,7 +200,7 @@ fn cfg() -> Config {
 
 /// α of the world's turn, rad ([`world_point`]): 6° unless the aircraft is slow.
 pub(crate) fn world_alpha_rad() -> f32 {
-    world_point(&CONFIG).alpha
+    world_point().alpha
 }
 
 fn fly(
@@ -284,7 +290,7 @@ fn finds_a_steady_wind_and_alpha_beta_while_turning() {
         }
     });
     let wind = f.wind();
-    let truth = w.wind * world_point(&cfg()).wind_scale;
+    let truth = w.wind * world_point().wind_scale;
     assert!((wind - truth).norm() < 1.0, "wind {wind:?}");
     assert!(
         worst.0.to_degrees() < 0.1,

@@ -100,15 +100,17 @@ pub fn score(
                 ),
                 _ => (None, false),
             };
-            let dev = |k: usize| -> Option<f64> {
+            // The answered estimate of frame k and its α and β differences from the reference.
+            let devs = |k: usize| -> Option<(Estimate, f64, f64)> {
                 let e = estimates.get(k).copied().flatten()?;
                 let r = reference.get(k)?;
-                Some(
-                    (e.alpha_deg() - r.alpha_deg())
-                        .abs()
-                        .max((e.beta_deg() - r.beta_deg()).abs()),
-                )
+                Some((
+                    e,
+                    (e.alpha_deg() - r.alpha_deg()).abs(),
+                    (e.beta_deg() - r.beta_deg()).abs(),
+                ))
             };
+            let dev = |k: usize| devs(k).map(|(_, a, b)| a.max(b));
             let back = |k: usize| {
                 estimates
                     .get(k)
@@ -123,15 +125,10 @@ pub fn score(
                     .and_then(|k| Some(super::round_ms(times_s.get(k)? - times_s.get(r)?)))
             });
             let max_dev = ret.map_or(0.0, |r| (r..end).filter_map(dev).fold(0.0, f64::max));
-            let unflagged = |k: usize| -> Option<(f64, f64)> {
-                let e = estimates.get(k).copied().flatten()?;
-                let r = reference.get(k)?;
-                (e.flags.0 == 0).then(|| {
-                    (
-                        (e.alpha_deg() - r.alpha_deg()).abs(),
-                        (e.beta_deg() - r.beta_deg()).abs(),
-                    )
-                })
+            let unflagged = |k: usize| {
+                devs(k)
+                    .filter(|(e, ..)| e.flags.0 == 0)
+                    .map(|(_, a, b)| (a, b))
             };
             let max_unflagged_dev_deg = first.map_or((0.0, 0.0), |f| {
                 (f..end)
@@ -166,21 +163,27 @@ mod tests {
         }
     }
 
+    /// The flight times of `n` frames at 20 Hz.
+    fn times(n: usize) -> Vec<f64> {
+        (0..n).map(|k| k as f64 * 0.05).collect()
+    }
+
+    /// `n` answered estimates, frame k's from `at(k)`.
+    fn answered(n: usize, at: impl Fn(usize) -> Estimate) -> Vec<Option<Estimate>> {
+        (0..n).map(|k| Some(at(k))).collect()
+    }
+
     #[test]
     fn latency_throughout_and_back_time() {
-        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let times = times(200);
         let fault: Fault = "dead:rudder_deg@1+2".parse().unwrap();
         let reference = vec![est(1000, 0); 200];
         // Flagged from frame 21 (one late), held to 60, then 0.3° off for 10 frames, then back.
-        let run: Vec<Option<Estimate>> = (0..200)
-            .map(|k| {
-                Some(match k {
-                    21..60 => est(900, Flags::INVALID_INPUT | Flags::BETA_HELD),
-                    60..70 => est(1300, 0),
-                    _ => est(1050, 0),
-                })
-            })
-            .collect();
+        let run = answered(200, |k| match k {
+            21..60 => est(900, Flags::INVALID_INPUT | Flags::BETA_HELD),
+            60..70 => est(1300, 0),
+            _ => est(1050, 0),
+        });
         let s = &score(&[fault], &run, &reference, &times)[0];
         assert_eq!(s.detectable_frame, Some(20));
         assert_eq!(s.flag_latency_frames, Some(1));
@@ -195,19 +198,15 @@ mod tests {
 
     #[test]
     fn a_bias_shows_in_no_frame_and_is_scored_by_what_it_moved_unflagged() {
-        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let times = times(200);
         let fault: Fault = "bias:accel_z_mps2=-39.2266@1+2".parse().unwrap();
         let reference = vec![est(1000, 0); 200];
         // 2.5° off and unflagged on frame 20, flagged (and 4° off) to 60, then back.
-        let run: Vec<Option<Estimate>> = (0..200)
-            .map(|k| {
-                Some(match k {
-                    20 => est(3500, 0),
-                    21..60 => est(5000, Flags::UNCERTAIN),
-                    _ => est(1000, 0),
-                })
-            })
-            .collect();
+        let run = answered(200, |k| match k {
+            20 => est(3500, 0),
+            21..60 => est(5000, Flags::UNCERTAIN),
+            _ => est(1000, 0),
+        });
         let s = &score(&[fault], &run, &reference, &times)[0];
         assert_eq!(s.detectable_frame, None);
         assert_eq!(s.flag_latency_frames, None);
@@ -218,7 +217,7 @@ mod tests {
 
     #[test]
     fn a_stuck_channel_is_detectable_after_stuck_frames_and_lost_replies_do_not_count() {
-        let times: Vec<f64> = (0..200).map(|k| k as f64 * 0.05).collect();
+        let times = times(200);
         let fault: Fault = "stuck:gyro_r_rps@1+3".parse().unwrap();
         let reference = vec![est(0, 0); 200];
         let run: Vec<Option<Estimate>> = (0..200)
@@ -237,7 +236,7 @@ mod tests {
 
     #[test]
     fn never_back_is_none() {
-        let times: Vec<f64> = (0..100).map(|k| k as f64 * 0.05).collect();
+        let times = times(100);
         let fault: Fault = "gps-loss@1+1".parse().unwrap();
         let reference = vec![est(0, 0); 100];
         let run = vec![Some(est(500, 0)); 100];
