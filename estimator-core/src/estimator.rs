@@ -6,7 +6,7 @@
 //! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
 //! | a noisy channel (IMU, GPS, EGI) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR` on that frame, held as above, until it changes ([`crate::health`]) |
 //! | an IMU channel a model uses is at its full scale in its 20 Hz value or a 120 Hz sub-sample (the sensor clipped) | `SATURATED` on that frame, held as above |
-//! | the air-data filter a model reads restarted or keeps failing its innovation gate | `FILTER_DIVERGED`, estimate computed |
+//! | the air-data filter a model reads restarted, keeps failing its innovation gate, or gives its prediction alone on this frame (the innovation failed the gate: sensors and model more than 5σ apart; or its first step after an outage) | `FILTER_DIVERGED`, estimate computed |
 //! | GPS speed or altitude invalid (no fix) while the EGI velocity is valid | both filled from the EGI (altitude for at most 120 s): `GPS_SUBSTITUTED`, estimate computed |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | the air-data filter's lift scale outside the range seen in training, for a model that runs the filter (whether or not it reads the lift scale: [`CascadeNet::lift_scale`]) | estimate computed, `OUT_OF_ENVELOPE` |
@@ -64,8 +64,12 @@ impl Flags {
     pub const SATURATED: u16 = 1 << 8;
     /// A computed angle reads the air-data filter's outputs and the filter is diverging: it
     /// restarted this step (covariance blow-up, non-finite arithmetic) or its innovations have
-    /// failed the gate for [`crate::filter::Config::gate_run`] steps in a row. The estimate is
-    /// computed but its filter features are not what training saw.
+    /// failed the gate for [`crate::filter::Config::gate_run`] steps in a row, or its outputs this
+    /// frame are its prediction alone ([`crate::filter::flags::PREDICTED`]: the innovation failed
+    /// the gate, the sensors disagreeing with its model by more than 5σ, a sensor fault or a
+    /// manoeuvre the model does not follow; or its first step after an outage, with seconds of
+    /// predicted wind). The estimate is computed but its filter features are not what training
+    /// saw.
     pub const FILTER_DIVERGED: u16 = 1 << 9;
     /// A computed angle reads GPS speed or altitude and the GPS had none: they came from the EGI
     /// (ground speed from its velocity, altitude coasted on its vertical velocity, at most
@@ -362,7 +366,11 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 /// `docs/results/ood.md`). Its β rests on the side force, which it follows less well than the
 /// network does even there.
 pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
-    if !values.filter_clear() || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX {
+    // `filter_clear` lets a prediction-only step pass; standing in for a network needs an update.
+    if !values.filter_clear()
+        || values.filter_flags & filter::flags::PREDICTED != 0
+        || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX
+    {
         return None;
     }
     let airspeed_mms = values.get(Feature::FilterAirspeed);
@@ -576,7 +584,9 @@ impl<'m> Estimator<'m> {
         };
         let values = self.state.next(frame);
         let health = values.health;
-        let diverged = values.filter_flags & (filter::flags::GATED | filter::flags::RESTARTED) != 0;
+        let diverged = values.filter_flags
+            & (filter::flags::GATED | filter::flags::PREDICTED | filter::flags::RESTARTED)
+            != 0;
         let mut flags = 0u16;
         let mut angle = |m: Model,
                          last: &mut Option<(i32, i32)>,
@@ -786,12 +796,14 @@ mod tests {
         w.raw[Feature::FilterSigmaBeta.index()] = 20_000;
         assert!(!beta_disagrees_with_filter(&w, -1145 + 3437));
         assert!(beta_disagrees_with_filter(&w, -1145 + 3438));
-        // Any filter flag, or no filter, and there is no judgement.
+        // Any filter flag, or no filter, and there is no judgement; but a step without an update
+        // leaves the filter's prediction to judge by.
         for bit in 0..8 {
             let mut f = v;
             f.filter_flags = 1 << bit;
-            assert!(
-                !beta_disagrees_with_filter(&f, 30_000),
+            assert_eq!(
+                beta_disagrees_with_filter(&f, 30_000),
+                f.filter_flags == filter::flags::PREDICTED,
                 "filter flag bit {bit}"
             );
         }
@@ -889,7 +901,7 @@ mod tests {
         let mut flagged = 0;
         for (k, (e, values)) in run(5_000).iter().enumerate() {
             assert_eq!(e.beta_mdeg, 5_000, "frame {k}");
-            let filter_ok = values.filter_flags == 0;
+            let filter_ok = values.filter_clear();
             assert_eq!(e.flags.has(Flags::BETA_DISAGREES), filter_ok, "frame {k}");
             flagged += usize::from(filter_ok);
         }

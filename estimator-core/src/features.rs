@@ -784,8 +784,12 @@ impl FeatureValues {
 
     /// The filter ran and raised no flag this step (inputs present, no restart, no gate run, 1σ
     /// within its limit, not slow, GPS altitude present): its outputs may stand beside a network's.
+    /// A step without an update ([`crate::filter::flags::PREDICTED`]) does not count: its
+    /// prediction is still the filter's state to compare a network with, and the estimator flags
+    /// the step itself (`FILTER_DIVERGED`).
     pub fn filter_clear(&self) -> bool {
-        self.filter_flags == 0 && self.get(Feature::FilterAirspeed) > 0
+        self.filter_flags & !crate::filter::flags::PREDICTED == 0
+            && self.get(Feature::FilterAirspeed) > 0
     }
 
     /// Writes the air-data filter's outputs into their features (rounded to the feature's LSB;

@@ -264,7 +264,9 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite, uncertain_hold: u8) 
             turbulence: count(estimator_core::Flags::TURBULENCE),
             alpha_from_filter: count(estimator_core::Flags::ALPHA_FROM_FILTER),
             beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
+            filter_diverged: count(estimator_core::Flags::FILTER_DIVERGED),
             uncertain: count(estimator_core::Flags::UNCERTAIN),
+            any_flag: ans.flags.iter().filter(|f| f.0 != 0).count(),
             silent,
         };
         a.push((fl.name.clone(), ans.alpha_deg, ta.to_vec()));
@@ -293,8 +295,13 @@ pub struct FlagCounts {
     pub alpha_from_filter: usize,
     /// The network's and the filter's β disagree (`Flags::BETA_DISAGREES`).
     pub beta_disagrees: usize,
+    /// The air-data filter restarted, kept failing its gate or rejected this frame's measurement
+    /// (`Flags::FILTER_DIVERGED`).
+    pub filter_diverged: usize,
     /// A 1σ above its limit (`Flags::UNCERTAIN`).
     pub uncertain: usize,
+    /// Any flag at all: the frames a user cannot take at face value.
+    pub any_flag: usize,
     /// Silent frames: every flag clear and |α error| > 2° or |β error| > 1° (`crate::ood`).
     pub silent: usize,
 }

@@ -68,6 +68,14 @@ pub mod flags {
     /// GPS altitude missing: the altitude (for air density and Mach) is the last GPS altitude
     /// carried on by the EGI's vertical velocity, for at most [`super::MAX_ALT_COAST_S`].
     pub const ALT_COASTED: u8 = 1 << 5;
+    /// The outputs are the prediction alone, with every input present: this step's innovation
+    /// failed [`super::Config::gate`] (raised from the first such step, where [`GATED`] waits for
+    /// [`super::Config::gate_run`] of them: the predicted covariance widens while no update comes,
+    /// so a gross sensor error, a 4-g accelerometer bias on a light aircraft, can end its run by
+    /// being accepted before `gate_run` is reached), or there was no update to make (the first step
+    /// after a start, a restart or a step without inputs has no previous step to time the model
+    /// by, and after an outage its wind is seconds of prediction old).
+    pub const PREDICTED: u8 = 1 << 6;
 }
 
 /// Tuning and installation constants.
@@ -977,6 +985,9 @@ impl AirDataFilter {
             // `update` returns finite values only; a gated one counts as the gate, so one wild
             // innovation cannot hold the mean up for long.
             running_mean(&mut self.nis_mean, n.min(self.cfg.gate), dt, NIS_TAU_S);
+        }
+        if nis.is_none_or(|n| n > self.cfg.gate) {
+            flags |= flags::PREDICTED;
         }
         let nis = nis.unwrap_or(0.0);
         self.prev = Some(*inp);

@@ -356,14 +356,18 @@ fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model
     };
     let c = cfg();
     let mut f = AirDataFilter::new(c);
-    // It starts at the gate: nothing is proven yet.
+    // It starts at the gate: nothing is proven yet. Its first step has no update to make: its
+    // outputs are the prediction alone, and say so; from the second on they are measured.
     let (inp, _) = calm.frame(0.0, &c);
-    assert_eq!(f.step(&inp, true).nis_mean, c.gate);
+    let first = f.step(&inp, true);
+    assert_eq!(first.nis_mean, c.gate);
+    assert_ne!(first.flags & flags::PREDICTED, 0);
     let mut t = DT;
     let mut out = Output::default();
     while t < 60.0 {
         let (inp, _) = calm.frame(t, &c);
         out = f.step(&inp, true);
+        assert_eq!(out.flags & flags::PREDICTED, 0, "t = {t}");
         t += DT;
     }
     // The world is the filter's own model: innovations far below their covariance.
@@ -373,7 +377,13 @@ fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model
     let held = f.step(&Input::default(), false);
     assert_eq!(held.nis_mean, out.nis_mean);
     let (inp, _) = calm.frame(t, &c);
-    assert_eq!(f.step(&inp, true).nis_mean, c.gate);
+    let back = f.step(&inp, true);
+    assert_eq!(back.nis_mean, c.gate);
+    assert_ne!(
+        back.flags & flags::PREDICTED,
+        0,
+        "the first step after an outage"
+    );
     let mut r = AirDataFilter::new(c);
     for k in 0..400 {
         let (inp, _) = calm.frame(k as f32 * DT, &c);
@@ -588,6 +598,13 @@ fn model_and_sensors_that_disagree_are_gated_and_flagged() {
         let (mut inp, _) = w.frame(60.0 + i as f32 * DT, &c);
         inp.accel_mps2[2] -= 40.0; // a 4 g error on the normal axis
         let out = f.step(&inp, true);
+        // Each step whose innovation fails the gate says so at once, the first one included.
+        let rejected = out.nis > c.gate;
+        assert_eq!(out.flags & flags::PREDICTED != 0, rejected, "step {i}");
+        assert!(
+            i > 0 || rejected,
+            "the first step of the error passed the gate"
+        );
         if out.flags & flags::GATED != 0 && flagged_after.is_none() {
             flagged_after = Some(i + 1);
         }
