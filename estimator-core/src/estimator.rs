@@ -6,7 +6,7 @@
 //! | a channel a model uses is marked invalid (sensor flag, NaN, ±Inf, out of the wire range) | `INVALID_INPUT`; that angle's last good value is held (`ALPHA_HELD`/`BETA_HELD`), or it reads zero with `NO_ESTIMATE` if there is none |
 //! | a noisy channel (IMU, GPS, EGI) a model uses repeats the same value for [`STUCK_FRAMES`] frames | `STUCK_SENSOR` on that frame, held as above, until it changes ([`crate::health`]) |
 //! | an IMU channel a model uses is at its full scale in its 20 Hz value or a 120 Hz sub-sample (the sensor clipped) | `SATURATED` on that frame, held as above |
-//! | the air-data filter a model reads restarted, keeps failing its innovation gate, or gives its prediction alone on this frame (the innovation failed the gate: sensors and model more than 5σ apart; or its first step after an outage) | `FILTER_DIVERGED`, estimate computed |
+//! | the air-data filter a model reads restarted, keeps failing its innovation gate, or gives its prediction alone on this frame (the innovation failed the gate: sensors and model more than 5σ apart; or no update was made: its first step after a start or an outage, an update whose arithmetic failed) | `FILTER_DIVERGED`, estimate computed |
 //! | GPS speed or altitude invalid (no fix) while the EGI velocity is valid | both filled from the EGI (altitude for at most 120 s): `GPS_SUBSTITUTED`, estimate computed |
 //! | a feature outside the range seen in training | clamped to that range, estimate computed, `OUT_OF_ENVELOPE` |
 //! | the air-data filter's lift scale outside the range seen in training, for a model that runs the filter (whether or not it reads the lift scale: [`CascadeNet::lift_scale`]) | estimate computed, `OUT_OF_ENVELOPE` |
@@ -86,7 +86,7 @@ impl Flags {
     pub const ALPHA_FROM_FILTER: u16 = 1 << 12;
     /// The network's β and the air-data filter's disagree by more than
     /// [`BETA_CROSSCHECK_MIN_MDEG`] and [`BETA_CROSSCHECK_SIGMAS`] of the filter's 1σ while the
-    /// filter reports no flag ([`beta_disagrees_with_filter`]): one of the two is wrong by
+    /// filter has no standing flag ([`beta_disagrees_with_filter`]): one of the two is wrong by
     /// degrees. On the validation flights it was mostly the network (a sideslip beyond what it
     /// was trained on, which the filter's kinematics follow); in heavy turbulence it can be the
     /// filter. β is still the network's.
@@ -354,8 +354,9 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 
 /// The air-data filter's α (millidegrees) and the body-z air velocity it implies (mm/s,
 /// `V·sin α·cos β`), when the filter is fit to stand in for an α network that is out of its
-/// envelope: its outputs are this step's and it raised no flag at all (inputs present, no restart,
-/// no gate run, confident, not slow, GPS altitude present), and its NIS mean is at most
+/// envelope: its outputs are this step's and it raised no flag at all (inputs present, its
+/// measurement used, no restart, no gate run, confident, not slow, GPS altitude present), and its
+/// NIS mean is at most
 /// [`FALLBACK_NIS_MEAN_MAX`]. `None` otherwise, and for a state without a filter (airspeed 0).
 ///
 /// A fallback α that is later held (the α sources go bad on the next frame) carries `ALPHA_HELD`
@@ -366,9 +367,9 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 /// `docs/results/ood.md`). Its β rests on the side force, which it follows less well than the
 /// network does even there.
 pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
-    // `filter_clear` lets a prediction-only step pass; standing in for a network needs an update.
-    if !values.filter_clear()
-        || values.filter_flags & filter::flags::PREDICTED != 0
+    // Standing in for a network needs no flag at all, `PREDICTED` included: an updated filter.
+    if values.filter_flags != 0
+        || values.get(Feature::FilterAirspeed) <= 0
         || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX
     {
         return None;
@@ -392,8 +393,8 @@ pub const BETA_CROSSCHECK_MIN_MDEG: i64 = 2_000;
 pub const BETA_CROSSCHECK_SIGMAS: i64 = 3;
 
 /// Whether `beta_mdeg` (the network's β) and the air-data filter's β in `values` disagree
-/// ([`Flags::BETA_DISAGREES`]). Never while the filter has a flag raised (no input, restarted,
-/// gated, low confidence, ...) or has not run (airspeed 0). Integer arithmetic: µrad to
+/// ([`Flags::BETA_DISAGREES`]). Never while the filter has a standing flag raised (no input,
+/// restarted, gated, low confidence, ...: any but `PREDICTED`) or has not run (airspeed 0). Integer arithmetic: µrad to
 /// millidegrees as `µrad · 180,000 / 3,141,593`.
 pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> bool {
     if !values.filter_clear() {

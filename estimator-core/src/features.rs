@@ -782,14 +782,11 @@ impl FeatureValues {
         self.filter_flags & (crate::filter::flags::NO_INPUT | crate::filter::flags::RESTARTED) == 0
     }
 
-    /// The filter ran and raised no flag this step (inputs present, no restart, no gate run, 1σ
-    /// within its limit, not slow, GPS altitude present): its outputs may stand beside a network's.
-    /// A step without an update ([`crate::filter::flags::PREDICTED`]) does not count: its
-    /// prediction is still the filter's state to compare a network with, and the estimator flags
-    /// the step itself (`FILTER_DIVERGED`).
+    /// The filter ran and has no standing flag this step ([`crate::filter::flags::clear`]: inputs
+    /// present, no restart, no gate run, 1σ within its limit, not slow, GPS altitude present; a
+    /// prediction-only step counts as clear): its outputs may stand beside a network's.
     pub fn filter_clear(&self) -> bool {
-        self.filter_flags & !crate::filter::flags::PREDICTED == 0
-            && self.get(Feature::FilterAirspeed) > 0
+        crate::filter::flags::clear(self.filter_flags) && self.get(Feature::FilterAirspeed) > 0
     }
 
     /// Writes the air-data filter's outputs into their features (rounded to the feature's LSB;

@@ -70,7 +70,7 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         let ta = fl.truth(Target::AlphaDeg);
         let tb = fl.truth(Target::BetaDeg);
         let (pa, pb) = degrees(&out);
-        let ok: Vec<bool> = out.iter().map(|o| o.flags == 0).collect();
+        let ok: Vec<bool> = out.iter().map(|o| flags::clear(o.flags)).collect();
         let keep = |v: &[f64]| -> Vec<f64> {
             v.iter()
                 .zip(&ok)

@@ -68,7 +68,10 @@ fn run_filter(fl: &crate::data::Flight) -> Answers {
     Answers {
         alpha_deg,
         beta_deg,
-        clear: out.iter().map(|o| o.flags == 0).collect(),
+        clear: out
+            .iter()
+            .map(|o| estimator_core::filter::flags::clear(o.flags))
+            .collect(),
         alpha_from_filter: vec![false; out.len()],
     }
 }

@@ -295,8 +295,8 @@ pub struct FlagCounts {
     pub alpha_from_filter: usize,
     /// The network's and the filter's β disagree (`Flags::BETA_DISAGREES`).
     pub beta_disagrees: usize,
-    /// The air-data filter restarted, kept failing its gate or rejected this frame's measurement
-    /// (`Flags::FILTER_DIVERGED`).
+    /// The air-data filter restarted, kept failing its gate, or gave its prediction alone (a
+    /// rejected measurement; the first frame after a start or an outage) (`Flags::FILTER_DIVERGED`).
     pub filter_diverged: usize,
     /// A 1σ above its limit (`Flags::UNCERTAIN`).
     pub uncertain: usize,

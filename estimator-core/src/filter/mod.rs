@@ -69,13 +69,19 @@ pub mod flags {
     /// carried on by the EGI's vertical velocity, for at most [`super::MAX_ALT_COAST_S`].
     pub const ALT_COASTED: u8 = 1 << 5;
     /// The outputs are the prediction alone, with every input present: this step's innovation
-    /// failed [`super::Config::gate`] (raised from the first such step, where [`GATED`] waits for
-    /// [`super::Config::gate_run`] of them: the predicted covariance widens while no update comes,
-    /// so a gross sensor error, a 4-g accelerometer bias on a light aircraft, can end its run by
-    /// being accepted before `gate_run` is reached), or there was no update to make (the first step
-    /// after a start, a restart or a step without inputs has no previous step to time the model
-    /// by, and after an outage its wind is seconds of prediction old).
+    /// failed [`super::Config::gate`] (from the first such step on; [`GATED`] waits for
+    /// [`super::Config::gate_run`] of them), or no update was made (the first step after a start
+    /// or an outage, or after a restart that dropped the step's input, has no previous step to
+    /// time the model by; or the update's arithmetic failed). With [`RESTARTED`] the outputs are
+    /// the held ones instead. Not a standing condition: [`clear`] lets it pass (docs/filter.md).
     pub const PREDICTED: u8 = 1 << 6;
+
+    /// No standing flag: every flag clear but [`PREDICTED`], a single step's. The filter's outputs
+    /// may stand beside a network's and count as trusted; the estimator flags a [`PREDICTED`]
+    /// step on its own (`FILTER_DIVERGED`).
+    pub const fn clear(flags: u8) -> bool {
+        flags & !PREDICTED == 0
+    }
 }
 
 /// Tuning and installation constants.
