@@ -67,8 +67,8 @@ impl Flags {
     /// failed the gate for [`crate::filter::Config::gate_run`] steps in a row, or its outputs this
     /// frame are its prediction alone ([`crate::filter::flags::PREDICTED`]: the innovation failed
     /// the gate, the sensors disagreeing with its model by more than 5σ, a sensor fault or a
-    /// manoeuvre the model does not follow; or its first step after an outage, with seconds of
-    /// predicted wind). The estimate is computed but its filter features are not what training
+    /// manoeuvre the model does not follow; or no update was made, as on its first step after a
+    /// start or an outage, whose wind is seconds of prediction old). The estimate is computed but its filter features are not what training
     /// saw.
     pub const FILTER_DIVERGED: u16 = 1 << 9;
     /// A computed angle reads GPS speed or altitude and the GPS had none: they came from the EGI
@@ -368,8 +368,8 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 /// network does even there.
 pub fn filter_alpha_fallback(values: &FeatureValues) -> Option<(i32, i32)> {
     // Standing in for a network needs no flag at all, `PREDICTED` included: an updated filter.
-    if values.filter_flags != 0
-        || values.get(Feature::FilterAirspeed) <= 0
+    if !values.filter_clear()
+        || values.filter_flags != 0
         || values.get(Feature::FilterNisMean) > FALLBACK_NIS_MEAN_MAX
     {
         return None;

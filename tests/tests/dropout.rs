@@ -162,6 +162,15 @@ fn during_fault(
     (computed as f64 / n.max(1) as f64, worst)
 }
 
+/// No estimate the fault moved past the silent-error sizes (2° α, 1° β) went without a flag.
+fn assert_nothing_silent(s: &FaultScore) {
+    let (alpha, beta) = s.max_unflagged_dev_deg;
+    assert!(
+        alpha <= SILENT_ALPHA_DEG && beta <= SILENT_BETA_DEG,
+        "unflagged and moved: {s:?}"
+    );
+}
+
 fn check(name: &str, run: fn(&[SensorFrame]) -> Vec<Estimate>) -> Vec<FaultScore> {
     let f = flight();
     let reference = run(&f.frames);
@@ -201,11 +210,7 @@ fn the_shipped_estimator_flags_every_fault_at_once_and_is_back_within_5_s() {
     // No estimate moved past the silent-error sizes goes without a flag, during the fault or as
     // the sensor comes back (the filter's first step after an outage is its prediction alone).
     for s in check("shipped", hybrid) {
-        let (alpha, beta) = s.max_unflagged_dev_deg;
-        assert!(
-            alpha <= SILENT_ALPHA_DEG && beta <= SILENT_BETA_DEG,
-            "unflagged and moved: {s:?}"
-        );
+        assert_nothing_silent(&s);
     }
     // The EGI stands in for the GPS: through a 30-s GPS loss the hybrid keeps computing (flagged
     // GPS_SUBSTITUTED), close to what it gives with the GPS.
@@ -240,11 +245,7 @@ fn a_bias_moves_no_unflagged_estimate_past_the_silent_error_sizes_and_is_back_af
         let run: Vec<Option<Estimate>> = hybrid(&faulted(&fault)).into_iter().map(Some).collect();
         let s = score(&[fault], &run, &reference, &f.times).remove(0);
         eprintln!("shipped: {s:?}");
-        let (alpha, beta) = s.max_unflagged_dev_deg;
-        assert!(
-            alpha <= SILENT_ALPHA_DEG && beta <= SILENT_BETA_DEG,
-            "unflagged and moved: {s:?}"
-        );
+        assert_nothing_silent(&s);
         let back = s.back_after_s.unwrap_or(f64::INFINITY);
         assert!(
             back <= back_within_s,
