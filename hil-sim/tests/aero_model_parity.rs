@@ -2,7 +2,8 @@
 //! flight, flown by stock JSBSim (`scripts/jsbsim-stock`), each force term, the wind-axis sums and
 //! the body-axis forces of `estimator_core::aero::MODEL` agree with JSBSim's own
 //! (`aero/coefficient/*`, `forces/fw{x,y,z}-aero-lbs`, `forces/fb{x,y,z}-aero-lbs`, over
-//! `qbar·Sw`) to a small fraction of each coefficient's range over the flight.
+//! `qbar·Sw`) to a small fraction of each coefficient's range over the flight; so do the roll and
+//! yaw moment terms of `aero::MOMENTS` (over `qbar·Sw·bw`), which flight-test calibration reads.
 //!
 //! Two input paths: JSBSim's own property values in JSBSim's units (checks the tables, products and
 //! the wind-to-body turn alone), and the estimator's units (degrees as the sensor channels carry
@@ -26,13 +27,14 @@ use estimator_core::aero::{
 /// one unit of the XML's last digit (1e-4) in a table cell the flight uses is ~6e-5 of it.
 const TOLERANCE: f64 = 1e-6;
 
-const INPUTS: [&str; 29] = [
+const INPUTS: [&str; 30] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
     "velocities/vt-fps",
     "aero/qbar-psf",
     "metrics/Sw-sqft",
+    "metrics/bw-ft",
     "velocities/p-aero-rad_sec",
     "velocities/q-aero-rad_sec",
     "velocities/r-aero-rad_sec",
@@ -72,6 +74,12 @@ fn terms() -> impl Iterator<Item = &'static Term<'static>> {
     MODEL.drag.iter().chain(MODEL.side).chain(MODEL.lift)
 }
 
+/// The roll and yaw moment axes (flight-test calibration reads them).
+fn moment_axes() -> [(&'static str, &'static [Term<'static>]); 2] {
+    let m = aero::MOMENTS.expect("JSBSim's F-16 has roll and yaw moments the evaluator reads");
+    [("ROLL", m.roll), ("YAW", m.yaw)]
+}
+
 /// One JSBSim step: every property above, by name.
 struct Step {
     v: std::collections::HashMap<String, f64>,
@@ -85,6 +93,11 @@ impl Step {
     /// A force property over qbar·Sw.
     fn coef(&self, p: &str) -> f64 {
         self.get(p) / (self.get("aero/qbar-psf") * self.get("metrics/Sw-sqft"))
+    }
+
+    /// A moment property over qbar·Sw·bw.
+    fn moment_coef(&self, p: &str) -> f64 {
+        self.coef(p) / self.get("metrics/bw-ft")
     }
 
     /// JSBSim's own values, in JSBSim's units.
@@ -163,6 +176,11 @@ fn flight() -> &'static [Step] {
             .iter()
             .copied()
             .chain(terms().map(|t| t.name))
+            .chain(
+                moment_axes()
+                    .into_iter()
+                    .flat_map(|(_, a)| a.iter().map(|t| t.name)),
+            )
             .chain(FORCES)
             .collect();
         let props: Vec<String> = names.iter().map(|n| n.to_string()).collect();
@@ -312,6 +330,35 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
             }
             ok &= report(term.name.trim_start_matches("aero/coefficient/"), &w, scale);
         }
+    }
+    // The roll and yaw moment terms, against the range of their axis's sum; and the sums.
+    for (axis, moment) in moment_axes() {
+        let sum = |s: &Step| moment.iter().map(|t| s.moment_coef(t.name)).sum::<f64>();
+        let mut total = Worst::default();
+        for s in steps {
+            total.add(0.0, 0.0, sum(s));
+        }
+        let scale = total.range();
+        for term in moment {
+            let mut w = Worst::default();
+            for s in steps {
+                let ours = term.eval(&s.point()).unwrap().value;
+                w.add(
+                    s.get("simulation/sim-time-sec"),
+                    ours,
+                    s.moment_coef(term.name),
+                );
+            }
+            ok &= report(term.name.trim_start_matches("aero/coefficient/"), &w, scale);
+        }
+        let mut w = Worst::default();
+        let m = aero::MOMENTS.unwrap();
+        for s in steps {
+            let [roll, yaw] = m.coefficients_at(&s.point()).unwrap();
+            let ours = if axis == "ROLL" { roll } else { yaw };
+            w.add(s.get("simulation/sim-time-sec"), ours, sum(s));
+        }
+        ok &= report(&format!("{axis} (sum)"), &w, scale);
     }
     // The ground-effect function the lift terms share.
     let mut w = Worst::default();

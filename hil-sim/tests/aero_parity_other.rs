@@ -3,7 +3,8 @@
 //! --jsbsim-model`, listed in its generated `fixtures.rs`), evaluated at JSBSim's own property
 //! values over a flight of each (`NAME_parity.xml` beside it, flown by stock JSBSim through
 //! `scripts/jsbsim-stock`), agree with JSBSim's `aero/coefficient/*` term by term and with the
-//! wind-axis force sums. The fixtures read what the F-16 does not: |β| and |δe| (slope: the
+//! wind-axis force sums, and so do their roll and yaw moment terms where extracted (over
+//! `qbar·Sw·bw`). The fixtures read what the F-16 does not: |β| and |δe| (slope: the
 //! sign), a left aileron, α̇, a flap in degrees, 2-D tables in α × Mach and α × flap, and a stall
 //! latch as a table key.
 //!
@@ -22,11 +23,13 @@ use std::collections::HashMap;
 #[path = "aero/stock_flight.rs"]
 mod stock_flight;
 
-use estimator_core::aero::{Model, Point};
+use estimator_core::aero::{Model, Moments, Point, Term};
 
 /// The generated fixtures, each in a module whose parent offers the names they `use super::…`.
 mod fixtures {
-    pub use estimator_core::aero::{Factor, Model, Table1, Table2, Term, Var, strictly_ascending};
+    pub use estimator_core::aero::{
+        Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending,
+    };
     include!("aero/fixtures.rs");
 }
 
@@ -36,7 +39,7 @@ const TOLERANCE: f64 = 1e-6;
 
 /// The evaluator's inputs, by the JSBSim property each stands for (|β| and |δe| are derived from
 /// β and δe), and what the coefficients are divided by.
-const INPUTS: [&str; 17] = [
+const INPUTS: [&str; 18] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -54,6 +57,7 @@ const INPUTS: [&str; 17] = [
     "aero/stall-hyst-norm",
     "aero/qbar-psf",
     "metrics/Sw-sqft",
+    "metrics/bw-ft",
 ];
 const FORCES: [&str; 3] = [
     "forces/fwx-aero-lbs",
@@ -61,17 +65,27 @@ const FORCES: [&str; 3] = [
     "forces/fwz-aero-lbs",
 ];
 
-fn terms<'a>(m: &'a Model<'a>) -> impl Iterator<Item = &'a estimator_core::aero::Term<'a>> {
+fn terms<'a>(m: &'a Model<'a>) -> impl Iterator<Item = &'a Term<'a>> {
     m.drag.iter().chain(m.side).chain(m.lift)
 }
 
+/// The roll and yaw moment terms, where extracted.
+fn moment_terms<'a>(m: &'a Option<Moments<'a>>) -> impl Iterator<Item = &'a Term<'a>> {
+    m.iter().flat_map(|m| m.roll.iter().chain(m.yaw))
+}
+
 /// Every step of `aircraft`'s parity flight: each property by name.
-fn flight(aircraft: &str, model: &Model<'_>) -> Vec<HashMap<String, f64>> {
+fn flight(
+    aircraft: &str,
+    model: &Model<'_>,
+    moments: &Option<Moments<'_>>,
+) -> Vec<HashMap<String, f64>> {
     let names: Vec<String> = INPUTS
         .iter()
         .chain(FORCES.iter())
         .map(|s| s.to_string())
         .chain(terms(model).map(|t| t.name.to_string()))
+        .chain(moment_terms(moments).map(|t| t.name.to_string()))
         .collect();
     let here = stock_flight::root().join("hil-sim/tests/aero");
     stock_flight::fly(
@@ -106,14 +120,16 @@ fn point(s: &HashMap<String, f64>) -> Point {
     }
 }
 
-/// Largest error of each term and wind-axis sum over the flight, against its own range.
-fn parity(aircraft: &str, model: &Model<'_>) {
-    let steps = flight(aircraft, model);
+/// Largest error of each term and wind-axis sum over the flight, against its own range; and of
+/// each roll and yaw moment term, where extracted.
+fn parity(aircraft: &str, model: &Model<'_>, moments: &Option<Moments<'_>>) {
+    let steps = flight(aircraft, model, moments);
     println!("{aircraft}: {} JSBSim steps", steps.len());
     assert!(steps.len() > 4_000, "{aircraft}: {} steps", steps.len());
     let names: Vec<&str> = terms(model)
         .map(|t| t.name)
         .chain(["CD", "CY", "CL"])
+        .chain(moment_terms(moments).map(|t| t.name))
         .collect();
     // (max |err|, min, max) of each quantity; a NaN anywhere fails.
     let mut worst = vec![(0.0f64, f64::MAX, f64::MIN); names.len()];
@@ -127,12 +143,15 @@ fn parity(aircraft: &str, model: &Model<'_>) {
                 let c = model.coefficients_at(&p);
                 assert!(c.valid, "{aircraft}: invalid at α {}", p.alpha_rad);
                 [c.wind.drag, c.wind.side, c.wind.lift]
-            });
+            })
+            .chain(moment_terms(moments).map(|t| t.eval(&p).expect("finite").value));
         // JSBSim: each term's property is its force (lbs), as are the wind-axis sums (drag, side,
         // lift with JSBSim's signs, as `Wind` has them).
         let theirs = terms(model)
             .map(|t| s[t.name] / qs)
-            .chain(FORCES.map(|f| s[f] / qs));
+            .chain(FORCES.map(|f| s[f] / qs))
+            // A moment term's property is its moment (lbs·ft): over qbar·Sw·bw.
+            .chain(moment_terms(moments).map(|t| s[t.name] / (qs * s["metrics/bw-ft"])));
         for (((w, o), j), n) in worst.iter_mut().zip(ours).zip(theirs).zip(&names) {
             let e = (f64::from(o) - j).abs();
             if e.is_nan() {
@@ -169,7 +188,7 @@ fn every_fixture_force_model_is_jsbsims() {
         "the fixtures: {}",
         fixtures::ALL.len()
     );
-    for (name, model) in fixtures::ALL {
-        parity(name, model);
+    for (name, model, moments) in fixtures::ALL {
+        parity(name, model, moments);
     }
 }

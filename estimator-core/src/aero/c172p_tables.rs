@@ -8,7 +8,7 @@
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
 // out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
 
-use super::{Factor, Model, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCDge`: Change_in_drag_due_to_ground_effect
 pub static KCDGE: Table1<13> = Table1 {
@@ -250,3 +250,8 @@ pub static MODEL: Model<'static> = Model {
     flaperon_mix_gain: 0.0,
     stall_hysteresis_rad: Some((0.09, 0.36)),
 };
+
+/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
+/// flight-test calibration identifies their scales; the flight software reads none of them.
+/// Not extracted: aircraft/c172p/c172p.xml axis YAW aero/coefficient/Cndr: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/bw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/bw-ft': 1}): only then is it qbar·Sw·bw times a coefficient
+pub static MOMENTS: Option<Moments<'static>> = None;

@@ -8,7 +8,7 @@
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
 // out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
 
-use super::{Factor, Model, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCDge`: Change_in_drag_due_to_ground_effect
 pub static KCDGE: Table1<13> = Table1 {
@@ -101,6 +101,54 @@ pub static CLALPHA: Table2<16, 2> = Table2 {
 const _: () = assert!(strictly_ascending(&CLALPHA.rows));
 const _: () = assert!(strictly_ascending(&CLALPHA.cols));
 
+/// `aero/coefficient/Clb`: Roll_moment_due_to_beta.
+pub static CLB: Table1<9> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, -0.1750, 0.0000, 0.2090, 0.3140, 0.4190, 0.6980, 0.7850, 0.8730],
+    y: [0.0286, -0.2292, -0.0573, -0.1719, -0.1146, -0.1719, -0.0745, -0.1146, -0.1203],
+};
+const _: () = assert!(strictly_ascending(&CLB.x));
+
+/// `aero/coefficient/Clp`: Roll_moment_due_to_roll_rate_(roll_damping).
+pub static CLP: Table1<2> = Table1 {
+    key: Var::AlphaRad,
+    x: [0.0000, 0.3490],
+    y: [-0.4000, -0.3100],
+};
+const _: () = assert!(strictly_ascending(&CLP.x));
+
+/// `aero/coefficient/ClDa`: Roll_moment_due_to_aileron.
+pub static CLDA: Table1<5> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, -0.0870, 0.1400, 0.5590, 0.8730],
+    y: [0.0172, 0.0372, 0.0401, 0.0057, 0.0057],
+};
+const _: () = assert!(strictly_ascending(&CLDA.x));
+
+/// `aero/coefficient/Cnb`: Yaw_moment_due_to_beta.
+pub static CNB: Table1<5> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, 0.0000, 0.3490, 0.5240, 0.8730],
+    y: [0.0745, 0.1776, 0.0057, -0.0974, -0.0286],
+};
+const _: () = assert!(strictly_ascending(&CNB.x));
+
+/// `aero/coefficient/Cnp`: Yaw_moment_due_to_roll_rate.
+pub static CNP: Table1<6> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, -0.0870, 0.0000, 0.2790, 0.4190, 0.8730],
+    y: [0.1100, -0.1400, -0.1000, 0.0100, -0.1300, -0.1800],
+};
+const _: () = assert!(strictly_ascending(&CNP.x));
+
+/// `aero/coefficient/Cndr`: Yaw_moment_due_to_rudder.
+pub static CNDR: Table1<2> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, 0.8730],
+    y: [-0.0688, -0.0115],
+};
+const _: () = assert!(strictly_ascending(&CNDR.x));
+
 /// The DRAG axis: the sum of these terms is the drag coefficient.
 pub static DRAG: [Term<'static>; 4] = [
     // qbar · Sw · aero/function/kCDge · table(aero/alpha-rad, velocities/mach)
@@ -168,6 +216,64 @@ pub static LIFT: [Term<'static>; 4] = [
     },
 ];
 
+/// The ROLL axis: the sum of these terms is the roll moment coefficient (over qbar·Sw·bw).
+pub static ROLL: [Term<'static>; 5] = [
+    // qbar · Sw · bw · aero/beta-rad · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Clb",
+        factors: &[Factor::Var(Var::BetaRad), Factor::Table(&CLB)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Clp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Table(&CLP)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · 0.0001
+    Term {
+        name: "aero/coefficient/Clr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Const(0.0001)],
+    },
+    // qbar · Sw · bw · fcs/left-aileron-pos-rad · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/ClDa",
+        factors: &[Factor::Var(Var::LeftAileronRad), Factor::Table(&CLDA)],
+    },
+    // qbar · Sw · bw · fcs/rudder-pos-rad · 0.0115
+    Term {
+        name: "aero/coefficient/ClDr",
+        factors: &[Factor::Var(Var::RudderRad), Factor::Const(0.0115)],
+    },
+];
+
+/// The YAW axis: the sum of these terms is the yaw moment coefficient (over qbar·Sw·bw).
+pub static YAW: [Term<'static>; 5] = [
+    // qbar · Sw · bw · aero/beta-rad · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cnb",
+        factors: &[Factor::Var(Var::BetaRad), Factor::Table(&CNB)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cnp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Table(&CNP)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · -0.4447
+    Term {
+        name: "aero/coefficient/Cnr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Const(-0.4447)],
+    },
+    // qbar · Sw · bw · fcs/left-aileron-pos-rad · 0.0022
+    Term {
+        name: "aero/coefficient/Cnda",
+        factors: &[Factor::Var(Var::LeftAileronRad), Factor::Const(0.0022)],
+    },
+    // qbar · Sw · bw · fcs/rudder-pos-rad · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cndr",
+        factors: &[Factor::Var(Var::RudderRad), Factor::Table(&CNDR)],
+    },
+];
+
 /// F-15 (JSBSim's f15): the three force axes as JSBSim flies them, and the lengths and gain the inputs need.
 pub static MODEL: Model<'static> = Model {
     drag: &DRAG,
@@ -179,3 +285,7 @@ pub static MODEL: Model<'static> = Model {
     flaperon_mix_gain: 0.0,
     stall_hysteresis_rad: None,
 };
+
+/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
+/// flight-test calibration identifies their scales; the flight software reads none of them.
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, yaw: &YAW });

@@ -12,7 +12,7 @@
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
 // out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
 
-use super::{Factor, Model, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCLge`: Change_in_lift_due_to_ground_effect
 pub static KCLGE: Table1<13> = Table1 {
@@ -167,6 +167,230 @@ pub static CLQ_DSB: Table1<12> = Table1 {
 };
 const _: () = assert!(strictly_ascending(&CLQ_DSB.x));
 
+/// `aero/coefficient/Clb`: Roll_moment_due_to_beta.
+pub static CLB: Table2<12, 13> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.4360, -0.3490, -0.2620, -0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240],
+    data: [
+        [-0.0090, -0.0070, -0.0000,  0.0010,  0.0030,  0.0010,  0.0000, -0.0010, -0.0030, -0.0010,  0.0000,  0.0070,  0.0090], // aero/alpha-rad = -0.1750
+        [ 0.0110,  0.0100,  0.0100,  0.0100,  0.0090,  0.0040,  0.0000, -0.0040, -0.0090, -0.0100, -0.0100, -0.0100, -0.0110], // aero/alpha-rad = -0.0870
+        [ 0.0230,  0.0230,  0.0220,  0.0200,  0.0170,  0.0080,  0.0000, -0.0080, -0.0170, -0.0200, -0.0220, -0.0230, -0.0230], // aero/alpha-rad = 0.0000
+        [ 0.0370,  0.0340,  0.0340,  0.0300,  0.0240,  0.0120,  0.0000, -0.0120, -0.0240, -0.0300, -0.0340, -0.0340, -0.0370], // aero/alpha-rad = 0.0870
+        [ 0.0500,  0.0490,  0.0470,  0.0390,  0.0300,  0.0160,  0.0000, -0.0160, -0.0300, -0.0390, -0.0470, -0.0490, -0.0500], // aero/alpha-rad = 0.1750
+        [ 0.0680,  0.0630,  0.0600,  0.0540,  0.0410,  0.0220,  0.0000, -0.0220, -0.0410, -0.0540, -0.0600, -0.0630, -0.0680], // aero/alpha-rad = 0.2620
+        [ 0.0890,  0.0810,  0.0690,  0.0570,  0.0450,  0.0220,  0.0000, -0.0220, -0.0450, -0.0570, -0.0690, -0.0810, -0.0890], // aero/alpha-rad = 0.3490
+        [ 0.0880,  0.0790,  0.0670,  0.0540,  0.0400,  0.0210,  0.0000, -0.0210, -0.0400, -0.0540, -0.0670, -0.0790, -0.0880], // aero/alpha-rad = 0.4360
+        [ 0.0910,  0.0600,  0.0330,  0.0230,  0.0160,  0.0150,  0.0000, -0.0150, -0.0160, -0.0230, -0.0330, -0.0600, -0.0910], // aero/alpha-rad = 0.5240
+        [ 0.0760,  0.0580,  0.0360,  0.0060,  0.0020,  0.0080,  0.0000, -0.0080, -0.0020, -0.0060, -0.0360, -0.0580, -0.0760], // aero/alpha-rad = 0.6110
+        [ 0.0770,  0.0620,  0.0350,  0.0140,  0.0100,  0.0130,  0.0000, -0.0130, -0.0100, -0.0140, -0.0350, -0.0620, -0.0770], // aero/alpha-rad = 0.6980
+        [ 0.0760,  0.0590,  0.0350,  0.0270,  0.0190,  0.0150,  0.0000, -0.0150, -0.0190, -0.0270, -0.0350, -0.0590, -0.0760], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CLB.rows));
+const _: () = assert!(strictly_ascending(&CLB.cols));
+
+/// `aero/coefficient/Clb_M`: Change_in_Roll_moment_due_to_beta_due_to_mach.
+pub static CLB_M: Table1<6> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 0.8000, 1.0000, 1.2000, 1.4000, 1.6000],
+    y: [0.0000, 0.1891, 0.1776, 0.1375, 0.1203, 0.0859],
+};
+const _: () = assert!(strictly_ascending(&CLB_M.x));
+
+/// `aero/coefficient/Clp`: Roll_moment_due_to_roll_rate_(roll_damping).
+pub static CLP: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-0.3600, -0.3590, -0.4430, -0.4200, -0.3830, -0.3750, -0.3290, -0.2940, -0.2300, -0.2100, -0.1200, -0.1000],
+};
+const _: () = assert!(strictly_ascending(&CLP.x));
+
+/// `aero/coefficient/Clr`: Roll_moment_due_to_yaw_rate.
+pub static CLR: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-0.1260, -0.0260, 0.0630, 0.1130, 0.2080, 0.2300, 0.3190, 0.4370, 0.6800, 0.1000, 0.4470, -0.3300],
+};
+const _: () = assert!(strictly_ascending(&CLR.x));
+
+/// `aero/coefficient/Clda`: Roll_moment_due_to_aileron.
+pub static CLDA: Table2<12, 7> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.3490, -0.1750, 0.0000, 0.1750, 0.3490, 0.5240],
+    data: [
+        [ 0.0410,  0.0410,  0.0420,  0.0400,  0.0430,  0.0440,  0.0430], // aero/alpha-rad = -0.1750
+        [ 0.0520,  0.0530,  0.0530,  0.0520,  0.0490,  0.0480,  0.0490], // aero/alpha-rad = -0.0870
+        [ 0.0530,  0.0530,  0.0520,  0.0510,  0.0480,  0.0480,  0.0470], // aero/alpha-rad = 0.0000
+        [ 0.0560,  0.0530,  0.0510,  0.0520,  0.0490,  0.0470,  0.0450], // aero/alpha-rad = 0.0870
+        [ 0.0500,  0.0500,  0.0490,  0.0480,  0.0430,  0.0420,  0.0420], // aero/alpha-rad = 0.1750
+        [ 0.0560,  0.0510,  0.0490,  0.0480,  0.0420,  0.0410,  0.0370], // aero/alpha-rad = 0.2620
+        [ 0.0820,  0.0660,  0.0430,  0.0420,  0.0420,  0.0200,  0.0030], // aero/alpha-rad = 0.3490
+        [ 0.0590,  0.0430,  0.0350,  0.0370,  0.0360,  0.0280,  0.0130], // aero/alpha-rad = 0.4360
+        [ 0.0420,  0.0380,  0.0260,  0.0310,  0.0250,  0.0130,  0.0100], // aero/alpha-rad = 0.5240
+        [ 0.0380,  0.0270,  0.0160,  0.0260,  0.0210,  0.0140,  0.0030], // aero/alpha-rad = 0.6110
+        [ 0.0270,  0.0230,  0.0180,  0.0170,  0.0160,  0.0110,  0.0070], // aero/alpha-rad = 0.6980
+        [ 0.0170,  0.0160,  0.0140,  0.0120,  0.0110, -0.0100,  0.0080], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CLDA.rows));
+const _: () = assert!(strictly_ascending(&CLDA.cols));
+
+/// `aero/coefficient/Clda_M`: Change_in_Roll_moment_due_to_aileron_due_to_mach.
+pub static CLDA_M: Table1<3> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 1.2000, 1.6000],
+    y: [0.0000, -0.0630, -0.0630],
+};
+const _: () = assert!(strictly_ascending(&CLDA_M.x));
+
+/// `aero/coefficient/Cldr_M`: Change_in_Roll_moment_due_to_rudder_due_to_mach.
+pub static CLDR_M: Table1<2> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 1.6000],
+    y: [0.0000, -0.0201],
+};
+const _: () = assert!(strictly_ascending(&CLDR_M.x));
+
+/// `aero/coefficient/Cldr`: Roll_moment_due_to_rudder.
+pub static CLDR: Table2<12, 7> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.3490, -0.1750, 0.0000, 0.1750, 0.3490, 0.5240],
+    data: [
+        [ 0.0050,  0.0070,  0.0130,  0.0180,  0.0150,  0.0210,  0.0230], // aero/alpha-rad = -0.1750
+        [ 0.0170,  0.0160,  0.0130,  0.0150,  0.0140,  0.0110,  0.0100], // aero/alpha-rad = -0.0870
+        [ 0.0140,  0.0140,  0.0110,  0.0150,  0.0130,  0.0100,  0.0110], // aero/alpha-rad = 0.0000
+        [ 0.0100,  0.0140,  0.0120,  0.0140,  0.0130,  0.0110,  0.0110], // aero/alpha-rad = 0.0870
+        [-0.0050,  0.0130,  0.0110,  0.0140,  0.0120,  0.0100,  0.0110], // aero/alpha-rad = 0.1750
+        [ 0.0090,  0.0090,  0.0090,  0.0140,  0.0110,  0.0090,  0.0100], // aero/alpha-rad = 0.2620
+        [ 0.0190,  0.0120,  0.0080,  0.0140,  0.0110,  0.0080,  0.0080], // aero/alpha-rad = 0.3490
+        [ 0.0050,  0.0050,  0.0050,  0.0150,  0.0100,  0.0100,  0.0100], // aero/alpha-rad = 0.4360
+        [ 0.0000,  0.0000,  0.0000,  0.0130,  0.0080,  0.0060,  0.0060], // aero/alpha-rad = 0.5240
+        [-0.0050,  0.0040,  0.0050,  0.0110,  0.0080,  0.0050,  0.0140], // aero/alpha-rad = 0.6110
+        [-0.0110,  0.0090,  0.0030,  0.0060,  0.0070,  0.0000,  0.0200], // aero/alpha-rad = 0.6980
+        [ 0.0080,  0.0070,  0.0050,  0.0010,  0.0030,  0.0010,  0.0000], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CLDR.rows));
+const _: () = assert!(strictly_ascending(&CLDR.cols));
+
+/// `aero/coefficient/Cnb`: Yaw_moment_due_to_beta.
+pub static CNB: Table2<12, 13> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.4360, -0.3490, -0.2620, -0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240],
+    data: [
+        [-0.0790, -0.0740, -0.0640, -0.0560, -0.0380, -0.0180,  0.0000,  0.0180,  0.0380,  0.0560,  0.0640,  0.0740,  0.0790], // aero/alpha-rad = -0.1750
+        [-0.0900, -0.0860, -0.0770, -0.0570, -0.0420, -0.0190,  0.0000,  0.0190,  0.0420,  0.0570,  0.0770,  0.0860,  0.0900], // aero/alpha-rad = -0.0870
+        [-0.1060, -0.0930, -0.0760, -0.0590, -0.0420, -0.0180,  0.0000,  0.0180,  0.0420,  0.0590,  0.0760,  0.0930,  0.1060], // aero/alpha-rad = 0.0000
+        [-0.1060, -0.0890, -0.0740, -0.0580, -0.0420, -0.0190,  0.0000,  0.0190,  0.0420,  0.0580,  0.0740,  0.0890,  0.1060], // aero/alpha-rad = 0.0870
+        [-0.0960, -0.0800, -0.0730, -0.0580, -0.0430, -0.0190,  0.0000,  0.0190,  0.0430,  0.0580,  0.0730,  0.0800,  0.0960], // aero/alpha-rad = 0.1750
+        [-0.0800, -0.0620, -0.0570, -0.0530, -0.0390, -0.0180,  0.0000,  0.0180,  0.0390,  0.0530,  0.0570,  0.0620,  0.0800], // aero/alpha-rad = 0.2620
+        [-0.0680, -0.0490, -0.0290, -0.0320, -0.0300, -0.0130,  0.0000,  0.0130,  0.0300,  0.0320,  0.0290,  0.0490,  0.0680], // aero/alpha-rad = 0.3490
+        [-0.0300, -0.0220, -0.0070, -0.0120, -0.0170, -0.0070,  0.0000,  0.0070,  0.0170,  0.0120,  0.0070,  0.0220,  0.0300], // aero/alpha-rad = 0.4360
+        [-0.0640, -0.0280, -0.0120, -0.0020, -0.0040, -0.0040,  0.0000,  0.0040,  0.0040,  0.0020,  0.0120,  0.0280,  0.0640], // aero/alpha-rad = 0.5240
+        [-0.0150,  0.0120,  0.0340,  0.0460,  0.0350,  0.0140,  0.0000, -0.0140, -0.0350, -0.0460, -0.0340, -0.0120,  0.0150], // aero/alpha-rad = 0.6110
+        [-0.0110,  0.0020,  0.0650,  0.0710,  0.0470,  0.0170,  0.0000, -0.0170, -0.0470, -0.0710, -0.0650, -0.0020,  0.0110], // aero/alpha-rad = 0.6980
+        [ 0.0010,  0.0130,  0.0410,  0.0730,  0.0570,  0.0330,  0.0000, -0.0330, -0.0570, -0.0730, -0.0410, -0.0130, -0.0010], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CNB.rows));
+const _: () = assert!(strictly_ascending(&CNB.cols));
+
+/// `aero/coefficient/Cnb_M`: Change_in_Yaw_moment_due_to_beta_due_to_mach.
+pub static CNB_M: Table1<8> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 0.7000, 0.8000, 0.9000, 1.0000, 1.2000, 1.4000, 1.6000],
+    y: [0.0000, -0.0688, -0.0172, 0.0229, 0.0000, -0.0688, 0.0057, 0.0688],
+};
+const _: () = assert!(strictly_ascending(&CNB_M.x));
+
+/// `aero/coefficient/Cnp`: Yaw_moment_due_to_roll_rate.
+pub static CNP: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-0.0610, -0.0520, -0.0520, 0.0120, 0.0130, 0.0240, -0.0500, -0.1500, -0.1300, -0.1580, -0.2400, -0.1500],
+};
+const _: () = assert!(strictly_ascending(&CNP.x));
+
+/// `aero/coefficient/Cnr`: Yaw_moment_due_to_yaw_rate.
+pub static CNR: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-0.3800, -0.3630, -0.3780, -0.3860, -0.3700, -0.4530, -0.5500, -0.5820, -0.5950, -0.6370, -1.0200, -0.8400],
+};
+const _: () = assert!(strictly_ascending(&CNR.x));
+
+/// `aero/coefficient/Cnda_M`: Change_in_Yaw_moment_due_to_aileron_due_to_mach.
+pub static CNDA_M: Table1<6> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 0.8000, 1.0000, 1.2000, 1.4000, 1.6000],
+    y: [0.0000, 0.0149, -0.0011, 0.0097, 0.0126, -0.0040],
+};
+const _: () = assert!(strictly_ascending(&CNDA_M.x));
+
+/// `aero/coefficient/Cnda`: Yaw_moment_due_to_aileron.
+pub static CNDA: Table2<12, 7> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.3490, -0.1750, 0.0000, 0.1750, 0.3490, 0.5240],
+    data: [
+        [ 0.0010,  0.0020,  0.0060,  0.0110,  0.0150,  0.0240, -0.0220], // aero/alpha-rad = -0.1750
+        [ 0.0270,  0.0140,  0.0080,  0.0110,  0.0150,  0.0100, -0.0020], // aero/alpha-rad = -0.0870
+        [ 0.0170,  0.0160,  0.0060,  0.0100,  0.0140,  0.0040,  0.0030], // aero/alpha-rad = 0.0000
+        [ 0.0130,  0.0160,  0.0060,  0.0090,  0.0120,  0.0020,  0.0050], // aero/alpha-rad = 0.0870
+        [ 0.0120,  0.0140,  0.0050,  0.0080,  0.0110,  0.0010,  0.0030], // aero/alpha-rad = 0.1750
+        [ 0.0160,  0.0190,  0.0080,  0.0060,  0.0080, -0.0030,  0.0010], // aero/alpha-rad = 0.2620
+        [-0.0010,  0.0210,  0.0050, -0.0000,  0.0020, -0.0140,  0.0090], // aero/alpha-rad = 0.3490
+        [-0.0170, -0.0020, -0.0070, -0.0040, -0.0020, -0.0060,  0.0090], // aero/alpha-rad = 0.4360
+        [-0.0110, -0.0120, -0.0040, -0.0070, -0.0060,  0.0010,  0.0010], // aero/alpha-rad = 0.5240
+        [-0.0170, -0.0160, -0.0070, -0.0100, -0.0120, -0.0040, -0.0030], // aero/alpha-rad = 0.6110
+        [-0.0080, -0.0150, -0.0060, -0.0040, -0.0110, -0.0040,  0.0020], // aero/alpha-rad = 0.6980
+        [-0.0160, -0.0110, -0.0060, -0.0100, -0.0110, -0.0060, -0.0010], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CNDA.rows));
+const _: () = assert!(strictly_ascending(&CNDA.cols));
+
+/// `aero/coefficient/Cndr`: Yaw_moment_due_to_rudder.
+pub static CNDR: Table2<12, 7> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::BetaRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.5240, -0.3490, -0.1750, 0.0000, 0.1750, 0.3490, 0.5240],
+    data: [
+        [-0.0180, -0.0280, -0.0370, -0.0480, -0.0430, -0.0520, -0.0620], // aero/alpha-rad = -0.1750
+        [-0.0520, -0.0510, -0.0410, -0.0450, -0.0440, -0.0340, -0.0340], // aero/alpha-rad = -0.0870
+        [-0.0520, -0.0430, -0.0380, -0.0450, -0.0410, -0.0360, -0.0270], // aero/alpha-rad = 0.0000
+        [-0.0520, -0.0460, -0.0400, -0.0450, -0.0410, -0.0360, -0.0280], // aero/alpha-rad = 0.0870
+        [-0.0540, -0.0450, -0.0400, -0.0440, -0.0400, -0.0350, -0.0270], // aero/alpha-rad = 0.1750
+        [-0.0490, -0.0490, -0.0380, -0.0450, -0.0380, -0.0280, -0.0270], // aero/alpha-rad = 0.2620
+        [-0.0590, -0.0570, -0.0370, -0.0470, -0.0340, -0.0240, -0.0230], // aero/alpha-rad = 0.3490
+        [-0.0510, -0.0520, -0.0300, -0.0480, -0.0350, -0.0230, -0.0230], // aero/alpha-rad = 0.4360
+        [-0.0300, -0.0300, -0.0270, -0.0490, -0.0350, -0.0200, -0.0190], // aero/alpha-rad = 0.5240
+        [-0.0370, -0.0330, -0.0240, -0.0450, -0.0290, -0.0160, -0.0090], // aero/alpha-rad = 0.6110
+        [-0.0260, -0.0300, -0.0190, -0.0330, -0.0220, -0.0100, -0.0250], // aero/alpha-rad = 0.6980
+        [-0.0130, -0.0080, -0.0130, -0.0160, -0.0090, -0.0140, -0.0100], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CNDR.rows));
+const _: () = assert!(strictly_ascending(&CNDR.cols));
+
+/// `aero/coefficient/Cndr_M`: Change_in_Yaw_moment_due_to_rudder_due_to_mach.
+pub static CNDR_M: Table1<3> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 1.2000, 1.6000],
+    y: [0.0000, 0.0401, 0.0716],
+};
+const _: () = assert!(strictly_ascending(&CNDR_M.x));
+
 /// The DRAG axis: the sum of these terms is the drag coefficient.
 pub static DRAG: [Term<'static>; 8] = [
     // qbar · Sw · table CDdHT(aero/alpha-rad, fcs/elevator-pos-rad)
@@ -279,6 +503,94 @@ pub static LIFT: [Term<'static>; 6] = [
     },
 ];
 
+/// The ROLL axis: the sum of these terms is the roll moment coefficient (over qbar·Sw·bw).
+pub static ROLL: [Term<'static>; 8] = [
+    // qbar · Sw · bw · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Clb",
+        factors: &[Factor::Table(&CLB)],
+    },
+    // qbar · Sw · bw · aero/beta-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Clb_M",
+        factors: &[Factor::Var(Var::BetaRad), Factor::Table(&CLB_M)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Clp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Table(&CLP)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Clr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Table(&CLR)],
+    },
+    // qbar · Sw · bw · fcs/aileron-pos-rad · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Clda",
+        factors: &[Factor::Var(Var::AileronRad), Factor::Table(&CLDA)],
+    },
+    // qbar · Sw · bw · aero/alpha-rad · fcs/aileron-pos-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Clda_M",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Var(Var::AileronRad), Factor::Table(&CLDA_M)],
+    },
+    // qbar · Sw · bw · aero/alpha-rad · fcs/rudder-pos-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Cldr_M",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Var(Var::RudderRad), Factor::Table(&CLDR_M)],
+    },
+    // qbar · Sw · bw · fcs/rudder-pos-rad · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Cldr",
+        factors: &[Factor::Var(Var::RudderRad), Factor::Table(&CLDR)],
+    },
+];
+
+/// The YAW axis: the sum of these terms is the yaw moment coefficient (over qbar·Sw·bw).
+pub static YAW: [Term<'static>; 8] = [
+    // qbar · Sw · bw · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Cnb",
+        factors: &[Factor::Table(&CNB)],
+    },
+    // qbar · Sw · bw · aero/beta-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Cnb_M",
+        factors: &[Factor::Var(Var::BetaRad), Factor::Table(&CNB_M)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cnp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Table(&CNP)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cnr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Table(&CNR)],
+    },
+    // qbar · Sw · bw · fcs/aileron-pos-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Cnda_M",
+        factors: &[Factor::Var(Var::AileronRad), Factor::Table(&CNDA_M)],
+    },
+    // qbar · Sw · bw · fcs/aileron-pos-rad · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Cnda",
+        factors: &[Factor::Var(Var::AileronRad), Factor::Table(&CNDA)],
+    },
+    // qbar · Sw · bw · fcs/rudder-pos-rad · table(aero/alpha-rad, aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Cndr",
+        factors: &[Factor::Var(Var::RudderRad), Factor::Table(&CNDR)],
+    },
+    // qbar · Sw · bw · aero/alpha-rad · fcs/rudder-pos-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Cndr_M",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Var(Var::RudderRad), Factor::Table(&CNDR_M)],
+    },
+];
+
 /// F-16 (JSBSim's f16): the three force axes as JSBSim flies them, and the lengths and gain the inputs need.
 pub static MODEL: Model<'static> = Model {
     drag: &DRAG,
@@ -290,3 +602,7 @@ pub static MODEL: Model<'static> = Model {
     flaperon_mix_gain: 1.4324,
     stall_hysteresis_rad: None,
 };
+
+/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
+/// flight-test calibration identifies their scales; the flight software reads none of them.
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, yaw: &YAW });

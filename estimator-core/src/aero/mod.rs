@@ -26,7 +26,7 @@ pub mod tables {
     include!(env!("ESTIMATOR_AERO_FILE"));
 }
 
-pub use tables::MODEL;
+pub use tables::{MODEL, MOMENTS};
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
 /// the aircraft description (its sensor's `deg_per_unit`). JSBSim's model has no degree property
@@ -507,6 +507,25 @@ impl Term<'_> {
         self.factors
             .iter()
             .fold(Partial::ONE, |acc, f| acc.times(f.eval(p)))
+    }
+}
+
+/// An aircraft's roll and yaw moment axes (JSBSim's `ROLL` and `YAW`, body axes, about the
+/// aerodynamic reference point), each a sum of terms over `qbar·Sw·bw`. Flight-test calibration
+/// identifies their scales; the flight software reads neither.
+#[derive(Clone, Copy)]
+pub struct Moments<'a> {
+    pub roll: &'a [Term<'a>],
+    pub yaw: &'a [Term<'a>],
+}
+
+impl Moments<'_> {
+    /// The roll and yaw moment coefficients at `p`; `None` if a term cannot be evaluated there.
+    pub fn coefficients_at(&self, p: &Point) -> Option<[f32; 2]> {
+        let sum = |axis: &[Term<'_>]| -> Option<f32> {
+            axis.iter().map(|t| t.eval(p).map(|v| v.value)).sum()
+        };
+        Some([sum(self.roll)?, sum(self.yaw)?])
     }
 }
 

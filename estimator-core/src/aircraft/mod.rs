@@ -69,6 +69,9 @@ pub struct Mass {
     pub empty_weight_lb: f64,
     /// The empty aircraft's CG station (JSBSim structural x), inches.
     pub empty_cg_x_in: f64,
+    /// The empty aircraft's inertia `[ixx, iyy, izz, ixz]`, slug·ft², as JSBSim's inertia tensor
+    /// carries it (`ixz` its xz element): flight-test calibration's moment equations read it.
+    pub inertia_slug_ft2: [f64; 4],
     pub pilot_lb: f64,
     /// The model's point mass that is the pilot (`inertia/pointmass-*[i]`).
     pub pilot_pointmass: u8,

@@ -15,5 +15,6 @@ pub mod f15 {
     include!("../../../estimator-core/src/aero/f15_tables.rs");
 }
 
-/// Every fixture: the model's name (its `NAME_parity.xml` flight) and its force model.
-pub static ALL: &[(&str, &Model<'static>)] = &[("c172p", &c172p::MODEL), ("f15", &f15::MODEL)];
+/// Every fixture: the model's name (its `NAME_parity.xml` flight), its force model and its
+/// roll and yaw moments (`None` where they are not extracted).
+pub static ALL: &[(&str, &Model<'static>, &Option<Moments<'static>>)] = &[("c172p", &c172p::MODEL, &c172p::MOMENTS), ("f15", &f15::MODEL, &f15::MOMENTS)];
