@@ -1,8 +1,8 @@
 //! Flight-test calibration of the aircraft model: from what a flight-test aircraft records (the
 //! production sensors of every frame and the nose boom's vanes and pitot-static, `NAME.boom.csv`),
-//! never from simulator truth, identify how the real aircraft's forces differ from the model's.
+//! never from simulator truth, identify how the real aircraft's forces and moments differ from the model's.
 //!
-//! Two steps (docs/calibration.md):
+//! The steps (docs/calibration.md):
 //! 1. **Data compatibility.** The boom's α, β and airspeed against the inertial data: in calm air
 //!    the EGI ground velocity, turned into body axes by the EGI attitude, is the air velocity, so
 //!    `kinematic = g·boom + o_flight` per angle (after removing the rotation-induced flow at the
@@ -22,7 +22,15 @@
 //!    it, and without a thrust model k_D is held at 1. The boom step reads quasi-steady frames
 //!    only.
 //!
-//! 3. **The method's own bias, removed.** The model evaluated from the recorded channels is not
+//! 3. **Moments.** The roll and yaw moments the gyros measure (differentiated across a frame's
+//!    neighbours, through Euler's equations with the description's inertia) against the model's
+//!    ROLL and YAW axes (`aero::MOMENTS`) at the corrected boom's air data:
+//!    `C_l = k_roll·C_l,model + a_l·Y/(q̄Sb) + b_l`, `C_n` alike, the side force's arms a fitted
+//!    beside (the model's moments are about the aerodynamic reference point, the gyros turn about
+//!    the unknown CG). A moment scale joins the calibrated aircraft only when it differs from 1 by
+//!    [`MOMENT_SIGNIFICANCE`]·1σ or more.
+//!
+//! 4. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
 //!    the mix, surfaces and accelerometers behind the anti-alias filter): on the model's own
 //!    aircraft the scales come out near 0.99 (lift), 1.01 and 1.05 (side force), not 1. The same test
@@ -39,7 +47,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{Factor, MODEL, Term, Var};
+use estimator_core::aero::{Factor, MODEL, MOMENTS, Term, Var};
 use estimator_core::filter::{self, CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
@@ -72,6 +80,9 @@ const MAX_ANGLE_STEP_DEG: f64 = 0.05;
 /// and bank captures): there the aileron and roll-rate terms' side force is unlike the sideslip
 /// terms'.
 const MIN_ROLL_RATE_RPS: f64 = 0.2;
+/// The gyros are differentiated across a frame's two neighbours when they lie within this span, s
+/// (two 20 Hz frames, and some slack for the clock).
+const MAX_DIFF_SPAN_S: f64 = 0.11;
 
 /// One identified parameter.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -108,6 +119,9 @@ pub struct Calibration {
     pub side: Fit,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
+    /// Roll and yaw moment coefficients: k_roll, k_yaw (`None`: the model has no moment axes the
+    /// evaluator understands).
+    pub moments: Option<[Fit; 2]>,
     /// The corrections identified from each flight alone.
     pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
@@ -129,6 +143,9 @@ pub struct Scales {
     pub sideslip: Estimate,
     /// The other side-force terms (surfaces, body rates), × this.
     pub side_controls: Estimate,
+    /// The roll and yaw moment axes, × these (`None`: not identified, the model's kept).
+    pub roll: Option<Estimate>,
+    pub yaw: Option<Estimate>,
     /// The lift's scale at each of [`STALL_KNOTS_DEG`] after the first, over `lift` (1: the
     /// model's stall); `None` where the card did not reach it.
     pub stall: [Option<Estimate>; STALL_PARAMS],
@@ -153,12 +170,54 @@ impl Scales {
             },
             sideslip: ratio(self.sideslip, model.sideslip),
             side_controls: ratio(self.side_controls, model.side_controls),
+            roll: self.roll.zip(model.roll).map(|(a, b)| ratio(a, b)),
+            yaw: self.yaw.zip(model.yaw).map(|(a, b)| ratio(a, b)),
             stall: core::array::from_fn(|j| match (self.stall[j], model.stall[j]) {
                 (Some(a), Some(b)) => Some(ratio(a, b)),
                 _ => None,
             }),
         }
     }
+}
+
+/// A moment scale joins the calibrated aircraft only when it differs from the model's 1 by at
+/// least this many of its 1σ; otherwise the model's moment is kept. The moment scales' 1σ is
+/// 5-10 times the forces' (the gyros differentiated, three flights' scatter), and a scale written
+/// from scatter alone would move a moment the flight test did not show wrong (docs/calibration.md).
+pub const MOMENT_SIGNIFICANCE: f64 = 2.0;
+
+impl Scales {
+    /// The roll and yaw moment scales the calibrated aircraft carries: each identified one that
+    /// differs from 1 by at least [`MOMENT_SIGNIFICANCE`]·1σ; `None` keeps the model's.
+    pub fn applied_moments(&self) -> [Option<f64>; 2] {
+        [self.roll, self.yaw].map(|e| {
+            e.filter(|e| (e.value - 1.0).abs() >= MOMENT_SIGNIFICANCE * e.std_error)
+                .map(|e| e.value)
+        })
+    }
+}
+
+/// One line on the moment scales: identified, and whether the calibrated aircraft carries them.
+pub fn moments_line(s: &Scales) -> String {
+    let applied = s.applied_moments();
+    let one = |what: &str, e: Option<Estimate>, a: Option<f64>| match (e, a) {
+        (None, _) => format!(
+            "{what} moment not identified (the model has no moment axes the evaluator reads)"
+        ),
+        (Some(e), Some(_)) => format!(
+            "{what} moment scale {:.4} ± {:.4} (applied)",
+            e.value, e.std_error
+        ),
+        (Some(e), None) => format!(
+            "{what} moment scale {:.4} ± {:.4} (within {MOMENT_SIGNIFICANCE}σ of 1: the model's kept)",
+            e.value, e.std_error
+        ),
+    };
+    format!(
+        "{}; {}",
+        one("roll", s.roll, applied[0]),
+        one("yaw", s.yaw, applied[1])
+    )
 }
 
 /// The weight of stall knot `j` (an index into [`STALL_KNOTS_DEG`], ≥ 1) at `alpha_deg` when the
@@ -218,6 +277,9 @@ pub struct PerFlight {
     /// its lift is then fitted with the side force at the pooled scales.
     pub sideslip: Option<f64>,
     pub side_controls: Option<f64>,
+    /// The roll and yaw moment scales (`None`: not identified).
+    pub roll: Option<f64>,
+    pub yaw: Option<f64>,
     /// The lift's scale at the stall knots over the lift scale, where this flight reaches them.
     pub stall: [Option<f64>; STALL_PARAMS],
 }
@@ -324,6 +386,8 @@ impl Fit {
 struct Row {
     /// Index of the flight the frame belongs to.
     flight: usize,
+    /// The frame's time, s.
+    time_s: f64,
     /// Angular acceleration magnitude and the boom angles' change from the previous frame.
     omega_dot: f64,
     angle_step: f64,
@@ -374,6 +438,7 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
         }
         out.push(Row {
             flight,
+            time_s: times[k],
             omega_dot,
             angle_step: (b[0] - bp[0]).abs().max((b[1] - bp[1]).abs()),
             alpha_kin: vb[2].atan2(vb[0]).to_degrees(),
@@ -498,13 +563,18 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             .collect()
     };
     let (off_a, off_b) = (offsets(&boom_alpha), offsets(&boom_beta));
-    for r in &all {
+    // The corrected boom's α, β (rad), airspeed (m/s), density and speed of sound of a row.
+    let air = |r: &Row| {
         let oa = off_a.get(r.flight).copied().unwrap_or(0.0);
         let ob = off_b.get(r.flight).copied().unwrap_or(0.0);
         let alpha = (ga * (r.boom_alpha + arm_a(r)) + oa).to_radians();
         let beta = (gb * (r.boom_beta - arm_b(r)) + ob).to_radians();
         let tas = (r.boom_tas - bv) / sv;
         let (rho, a_sound) = filter::isa(r.inp.alt_m);
+        (alpha, beta, tas, rho, a_sound)
+    };
+    for r in &all {
+        let (alpha, beta, tas, rho, a_sound) = air(r);
         let qbar = 0.5 * f64::from(rho) * tas * tas;
         let steady = quasi_steady(r);
         let rolling = f64::from(r.inp.gyro_rps[0]).abs() >= MIN_ROLL_RATE_RPS;
@@ -568,6 +638,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 offset: l.as_ref().map(|l| l.get("offset_cl")),
                 sideslip: s.as_ref().map(|s| s.get("k_sideslip")),
                 side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
+                roll: None,
+                yaw: None,
                 stall: core::array::from_fn(|j| {
                     let l = l.as_ref().filter(|_| j < n)?;
                     Some(stall_scale(l, j + 1, &[]).value)
@@ -575,6 +647,53 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             }
         })
         .collect();
+    // 3. The roll and yaw moments, when the model has them: every frame with a neighbour on each
+    // side (the gyros differentiated across both).
+    let mom: Vec<MomentRow> = all
+        .windows(3)
+        .filter_map(|w| {
+            let [a, r, b] = w else { return None };
+            let span = b.time_s - a.time_s;
+            if a.flight != r.flight
+                || b.flight != r.flight
+                || !(0.0..=MAX_DIFF_SPAN_S).contains(&span)
+            {
+                return None;
+            }
+            let omega_dot: [f64; 3] =
+                core::array::from_fn(|i| f64::from(b.inp.gyro_rps[i] - a.inp.gyro_rps[i]) / span);
+            let (alpha, beta, tas, rho, a_sound) = air(r);
+            moment_row(r, omega_dot, alpha, beta, tas, rho, a_sound)
+        })
+        .collect();
+    let moments = MOMENTS.map(|_| moment_fits(&mom));
+    let moments_of = |k: usize| -> Option<[Fit; 2]> {
+        let rows: Vec<&MomentRow> = mom.iter().filter(|m| m.flight == k).collect();
+        moment_fits(&rows.iter().map(|m| (*m).clone()).collect::<Vec<_>>())
+    };
+    let per_flight: Vec<PerFlight> = per_flight
+        .into_iter()
+        .enumerate()
+        .map(|(k, mut p)| {
+            if MOMENTS.is_some() {
+                let f = moments_of(k);
+                p.roll = f.as_ref().map(|[r, _]| r.get("k_roll"));
+                p.yaw = f.as_ref().map(|[_, y]| y.get("k_yaw"));
+            }
+            p
+        })
+        .collect();
+    let moments = match moments {
+        Some(None) => {
+            return Err(Error::Numeric(format!(
+                "moments: {} frames (q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine the roll and yaw moment scales: the card needs roll and rudder inputs",
+                mom.len(),
+                MIN_QBAR_PA / 1000.0
+            )));
+        }
+        Some(Some(m)) => Some(m),
+        None => None,
+    };
     let spread =
         |f: fn(&PerFlight) -> Option<f64>| per_flight.iter().filter_map(f).collect::<Vec<_>>();
     let scales = Scales {
@@ -583,6 +702,12 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
         sideslip: with_scatter(&side, "k_sideslip", &spread(|f| f.sideslip)),
         side_controls: with_scatter(&side, "k_side_controls", &spread(|f| f.side_controls)),
+        roll: moments
+            .as_ref()
+            .map(|[r, _]| with_scatter(r, "k_roll", &spread(|f| f.roll))),
+        yaw: moments
+            .as_ref()
+            .map(|[_, y]| with_scatter(y, "k_yaw", &spread(|f| f.yaw))),
         stall: core::array::from_fn(|j| {
             (j < knots).then(|| {
                 stall_scale(
@@ -604,9 +729,105 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         boom_tas,
         side,
         lift,
+        moments,
         per_flight,
         scales,
     })
+}
+
+/// One frame of the moment equations: the roll and yaw moment coefficients the gyros measure and
+/// the model's at the corrected boom's air data.
+#[derive(Clone)]
+struct MomentRow {
+    flight: usize,
+    measured: [f64; 2],
+    model: [f64; 2],
+    /// The side force over q̄·S·b, 1/m: the regressor of the moment arm.
+    side: f64,
+}
+
+/// The moment coefficients of a frame (see [`moment_fits`]); `None` below [`MIN_QBAR_PA`], beyond
+/// [`MAX_ALPHA_DEG`] or where the model cannot be evaluated.
+#[allow(clippy::too_many_arguments)]
+fn moment_row(
+    r: &Row,
+    omega_dot: [f64; 3],
+    alpha: f64,
+    beta: f64,
+    tas: f64,
+    rho: f32,
+    a_sound: f32,
+) -> Option<MomentRow> {
+    let moments = MOMENTS?;
+    let qbar = 0.5 * f64::from(rho) * tas * tas;
+    if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG {
+        return None;
+    }
+    let point = filter::model_point(
+        &r.inp,
+        r.inp.gyro_rps,
+        alpha as f32,
+        beta as f32,
+        (tas / f64::from(a_sound)) as f32,
+        tas as f32,
+        CONFIG.gear_norm,
+        estimator_core::aero::Unsteady::default(),
+    )?;
+    let model = moments.coefficients_at(&point)?.map(f64::from);
+    let [m_x, _, m_z] = body_moment(
+        estimator_core::aircraft::AIRCRAFT.mass.inertia_slug_ft2,
+        r.inp.gyro_rps.map(f64::from),
+        omega_dot,
+    );
+    // The side force, N: the accelerometers' lateral specific force at the CG times the mass (no
+    // thrust along y).
+    let fy = f64::from(CONFIG.mass_kg(r.inp.fuel_kg)) * r.f_cg[1];
+    let (ft, ft2) = (0.3048, 0.3048 * 0.3048);
+    let q_s_b = qbar * f64::from(MODEL.wing_area_ft2) * ft2 * f64::from(MODEL.wingspan_ft) * ft;
+    Some(MomentRow {
+        flight: r.flight,
+        measured: [m_x / q_s_b, m_z / q_s_b],
+        model,
+        side: fy / q_s_b,
+    })
+}
+
+/// The body-axis moment (N·m) that turns an aircraft of inertia `[ixx, iyy, izz, ixz]` (slug·ft²,
+/// `ixz` the inertia tensor's xz element) at rate `w` (rad/s) with angular acceleration `w_dot`
+/// (rad/s²): Euler's `M = J·ω̇ + ω × (J·ω)`.
+pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> [f64; 3] {
+    const SLUG_FT2: f64 = 1.355_817_948;
+    let [ixx, iyy, izz, ixz] = inertia_slug_ft2.map(|v| v * SLUG_FT2);
+    let j = |v: [f64; 3]| [ixx * v[0] + ixz * v[2], iyy * v[1], ixz * v[0] + izz * v[2]];
+    let (jd, jw) = (j(w_dot), j(w));
+    [
+        jd[0] + w[1] * jw[2] - w[2] * jw[1],
+        jd[1] + w[2] * jw[0] - w[0] * jw[2],
+        jd[2] + w[0] * jw[1] - w[1] * jw[0],
+    ]
+}
+
+/// The roll and yaw moment scales by equation error: `C_l = k_roll·C_l,model + a_l·Y/(q̄Sb) + b_l`
+/// and `C_n = k_yaw·C_n,model + a_n·Y/(q̄Sb) + b_n` over `rows`, the measured coefficients from the
+/// gyros differentiated and the inertia of the aircraft description, `Y` the side force the
+/// accelerometers measure; `None` if the rows do not determine them. JSBSim's moments are about the
+/// aerodynamic reference point, the gyros turn about the CG: the side force there adds its moment
+/// arm (a_l the reference point's height, a_n its distance aft, m, both unknown to the flight test
+/// as the CG is), fitted beside the scale. The constants take the gyros' bias drift and the moments
+/// no model term carries.
+fn moment_fits(rows: &[MomentRow]) -> Option<[Fit; 2]> {
+    let fit = |axis: usize, name: &str| {
+        least_squares(
+            &[name, "arm_m", "bias"],
+            &[
+                rows.iter().map(|r| r.model[axis]).collect(),
+                rows.iter().map(|r| r.side).collect(),
+                vec![1.0; rows.len()],
+            ],
+            &rows.iter().map(|r| r.measured[axis]).collect::<Vec<_>>(),
+        )
+    };
+    Some([fit(0, "k_roll")?, fit(1, "k_yaw")?])
 }
 
 /// One frame of the force equations.
@@ -814,13 +1035,26 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
     } else {
         "equation error; drag not identified"
     };
+    // The moment scales that pass the significance test (none: the text is the forces' alone).
+    let moments: Vec<(&str, f64)> = ["ROLL", "YAW"]
+        .into_iter()
+        .zip(scales.applied_moments())
+        .filter_map(|(axis, k)| k.map(|k| (axis, k)))
+        .collect();
+    let moments_text: String = moments
+        .iter()
+        .map(|(axis, k)| format!(", {} moment x {k:.5}", axis.to_lowercase()))
+        .collect();
     let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms) ({how}).\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){moments_text} ({how}).\"\n\
          [axes]\nLIFT = {l:.5}\nSIDE = {sc:.5}\n",
         ft.display(),
         c.flights.len()
     );
+    for (axis, k) in &moments {
+        t.push_str(&format!("{axis} = {k:.5}\n"));
+    }
     // Terms with a scale of their own carry it over their axis's.
     let own_scale = sideslip_side_terms()
         .map(|term| (term, sb / sc))
@@ -862,6 +1096,9 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
 pub struct Report {
     /// The scales of the calibrated aircraft (`aircraft.toml`).
     pub scales: Scales,
+    /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
+    /// `None`: the model's).
+    pub applied_moments: [Option<f64>; 2],
     pub flight_test: Calibration,
     /// The same card flown on the model: the identification's own bias.
     pub model_card: Option<Calibration>,
@@ -879,7 +1116,14 @@ impl Report {
     pub fn new(flight_test: Calibration, model_card: Option<Calibration>) -> Report {
         let mut scales = match &model_card {
             Some(m) => flight_test.scales.over(&m.scales),
-            None => flight_test.scales,
+            // The moment scales mean something only over the model card's: alone they carry the
+            // empty-aircraft inertia and the gyros' filter (0.72 and 0.82 on the model's own
+            // aircraft).
+            None => Scales {
+                roll: None,
+                yaw: None,
+                ..flight_test.scales
+            },
         };
         // The drag the flight test's lift reads at high α, which no card identifies.
         for (s, share) in scales.stall.iter_mut().zip(flight_test.stall_drag_share) {
@@ -888,6 +1132,7 @@ impl Report {
             }
         }
         Report {
+            applied_moments: scales.applied_moments(),
             scales,
             flight_test,
             model_card,
@@ -897,6 +1142,65 @@ impl Report {
             stall_knots_deg: STALL_KNOTS_DEG.to_vec(),
         }
     }
+}
+
+/// The moment section of `calibration.md`: the scales and the side force's moment arms.
+fn moments_markdown(r: &Report) -> String {
+    let c = &r.flight_test;
+    let Some(ft) = &c.moments else {
+        return "\nThe roll and yaw moments are not identified: the model has no moment axes the \
+                evaluator reads (the tables' `MOMENTS` says why).\n"
+            .into();
+    };
+    let e = |e: Option<Estimate>| {
+        e.map_or("–".into(), |e| {
+            format!("{:.4} ± {:.4}", e.value, e.std_error)
+        })
+    };
+    let arm = |f: &[Fit; 2]| {
+        let a = |f: &Fit| {
+            f.estimate("arm_m").map_or("–".into(), |e| {
+                format!("{:+.3} ± {:.3}", e.value, e.std_error)
+            })
+        };
+        format!("{} | {}", a(&f[0]), a(&f[1]))
+    };
+    let mut m = String::from(
+        "\n| moments (± 1σ) | roll-moment scale | yaw-moment scale | side-force arm in roll, m | in yaw, m |\n|---|---|---|---|---|\n",
+    );
+    m.push_str(&format!(
+        "| flight test | {} | {} | {} |\n",
+        e(c.scales.roll),
+        e(c.scales.yaw),
+        arm(ft)
+    ));
+    if let Some(mc) = &r.model_card {
+        m.push_str(&format!(
+            "| the same card flown on the model | {} | {} | {} |\n",
+            e(mc.scales.roll),
+            e(mc.scales.yaw),
+            mc.moments.as_ref().map_or("– | –".into(), arm)
+        ));
+    }
+    let applied = r.scales.applied_moments();
+    let cell = |s: Option<Estimate>, a: Option<f64>| match a {
+        Some(k) => format!("**{k:.4}** (applied)"),
+        None => format!("1 (kept: {} is within {MOMENT_SIGNIFICANCE}σ of 1)", e(s)),
+    };
+    m.push_str(&format!(
+        "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
+        cell(r.scales.roll, applied[0]),
+        cell(r.scales.yaw, applied[1])
+    ));
+    m.push_str(&format!(
+        "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
+         the description's empty-aircraft inertia (Euler's equations), over q̄·S·b; the model's are \
+         the ROLL and YAW axes at the corrected boom's air data. The side force's moment arm (the \
+         aerodynamic reference point's height over the CG in roll, its distance aft in yaw, with \
+         the inertia's share) is fitted beside each scale; the scale is written into the \
+         calibrated aircraft only when it differs from 1 by {MOMENT_SIGNIFICANCE}σ or more.\n"
+    ));
+    m
 }
 
 /// `calibration.md`: the identified parameters with their standard errors and the fits.
@@ -961,6 +1265,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             .collect::<Vec<_>>()
             .join(", ")
     ));
+    m.push_str(&moments_markdown(r));
     let f = |p: &PerFlight| {
         let v = |x: Option<f64>, signed: bool| match (x, signed) {
             (Some(x), true) => format!("{x:+.4}"),
@@ -968,16 +1273,18 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             (None, _) => "–".to_string(),
         };
         format!(
-            "{} / {} / {} / {} / {}",
+            "{} / {} / {} / {} / {} / {} / {}",
             v(p.lift, false),
             v(p.flap, false),
             v(p.offset, true),
             v(p.sideslip, false),
-            v(p.side_controls, false)
+            v(p.side_controls, false),
+            v(p.roll, false),
+            v(p.yaw, false)
         )
     };
     m.push_str(
-        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale):\n\n| flight | flight test |",
+        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale / roll-moment scale / yaw-moment scale):\n\n| flight | flight test |",
     );
     if r.model_card.is_some() {
         m.push_str(" model card |");
@@ -1002,13 +1309,22 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     m.push_str(
         "| step | parameter | value | 1σ | frames | residual RMS | R² | ρ₁ |\n|---|---|---|---|---|---|---|---|\n",
     );
+    let moments = c.moments.as_ref();
     for (step, f) in [
-        ("inertial α vs boom α, deg", &c.boom_alpha),
-        ("inertial β vs boom β, deg", &c.boom_beta),
-        ("boom airspeed vs inertial, m/s", &c.boom_tas),
-        ("lateral specific force (rolling frames), m/s²", &c.side),
-        ("normal specific force, m/s²", &c.lift),
-    ] {
+        ("inertial α vs boom α, deg", Some(&c.boom_alpha)),
+        ("inertial β vs boom β, deg", Some(&c.boom_beta)),
+        ("boom airspeed vs inertial, m/s", Some(&c.boom_tas)),
+        (
+            "lateral specific force (rolling frames), m/s²",
+            Some(&c.side),
+        ),
+        ("normal specific force, m/s²", Some(&c.lift)),
+        ("roll moment coefficient", moments.map(|[r, _]| r)),
+        ("yaw moment coefficient", moments.map(|[_, y]| y)),
+    ]
+    .into_iter()
+    .filter_map(|(step, f)| f.map(|f| (step, f)))
+    {
         for (name, e) in &f.params {
             m.push_str(&format!(
                 "| {step} | {name} | {:.5} | {:.5} | {} | {:.4} | {:.5} | {:.3} |\n",
@@ -1021,8 +1337,9 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
          calibration against the inertial data (gain and scale 1: none); the lift scale multiplies \
          the model's LIFT axis in aircraft.toml, the flap-lift scale the lift terms driven by the \
          trailing-edge flaps, and the offset joins the lift axis; the surface side-force scale \
-         multiplies the SIDE axis and the sideslip terms carry their own scale over it. Drag is \
-         not identified: along body x the engine's thrust adds to it.\n",
+         multiplies the SIDE axis and the sideslip terms carry their own scale over it; a moment \
+         scale that passes the significance test multiplies the ROLL or YAW axis. Drag is not \
+         identified: along body x the engine's thrust adds to it.\n",
     );
     m
 }
@@ -1178,5 +1495,63 @@ mod tests {
         assert!(p.sideslip[1].abs() > 1e-3 && p.side_rest[1].abs() > 1e-4);
         let unit = (p.unit_lift[0].powi(2) + p.unit_lift[2].powi(2)).sqrt();
         assert!((unit - qs_m).abs() < 1e-6 * qs_m, "{unit} vs {qs_m}");
+    }
+
+    #[test]
+    fn euler_moments_of_a_known_turn() {
+        const SLUG_FT2: f64 = 1.355_817_948;
+        let j = [9496.0, 55814.0, 63100.0, -982.0];
+        // Angular acceleration alone: J·ω̇, the product of inertia coupling roll and yaw.
+        let m = body_moment(j, [0.0; 3], [1.0, 0.0, 0.0]);
+        assert!((m[0] - 9496.0 * SLUG_FT2).abs() < 1e-9);
+        assert!((m[2] + 982.0 * SLUG_FT2).abs() < 1e-9);
+        assert_eq!(m[1], 0.0);
+        // A steady turn (q, r) with no acceleration: the gyroscopic ω × Jω, (Izz − Iyy)·q·r in roll,
+        // and the product of inertia's share in pitch and yaw.
+        let m = body_moment(j, [0.0, 0.1, 0.2], [0.0; 3]);
+        assert!((m[0] - (63100.0 - 55814.0) * 0.1 * 0.2 * SLUG_FT2).abs() < 1e-9);
+        assert!((m[1] - -982.0 * 0.2 * 0.2 * SLUG_FT2).abs() < 1e-9);
+        assert!((m[2] - 982.0 * 0.1 * 0.2 * SLUG_FT2).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_moment_fits_recover_scale_and_arm_and_only_a_clear_scale_is_applied() {
+        // Two regressors that move independently (a doublet's model moment, a side force).
+        let rows: Vec<MomentRow> = (0..400)
+            .map(|k| {
+                let t = k as f64 * 0.05;
+                let (model, side) = ((1.3 * t).sin() * 0.01, (0.7 * t).cos() * 0.02);
+                MomentRow {
+                    flight: 0,
+                    measured: [1.1 * model + 0.2 * side + 1e-4, 0.9 * model - 0.05 * side],
+                    model: [model, model],
+                    side,
+                }
+            })
+            .collect();
+        let [roll, yaw] = moment_fits(&rows).unwrap();
+        assert!((roll.get("k_roll") - 1.1).abs() < 1e-9 && (roll.get("arm_m") - 0.2).abs() < 1e-9);
+        assert!((yaw.get("k_yaw") - 0.9).abs() < 1e-9 && (yaw.get("arm_m") + 0.05).abs() < 1e-9);
+        assert!(moment_fits(&rows[..3]).is_none());
+        let e = |value, std_error| Some(Estimate { value, std_error });
+        let scales = |roll, yaw| Scales {
+            lift: Estimate::default(),
+            flap: Estimate::default(),
+            offset: Estimate::default(),
+            sideslip: Estimate::default(),
+            side_controls: Estimate::default(),
+            roll,
+            yaw,
+            stall: [None; STALL_PARAMS],
+        };
+        // 2.5σ from 1: applied; 1.5σ: the model's kept; not identified: kept.
+        assert_eq!(
+            scales(e(1.05, 0.02), e(1.03, 0.02)).applied_moments(),
+            [Some(1.05), None]
+        );
+        assert_eq!(
+            scales(None, e(0.8, 0.05)).applied_moments(),
+            [None, Some(0.8)]
+        );
     }
 }

@@ -1011,6 +1011,7 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
             },
             out.display()
         );
+        println!("{}", trainer::calibrate::moments_line(&r.scales));
     }
     Ok(())
 }
