@@ -355,7 +355,7 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
         let m = aero::MOMENTS.unwrap();
         for s in steps {
             let [roll, yaw] = m.coefficients_at(&s.point()).unwrap();
-            let ours = if axis == "ROLL" { roll } else { yaw };
+            let ours = [roll, yaw][usize::from(axis == "YAW")];
             w.add(s.get("simulation/sim-time-sec"), ours, sum(s));
         }
         ok &= report(&format!("{axis} (sum)"), &w, scale);

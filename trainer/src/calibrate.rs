@@ -1,6 +1,7 @@
 //! Flight-test calibration of the aircraft model: from what a flight-test aircraft records (the
 //! production sensors of every frame and the nose boom's vanes and pitot-static, `NAME.boom.csv`),
-//! never from simulator truth, identify how the real aircraft's forces and moments differ from the model's.
+//! never from simulator truth, identify how the real aircraft's forces and moments differ from the
+//! model's.
 //!
 //! The steps (docs/calibration.md):
 //! 1. **Data compatibility.** The boom's α, β and airspeed against the inertial data: in calm air
@@ -36,7 +37,9 @@
 //!    aircraft the scales come out near 0.99 (lift), 1.01 and 1.05 (side force), not 1. The same test
 //!    card flown in simulation on the a-priori model (`--model-flight-test`: the production sensors
 //!    and the boom of that flight, never its truth) measures this bias, and the scales reported are
-//!    the flight test's over the model card's.
+//!    the flight test's over the model card's. The moment scales need it most (0.72 roll, 0.82 yaw
+//!    on the model's own aircraft: the empty inertia, the gyros' filter); without it none is
+//!    reported.
 //!
 //! Standard errors are least squares' σ²(XᵀX)⁻¹ inflated for the residuals' autocorrelation
 //! (effective sample size n·(1 − ρ₁)/(1 + ρ₁), ρ₁ the lag-1 autocorrelation), raised to the
@@ -52,6 +55,8 @@ use estimator_core::filter::{self, CONFIG, Input};
 use serde::Serialize;
 use std::path::Path;
 
+/// kg·m² in a slug·ft².
+const SLUG_FT2: f64 = 1.355_817_948;
 /// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
 const MIN_QBAR_PA: f64 = 3_000.0;
 /// Frames beyond this α (deg) are left out (beyond the card's stall approach).
@@ -119,9 +124,11 @@ pub struct Calibration {
     pub side: Fit,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
-    /// Roll and yaw moment coefficients: k_roll, k_yaw (`None`: the model has no moment axes the
-    /// evaluator understands).
+    /// Roll and yaw moment coefficients: k_roll, k_yaw, the side force's arms (`None`: not
+    /// identified, [`Calibration::moments_why`] says why).
     pub moments: Option<[Fit; 2]>,
+    /// Why the moments are not identified (`None` when they are).
+    pub moments_why: Option<String>,
     /// The corrections identified from each flight alone.
     pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
@@ -181,9 +188,10 @@ impl Scales {
 }
 
 /// A moment scale joins the calibrated aircraft only when it differs from the model's 1 by at
-/// least this many of its 1σ; otherwise the model's moment is kept. The moment scales' 1σ is
-/// 5-10 times the forces' (the gyros differentiated, three flights' scatter), and a scale written
-/// from scatter alone would move a moment the flight test did not show wrong (docs/calibration.md).
+/// least this many of its 1σ; otherwise the model's moment is kept. The yaw scale's 1σ, 0.05-0.10
+/// on the development variants, is set by the three flights' scatter, and its fit leans on the
+/// boom's β noise where the side force differs from the model's: a scale written from that alone
+/// would move a moment the flight test did not show wrong (docs/calibration.md).
 pub const MOMENT_SIGNIFICANCE: f64 = 2.0;
 
 impl Scales {
@@ -198,12 +206,13 @@ impl Scales {
 }
 
 /// One line on the moment scales: identified, and whether the calibrated aircraft carries them.
-pub fn moments_line(s: &Scales) -> String {
-    let applied = s.applied_moments();
+pub fn moments_line(r: &Report) -> String {
+    if let Some(why) = r.moments_why() {
+        return format!("roll and yaw moments not identified: {why}");
+    }
+    let (s, applied) = (&r.scales, r.applied_moments);
     let one = |what: &str, e: Option<Estimate>, a: Option<f64>| match (e, a) {
-        (None, _) => format!(
-            "{what} moment not identified (the model has no moment axes the evaluator reads)"
-        ),
+        (None, _) => format!("{what} moment not identified"),
         (Some(e), Some(_)) => format!(
             "{what} moment scale {:.4} ± {:.4} (applied)",
             e.value, e.std_error
@@ -459,7 +468,7 @@ fn quasi_steady(r: &Row) -> bool {
     r.omega_dot <= MAX_OMEGA_DOT_RPS2 && r.angle_step <= MAX_ANGLE_STEP_DEG
 }
 
-/// Runs both steps on the flights of a flight-test dataset.
+/// Runs the identification on the flights of a flight-test dataset.
 pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
     // The boom's arm as the dataset recorded it (`config.boom`).
@@ -656,44 +665,53 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             let span = b.time_s - a.time_s;
             if a.flight != r.flight
                 || b.flight != r.flight
-                || !(0.0..=MAX_DIFF_SPAN_S).contains(&span)
+                || !(span > 0.0 && span <= MAX_DIFF_SPAN_S)
             {
                 return None;
             }
             let omega_dot: [f64; 3] =
                 core::array::from_fn(|i| f64::from(b.inp.gyro_rps[i] - a.inp.gyro_rps[i]) / span);
-            let (alpha, beta, tas, rho, a_sound) = air(r);
-            moment_row(r, omega_dot, alpha, beta, tas, rho, a_sound)
+            moment_row(r, omega_dot, air(r))
         })
         .collect();
-    let moments = MOMENTS.map(|_| moment_fits(&mom));
-    let moments_of = |k: usize| -> Option<[Fit; 2]> {
-        let rows: Vec<&MomentRow> = mom.iter().filter(|m| m.flight == k).collect();
-        moment_fits(&rows.iter().map(|m| (*m).clone()).collect::<Vec<_>>())
+    let moments_of = |k: Option<usize>| {
+        let rows: Vec<&MomentRow> = mom
+            .iter()
+            .filter(|m| k.is_none_or(|k| m.flight == k))
+            .collect();
+        moment_fits(&rows)
+    };
+    // A card that determines the forces but not the moments still calibrates the forces.
+    let (moments, moments_why) = match (MOMENTS, moments_of(None)) {
+        (None, _) => (
+            None,
+            Some(
+                "the model has no moment axes the evaluator reads (its tables' `MOMENTS` says why)"
+                    .to_string(),
+            ),
+        ),
+        (Some(_), None) => (
+            None,
+            Some(format!(
+                "{} frames (q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine them: the card needs roll and rudder inputs",
+                mom.len(),
+                MIN_QBAR_PA / 1000.0
+            )),
+        ),
+        (Some(_), Some(m)) => (Some(m), None),
     };
     let per_flight: Vec<PerFlight> = per_flight
         .into_iter()
         .enumerate()
         .map(|(k, mut p)| {
-            if MOMENTS.is_some() {
-                let f = moments_of(k);
+            if moments.is_some() {
+                let f = moments_of(Some(k));
                 p.roll = f.as_ref().map(|[r, _]| r.get("k_roll"));
                 p.yaw = f.as_ref().map(|[_, y]| y.get("k_yaw"));
             }
             p
         })
         .collect();
-    let moments = match moments {
-        Some(None) => {
-            return Err(Error::Numeric(format!(
-                "moments: {} frames (q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine the roll and yaw moment scales: the card needs roll and rudder inputs",
-                mom.len(),
-                MIN_QBAR_PA / 1000.0
-            )));
-        }
-        Some(Some(m)) => Some(m),
-        None => None,
-    };
     let spread =
         |f: fn(&PerFlight) -> Option<f64>| per_flight.iter().filter_map(f).collect::<Vec<_>>();
     let scales = Scales {
@@ -730,6 +748,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         side,
         lift,
         moments,
+        moments_why,
         per_flight,
         scales,
     })
@@ -737,7 +756,6 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
 
 /// One frame of the moment equations: the roll and yaw moment coefficients the gyros measure and
 /// the model's at the corrected boom's air data.
-#[derive(Clone)]
 struct MomentRow {
     flight: usize,
     measured: [f64; 2],
@@ -746,17 +764,13 @@ struct MomentRow {
     side: f64,
 }
 
-/// The moment coefficients of a frame (see [`moment_fits`]); `None` below [`MIN_QBAR_PA`], beyond
+/// The moment coefficients of a frame (see [`moment_fits`]) at angular acceleration `omega_dot`
+/// and air data `(α, β, airspeed, density, speed of sound)`; `None` below [`MIN_QBAR_PA`], beyond
 /// [`MAX_ALPHA_DEG`] or where the model cannot be evaluated.
-#[allow(clippy::too_many_arguments)]
 fn moment_row(
     r: &Row,
     omega_dot: [f64; 3],
-    alpha: f64,
-    beta: f64,
-    tas: f64,
-    rho: f32,
-    a_sound: f32,
+    (alpha, beta, tas, rho, a_sound): (f64, f64, f64, f32, f32),
 ) -> Option<MomentRow> {
     let moments = MOMENTS?;
     let qbar = 0.5 * f64::from(rho) * tas * tas;
@@ -796,7 +810,6 @@ fn moment_row(
 /// `ixz` the inertia tensor's xz element) at rate `w` (rad/s) with angular acceleration `w_dot`
 /// (rad/s²): Euler's `M = J·ω̇ + ω × (J·ω)`.
 pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> [f64; 3] {
-    const SLUG_FT2: f64 = 1.355_817_948;
     let [ixx, iyy, izz, ixz] = inertia_slug_ft2.map(|v| v * SLUG_FT2);
     let j = |v: [f64; 3]| [ixx * v[0] + ixz * v[2], iyy * v[1], ixz * v[0] + izz * v[2]];
     let (jd, jw) = (j(w_dot), j(w));
@@ -812,10 +825,11 @@ pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> 
 /// gyros differentiated and the inertia of the aircraft description, `Y` the side force the
 /// accelerometers measure; `None` if the rows do not determine them. JSBSim's moments are about the
 /// aerodynamic reference point, the gyros turn about the CG: the side force there adds its moment
-/// arm (a_l the reference point's height, a_n its distance aft, m, both unknown to the flight test
-/// as the CG is), fitted beside the scale. The constants take the gyros' bias drift and the moments
-/// no model term carries.
-fn moment_fits(rows: &[MomentRow]) -> Option<[Fit; 2]> {
+/// with arms a_l (the reference point's height above the CG) and a_n (its distance ahead of the CG,
+/// negative when it lies aft), m, with the inertia's share; the CG is as unknown to the flight test
+/// as the moments, and the arms are fitted beside the scales. The constants take the gyros' bias
+/// drift and the moments no model term carries.
+fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
     let fit = |axis: usize, name: &str| {
         least_squares(
             &[name, "arm_m", "bias"],
@@ -1094,11 +1108,14 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
 /// card's (when given) and the scales the calibrated aircraft carries.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
-    /// The scales of the calibrated aircraft (`aircraft.toml`).
+    /// The identified scales, over the model card's: the calibrated aircraft (`aircraft.toml`)
+    /// carries the force scales and [`Report::applied_moments`].
     pub scales: Scales,
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
     /// `None`: the model's).
     pub applied_moments: [Option<f64>; 2],
+    /// [`MOMENT_SIGNIFICANCE`]: how many 1σ from 1 a moment scale must be to be carried.
+    pub moment_significance: f64,
     pub flight_test: Calibration,
     /// The same card flown on the model: the identification's own bias.
     pub model_card: Option<Calibration>,
@@ -1133,6 +1150,7 @@ impl Report {
         }
         Report {
             applied_moments: scales.applied_moments(),
+            moment_significance: MOMENT_SIGNIFICANCE,
             scales,
             flight_test,
             model_card,
@@ -1142,15 +1160,30 @@ impl Report {
             stall_knots_deg: STALL_KNOTS_DEG.to_vec(),
         }
     }
+
+    /// Why the calibrated aircraft carries no identified moment (`None`: the moments are
+    /// identified, over the model card's).
+    pub fn moments_why(&self) -> Option<String> {
+        if let Some(why) = &self.flight_test.moments_why {
+            return Some(why.clone());
+        }
+        match &self.model_card {
+            None => Some(
+                "without the model card (--model-flight-test) the moment scales carry the empty inertia and the gyros' filter".into(),
+            ),
+            Some(m) => m.moments_why.as_ref().map(|why| format!("the model card: {why}")),
+        }
+    }
 }
 
 /// The moment section of `calibration.md`: the scales and the side force's moment arms.
 fn moments_markdown(r: &Report) -> String {
     let c = &r.flight_test;
-    let Some(ft) = &c.moments else {
-        return "\nThe roll and yaw moments are not identified: the model has no moment axes the \
-                evaluator reads (the tables' `MOMENTS` says why).\n"
-            .into();
+    let (Some(ft), None) = (&c.moments, r.moments_why()) else {
+        return format!(
+            "\nThe roll and yaw moments are not identified: {}.\n",
+            r.moments_why().unwrap_or_default()
+        );
     };
     let e = |e: Option<Estimate>| {
         e.map_or("–".into(), |e| {
@@ -1182,7 +1215,7 @@ fn moments_markdown(r: &Report) -> String {
             mc.moments.as_ref().map_or("– | –".into(), arm)
         ));
     }
-    let applied = r.scales.applied_moments();
+    let applied = r.applied_moments;
     let cell = |s: Option<Estimate>, a: Option<f64>| match a {
         Some(k) => format!("**{k:.4}** (applied)"),
         None => format!("1 (kept: {} is within {MOMENT_SIGNIFICANCE}σ of 1)", e(s)),
@@ -1196,8 +1229,8 @@ fn moments_markdown(r: &Report) -> String {
         "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
          the description's empty-aircraft inertia (Euler's equations), over q̄·S·b; the model's are \
          the ROLL and YAW axes at the corrected boom's air data. The side force's moment arm (the \
-         aerodynamic reference point's height over the CG in roll, its distance aft in yaw, with \
-         the inertia's share) is fitted beside each scale; the scale is written into the \
+         aerodynamic reference point's height above the CG in roll, its distance ahead of the CG in \
+         yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale; the scale is written into the \
          calibrated aircraft only when it differs from 1 by {MOMENT_SIGNIFICANCE}σ or more.\n"
     ));
     m
@@ -1499,7 +1532,6 @@ mod tests {
 
     #[test]
     fn euler_moments_of_a_known_turn() {
-        const SLUG_FT2: f64 = 1.355_817_948;
         let j = [9496.0, 55814.0, 63100.0, -982.0];
         // Angular acceleration alone: J·ω̇, the product of inertia coupling roll and yaw.
         let m = body_moment(j, [0.0; 3], [1.0, 0.0, 0.0]);
@@ -1529,6 +1561,7 @@ mod tests {
                 }
             })
             .collect();
+        let rows: Vec<&MomentRow> = rows.iter().collect();
         let [roll, yaw] = moment_fits(&rows).unwrap();
         assert!((roll.get("k_roll") - 1.1).abs() < 1e-9 && (roll.get("arm_m") - 0.2).abs() < 1e-9);
         assert!((yaw.get("k_yaw") - 0.9).abs() < 1e-9 && (yaw.get("arm_m") + 0.05).abs() < 1e-9);

@@ -426,9 +426,10 @@ enum Cmd {
     },
     /// Flight-test calibration: from a `flight-test` dataset's production sensors and nose boom
     /// (never its truth columns), check the boom against the inertial data and identify the lift
-    /// scale, the flap-lift scale, a lift offset and the side force's two scales (its sideslip
-    /// terms', and its surface and rate terms', from the rolling frames) of the aircraft against
-    /// the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
+    /// scale, the flap-lift scale, a lift offset, the side force's two scales (its sideslip
+    /// terms', and its surface and rate terms', from the rolling frames) and the roll and yaw
+    /// moment scales (the gyros differentiated; carried when 2σ or more from 1, and only over the
+    /// model card) of the aircraft against the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
     /// spec of the calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
     Calibrate {
         /// The flight-test dataset (`hil-sim generate --preset flight-test`).
@@ -1011,7 +1012,7 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
             },
             out.display()
         );
-        println!("{}", trainer::calibrate::moments_line(&r.scales));
+        println!("{}", trainer::calibrate::moments_line(&r));
     }
     Ok(())
 }

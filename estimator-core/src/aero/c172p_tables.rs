@@ -5,8 +5,9 @@
 // Files read, relative to `jsbsim.get_default_root_dir()`:
 //     aircraft/c172p/c172p.xml  sha256 0af58c613f7bca7e1d85f4b2e178a4d7b0b14dda6d5f79b38c571d9911187aa4
 //         (metrics, aerodynamics, flight control)
-// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
-// out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
+// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
+// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
+// ascending at compile time.
 
 use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 

@@ -5,8 +5,9 @@
 // Files read, relative to `jsbsim.get_default_root_dir()`:
 //     aircraft/f15/f15.xml  sha256 19c6d2f82705489410a835dacc8d08be88149d321e00822c338f4676046e8c87
 //         (metrics, aerodynamics, flight control)
-// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
-// out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
+// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
+// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
+// ascending at compile time.
 
 use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 

@@ -9,8 +9,9 @@
 //         (searched for writers of fcs/flaperon-mix-rad)
 //     aircraft/f16/Systems/hook.xml  sha256 9067ea104820d9d2d2f438b0361cbfdc9cea28a7969bd46eaa540fd7d9dfdd62
 //         (searched for writers of fcs/flaperon-mix-rad)
-// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw divided
-// out; the factors keep the XML's order. Breakpoints are checked ascending at compile time.
+// Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
+// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
+// ascending at compile time.
 
 use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
