@@ -68,8 +68,8 @@ impl Flags {
     /// frame are its prediction alone ([`crate::filter::flags::PREDICTED`]: the innovation failed
     /// the gate, the sensors disagreeing with its model by more than 5σ, a sensor fault or a
     /// manoeuvre the model does not follow; or no update was made, as on its first step after a
-    /// start or an outage, whose wind is seconds of prediction old). The estimate is computed but its filter features are not what training
-    /// saw.
+    /// start or an outage, whose wind is seconds of prediction old). The estimate is computed but
+    /// its filter features are not what training saw.
     pub const FILTER_DIVERGED: u16 = 1 << 9;
     /// A computed angle reads GPS speed or altitude and the GPS had none: they came from the EGI
     /// (ground speed from its velocity, altitude coasted on its vertical velocity, at most
@@ -356,8 +356,7 @@ pub const FALLBACK_NIS_MEAN_MAX: i32 = 2_000;
 /// `V·sin α·cos β`), when the filter is fit to stand in for an α network that is out of its
 /// envelope: its outputs are this step's and it raised no flag at all (inputs present, its
 /// measurement used, no restart, no gate run, confident, not slow, GPS altitude present), and its
-/// NIS mean is at most
-/// [`FALLBACK_NIS_MEAN_MAX`]. `None` otherwise, and for a state without a filter (airspeed 0).
+/// NIS mean is at most [`FALLBACK_NIS_MEAN_MAX`]. `None` otherwise, and for a state without a filter (airspeed 0).
 ///
 /// A fallback α that is later held (the α sources go bad on the next frame) carries `ALPHA_HELD`
 /// only, like any held value. The choice is made frame by frame, without hysteresis.
@@ -394,8 +393,8 @@ pub const BETA_CROSSCHECK_SIGMAS: i64 = 3;
 
 /// Whether `beta_mdeg` (the network's β) and the air-data filter's β in `values` disagree
 /// ([`Flags::BETA_DISAGREES`]). Never while the filter has a standing flag raised (no input,
-/// restarted, gated, low confidence, ...: any but `PREDICTED`) or has not run (airspeed 0). Integer arithmetic: µrad to
-/// millidegrees as `µrad · 180,000 / 3,141,593`.
+/// restarted, gated, low confidence, ...: any but `PREDICTED`) or has not run (airspeed 0).
+/// Integer arithmetic: µrad to millidegrees as `µrad · 180,000 / 3,141,593`.
 pub fn beta_disagrees_with_filter(values: &FeatureValues, beta_mdeg: i32) -> bool {
     if !values.filter_clear() {
         return false;

@@ -244,6 +244,26 @@ fn report(what: &str, w: &Worst, scale: f64) -> bool {
     ok
 }
 
+/// Each of `terms` at JSBSim's own inputs against its JSBSim property (`theirs`: over qbar·Sw, or
+/// qbar·Sw·bw for a moment), within TOLERANCE of `scale`.
+fn compare_terms(
+    steps: &[Step],
+    terms: &[Term<'_>],
+    scale: f64,
+    theirs: fn(&Step, &str) -> f64,
+) -> bool {
+    let mut ok = true;
+    for term in terms {
+        let mut w = Worst::default();
+        for s in steps {
+            let ours = term.eval(&s.point()).unwrap().value;
+            w.add(s.get("simulation/sim-time-sec"), ours, theirs(s, term.name));
+        }
+        ok &= report(term.name.trim_start_matches("aero/coefficient/"), &w, scale);
+    }
+    ok
+}
+
 /// JSBSim's range over the flight of a force property over qbar·Sw.
 fn range_of(steps: &[Step], force: &str) -> f64 {
     let mut w = Worst::default();
@@ -321,15 +341,7 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
         (MODEL.side, "forces/fwy-aero-lbs"),
         (MODEL.lift, "forces/fwz-aero-lbs"),
     ] {
-        let scale = range_of(steps, force);
-        for term in axis {
-            let mut w = Worst::default();
-            for s in steps {
-                let ours = term.eval(&s.point()).unwrap().value;
-                w.add(s.get("simulation/sim-time-sec"), ours, s.coef(term.name));
-            }
-            ok &= report(term.name.trim_start_matches("aero/coefficient/"), &w, scale);
-        }
+        ok &= compare_terms(steps, axis, range_of(steps, force), Step::coef);
     }
     // The roll and yaw moment terms, against the range of their axis's sum; and the sums.
     for (axis, moment) in moment_axes() {
@@ -339,18 +351,7 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
             total.add(0.0, 0.0, sum(s));
         }
         let scale = total.range();
-        for term in moment {
-            let mut w = Worst::default();
-            for s in steps {
-                let ours = term.eval(&s.point()).unwrap().value;
-                w.add(
-                    s.get("simulation/sim-time-sec"),
-                    ours,
-                    s.moment_coef(term.name),
-                );
-            }
-            ok &= report(term.name.trim_start_matches("aero/coefficient/"), &w, scale);
-        }
+        ok &= compare_terms(steps, moment, scale, Step::moment_coef);
         let mut w = Worst::default();
         let m = aero::MOMENTS.unwrap();
         for s in steps {

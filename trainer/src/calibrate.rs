@@ -52,6 +52,7 @@ use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
 use estimator_core::aero::{Factor, MODEL, MOMENTS, Term, Var};
 use estimator_core::filter::{self, CONFIG, Input};
+use hil_sim::flight::FT_TO_M;
 use serde::Serialize;
 use std::path::Path;
 
@@ -796,8 +797,11 @@ fn moment_row(
     // The side force, N: the accelerometers' lateral specific force at the CG times the mass (no
     // thrust along y).
     let fy = f64::from(CONFIG.mass_kg(r.inp.fuel_kg)) * r.f_cg[1];
-    let (ft, ft2) = (0.3048, 0.3048 * 0.3048);
-    let q_s_b = qbar * f64::from(MODEL.wing_area_ft2) * ft2 * f64::from(MODEL.wingspan_ft) * ft;
+    let q_s_b = qbar
+        * f64::from(MODEL.wing_area_ft2)
+        * (FT_TO_M * FT_TO_M)
+        * f64::from(MODEL.wingspan_ft)
+        * FT_TO_M;
     Some(MomentRow {
         flight: r.flight,
         measured: [m_x / q_s_b, m_z / q_s_b],
@@ -811,6 +815,8 @@ fn moment_row(
 /// (rad/s²): Euler's `M = J·ω̇ + ω × (J·ω)`.
 pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> [f64; 3] {
     let [ixx, iyy, izz, ixz] = inertia_slug_ft2.map(|v| v * SLUG_FT2);
+    // Written out: nalgebra's product orders the arithmetic otherwise, which moves the identified
+    // scales in their last digit.
     let j = |v: [f64; 3]| [ixx * v[0] + ixz * v[2], iyy * v[1], ixz * v[0] + izz * v[2]];
     let (jd, jw) = (j(w_dot), j(w));
     [
@@ -1036,7 +1042,8 @@ fn force_parts(inp: &Input, alpha: f64, beta: f64, tas: f64, mach: f64, rho: f32
 /// The calibrated aircraft as a `scripts/airframe-variant` spec: the model the estimator knows,
 /// with the identified corrections. The axis scales multiply every term of their axis; the flap
 /// terms carry their own scale over the lift axis's, and the offset joins the lift axis's first term.
-pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -> String {
+pub fn spec_toml(r: &Report, ft: &Path) -> String {
+    let (scales, c, corrected) = (&r.scales, &r.flight_test, r.model_card.is_some());
     let (l, f, o, sb, sc) = (
         scales.lift.value,
         scales.flap.value,
@@ -1052,7 +1059,7 @@ pub fn spec_toml(scales: &Scales, c: &Calibration, ft: &Path, corrected: bool) -
     // The moment scales that pass the significance test (none: the text is the forces' alone).
     let moments: Vec<(&str, f64)> = ["ROLL", "YAW"]
         .into_iter()
-        .zip(scales.applied_moments())
+        .zip(r.applied_moments)
         .filter_map(|(axis, k)| k.map(|k| (axis, k)))
         .collect();
     let moments_text: String = moments
@@ -1179,10 +1186,11 @@ impl Report {
 /// The moment section of `calibration.md`: the scales and the side force's moment arms.
 fn moments_markdown(r: &Report) -> String {
     let c = &r.flight_test;
-    let (Some(ft), None) = (&c.moments, r.moments_why()) else {
+    let why = r.moments_why();
+    let (Some(ft), None) = (&c.moments, &why) else {
         return format!(
             "\nThe roll and yaw moments are not identified: {}.\n",
-            r.moments_why().unwrap_or_default()
+            why.unwrap_or_default()
         );
     };
     let e = |e: Option<Estimate>| {

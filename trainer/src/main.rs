@@ -974,7 +974,7 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
         })
         .transpose()?;
     let r = trainer::calibrate::Report::new(c, model_card);
-    let spec = trainer::calibrate::spec_toml(&r.scales, &r.flight_test, ft, model_ft.is_some());
+    let spec = trainer::calibrate::spec_toml(&r, ft);
     let md =
         trainer::calibrate::markdown(&r, &command_line(), &machine(), t0.elapsed().as_secs_f64());
     let text = serde_json::to_string_pretty(&r)?;

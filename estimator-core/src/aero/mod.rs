@@ -520,12 +520,10 @@ pub struct Moments<'a> {
 }
 
 impl Moments<'_> {
-    /// The roll and yaw moment coefficients at `p`; `None` if a term cannot be evaluated there.
+    /// The roll and yaw moment coefficients at `p`; `None` if `p` or a sum is not finite.
     pub fn coefficients_at(&self, p: &Point) -> Option<[f32; 2]> {
-        let sum = |axis: &[Term<'_>]| -> Option<f32> {
-            axis.iter().map(|t| t.eval(p).map(|v| v.value)).sum()
-        };
-        Some([sum(self.roll)?, sum(self.yaw)?])
+        let c = [self.roll, self.yaw].map(|terms| Model::axis(terms, p).value);
+        (p.is_finite() && c.iter().all(|v| v.is_finite())).then_some(c)
     }
 }
 
