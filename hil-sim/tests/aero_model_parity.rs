@@ -27,7 +27,7 @@ use estimator_core::aero::{
 /// one unit of the XML's last digit (1e-4) in a table cell the flight uses is ~6e-5 of it.
 const TOLERANCE: f64 = 1e-6;
 
-const INPUTS: [&str; 30] = [
+const INPUTS: [&str; 35] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -58,6 +58,12 @@ const INPUTS: [&str; 30] = [
     "aero/function/kCLge",
     "aero/alphadot-rad_sec",
     "aero/stall-hyst-norm",
+    // The engine deck's inputs and JSBSim's thrust.
+    "propulsion/engine/n2",
+    "fcs/throttle-pos-norm",
+    "atmosphere/density-altitude",
+    "position/h-sl-ft",
+    "propulsion/engine/thrust-lbs",
 ];
 const FORCES: [&str; 6] = [
     "forces/fwx-aero-lbs",
@@ -451,6 +457,40 @@ fn lift_error(model: &Model<'_>, steps: &[Step]) -> (Worst, bool) {
     }
     let ok = w.err <= TOLERANCE * w.range();
     (w, ok)
+}
+
+/// The engine deck (`aero::ENGINE`, flight-test calibration's thrust) gives JSBSim's thrust from
+/// its N2, throttle position, Mach and density altitude; with the altitude standing in for the
+/// density altitude (what calibration has: JSBSim's standard atmosphere, where they are the same)
+/// within 0.1 %.
+#[test]
+fn the_engine_deck_gives_jsbsim_thrust() {
+    let steps = flight();
+    let e = aero::ENGINE.expect("JSBSim's F-16 has a turbine deck the evaluator reads");
+    let (mut exact, mut by_altitude) = (Worst::default(), Worst::default());
+    let mut afterburner = 0;
+    for s in steps {
+        let g = |p: &str| s.get(p) as f32;
+        let thrust = |alt_ft: f32| {
+            e.thrust_lbf(
+                g("propulsion/engine/n2"),
+                g("fcs/throttle-pos-norm"),
+                g("velocities/mach"),
+                alt_ft,
+            )
+            .map_or(f32::NAN, |t| t * f32::from(e.count))
+        };
+        let t = s.get("simulation/sim-time-sec");
+        let jsbsim = s.get("propulsion/engine/thrust-lbs");
+        exact.add(t, thrust(g("atmosphere/density-altitude")), jsbsim);
+        by_altitude.add(t, thrust(g("position/h-sl-ft")), jsbsim);
+        afterburner += usize::from(s.get("fcs/throttle-pos-norm") > 1.0);
+    }
+    println!("{afterburner} steps in afterburner");
+    assert!(report("thrust", &exact, exact.range()));
+    let rel = by_altitude.err / exact.max;
+    println!("thrust at the altitude: worst {rel:.2e} of the largest thrust");
+    assert!(rel <= 1e-3, "{rel}");
 }
 
 #[test]

@@ -4,7 +4,9 @@
 //! values over a flight of each (`NAME_parity.xml` beside it, flown by stock JSBSim through
 //! `scripts/jsbsim-stock`), agree with JSBSim's `aero/coefficient/*` term by term and with the
 //! wind-axis force sums, and so do their roll and yaw moment terms where extracted (over
-//! `qbar·Sw·bw`). The fixtures read what the F-16 does not: |β| and |δe| (slope: the
+//! `qbar·Sw·bw`), and where an engine deck is extracted (`ENGINE`) each engine's thrust from its
+//! N2, throttle position, Mach and density altitude is JSBSim's. The fixtures read what the F-16
+//! does not: |β| and |δe| (slope: the
 //! sign), a left aileron, α̇, a flap in degrees, 2-D tables in α × Mach and α × flap, and a stall
 //! latch as a table key.
 //!
@@ -23,12 +25,12 @@ use std::collections::HashMap;
 #[path = "aero/stock_flight.rs"]
 mod stock_flight;
 
-use estimator_core::aero::{Model, Moments, Point, Term};
+use estimator_core::aero::{Engine, Model, Moments, Point, Term};
 
 /// The generated fixtures, each in a module whose parent offers the names they `use super::…`.
 mod fixtures {
     pub use estimator_core::aero::{
-        Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending,
+        Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending,
     };
     include!("aero/fixtures.rs");
 }
@@ -74,11 +76,22 @@ fn moment_terms<'a>(m: &'a Option<Moments<'a>>) -> impl Iterator<Item = &'a Term
     m.iter().flat_map(|m| m.roll.iter().chain(m.yaw))
 }
 
+/// Engine `i`'s deck inputs and JSBSim's thrust, by property.
+fn engine_props(i: u8) -> [String; 4] {
+    [
+        format!("propulsion/engine[{i}]/n2"),
+        format!("fcs/throttle-pos-norm[{i}]"),
+        format!("propulsion/engine[{i}]/thrust-lbs"),
+        "atmosphere/density-altitude".to_string(),
+    ]
+}
+
 /// Every step of `aircraft`'s parity flight: each property by name.
 fn flight(
     aircraft: &str,
     model: &Model<'_>,
     moments: &Option<Moments<'_>>,
+    engine: &Option<Engine<'_>>,
 ) -> Vec<HashMap<String, f64>> {
     let names: Vec<String> = INPUTS
         .iter()
@@ -86,6 +99,11 @@ fn flight(
         .map(|s| s.to_string())
         .chain(terms(model).map(|t| t.name.to_string()))
         .chain(moment_terms(moments).map(|t| t.name.to_string()))
+        .chain(
+            engine
+                .iter()
+                .flat_map(|e| (0..e.count).flat_map(engine_props)),
+        )
         .collect();
     let here = stock_flight::root().join("hil-sim/tests/aero");
     stock_flight::fly(
@@ -122,8 +140,13 @@ fn point(s: &HashMap<String, f64>) -> Point {
 
 /// Largest error of each term and wind-axis sum over the flight, against its own range; and of
 /// each roll and yaw moment term, where extracted.
-fn parity(aircraft: &str, model: &Model<'_>, moments: &Option<Moments<'_>>) {
-    let steps = flight(aircraft, model, moments);
+fn parity(
+    aircraft: &str,
+    model: &Model<'_>,
+    moments: &Option<Moments<'_>>,
+    engine: &Option<Engine<'_>>,
+) {
+    let steps = flight(aircraft, model, moments, engine);
     println!("{aircraft}: {} JSBSim steps", steps.len());
     assert!(steps.len() > 4_000, "{aircraft}: {} steps", steps.len());
     let names: Vec<&str> = terms(model)
@@ -174,6 +197,28 @@ fn parity(aircraft: &str, model: &Model<'_>, moments: &Option<Moments<'_>>) {
             failed.push(*n);
         }
     }
+    // Each engine's thrust, against the military thrust (a thrust held the whole flight has no
+    // range of its own).
+    for i in 0..engine.map_or(0, |e| e.count) {
+        let Some(e) = engine else { break };
+        let [n2, throttle, thrust, alt] = engine_props(i);
+        let err = steps
+            .iter()
+            .map(|s| {
+                let g = |p: &str| s[p] as f32;
+                let ours = e.thrust_lbf(g(&n2), g(&throttle), g("velocities/mach"), g(&alt));
+                ours.map_or(f64::NAN, |t| (f64::from(t) - s[&thrust]).abs())
+            })
+            .fold(0.0f64, |w, x| if x.is_nan() { x } else { w.max(x) });
+        let scale = f64::from(e.mil_thrust_lbf);
+        println!(
+            "{aircraft} engine {i} thrust            max |err| {err:9.3e} lbf  err/military {:9.3e}",
+            err / scale
+        );
+        if err.is_nan() || err > TOLERANCE * scale {
+            failed.push("thrust");
+        }
+    }
     assert!(nan.is_empty(), "{aircraft}: NaN in {nan:?}");
     assert!(
         failed.is_empty(),
@@ -188,7 +233,7 @@ fn every_fixture_force_model_is_jsbsims() {
         "the fixtures: {}",
         fixtures::ALL.len()
     );
-    for (name, model, moments) in fixtures::ALL {
-        parity(name, model, moments);
+    for (name, model, moments, engine) in fixtures::ALL {
+        parity(name, model, moments, engine);
     }
 }

@@ -9,7 +9,7 @@
 // term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
 // ascending at compile time.
 
-use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Engine, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCDge`: Change_in_drag_due_to_ground_effect
 pub static KCDGE: Table1<13> = Table1 {
@@ -256,3 +256,8 @@ pub static MODEL: Model<'static> = Model {
 /// flight-test calibration identifies their scales; the flight software reads none of them.
 /// Not extracted: aircraft/c172p/c172p.xml axis YAW aero/coefficient/Cndr: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/bw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/bw-ft': 1}): only then is it qbar·Sw·bw times a coefficient
 pub static MOMENTS: Option<Moments<'static>> = None;
+
+/// The engine deck (JSBSim's turbine, `aero::Engine`): flight-test calibration computes the
+/// thrust from the recorded N2 and throttle with it; the flight software reads none of it.
+/// Not extracted: aircraft/c172p/c172p.xml <propulsion>: thruster 'prop_75in2f': only JSBSim's direct thruster (the engine's thrust as it is) is understood, not a propeller's
+pub static ENGINE: Option<Engine<'static>> = None;

@@ -9,11 +9,13 @@
 //         (searched for writers of fcs/flaperon-mix-rad)
 //     aircraft/f16/Systems/hook.xml  sha256 9067ea104820d9d2d2f438b0361cbfdc9cea28a7969bd46eaa540fd7d9dfdd62
 //         (searched for writers of fcs/flaperon-mix-rad)
+//     engine/F100-PW-229.xml  sha256 92fd101fdcc60dc8f41f449a297e134419ff062f5293c2e58678fd07d8127e69
+//         (the engine deck: flight-test calibration's thrust)
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
 // term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
 // ascending at compile time.
 
-use super::{Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCLge`: Change_in_lift_due_to_ground_effect
 pub static KCLGE: Table1<13> = Table1 {
@@ -607,3 +609,74 @@ pub static MODEL: Model<'static> = Model {
 /// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
 /// flight-test calibration identifies their scales; the flight software reads none of them.
 pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, yaw: &YAW });
+
+/// `IdleThrust` of F100-PW-229.xml.
+pub static ENGINE_IDLE: EngineTable<6, 8> = EngineTable {
+    mach: [0.0, 0.2, 0.4, 0.6, 0.8, 1.0],
+    density_altitude_ft: [-10000.0, 0.0, 10000.0, 20000.0, 30000.0, 40000.0, 50000.0, 60000.0],
+    data: [
+        [ 0.0430,  0.0488,  0.0528,  0.0694,  0.0899,  0.1183,  0.1467,     0.0], // Mach 0.0
+        [ 0.0500,  0.0501,  0.0335,  0.0544,  0.0797,  0.1049,  0.1342,     0.0], // Mach 0.2
+        [ 0.0040,  0.0047,  0.0020,  0.0272,  0.0595,  0.0891,  0.1203,     0.0], // Mach 0.4
+        [-0.0804, -0.0804, -0.0560, -0.0237,  0.0276,  0.0718,  0.1073,     0.0], // Mach 0.6
+        [-0.2129, -0.2129, -0.1498, -0.1025,  0.0474,  0.0868,  0.0900,     0.0], // Mach 0.8
+        [-0.2839, -0.2839, -0.1104, -0.0469, -0.0270,  0.0552,  0.0800,     0.0], // Mach 1.0
+    ],
+};
+const _: () = assert!(strictly_ascending(&ENGINE_IDLE.mach));
+const _: () = assert!(strictly_ascending(&ENGINE_IDLE.density_altitude_ft));
+
+/// `MilThrust` of F100-PW-229.xml.
+pub static ENGINE_MIL: EngineTable<8, 8> = EngineTable {
+    mach: [0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4],
+    density_altitude_ft: [-10000.0, 0.0, 10000.0, 20000.0, 30000.0, 40000.0, 50000.0, 60000.0],
+    data: [
+        [1.2600, 1.0000, 0.7400, 0.5340, 0.3720, 0.2410, 0.1490,    0.0], // Mach 0.0
+        [1.1710, 0.9340, 0.6970, 0.5060, 0.3550, 0.2310, 0.1430,    0.0], // Mach 0.2
+        [1.1500, 0.9210, 0.6920, 0.5060, 0.3570, 0.2330, 0.1450,    0.0], // Mach 0.4
+        [1.1810, 0.9510, 0.7210, 0.5320, 0.3780, 0.2480, 0.1540,    0.0], // Mach 0.6
+        [1.2580, 1.0200, 0.7820, 0.5820, 0.4170, 0.2750, 0.1700,    0.0], // Mach 0.8
+        [1.3690, 1.1200, 0.8710, 0.6510, 0.4750, 0.3150, 0.1950,    0.0], // Mach 1.0
+        [1.4850, 1.2300, 0.9750, 0.7440, 0.5450, 0.3640, 0.2250,    0.0], // Mach 1.2
+        [1.5941, 1.3400, 1.0860, 0.8450, 0.6280, 0.4240, 0.2630,    0.0], // Mach 1.4
+    ],
+};
+const _: () = assert!(strictly_ascending(&ENGINE_MIL.mach));
+const _: () = assert!(strictly_ascending(&ENGINE_MIL.density_altitude_ft));
+
+/// `AugThrust` of F100-PW-229.xml.
+pub static ENGINE_AUG: EngineTable<14, 8> = EngineTable {
+    mach: [0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2, 2.4, 2.6],
+    density_altitude_ft: [-10000.0, 0.0, 10000.0, 20000.0, 30000.0, 40000.0, 50000.0, 60000.0],
+    data: [
+        [1.1816, 1.0000, 0.8184, 0.6627, 0.5280, 0.3756, 0.2327,    0.0], // Mach 0.0
+        [1.1308, 0.9599, 0.7890, 0.6406, 0.5116, 0.3645, 0.2258,    0.0], // Mach 0.2
+        [1.1150, 0.9474, 0.7798, 0.6340, 0.5070, 0.3615, 0.2240,    0.0], // Mach 0.4
+        [1.1284, 0.9589, 0.7894, 0.6420, 0.5134, 0.3661, 0.2268,    0.0], // Mach 0.6
+        [1.1707, 0.9942, 0.8177, 0.6647, 0.5309, 0.3784, 0.2345,    0.0], // Mach 0.8
+        [1.2411, 1.0529, 0.8648, 0.7017, 0.5596, 0.3983, 0.2467,    0.0], // Mach 1.0
+        [1.3287, 1.1254, 0.9221, 0.7462, 0.5936, 0.4219, 0.2614,    0.0], // Mach 1.2
+        [1.4365, 1.2149, 0.9933, 0.8021, 0.6360, 0.4509, 0.2794,    0.0], // Mach 1.4
+        [1.5711, 1.3260, 1.0809, 0.8700, 0.6874, 0.4860, 0.3011,    0.0], // Mach 1.6
+        [1.7301, 1.4579, 1.1857, 0.9512, 0.7495, 0.5289, 0.3277,    0.0], // Mach 1.8
+        [1.8314, 1.5700, 1.3086, 1.0474, 0.8216, 0.5786, 0.3585,    0.0], // Mach 2.0
+        [1.9700, 1.6900, 1.4100, 1.2400, 0.9100, 0.6359, 0.3940,    0.0], // Mach 2.2
+        [2.0700, 1.8000, 1.5300, 1.3400, 1.0000, 0.7200, 0.4600,    0.0], // Mach 2.4
+        [2.2000, 1.9200, 1.6400, 1.4400, 1.1000, 0.8000, 0.5200,    0.0], // Mach 2.6
+    ],
+};
+const _: () = assert!(strictly_ascending(&ENGINE_AUG.mach));
+const _: () = assert!(strictly_ascending(&ENGINE_AUG.density_altitude_ft));
+
+/// The engine deck (JSBSim's turbine, `aero::Engine`): flight-test calibration computes the
+/// thrust from the recorded N2 and throttle with it; the flight software reads none of it.
+pub static ENGINE: Option<Engine<'static>> = Some(Engine {
+    count: 1,
+    mil_thrust_lbf: 17800.0,
+    max_thrust_lbf: 29000.0,
+    idle_n2_pct: 53.0,
+    max_n2_pct: 100.0,
+    idle: &ENGINE_IDLE,
+    mil: &ENGINE_MIL,
+    aug: Some(&ENGINE_AUG),
+});

@@ -22,11 +22,16 @@
 /// default `f16`), or the file `ESTIMATOR_AERO` names at build time (`build.rs`;
 /// `scripts/calibrate` builds a calibrated aircraft's tables this way).
 #[rustfmt::skip]
+// The numbers are the XML's own (an engine deck's 1.1284 is not 2/√π).
+#[allow(clippy::approx_constant)]
 pub mod tables {
     include!(env!("ESTIMATOR_AERO_FILE"));
 }
 
-pub use tables::{MODEL, MOMENTS};
+pub use tables::{ENGINE, MODEL, MOMENTS};
+
+mod engine;
+pub use engine::{Engine, EngineLookup, EngineTable};
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
 /// the aircraft description (its sensor's `deg_per_unit`). JSBSim's model has no degree property

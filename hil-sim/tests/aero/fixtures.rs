@@ -4,17 +4,18 @@
 // Do not edit: `scripts/extract-aero --jsbsim-model NAME --out <this folder>/NAME_tables.rs` rewrites it.
 
 #[rustfmt::skip]
-#[allow(non_snake_case)]
+#[allow(non_snake_case, clippy::approx_constant)]
 pub mod c172p {
     include!("../../../estimator-core/src/aero/c172p_tables.rs");
 }
 
 #[rustfmt::skip]
-#[allow(non_snake_case)]
+#[allow(non_snake_case, clippy::approx_constant)]
 pub mod f15 {
     include!("../../../estimator-core/src/aero/f15_tables.rs");
 }
 
-/// Every fixture: the model's name (its `NAME_parity.xml` flight), its force model and its
-/// roll and yaw moments (`None` where they are not extracted).
-pub static ALL: &[(&str, &Model<'static>, &Option<Moments<'static>>)] = &[("c172p", &c172p::MODEL, &c172p::MOMENTS), ("f15", &f15::MODEL, &f15::MOMENTS)];
+/// Every fixture: the model's name (its `NAME_parity.xml` flight), its force model, its roll
+/// and yaw moments and its engine deck (`None` where they are not extracted).
+#[allow(clippy::type_complexity)]
+pub static ALL: &[(&str, &Model<'static>, &Option<Moments<'static>>, &Option<Engine<'static>>)] = &[("c172p", &c172p::MODEL, &c172p::MOMENTS, &c172p::ENGINE), ("f15", &f15::MODEL, &f15::MOMENTS, &f15::ENGINE)];
