@@ -8,6 +8,11 @@
 //! the installation's calibration residual (the part of the upwash/sidewash or position-error
 //! calibration that is left), plus a per-flight misalignment bias, through a first-order lag, plus
 //! white noise, quantized to the resolution.
+//!
+//! Beside the boom, the record carries engine 0's instrumentation (its core speed N2 and throttle
+//! position, through the same error model): flight-test calibration computes the thrust from them
+//! with the engine deck, to tell the drag from the thrust along body x. The flight-test card moves
+//! every engine's throttle together, so engine 0 stands for all.
 
 #[cfg(feature = "sim")]
 use rand::SeedableRng;
@@ -46,6 +51,10 @@ pub struct BoomConfig {
     pub beta: ChannelErrors,
     /// True airspeed from the pitot-static probe, m/s.
     pub tas: ChannelErrors,
+    /// Engine 0's core speed N2, %.
+    pub n2: ChannelErrors,
+    /// Engine 0's throttle position (JSBSim's norm: 1 military power, 2 full afterburner).
+    pub throttle: ChannelErrors,
 }
 
 impl Default for BoomConfig {
@@ -68,6 +77,19 @@ impl Default for BoomConfig {
                 scale_residual: 0.005,
                 bias_sigma: 0.5,
             },
+            // A core-speed indication to 0.1 % with a per-flight zero shift of 0.1 % (about 0.5 %
+            // of the thrust near military power).
+            n2: ChannelErrors {
+                noise: 0.05,
+                resolution: 0.1,
+                lag_s: 0.0,
+                scale_residual: 0.0,
+                bias_sigma: 0.1,
+            },
+            throttle: ChannelErrors {
+                resolution: 0.001,
+                ..ChannelErrors::default()
+            },
         }
     }
 }
@@ -79,10 +101,21 @@ pub struct BoomSample {
     pub alpha_deg: f64,
     pub beta_deg: f64,
     pub tas_mps: f64,
+    /// Engine 0's core speed, % (`None`, an empty cell, for an engine without one), and throttle
+    /// position.
+    pub engine_n2_pct: Option<f64>,
+    pub engine_throttle_pos: f64,
 }
 
 /// The CSV header of `NAME.boom.csv`.
-pub const COLUMNS: [&str; 4] = ["time_s", "boom_alpha_deg", "boom_beta_deg", "boom_tas_mps"];
+pub const COLUMNS: [&str; 6] = [
+    "time_s",
+    "boom_alpha_deg",
+    "boom_beta_deg",
+    "boom_tas_mps",
+    "engine_n2_pct",
+    "engine_throttle_pos",
+];
 
 #[cfg(feature = "sim")]
 struct Channel {
@@ -128,19 +161,27 @@ pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
     let mut alpha = Channel::new(cfg.alpha, &mut rng);
     let mut beta = Channel::new(cfg.beta, &mut rng);
     let mut tas = Channel::new(cfg.tas, &mut rng);
+    // The engine's channels draw from their own stream: the boom's are the same with or without.
+    let mut engine_rng = ChaCha12Rng::seed_from_u64(seed ^ 0x656e_6769_6e65_2d6e);
+    let mut n2 = Channel::new(cfg.n2, &mut engine_rng);
+    let mut throttle = Channel::new(cfg.throttle, &mut engine_rng);
     flight
         .samples
         .iter()
-        .map(|s| {
+        .enumerate()
+        .map(|(k, s)| {
             let t = &s.truth;
             let v = t.vt_mps.max(1.0);
             let local_alpha = t.alpha_deg - (t.q_true_rps * cfg.arm_m / v).to_degrees();
             let local_beta = t.beta_deg + (t.r_true_rps * cfg.arm_m / v).to_degrees();
+            let engine = flight.engine.get(k).copied().unwrap_or_default();
             BoomSample {
                 time_s: s.time_s,
                 alpha_deg: alpha.step(local_alpha, &mut rng),
                 beta_deg: beta.step(local_beta, &mut rng),
                 tas_mps: tas.step(t.vt_mps, &mut rng),
+                engine_n2_pct: engine.n2_pct.map(|x| n2.step(x, &mut engine_rng)),
+                engine_throttle_pos: throttle.step(engine.throttle_pos, &mut engine_rng),
             }
         })
         .collect()
@@ -156,6 +197,8 @@ pub fn write_csv<W: std::io::Write>(w: W, samples: &[BoomSample]) -> Result<(), 
             s.alpha_deg.to_string(),
             s.beta_deg.to_string(),
             s.tas_mps.to_string(),
+            s.engine_n2_pct.map_or_else(String::new, |x| x.to_string()),
+            s.engine_throttle_pos.to_string(),
         ])?;
     }
     wr.flush()?;
@@ -200,16 +243,29 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
     let mut out = Vec::new();
     for rec in rd.records() {
         let rec = rec.map_err(|e| err(e.to_string()))?;
-        let v: Vec<f64> = idx
+        // An empty cell is a channel the aircraft does not have (a piston engine's N2).
+        let v: Vec<Option<f64>> = idx
             .iter()
-            .map(|&i| rec.get(i).unwrap_or("").trim().parse::<f64>())
+            .map(|&i| {
+                let cell = rec.get(i).unwrap_or("").trim();
+                (!cell.is_empty()).then(|| cell.parse::<f64>()).transpose()
+            })
             .collect::<Result<_, _>>()
             .map_err(|e| err(format!("line {}: {e}", out.len() + 2)))?;
+        let line = out.len() + 2;
+        let need = |i: usize| {
+            v.get(i)
+                .copied()
+                .flatten()
+                .ok_or_else(|| err(format!("line {line}: `{}` is empty", COLUMNS[i])))
+        };
         out.push(BoomSample {
-            time_s: v[0],
-            alpha_deg: v[1],
-            beta_deg: v[2],
-            tas_mps: v[3],
+            time_s: need(0)?,
+            alpha_deg: need(1)?,
+            beta_deg: need(2)?,
+            tas_mps: need(3)?,
+            engine_n2_pct: v.get(4).copied().flatten(),
+            engine_throttle_pos: need(5)?,
         });
     }
     Ok(out)
@@ -233,6 +289,7 @@ mod tests {
                 .collect(),
             cut: None,
             zones: None,
+            engine: Vec::new(),
         }
     }
 
@@ -243,6 +300,8 @@ mod tests {
             alpha: c,
             beta: c,
             tas: c,
+            n2: c,
+            throttle: c,
         }
     }
 
@@ -301,8 +360,36 @@ mod tests {
             ..Truth::default()
         });
         let cfg = BoomConfig::default();
+        let vanes = |r: &[BoomSample]| -> Vec<[f64; 4]> {
+            r.iter()
+                .map(|s| [s.time_s, s.alpha_deg, s.beta_deg, s.tas_mps])
+                .collect()
+        };
+        let without_engine = record(&f, &cfg, 7);
+        // An N2 on every other sample (None: a piston engine's empty cell).
+        let mut f = f;
+        f.engine = (0..50)
+            .map(|k| crate::flight::EngineState {
+                n2_pct: (k % 2 == 0).then_some(90.0 + k as f64 * 0.01),
+                throttle_pos: 0.8,
+            })
+            .collect();
         let (a, b) = (record(&f, &cfg, 7), record(&f, &cfg, 7));
         assert_eq!(a, b);
+        // The engine's channels draw from their own stream: the boom's are the same.
+        assert_eq!(vanes(&a), vanes(&without_engine));
+        assert!(
+            a.iter()
+                .step_by(2)
+                .all(|s| s.engine_n2_pct.is_some_and(|n| (n - 90.25).abs() < 1.0))
+        );
+        assert!(
+            a.iter()
+                .skip(1)
+                .step_by(2)
+                .all(|s| s.engine_n2_pct.is_none())
+        );
+        assert!(a.iter().all(|s| s.engine_throttle_pos == 0.8));
         assert_ne!(a, record(&f, &cfg, 8));
         let dir = std::env::temp_dir().join(format!("boom-{}.csv", std::process::id()));
         write_csv(std::fs::File::create(&dir).unwrap(), &a).unwrap();

@@ -277,6 +277,18 @@ pub struct Flight {
     /// Time in each generator zone; `None` for a script without the generator's zone state.
     /// Not stored in the CSV (it is in the manifest).
     pub zones: Option<ZoneTimes>,
+    /// Engine 0's state at each sample, as JSBSim flew it, for the flight-test record
+    /// (`crate::boom`); empty for a flight read back from its CSV, which does not store it.
+    pub engine: Vec<EngineState>,
+}
+
+/// One engine's state at a sample: what a flight-test aircraft's engine instrumentation reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EngineState {
+    /// Core speed, % (`propulsion/engine/n2`; `None` for an engine without one, a piston engine).
+    pub n2_pct: Option<f64>,
+    /// The engine's throttle position (`fcs/throttle-pos-norm`; above 1 the afterburner's share).
+    pub throttle_pos: f64,
 }
 
 /// Train or test split.

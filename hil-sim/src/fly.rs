@@ -10,7 +10,7 @@ use crate::flight::{
 };
 use crate::plant::{
     AIRBORNE_AGL_FT, GROUND_CUT_AGL_FT, Loaded, OPTIONAL, Plant, PlantError, ReadPlan, TRUTH_ONLY,
-    WATCH, at, load_runscript, truth_of,
+    WATCH, at, engine_of, load_runscript, truth_of,
 };
 use crate::sensors::{InputSchedule, SensorConfig, SensorInput, SensorModel};
 
@@ -136,6 +136,7 @@ fn fly_planned(
         samples: Vec::new(),
         cut: None,
         zones: None,
+        engine: Vec::new(),
     };
     // Steps since the load, counted from 0 as the read plan counts them.
     let mut k: u64 = 0;
@@ -191,6 +192,7 @@ fn fly_planned(
                     sensed: si,
                     sub,
                 });
+                flight.engine.push(engine_of(r));
             }
         }
         if ended {

@@ -536,8 +536,11 @@ pub(crate) mod at {
     pub const WIND_DOWN: usize = 44;
     /// The generator's zone state (optional: NaN for scripts that do not have it).
     pub const ZONE: usize = 45;
+    /// Engine 0's core speed and throttle position (optional: a piston engine has no N2).
+    pub const ENGINE_N2: usize = 46;
+    pub const ENGINE_THROTTLE: usize = 47;
     /// Properties watched.
-    pub const COUNT: usize = ZONE + 1;
+    pub const COUNT: usize = ENGINE_THROTTLE + 1;
 }
 
 /// The properties a flight watches, each written next to its position in [`at`]; a position left
@@ -600,6 +603,9 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     w[at::WIND_EAST] = "atmosphere/total-wind-east-fps";
     w[at::WIND_DOWN] = "atmosphere/total-wind-down-fps";
     w[at::ZONE] = "?maneuver/zone";
+    // The flight-test record's engine channels (`crate::boom`): never a sensor frame's.
+    w[at::ENGINE_N2] = "?propulsion/engine/n2";
+    w[at::ENGINE_THROTTLE] = "?fcs/throttle-pos-norm";
     let mut i = 0;
     while i < at::COUNT {
         assert!(!w[i].is_empty(), "every position in `at` has a property");
@@ -620,9 +626,9 @@ pub(crate) const OPTIONAL: [bool; at::COUNT] = {
     m
 };
 
-/// The [`WATCH`] positions only [`truth_of`] reads: air data, position, wind. They are needed at the
-/// 20 Hz sample instants only.
-pub(crate) const TRUTH_ONLY: [usize; 13] = [
+/// The [`WATCH`] positions only [`truth_of`] and the engine record read: air data, position, wind,
+/// the engine. They are needed at the 20 Hz sample instants only.
+pub(crate) const TRUTH_ONLY: [usize; 15] = [
     at::ALPHA,
     at::BETA,
     at::U_AERO,
@@ -636,6 +642,8 @@ pub(crate) const TRUTH_ONLY: [usize; 13] = [
     at::WIND_NORTH,
     at::WIND_EAST,
     at::WIND_DOWN,
+    at::ENGINE_N2,
+    at::ENGINE_THROTTLE,
 ];
 
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
@@ -684,6 +692,14 @@ pub fn script_use(path: &Path) -> Result<ScriptUse, PlantError> {
         aircraft,
         initialize: attr(tag, "initialize"),
     })
+}
+
+/// Engine 0's state at one step.
+pub(crate) fn engine_of(r: &[f64]) -> crate::flight::EngineState {
+    crate::flight::EngineState {
+        n2_pct: Some(r[at::ENGINE_N2]).filter(|v| v.is_finite()),
+        throttle_pos: r[at::ENGINE_THROTTLE],
+    }
 }
 
 /// Truth at one step, in dataset units.

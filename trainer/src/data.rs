@@ -489,6 +489,7 @@ mod tests {
             samples,
             cut: None,
             zones: None,
+            engine: Vec::new(),
         };
         let entries = flights
             .iter()

@@ -374,6 +374,7 @@ impl Flight {
             samples,
             cut: None,
             zones: None,
+            engine: Vec::new(),
         };
         Ok((flight, !no_sub))
     }
@@ -856,6 +857,7 @@ mod tests {
             samples: vec![s, s],
             cut: None,
             zones: None,
+            engine: Vec::new(),
         };
         let dir = std::env::temp_dir().join(format!("hil-ds-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
