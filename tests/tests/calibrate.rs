@@ -87,14 +87,16 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     let without = calibration(&stripped, &model, &dir.join("cal-no-truth"));
     assert_eq!(with_truth, without, "the calibration read a truth column");
 
-    // Within 2 % (lift) and 5 % (side force, the flap terms) of the truth, and the error inside
-    // 2σ: C scales the whole lift axis, flaps included, and the whole side axis, its sideslip
-    // terms as much as its surface and rate terms, and has no lift offset.
+    // Within 2 % (lift) and 5 % (side force, the flap terms, drag) of the truth, and the error
+    // inside 2σ: C scales the whole lift axis, flaps included, the whole side axis, its sideslip
+    // terms as much as its surface and rate terms, and the drag axis (its thrust is the model's),
+    // and has no lift offset.
     for (axis, truth, tolerance) in [
         ("lift", 0.94, 0.02),
         ("flap", 0.94, 0.05),
         ("sideslip", 1.10, 0.05),
         ("side_controls", 1.10, 0.05),
+        ("drag", 1.10, 0.05),
     ] {
         let e = &with_truth["scales"][axis];
         let (k, se) = (

@@ -19,9 +19,10 @@
 //!    side force has two scales, of its sideslip terms (k_β) and of its surface and body-rate terms
 //!    (k_Y): in quasi-steady flight the rudder and aileron hold the sideslip, so the two move
 //!    together there, and they are fitted over the rolling frames, where the aileron and roll-rate
-//!    terms move without sideslip. Drag is not identified: along body x the unknown thrust adds to
-//!    it, and without a thrust model k_D is held at 1. The boom step reads quasi-steady frames
-//!    only.
+//!    terms move without sideslip. Along body x, `f_x − (lift and side parts) = k_D·f_x,drag +
+//!    k_T·T/m + b_x`, T the engine deck's thrust (`aero::ENGINE`) at the recorded N2 and throttle:
+//!    the card's throttle steps move the thrust apart from the drag. The boom step reads
+//!    quasi-steady frames only.
 //!
 //! 3. **Moments.** The roll and yaw moments the gyros measure (differentiated across a frame's
 //!    neighbours, through Euler's equations with the description's inertia) against the model's
@@ -50,7 +51,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{Factor, MODEL, MOMENTS, Term, Var};
+use estimator_core::aero::{ENGINE, Factor, MODEL, MOMENTS, Term, Var};
 use estimator_core::filter::{self, CONFIG, Input};
 use hil_sim::flight::FT_TO_M;
 use serde::Serialize;
@@ -58,6 +59,8 @@ use std::path::Path;
 
 /// kg·m² in a slug·ft².
 const SLUG_FT2: f64 = 1.355_817_948;
+/// N in a pound-force.
+const LBF_TO_N: f64 = 4.448_221_615_260_5;
 /// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
 const MIN_QBAR_PA: f64 = 3_000.0;
 /// Frames beyond this α (deg) are left out (beyond the card's stall approach).
@@ -67,10 +70,14 @@ const MAX_ALPHA_DEG: f64 = 25.0;
 /// knot is identified when at least [`MIN_STALL_FRAMES`] quasi-steady frames lie nearer to it
 /// than to its neighbours, and every knot before it is.
 pub const STALL_KNOTS_DEG: [f64; 5] = [10.0, 13.0, 16.0, 19.0, 22.0];
-/// Drag is not identified (thrust is unknown), and at high α its body-z share, D·sin α, reads as
-/// lift: a stall knot's 1σ includes this share of the drag's normal force there, the drag error a
-/// wind-tunnel model carries (docs/calibration.md).
+/// At high α the drag's body-z share, D·sin α, reads as lift: a stall knot's 1σ includes the
+/// drag scale's 1σ times the drag's normal force there; where drag is not identified (no engine
+/// deck or N2 record to tell it from the thrust) this, the drag error a wind-tunnel model carries
+/// (docs/calibration.md).
 const DRAG_PRIOR: f64 = 0.10;
+/// The drag fit reads the quasi-steady frames below the first stall knot, where the lift along
+/// body x is the lift fit's (no stall scale).
+const MAX_DRAG_ALPHA_DEG: f64 = STALL_KNOTS_DEG[0];
 /// See [`STALL_KNOTS_DEG`]: 3 s of frames pooled over the flights, 1 s in one flight's own fit.
 const MIN_STALL_FRAMES: usize = 60;
 const MIN_STALL_FRAMES_PER_FLIGHT: usize = 20;
@@ -82,6 +89,30 @@ pub const STALL_PARAMS: usize = STALL_KNOTS_DEG.len() - 1;
 const MAX_OMEGA_DOT_RPS2: f64 = 0.05;
 /// …and boom α and β changing by less than this per frame, deg.
 const MAX_ANGLE_STEP_DEG: f64 = 0.05;
+/// The drag fit ([`drag_fit`]) when the model has an engine deck and the flight test recorded the
+/// engine; otherwise `None` and why.
+fn identified_drag(
+    all: &[&EqRow],
+    k_b: f64,
+    k_y: f64,
+    lift: &Fit,
+) -> (Option<Fit>, Option<String>) {
+    let with_thrust = all.iter().filter(|r| r.thrust_x.is_some()).count();
+    let why = if ENGINE.is_none() {
+        "the model's engine is not a deck the evaluator reads (its tables' `ENGINE` says why), so the thrust along body x is unknown".to_string()
+    } else if with_thrust == 0 {
+        "the flight test records no engine N2 (`engine_n2_pct` in NAME.boom.csv): regenerate it with `hil-sim generate --preset flight-test`".to_string()
+    } else {
+        match drag_fit(all, k_b, k_y, lift) {
+            Some(f) => return (Some(f), None),
+            None => format!(
+                "{with_thrust} frames with a recorded thrust do not determine it: the card needs steady points at several speeds below {MAX_DRAG_ALPHA_DEG}° α"
+            ),
+        }
+    };
+    (None, Some(why))
+}
+
 /// The side-force fit reads the frames rolling faster than this, rad/s (the card's roll doublets
 /// and bank captures): there the aileron and roll-rate terms' side force is unlike the sideslip
 /// terms'.
@@ -125,6 +156,11 @@ pub struct Calibration {
     pub side: Fit,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
+    /// Axial specific force less the thrust's, m/s²: k_D (drag scale) (`None`: not identified,
+    /// [`Calibration::drag_why`] says why).
+    pub drag: Option<Fit>,
+    /// Why the drag is not identified (`None` when it is).
+    pub drag_why: Option<String>,
     /// Roll and yaw moment coefficients: k_roll, k_yaw, the side force's arms (`None`: not
     /// identified, [`Calibration::moments_why`] says why).
     pub moments: Option<[Fit; 2]>,
@@ -151,6 +187,11 @@ pub struct Scales {
     pub sideslip: Estimate,
     /// The other side-force terms (surfaces, body rates), × this.
     pub side_controls: Estimate,
+    /// The drag axis, × this (`None`: not identified, the model's kept).
+    pub drag: Option<Estimate>,
+    /// The engines' thrust over the engine deck's, identified beside the drag (`None`: not
+    /// identified).
+    pub thrust: Option<Estimate>,
     /// The roll and yaw moment axes, × these (`None`: not identified, the model's kept).
     pub roll: Option<Estimate>,
     pub yaw: Option<Estimate>,
@@ -178,6 +219,8 @@ impl Scales {
             },
             sideslip: ratio(self.sideslip, model.sideslip),
             side_controls: ratio(self.side_controls, model.side_controls),
+            drag: self.drag.zip(model.drag).map(|(a, b)| ratio(a, b)),
+            thrust: self.thrust.zip(model.thrust).map(|(a, b)| ratio(a, b)),
             roll: self.roll.zip(model.roll).map(|(a, b)| ratio(a, b)),
             yaw: self.yaw.zip(model.yaw).map(|(a, b)| ratio(a, b)),
             stall: core::array::from_fn(|j| match (self.stall[j], model.stall[j]) {
@@ -188,8 +231,8 @@ impl Scales {
     }
 }
 
-/// A moment scale joins the calibrated aircraft only when it differs from the model's 1 by at
-/// least this many of its 1σ; otherwise the model's moment is kept. The yaw scale's 1σ, 0.05-0.10
+/// A moment or thrust scale joins the calibrated aircraft only when it differs from the model's 1
+/// by at least this many of its 1σ; otherwise the model's moment (engine deck) is kept. The yaw scale's 1σ, 0.05-0.10
 /// on the development variants, is set by the three flights' scatter, and its fit leans on the
 /// boom's β noise where the side force differs from the model's: a scale written from that alone
 /// would move a moment the flight test did not show wrong (docs/calibration.md).
@@ -199,11 +242,20 @@ impl Scales {
     /// The roll and yaw moment scales the calibrated aircraft carries: each identified one that
     /// differs from 1 by at least [`MOMENT_SIGNIFICANCE`]·1σ; `None` keeps the model's.
     pub fn applied_moments(&self) -> [Option<f64>; 2] {
-        [self.roll, self.yaw].map(|e| {
-            e.filter(|e| (e.value - 1.0).abs() >= MOMENT_SIGNIFICANCE * e.std_error)
-                .map(|e| e.value)
-        })
+        [self.roll, self.yaw].map(significant)
     }
+
+    /// The thrust scale the calibrated aircraft carries, by the same test: the engine deck is
+    /// kept unless the flight test shows it wrong.
+    pub fn applied_thrust(&self) -> Option<f64> {
+        significant(self.thrust)
+    }
+}
+
+/// `e`'s value when it differs from 1 by at least [`MOMENT_SIGNIFICANCE`]·1σ.
+fn significant(e: Option<Estimate>) -> Option<f64> {
+    e.filter(|e| (e.value - 1.0).abs() >= MOMENT_SIGNIFICANCE * e.std_error)
+        .map(|e| e.value)
 }
 
 /// One line on the moment scales: identified, and whether the calibrated aircraft carries them.
@@ -287,6 +339,9 @@ pub struct PerFlight {
     /// its lift is then fitted with the side force at the pooled scales.
     pub sideslip: Option<f64>,
     pub side_controls: Option<f64>,
+    /// The drag and thrust scales (`None`: not identified).
+    pub drag: Option<f64>,
+    pub thrust: Option<f64>,
     /// The roll and yaw moment scales (`None`: not identified).
     pub roll: Option<f64>,
     pub yaw: Option<f64>,
@@ -407,12 +462,19 @@ struct Row {
     boom_alpha: f64,
     boom_beta: f64,
     boom_tas: f64,
+    /// Engine 0's recorded N2 (%) and throttle position (`None`: no N2 recorded).
+    engine: Option<[f64; 2]>,
     inp: Input,
     f_cg: [f64; 3],
 }
 
 /// The rows of one flight: frames with every channel the filter needs, and the boom.
-fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]]) -> Vec<Row> {
+fn rows(
+    flight: usize,
+    frames: &[SensorFrame],
+    times: &[f64],
+    boom: &[hil_sim::boom::BoomSample],
+) -> Vec<Row> {
     let cfg = CONFIG;
     let arm = cfg.lever_arm_m;
     let mut out = Vec::new();
@@ -450,13 +512,16 @@ fn rows(flight: usize, frames: &[SensorFrame], times: &[f64], boom: &[[f64; 3]])
             flight,
             time_s: times[k],
             omega_dot,
-            angle_step: (b[0] - bp[0]).abs().max((b[1] - bp[1]).abs()),
+            angle_step: (b.alpha_deg - bp.alpha_deg)
+                .abs()
+                .max((b.beta_deg - bp.beta_deg).abs()),
             alpha_kin: vb[2].atan2(vb[0]).to_degrees(),
             beta_kin: (vb[1] / v).clamp(-1.0, 1.0).asin().to_degrees(),
             tas_kin: v,
-            boom_alpha: b[0],
-            boom_beta: b[1],
-            boom_tas: b[2],
+            boom_alpha: b.alpha_deg,
+            boom_beta: b.beta_deg,
+            boom_tas: b.tas_mps,
+            engine: b.engine_n2_pct.map(|n2| [n2, b.engine_throttle_pos]),
             inp,
             f_cg: [f.x, f.y, f.z].map(f64::from),
         });
@@ -499,11 +564,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         }
         let frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
         let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
-        let bm: Vec<[f64; 3]> = boom
-            .iter()
-            .map(|s| [s.alpha_deg, s.beta_deg, s.tas_mps])
-            .collect();
-        all.extend(rows(names.len(), &frames, &times, &bm));
+        all.extend(rows(names.len(), &frames, &times, &boom));
         names.push(e.name.clone());
     }
     if all.is_empty() {
@@ -601,6 +662,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             steady,
             rolling,
             parts,
+            thrust_x: thrust_x(r, mach),
             f_cg: r.f_cg,
         });
     }
@@ -624,12 +686,25 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         }
     }
     let knots = stall_knots(&all_eq, MIN_STALL_FRAMES);
-    let lift = lift_fit(&all_eq, k_b, k_y, knots).ok_or_else(|| {
-        Error::Numeric(format!(
-            "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
-            count(|r| r.steady)
-        ))
-    })?;
+    let lift_at = |k_d: f64| {
+        lift_fit(&all_eq, k_b, k_y, k_d, knots).ok_or_else(|| {
+            Error::Numeric(format!(
+                "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
+                count(|r| r.steady)
+            ))
+        })
+    };
+    // The lift with the model's drag, the drag with that lift, then each once more with the
+    // other's scale (the drag's normal share and the lift's axial share are small: one pass
+    // settles both).
+    let (lift, drag, drag_why) = {
+        let first = lift_at(1.0)?;
+        let (drag, why) = identified_drag(&all_eq, k_b, k_y, &first);
+        let lift = lift_at(drag.as_ref().map_or(1.0, |d| d.get("k_drag")))?;
+        let drag = drag.and_then(|_| drag_fit(&all_eq, k_b, k_y, &lift));
+        (lift, drag, why)
+    };
+    let k_d = drag.as_ref().map_or(1.0, |d| d.get("k_drag"));
     // Each flight alone: the scatter of its scales is the honest part of the 1σ. A flight without
     // roll inputs has no side-force scales of its own; its lift reads the pooled ones.
     let per_flight: Vec<PerFlight> = names
@@ -640,7 +715,12 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             let s = side_fit(&rows);
             let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
             let n = stall_knots(&rows, MIN_STALL_FRAMES_PER_FLIGHT).min(knots);
-            let l = lift_fit(&rows, kb, ky, n);
+            let d = drag.as_ref().and_then(|_| {
+                let l = lift_fit(&rows, kb, ky, k_d, n)?;
+                drag_fit(&rows, kb, ky, &l)
+            });
+            let kd = d.as_ref().map_or(k_d, |d| d.get("k_drag"));
+            let l = lift_fit(&rows, kb, ky, kd, n);
             PerFlight {
                 flight: name.clone(),
                 lift: l.as_ref().map(|l| l.get("k_lift")),
@@ -648,6 +728,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 offset: l.as_ref().map(|l| l.get("offset_cl")),
                 sideslip: s.as_ref().map(|s| s.get("k_sideslip")),
                 side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
+                drag: d.as_ref().map(|d| d.get("k_drag")),
+                thrust: d.as_ref().map(|d| d.get("k_thrust")),
                 roll: None,
                 yaw: None,
                 stall: core::array::from_fn(|j| {
@@ -721,6 +803,12 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
         sideslip: with_scatter(&side, "k_sideslip", &spread(|f| f.sideslip)),
         side_controls: with_scatter(&side, "k_side_controls", &spread(|f| f.side_controls)),
+        drag: drag
+            .as_ref()
+            .map(|d| with_scatter(d, "k_drag", &spread(|f| f.drag))),
+        thrust: drag
+            .as_ref()
+            .map(|d| with_scatter(d, "k_thrust", &spread(|f| f.thrust))),
         roll: moments
             .as_ref()
             .map(|[r, _]| with_scatter(r, "k_roll", &spread(|f| f.roll))),
@@ -748,6 +836,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         boom_tas,
         side,
         lift,
+        drag,
+        drag_why,
         moments,
         moments_why,
         per_flight,
@@ -860,7 +950,65 @@ struct EqRow {
     /// Rolling ([`MIN_ROLL_RATE_RPS`]): the side-force fit reads it.
     rolling: bool,
     parts: Parts,
+    /// The engines' thrust over the mass, m/s² along body x, from the engine deck at the recorded
+    /// N2 and throttle (`None`: no deck, or no N2 recorded).
+    thrust_x: Option<f64>,
     f_cg: [f64; 3],
+}
+
+/// The thrust's specific force along body x of a row at Mach `mach` (see [`EqRow::thrust_x`]):
+/// every engine at engine 0's recorded N2 and throttle, the altitude as the density altitude
+/// (JSBSim's standard atmosphere: they are the same).
+fn thrust_x(r: &Row, mach: f64) -> Option<f64> {
+    let ([n2, throttle], engine) = r.engine.zip(ENGINE)?;
+    let alt_ft = f64::from(r.inp.alt_m) / FT_TO_M;
+    let lbf = engine.thrust_lbf(n2 as f32, throttle as f32, mach as f32, alt_ft as f32)?;
+    let newtons = f64::from(lbf) * f64::from(engine.count) * LBF_TO_N;
+    Some(newtons / f64::from(CONFIG.mass_kg(r.inp.fuel_kg)))
+}
+
+/// The drag and thrust fit over the quasi-steady frames below [`MAX_DRAG_ALPHA_DEG`] with a
+/// recorded thrust, the lift and side force at the scales `lift` and `(k_b, k_y)` identified:
+/// `f_x − k_L·lift_x − k_F·flap_x − ΔC_L·unit_x − k_β·sideslip_x − k_Y·surfaces_x = k_D·drag_x + k_T·T/m + b_x`,
+/// T the engine deck's thrust at the recorded N2 and throttle. In steady flight thrust and drag
+/// balance, so those frames tell only their difference; the card's accel/decel (full throttle,
+/// then idle) swings the thrust between the deck's maximum and idle within seconds while the drag
+/// follows the speed slowly, and its push-overs and pull-ups move the drag with α at the same thrust: the
+/// two scales come apart, and the test points' span in dynamic pressure tells k_D from the
+/// accelerometer's constant b_x.
+fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
+    let (k_l, k_f, dcl) = (
+        lift.get("k_lift"),
+        lift.get("k_flap"),
+        lift.get("offset_cl"),
+    );
+    let rows: Vec<(&EqRow, f64)> = all
+        .iter()
+        .filter(|r| r.steady && r.alpha_deg < MAX_DRAG_ALPHA_DEG)
+        .filter_map(|r| Some((*r, r.thrust_x?)))
+        .collect();
+    fn p(r: &EqRow) -> &Parts {
+        &r.parts
+    }
+    least_squares(
+        &["k_drag", "k_thrust", "bias_mps2"],
+        &[
+            rows.iter().map(|(r, _)| p(r).drag[0]).collect(),
+            rows.iter().map(|(_, t)| *t).collect(),
+            vec![1.0; rows.len()],
+        ],
+        &rows
+            .iter()
+            .map(|(r, _)| {
+                r.f_cg[0]
+                    - k_l * p(r).lift[0]
+                    - k_f * p(r).flap[0]
+                    - dcl * p(r).unit_lift[0]
+                    - k_b * p(r).sideslip[0]
+                    - k_y * p(r).side_rest[0]
+            })
+            .collect::<Vec<_>>(),
+    )
 }
 
 /// The side-force fit over the rolling frames, then the lift fit over the quasi-steady ones with
@@ -914,9 +1062,10 @@ fn stall_scale(lift: &Fit, j: usize, per_flight: &[f64]) -> Estimate {
     )
 }
 
-/// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`, and the
-/// first `knots` stall knots' lift changes `d_j · lift_z · basis_j(α)` ([`STALL_KNOTS_DEG`]).
-fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, knots: usize) -> Option<Fit> {
+/// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`, the drag at
+/// `k_d`, and the first `knots` stall knots' lift changes `d_j · lift_z · basis_j(α)`
+/// ([`STALL_KNOTS_DEG`]).
+fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, k_d: f64, knots: usize) -> Option<Fit> {
     let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
     let ones = vec![1.0; rows.len()];
     let stall_names: Vec<String> = (1..=knots).map(stall_name).collect();
@@ -941,7 +1090,10 @@ fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, knots: usize) -> Option<Fit> {
         &rows
             .iter()
             .map(|r| {
-                r.f_cg[2] - k_b * r.parts.sideslip[2] - k_y * r.parts.side_rest[2] - r.parts.drag[2]
+                r.f_cg[2]
+                    - k_b * r.parts.sideslip[2]
+                    - k_y * r.parts.side_rest[2]
+                    - k_d * r.parts.drag[2]
             })
             .collect::<Vec<_>>(),
     )
@@ -1051,11 +1203,18 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         scales.sideslip.value,
         scales.side_controls.value,
     );
-    let how = if corrected {
-        "equation error, over the same card flown on the model; drag not identified"
-    } else {
-        "equation error; drag not identified"
+    let drag = scales.drag.map(|d| d.value);
+    let how = match (corrected, drag) {
+        (true, Some(_)) => "equation error, over the same card flown on the model",
+        (true, None) => {
+            "equation error, over the same card flown on the model; drag not identified"
+        }
+        (false, Some(_)) => "equation error",
+        (false, None) => "equation error; drag not identified",
     };
+    let drag_text = drag.map_or(String::new(), |k| format!(", drag x {k:.5}"))
+        + &r.applied_thrust
+            .map_or(String::new(), |k| format!(", engine thrust x {k:.5}"));
     // The moment scales that pass the significance test (none: the text is the forces' alone).
     let moments: Vec<(&str, f64)> = ["ROLL", "YAW"]
         .into_iter()
@@ -1068,11 +1227,14 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .collect();
     let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){moments_text} ({how}).\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){drag_text}{moments_text} ({how}).\"\n\
          [axes]\nLIFT = {l:.5}\nSIDE = {sc:.5}\n",
         ft.display(),
         c.flights.len()
     );
+    if let Some(k) = drag {
+        t.push_str(&format!("DRAG = {k:.5}\n"));
+    }
     for (axis, k) in &moments {
         t.push_str(&format!("{axis} = {k:.5}\n"));
     }
@@ -1108,6 +1270,9 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
             list(stall.iter().map(|(_, s)| format!("{s:.5}")).collect())
         ));
     }
+    if let Some(k) = r.applied_thrust {
+        t.push_str(&format!("[propulsion]\nthrust_scale = {k:.5}\n"));
+    }
     t
 }
 
@@ -1121,8 +1286,10 @@ pub struct Report {
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
     /// `None`: the model's).
     pub applied_moments: [Option<f64>; 2],
-    /// [`MOMENT_SIGNIFICANCE`]: how many 1σ from 1 a moment scale must be to be carried.
+    /// [`MOMENT_SIGNIFICANCE`]: how many 1σ from 1 a moment or thrust scale must be to be carried.
     pub moment_significance: f64,
+    /// The thrust scale `aircraft.toml` carries ([`Scales::applied_thrust`]; `None`: the deck's).
+    pub applied_thrust: Option<f64>,
     pub flight_test: Calibration,
     /// The same card flown on the model: the identification's own bias.
     pub model_card: Option<Calibration>,
@@ -1149,14 +1316,17 @@ impl Report {
                 ..flight_test.scales
             },
         };
-        // The drag the flight test's lift reads at high α, which no card identifies.
+        // The drag the flight test's lift reads at high α: its identified scale's 1σ, or where it
+        // is not identified the prior.
+        let drag_sigma = scales.drag.map_or(DRAG_PRIOR, |d| d.std_error);
         for (s, share) in scales.stall.iter_mut().zip(flight_test.stall_drag_share) {
             if let Some(e) = s {
-                e.std_error = e.std_error.hypot(DRAG_PRIOR * share);
+                e.std_error = e.std_error.hypot(drag_sigma * share);
             }
         }
         Report {
             applied_moments: scales.applied_moments(),
+            applied_thrust: scales.applied_thrust(),
             moment_significance: MOMENT_SIGNIFICANCE,
             scales,
             flight_test,
@@ -1165,6 +1335,21 @@ impl Report {
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
             sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
             stall_knots_deg: STALL_KNOTS_DEG.to_vec(),
+        }
+    }
+
+    /// Why the calibrated aircraft carries no identified drag (`None`: identified, over the model
+    /// card's).
+    pub fn drag_why(&self) -> Option<String> {
+        if let Some(why) = &self.flight_test.drag_why {
+            return Some(why.clone());
+        }
+        match &self.model_card {
+            None => None,
+            Some(m) => m
+                .drag_why
+                .as_ref()
+                .map(|why| format!("the model card: {why}")),
         }
     }
 
@@ -1296,9 +1481,14 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     }
     m.push_str(&stall_row("**calibrated aircraft**", &r.scales));
     m.push_str(&format!(
-        "\nThe calibrated aircraft's 1σ at each knot includes {:.0} % of the drag's normal force there \
-         (D·sin α, which reads as lift and which no card identifies: {}).\n",
-        100.0 * DRAG_PRIOR,
+        "\nThe calibrated aircraft's 1σ at each knot includes {:.1} % of the drag's normal force there \
+         (D·sin α, which reads as lift: {}; {}).\n",
+        100.0 * r.scales.drag.map_or(DRAG_PRIOR, |d| d.std_error),
+        if r.scales.drag.is_some() {
+            "the drag scale's 1σ"
+        } else {
+            "drag is not identified, the prior error of a wind-tunnel drag"
+        },
         c.stall_drag_share
             .iter()
             .zip(STALL_KNOTS_DEG.iter().skip(1))
@@ -1306,6 +1496,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             .collect::<Vec<_>>()
             .join(", ")
     ));
+    m.push_str(&drag_markdown(r));
     m.push_str(&moments_markdown(r));
     let f = |p: &PerFlight| {
         let v = |x: Option<f64>, signed: bool| match (x, signed) {
@@ -1314,18 +1505,19 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             (None, _) => "–".to_string(),
         };
         format!(
-            "{} / {} / {} / {} / {} / {} / {}",
+            "{} / {} / {} / {} / {} / {} / {} / {}",
             v(p.lift, false),
             v(p.flap, false),
             v(p.offset, true),
             v(p.sideslip, false),
             v(p.side_controls, false),
+            v(p.drag, false),
             v(p.roll, false),
             v(p.yaw, false)
         )
     };
     m.push_str(
-        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale / roll-moment scale / yaw-moment scale):\n\n| flight | flight test |",
+        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale / drag scale / roll-moment scale / yaw-moment scale):\n\n| flight | flight test |",
     );
     if r.model_card.is_some() {
         m.push_str(" model card |");
@@ -1360,6 +1552,10 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             Some(&c.side),
         ),
         ("normal specific force, m/s²", Some(&c.lift)),
+        (
+            "axial specific force less the thrust's, m/s²",
+            c.drag.as_ref(),
+        ),
         ("roll moment coefficient", moments.map(|[r, _]| r)),
         ("yaw moment coefficient", moments.map(|[_, y]| y)),
     ]
@@ -1379,9 +1575,84 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
          the model's LIFT axis in aircraft.toml, the flap-lift scale the lift terms driven by the \
          trailing-edge flaps, and the offset joins the lift axis; the surface side-force scale \
          multiplies the SIDE axis and the sideslip terms carry their own scale over it; a moment \
-         scale that passes the significance test multiplies the ROLL or YAW axis. Drag is not \
-         identified: along body x the engine's thrust adds to it.\n",
+         scale that passes the significance test multiplies the ROLL or YAW axis; the drag scale \
+         multiplies the DRAG axis.\n",
     );
+    m
+}
+
+/// One line on the drag and thrust: identified, or why not.
+pub fn drag_line(r: &Report) -> String {
+    match (r.scales.drag, r.scales.thrust, r.drag_why()) {
+        (Some(d), Some(t), _) => format!(
+            "drag scale {:.4} ± {:.4}; engine thrust scale {:.4} ± {:.4} ({})",
+            d.value,
+            d.std_error,
+            t.value,
+            t.std_error,
+            if r.applied_thrust.is_some() {
+                "applied".to_string()
+            } else {
+                format!("within {MOMENT_SIGNIFICANCE}σ of 1: the deck's kept")
+            }
+        ),
+        (_, _, why) => format!(
+            "drag and thrust not identified: {}",
+            why.unwrap_or_default()
+        ),
+    }
+}
+
+/// The drag section of `calibration.md`.
+fn drag_markdown(r: &Report) -> String {
+    let c = &r.flight_test;
+    let (Some(d), None) = (r.scales.drag, r.drag_why()) else {
+        return format!(
+            "\nDrag is not identified: {}. The calibrated aircraft keeps the model's drag.\n",
+            r.drag_why().unwrap_or_default()
+        );
+    };
+    let e = |e: Option<Estimate>| {
+        e.map_or("–".into(), |e| {
+            format!("{:.4} ± {:.4}", e.value, e.std_error)
+        })
+    };
+    let mut m = String::from(
+        "\n| drag and thrust (± 1σ) | drag scale | engine thrust scale |\n|---|---|---|\n",
+    );
+    m.push_str(&format!(
+        "| flight test | {} | {} |\n",
+        e(c.scales.drag),
+        e(c.scales.thrust)
+    ));
+    if let Some(mc) = &r.model_card {
+        m.push_str(&format!(
+            "| the same card flown on the model | {} | {} |\n",
+            e(mc.scales.drag),
+            e(mc.scales.thrust)
+        ));
+    }
+    m.push_str(&format!(
+        "| **calibrated aircraft** (aircraft.toml) | **{:.4}** ± {:.4} | {} |\n",
+        d.value,
+        d.std_error,
+        match r.applied_thrust {
+            Some(k) => format!("**{k:.4}** (applied)"),
+            None => format!(
+                "1 (kept: {} is within {MOMENT_SIGNIFICANCE}σ of 1)",
+                e(r.scales.thrust)
+            ),
+        }
+    ));
+    m.push_str(&format!(
+        "\nThe thrust T is the engine deck's (`aero::ENGINE`) at the recorded N2 and throttle \
+         position, Mach from the corrected boom and the altitude as density altitude. Over the \
+         quasi-steady frames below {MAX_DRAG_ALPHA_DEG}° α, with the lift and side force at their \
+         identified scales, the axial force is fitted as k_D·drag + k_T·T/m + b: in steady flight \
+         thrust and drag balance, and the card's throttle steps (thrust) and push-overs and \
+         pull-ups (drag) move them apart. The engine's thrust scale joins the calibrated aircraft \
+         only when it differs from 1 by {MOMENT_SIGNIFICANCE}σ or more.\n"
+    ));
     m
 }
 
@@ -1432,11 +1703,15 @@ mod tests {
                 0.8 * (1.3 * t).cos()
             };
             let lift = 9.0 + (0.5 * t).sin();
+            // Drag and thrust along x: truth k_D 1.08, k_T 0.95 (the lift's x share at k_L, a
+            // bias 0.02).
+            let drag = -(0.8 + 0.2 * (0.7 * t).sin());
+            let thrust = 3.0 + 0.5 * (0.3 * t).cos();
             let parts = Parts {
-                drag: [0.0; 3],
+                drag: [drag, 0.0, 0.0],
                 sideslip: [0.0, b, 0.1 * b],
                 side_rest: [0.0, rest, 0.05 * rest],
-                lift: [0.0, 0.0, -lift],
+                lift: [0.1 * lift, 0.0, -lift],
                 flap: [0.0, 0.0, -0.3 * (0.9 * t).cos()],
                 unit_lift: [0.0, 0.0, -(20.0 + 5.0 * (0.2 * t).sin())],
             };
@@ -1448,13 +1723,15 @@ mod tests {
             let stall = 1.0 - 0.1 * ((alpha_deg - 10.0) / 9.0).clamp(0.0, 1.0);
             let f_z =
                 -0.95 * stall * lift + 0.1 * kb * b + 0.05 * ky * rest - 0.3 * (0.9 * t).cos();
+            let f_x = 0.95 * thrust + 1.08 * drag + 0.95 * 0.1 * lift + 0.02;
             EqRow {
                 flight: 0,
                 alpha_deg,
                 steady,
                 rolling: !steady,
                 parts,
-                f_cg: [0.0, f_y, f_z],
+                thrust_x: Some(thrust),
+                f_cg: [f_x, f_y, f_z],
             }
         };
         let rows: Vec<EqRow> = (0..400).map(|k| row(k, k % 3 != 0)).collect();
@@ -1468,7 +1745,7 @@ mod tests {
         // Three knots (13°, 16°, 19°) have their frames; 22° is beyond the sweep.
         let knots = stall_knots(&all, 10);
         assert_eq!(knots, 3);
-        let lift = lift_fit(&all, kb, ky, knots).unwrap();
+        let lift = lift_fit(&all, kb, ky, 1.0, knots).unwrap();
         assert!(
             (lift.get("k_lift") - 0.95).abs() < 1e-9,
             "{}",
@@ -1478,6 +1755,23 @@ mod tests {
             let s = stall_scale(&lift, j, &[]).value;
             assert!((s - truth).abs() < 1e-9, "knot {j}: {s}, truth {truth}");
         }
+        // The drag and the thrust from the steady frames below the first knot.
+        let drag = drag_fit(&all, kb, ky, &lift).unwrap();
+        assert!(
+            (drag.get("k_drag") - 1.08).abs() < 1e-9
+                && (drag.get("k_thrust") - 0.95).abs() < 1e-9
+                && drag.rows > 50,
+            "{drag:?}"
+        );
+        // Without a recorded thrust there is no drag fit.
+        let no_thrust: Vec<EqRow> = (0..400)
+            .map(|k| EqRow {
+                thrust_x: None,
+                ..row(k, true)
+            })
+            .collect();
+        let no_thrust: Vec<&EqRow> = no_thrust.iter().collect();
+        assert!(drag_fit(&no_thrust, kb, ky, &lift).is_none());
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
         assert!(side_fit(&steady).is_none());
@@ -1581,6 +1875,8 @@ mod tests {
             offset: Estimate::default(),
             sideslip: Estimate::default(),
             side_controls: Estimate::default(),
+            drag: None,
+            thrust: yaw,
             roll,
             yaw,
             stall: [None; STALL_PARAMS],
@@ -1594,5 +1890,9 @@ mod tests {
             scales(None, e(0.8, 0.05)).applied_moments(),
             [None, Some(0.8)]
         );
+        // The engine's thrust scale by the same test.
+        assert_eq!(scales(None, e(1.03, 0.02)).applied_thrust(), None);
+        assert_eq!(scales(None, e(0.95, 0.001)).applied_thrust(), Some(0.95));
+        assert_eq!(scales(None, None).applied_thrust(), None);
     }
 }

@@ -1012,6 +1012,7 @@ fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> 
             },
             out.display()
         );
+        println!("{}", trainer::calibrate::drag_line(&r));
         println!("{}", trainer::calibrate::moments_line(&r));
     }
     Ok(())
