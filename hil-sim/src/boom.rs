@@ -101,11 +101,14 @@ pub struct BoomSample {
     pub alpha_deg: f64,
     pub beta_deg: f64,
     pub tas_mps: f64,
-    /// Engine 0's core speed, % (`None`, an empty cell, for an engine without one), and throttle
-    /// position.
+    /// Engine 0's core speed, % (`None`, an empty cell, for an engine without one, or a record
+    /// without the engine channels), and throttle position (`None` without the engine channels).
     pub engine_n2_pct: Option<f64>,
-    pub engine_throttle_pos: f64,
+    pub engine_throttle_pos: Option<f64>,
 }
+
+/// The columns from here on are the engine's, optional in a record read.
+const ENGINE_COLUMNS: usize = 4;
 
 /// The CSV header of `NAME.boom.csv`.
 pub const COLUMNS: [&str; 6] = [
@@ -165,6 +168,8 @@ pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
     let mut engine_rng = ChaCha12Rng::seed_from_u64(seed ^ 0x656e_6769_6e65_2d6e);
     let mut n2 = Channel::new(cfg.n2, &mut engine_rng);
     let mut throttle = Channel::new(cfg.throttle, &mut engine_rng);
+    // A flight without its engine state at every sample (one read back from its CSV) records none.
+    let engine = (flight.engine.len() == flight.samples.len()).then_some(&flight.engine);
     flight
         .samples
         .iter()
@@ -174,14 +179,16 @@ pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
             let v = t.vt_mps.max(1.0);
             let local_alpha = t.alpha_deg - (t.q_true_rps * cfg.arm_m / v).to_degrees();
             let local_beta = t.beta_deg + (t.r_true_rps * cfg.arm_m / v).to_degrees();
-            let engine = flight.engine.get(k).copied().unwrap_or_default();
+            let engine = engine.and_then(|e| e.get(k));
             BoomSample {
                 time_s: s.time_s,
                 alpha_deg: alpha.step(local_alpha, &mut rng),
                 beta_deg: beta.step(local_beta, &mut rng),
                 tas_mps: tas.step(t.vt_mps, &mut rng),
-                engine_n2_pct: engine.n2_pct.map(|x| n2.step(x, &mut engine_rng)),
-                engine_throttle_pos: throttle.step(engine.throttle_pos, &mut engine_rng),
+                engine_n2_pct: engine
+                    .and_then(|e| e.n2_pct)
+                    .map(|x| n2.step(x, &mut engine_rng)),
+                engine_throttle_pos: engine.map(|e| throttle.step(e.throttle_pos, &mut engine_rng)),
             }
         })
         .collect()
@@ -198,7 +205,8 @@ pub fn write_csv<W: std::io::Write>(w: W, samples: &[BoomSample]) -> Result<(), 
             s.beta_deg.to_string(),
             s.tas_mps.to_string(),
             s.engine_n2_pct.map_or_else(String::new, |x| x.to_string()),
-            s.engine_throttle_pos.to_string(),
+            s.engine_throttle_pos
+                .map_or_else(String::new, |x| x.to_string()),
         ])?;
     }
     wr.flush()?;
@@ -228,16 +236,18 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
     };
     let mut rd = csv::Reader::from_path(path).map_err(|e| err(e.to_string()))?;
     let header = rd.headers().map_err(|e| err(e.to_string()))?.clone();
-    let idx: Vec<usize> = COLUMNS
+    // The engine channels are optional: a record made before them has the boom's alone, and
+    // calibration then says the drag needs them.
+    let idx: Vec<Option<usize>> = COLUMNS
         .iter()
-        .map(|c| {
-            header
-                .iter()
-                .position(|h| h == *c)
-                .ok_or_else(|| BoomError::MissingColumn {
-                    path: path.to_path_buf(),
-                    column: c,
-                })
+        .enumerate()
+        .map(|(i, c)| match header.iter().position(|h| h == *c) {
+            Some(at) => Ok(Some(at)),
+            None if i >= ENGINE_COLUMNS => Ok(None),
+            None => Err(BoomError::MissingColumn {
+                path: path.to_path_buf(),
+                column: c,
+            }),
         })
         .collect::<Result<_, _>>()?;
     let mut out = Vec::new();
@@ -247,7 +257,7 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
         let v: Vec<Option<f64>> = idx
             .iter()
             .map(|&i| {
-                let cell = rec.get(i).unwrap_or("").trim();
+                let cell = i.and_then(|i| rec.get(i)).unwrap_or("").trim();
                 (!cell.is_empty()).then(|| cell.parse::<f64>()).transpose()
             })
             .collect::<Result<_, _>>()
@@ -265,7 +275,7 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
             beta_deg: need(2)?,
             tas_mps: need(3)?,
             engine_n2_pct: v.get(4).copied().flatten(),
-            engine_throttle_pos: need(5)?,
+            engine_throttle_pos: v.get(5).copied().flatten(),
         });
     }
     Ok(out)
@@ -389,11 +399,40 @@ mod tests {
                 .step_by(2)
                 .all(|s| s.engine_n2_pct.is_none())
         );
-        assert!(a.iter().all(|s| s.engine_throttle_pos == 0.8));
+        assert!(a.iter().all(|s| s.engine_throttle_pos == Some(0.8)));
+        // Without the engine state at every sample, no engine channel.
+        assert!(
+            without_engine
+                .iter()
+                .all(|s| s.engine_n2_pct.is_none() && s.engine_throttle_pos.is_none())
+        );
         assert_ne!(a, record(&f, &cfg, 8));
         let dir = std::env::temp_dir().join(format!("boom-{}.csv", std::process::id()));
         write_csv(std::fs::File::create(&dir).unwrap(), &a).unwrap();
         assert_eq!(read_csv(&dir).unwrap(), a);
+        // A record made before the engine channels reads, without them; a boom column is needed.
+        std::fs::write(
+            &dir,
+            "time_s,boom_alpha_deg,boom_beta_deg,boom_tas_mps\n0.05,2.5,0.1,150\n",
+        )
+        .unwrap();
+        let old = read_csv(&dir).unwrap();
+        assert_eq!(
+            (
+                old[0].tas_mps,
+                old[0].engine_n2_pct,
+                old[0].engine_throttle_pos
+            ),
+            (150.0, None, None)
+        );
+        std::fs::write(&dir, "time_s,boom_alpha_deg,boom_beta_deg\n0.05,2.5,0.1\n").unwrap();
+        assert!(matches!(
+            read_csv(&dir),
+            Err(BoomError::MissingColumn {
+                column: "boom_tas_mps",
+                ..
+            })
+        ));
         let _ = std::fs::remove_file(dir);
     }
 }

@@ -226,6 +226,7 @@ mod tests {
         let (planned, full) = (fly(read_plan), fly(|_| ReadPlan::every_step(at::COUNT)));
         assert_eq!(planned.samples.len(), 600);
         assert_eq!(planned.cut, full.cut);
+        assert_eq!(planned.engine, full.engine);
         for (k, (p, f)) in planned.samples.iter().zip(&full.samples).enumerate() {
             assert_eq!(p.time_s.to_bits(), f.time_s.to_bits(), "sample {k}");
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();

@@ -209,7 +209,13 @@ fn parity(
                 let ours = e.thrust_lbf(g(&n2), g(&throttle), g("velocities/mach"), g(&alt));
                 ours.map_or(f64::NAN, |t| (f64::from(t) - s[&thrust]).abs())
             })
-            .fold(0.0f64, |w, x| if x.is_nan() { x } else { w.max(x) });
+            .fold(0.0f64, |w, x| {
+                if w.is_nan() || x.is_nan() {
+                    f64::NAN
+                } else {
+                    w.max(x)
+                }
+            });
         let scale = f64::from(e.mil_thrust_lbf);
         println!(
             "{aircraft} engine {i} thrust            max |err| {err:9.3e} lbf  err/military {:9.3e}",

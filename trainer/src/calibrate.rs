@@ -1,5 +1,6 @@
 //! Flight-test calibration of the aircraft model: from what a flight-test aircraft records (the
-//! production sensors of every frame and the nose boom's vanes and pitot-static, `NAME.boom.csv`),
+//! production sensors of every frame, the nose boom's vanes and pitot-static and the engine's N2
+//! and throttle, `NAME.boom.csv`),
 //! never from simulator truth, identify how the real aircraft's forces and moments differ from the
 //! model's.
 //!
@@ -12,7 +13,7 @@
 //!    them.
 //! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
 //!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
-//!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + k_D·f_y,drag + b_y` and
+//!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + f_y,drag + b_y` and
 //!    `f_z = k_L·f_z,lift + k_D·f_z,drag + k_β·f_z,sideslip + k_Y·f_z,surfaces + b_z`, each model
 //!    part computed from the wind-axis coefficients, the constants b taking the accelerometers' bias
 //!    and misalignment. k_L (lift) is observable in the normal force of quasi-steady frames. The
@@ -30,7 +31,7 @@
 //!    `C_l = k_roll·C_l,model + a_l·Y/(q̄Sb) + b_l`, `C_n` alike, the side force's arms a fitted
 //!    beside (the model's moments are about the aerodynamic reference point, the gyros turn about
 //!    the unknown CG). A moment scale joins the calibrated aircraft only when it differs from 1 by
-//!    [`MOMENT_SIGNIFICANCE`]·1σ or more.
+//!    [`SCALE_SIGNIFICANCE`]·1σ or more.
 //!
 //! 4. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
@@ -70,10 +71,10 @@ const MAX_ALPHA_DEG: f64 = 25.0;
 /// knot is identified when at least [`MIN_STALL_FRAMES`] quasi-steady frames lie nearer to it
 /// than to its neighbours, and every knot before it is.
 pub const STALL_KNOTS_DEG: [f64; 5] = [10.0, 13.0, 16.0, 19.0, 22.0];
-/// At high α the drag's body-z share, D·sin α, reads as lift: a stall knot's 1σ includes the
-/// drag scale's 1σ times the drag's normal force there; where drag is not identified (no engine
-/// deck or N2 record to tell it from the thrust) this, the drag error a wind-tunnel model carries
-/// (docs/calibration.md).
+/// At high α the drag's body-z share, D·sin α, reads as lift: a stall knot's 1σ includes this
+/// share of the drag's normal force there, the drag error a wind-tunnel model carries beyond what
+/// the drag fit sees (it reads the frames below the first knot; docs/calibration.md), and the
+/// drag scale's 1σ where it is identified.
 const DRAG_PRIOR: f64 = 0.10;
 /// The drag fit reads the quasi-steady frames below the first stall knot, where the lift along
 /// body x is the lift fit's (no stall scale).
@@ -97,7 +98,7 @@ fn identified_drag(
     k_y: f64,
     lift: &Fit,
 ) -> (Option<Fit>, Option<String>) {
-    let with_thrust = all.iter().filter(|r| r.thrust_x.is_some()).count();
+    let with_thrust = all.iter().filter(|r| r.thrust_accel_x.is_some()).count();
     let why = if ENGINE.is_none() {
         "the model's engine is not a deck the evaluator reads (its tables' `ENGINE` says why), so the thrust along body x is unknown".to_string()
     } else if with_thrust == 0 {
@@ -156,9 +157,9 @@ pub struct Calibration {
     pub side: Fit,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
-    /// Axial specific force less the thrust's, m/s²: k_D (drag scale) (`None`: not identified,
-    /// [`Calibration::drag_why`] says why).
-    pub drag: Option<Fit>,
+    /// Axial specific force, m/s²: k_D (drag scale) and k_T (the engine deck's thrust scale)
+    /// (`None`: not identified, [`Calibration::drag_why`] says why).
+    pub axial: Option<Fit>,
     /// Why the drag is not identified (`None` when it is).
     pub drag_why: Option<String>,
     /// Roll and yaw moment coefficients: k_roll, k_yaw, the side force's arms (`None`: not
@@ -236,11 +237,11 @@ impl Scales {
 /// on the development variants, is set by the three flights' scatter, and its fit leans on the
 /// boom's β noise where the side force differs from the model's: a scale written from that alone
 /// would move a moment the flight test did not show wrong (docs/calibration.md).
-pub const MOMENT_SIGNIFICANCE: f64 = 2.0;
+pub const SCALE_SIGNIFICANCE: f64 = 2.0;
 
 impl Scales {
     /// The roll and yaw moment scales the calibrated aircraft carries: each identified one that
-    /// differs from 1 by at least [`MOMENT_SIGNIFICANCE`]·1σ; `None` keeps the model's.
+    /// differs from 1 by at least [`SCALE_SIGNIFICANCE`]·1σ; `None` keeps the model's.
     pub fn applied_moments(&self) -> [Option<f64>; 2] {
         [self.roll, self.yaw].map(significant)
     }
@@ -252,9 +253,9 @@ impl Scales {
     }
 }
 
-/// `e`'s value when it differs from 1 by at least [`MOMENT_SIGNIFICANCE`]·1σ.
+/// `e`'s value when it differs from 1 by at least [`SCALE_SIGNIFICANCE`]·1σ.
 fn significant(e: Option<Estimate>) -> Option<f64> {
-    e.filter(|e| (e.value - 1.0).abs() >= MOMENT_SIGNIFICANCE * e.std_error)
+    e.filter(|e| (e.value - 1.0).abs() >= SCALE_SIGNIFICANCE * e.std_error)
         .map(|e| e.value)
 }
 
@@ -271,7 +272,7 @@ pub fn moments_line(r: &Report) -> String {
             e.value, e.std_error
         ),
         (Some(e), None) => format!(
-            "{what} moment scale {:.4} ± {:.4} (within {MOMENT_SIGNIFICANCE}σ of 1: the model's kept)",
+            "{what} moment scale {:.4} ± {:.4} (within {SCALE_SIGNIFICANCE}σ of 1: the model's kept)",
             e.value, e.std_error
         ),
     };
@@ -521,7 +522,10 @@ fn rows(
             boom_alpha: b.alpha_deg,
             boom_beta: b.beta_deg,
             boom_tas: b.tas_mps,
-            engine: b.engine_n2_pct.map(|n2| [n2, b.engine_throttle_pos]),
+            engine: b
+                .engine_n2_pct
+                .zip(b.engine_throttle_pos)
+                .map(|(n2, t)| [n2, t]),
             inp,
             f_cg: [f.x, f.y, f.z].map(f64::from),
         });
@@ -662,7 +666,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             steady,
             rolling,
             parts,
-            thrust_x: thrust_x(r, mach),
+            thrust_accel_x: thrust_accel_x(r, mach),
             f_cg: r.f_cg,
         });
     }
@@ -701,7 +705,9 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         let first = lift_at(1.0)?;
         let (drag, why) = identified_drag(&all_eq, k_b, k_y, &first);
         let lift = lift_at(drag.as_ref().map_or(1.0, |d| d.get("k_drag")))?;
-        let drag = drag.and_then(|_| drag_fit(&all_eq, k_b, k_y, &lift));
+        // With the lift at k_D the frames are the same: the refit stands where the first did
+        // (the first is kept should it not).
+        let drag = drag.map(|first| drag_fit(&all_eq, k_b, k_y, &lift).unwrap_or(first));
         (lift, drag, why)
     };
     let k_d = drag.as_ref().map_or(1.0, |d| d.get("k_drag"));
@@ -836,7 +842,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         boom_tas,
         side,
         lift,
-        drag,
+        axial: drag,
         drag_why,
         moments,
         moments_why,
@@ -952,14 +958,14 @@ struct EqRow {
     parts: Parts,
     /// The engines' thrust over the mass, m/s² along body x, from the engine deck at the recorded
     /// N2 and throttle (`None`: no deck, or no N2 recorded).
-    thrust_x: Option<f64>,
+    thrust_accel_x: Option<f64>,
     f_cg: [f64; 3],
 }
 
-/// The thrust's specific force along body x of a row at Mach `mach` (see [`EqRow::thrust_x`]):
+/// The thrust's specific force along body x of a row at Mach `mach` (see [`EqRow::thrust_accel_x`]):
 /// every engine at engine 0's recorded N2 and throttle, the altitude as the density altitude
 /// (JSBSim's standard atmosphere: they are the same).
-fn thrust_x(r: &Row, mach: f64) -> Option<f64> {
+fn thrust_accel_x(r: &Row, mach: f64) -> Option<f64> {
     let ([n2, throttle], engine) = r.engine.zip(ENGINE)?;
     let alt_ft = f64::from(r.inp.alt_m) / FT_TO_M;
     let lbf = engine.thrust_lbf(n2 as f32, throttle as f32, mach as f32, alt_ft as f32)?;
@@ -985,7 +991,7 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
     let rows: Vec<(&EqRow, f64)> = all
         .iter()
         .filter(|r| r.steady && r.alpha_deg < MAX_DRAG_ALPHA_DEG)
-        .filter_map(|r| Some((*r, r.thrust_x?)))
+        .filter_map(|r| Some((*r, r.thrust_accel_x?)))
         .collect();
     fn p(r: &EqRow) -> &Parts {
         &r.parts
@@ -1013,13 +1019,14 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 
 /// The side-force fit over the rolling frames, then the lift fit over the quasi-steady ones with
 /// the side force at its scales:
-/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + b_y`,
-/// `f_z − k_β·sideslip_z − k_Y·surfaces_z − drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
+/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + b_y` (the model's drag: its lateral share,
+/// sin β of it, is small, and k_D comes later),
+/// `f_z − k_β·sideslip_z − k_Y·surfaces_z − k_D·drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
 /// In quasi-steady flight the surfaces' side force is a fixed share of the sideslip terms' (the
 /// rudder and aileron hold the sideslip; −0.32 on JSBSim's F-16 card), so those frames tell only
 /// one combination of k_β and k_Y; in a roll the aileron and roll-rate terms move on their own.
-/// Drag is not identified (thrust along x is unknown): its part is held at the model's. Each force
-/// equation carries a constant: the accelerometer's bias and misalignment (a milliradian moves
+/// The drag enters at the model's until [`drag_fit`] has k_D. Each force equation carries a
+/// constant: the accelerometer's bias and misalignment (a milliradian moves
 /// 0.01 m/s² of the normal force into y) would otherwise bias the scale. The lift offset ΔC_L is
 /// told apart from that constant by dynamic pressure (the test points span 3:1 in it), and from
 /// k_L because in quasi-steady flight the lift carries the weight at every speed while q varies.
@@ -1286,8 +1293,8 @@ pub struct Report {
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
     /// `None`: the model's).
     pub applied_moments: [Option<f64>; 2],
-    /// [`MOMENT_SIGNIFICANCE`]: how many 1σ from 1 a moment or thrust scale must be to be carried.
-    pub moment_significance: f64,
+    /// [`SCALE_SIGNIFICANCE`]: how many 1σ from 1 a moment or thrust scale must be to be carried.
+    pub scale_significance: f64,
     /// The thrust scale `aircraft.toml` carries ([`Scales::applied_thrust`]; `None`: the deck's).
     pub applied_thrust: Option<f64>,
     pub flight_test: Calibration,
@@ -1316,9 +1323,12 @@ impl Report {
                 ..flight_test.scales
             },
         };
-        // The drag the flight test's lift reads at high α: its identified scale's 1σ, or where it
-        // is not identified the prior.
-        let drag_sigma = scales.drag.map_or(DRAG_PRIOR, |d| d.std_error);
+        // The drag the flight test's lift reads at high α: k_D is fitted below the first knot,
+        // and the drag's rise toward the stall is not observed, so the prior stays, with k_D's
+        // own 1σ beside it.
+        let drag_sigma = scales
+            .drag
+            .map_or(DRAG_PRIOR, |d| d.std_error.hypot(DRAG_PRIOR));
         for (s, share) in scales.stall.iter_mut().zip(flight_test.stall_drag_share) {
             if let Some(e) = s {
                 e.std_error = e.std_error.hypot(drag_sigma * share);
@@ -1327,7 +1337,7 @@ impl Report {
         Report {
             applied_moments: scales.applied_moments(),
             applied_thrust: scales.applied_thrust(),
-            moment_significance: MOMENT_SIGNIFICANCE,
+            scale_significance: SCALE_SIGNIFICANCE,
             scales,
             flight_test,
             model_card,
@@ -1341,29 +1351,31 @@ impl Report {
     /// Why the calibrated aircraft carries no identified drag (`None`: identified, over the model
     /// card's).
     pub fn drag_why(&self) -> Option<String> {
-        if let Some(why) = &self.flight_test.drag_why {
-            return Some(why.clone());
-        }
-        match &self.model_card {
-            None => None,
-            Some(m) => m
-                .drag_why
-                .as_ref()
-                .map(|why| format!("the model card: {why}")),
-        }
+        self.why_not(|c| &c.drag_why, None)
     }
 
     /// Why the calibrated aircraft carries no identified moment (`None`: the moments are
     /// identified, over the model card's).
     pub fn moments_why(&self) -> Option<String> {
-        if let Some(why) = &self.flight_test.moments_why {
-            return Some(why.clone());
+        self.why_not(
+            |c| &c.moments_why,
+            Some("without the model card (--model-flight-test) the moment scales carry the empty inertia and the gyros' filter"),
+        )
+    }
+
+    /// The flight test's reason (`why` of a [`Calibration`]) for leaving a part out, else the
+    /// model card's, else `without_card` when there is no model card.
+    fn why_not(
+        &self,
+        why: fn(&Calibration) -> &Option<String>,
+        without_card: Option<&str>,
+    ) -> Option<String> {
+        if let Some(w) = why(&self.flight_test) {
+            return Some(w.clone());
         }
         match &self.model_card {
-            None => Some(
-                "without the model card (--model-flight-test) the moment scales carry the empty inertia and the gyros' filter".into(),
-            ),
-            Some(m) => m.moments_why.as_ref().map(|why| format!("the model card: {why}")),
+            None => without_card.map(str::to_string),
+            Some(m) => why(m).as_ref().map(|w| format!("the model card: {w}")),
         }
     }
 }
@@ -1411,7 +1423,7 @@ fn moments_markdown(r: &Report) -> String {
     let applied = r.applied_moments;
     let cell = |s: Option<Estimate>, a: Option<f64>| match a {
         Some(k) => format!("**{k:.4}** (applied)"),
-        None => format!("1 (kept: {} is within {MOMENT_SIGNIFICANCE}σ of 1)", e(s)),
+        None => format!("1 (kept: {} is within {SCALE_SIGNIFICANCE}σ of 1)", e(s)),
     };
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
@@ -1424,7 +1436,7 @@ fn moments_markdown(r: &Report) -> String {
          the ROLL and YAW axes at the corrected boom's air data. The side force's moment arm (the \
          aerodynamic reference point's height above the CG in roll, its distance ahead of the CG in \
          yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale; the scale is written into the \
-         calibrated aircraft only when it differs from 1 by {MOMENT_SIGNIFICANCE}σ or more.\n"
+         calibrated aircraft only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more.\n"
     ));
     m
 }
@@ -1483,9 +1495,12 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     m.push_str(&format!(
         "\nThe calibrated aircraft's 1σ at each knot includes {:.1} % of the drag's normal force there \
          (D·sin α, which reads as lift: {}; {}).\n",
-        100.0 * r.scales.drag.map_or(DRAG_PRIOR, |d| d.std_error),
+        100.0
+            * r.scales
+                .drag
+                .map_or(DRAG_PRIOR, |d| d.std_error.hypot(DRAG_PRIOR)),
         if r.scales.drag.is_some() {
-            "the drag scale's 1σ"
+            "the prior error of a wind-tunnel drag above the frames the drag fit reads, with the drag scale's 1σ"
         } else {
             "drag is not identified, the prior error of a wind-tunnel drag"
         },
@@ -1554,7 +1569,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         ("normal specific force, m/s²", Some(&c.lift)),
         (
             "axial specific force less the thrust's, m/s²",
-            c.drag.as_ref(),
+            c.axial.as_ref(),
         ),
         ("roll moment coefficient", moments.map(|[r, _]| r)),
         ("yaw moment coefficient", moments.map(|[_, y]| y)),
@@ -1593,7 +1608,7 @@ pub fn drag_line(r: &Report) -> String {
             if r.applied_thrust.is_some() {
                 "applied".to_string()
             } else {
-                format!("within {MOMENT_SIGNIFICANCE}σ of 1: the deck's kept")
+                format!("within {SCALE_SIGNIFICANCE}σ of 1: the deck's kept")
             }
         ),
         (_, _, why) => format!(
@@ -1639,7 +1654,7 @@ fn drag_markdown(r: &Report) -> String {
         match r.applied_thrust {
             Some(k) => format!("**{k:.4}** (applied)"),
             None => format!(
-                "1 (kept: {} is within {MOMENT_SIGNIFICANCE}σ of 1)",
+                "1 (kept: {} is within {SCALE_SIGNIFICANCE}σ of 1)",
                 e(r.scales.thrust)
             ),
         }
@@ -1651,7 +1666,7 @@ fn drag_markdown(r: &Report) -> String {
          identified scales, the axial force is fitted as k_D·drag + k_T·T/m + b: in steady flight \
          thrust and drag balance, and the card's throttle steps (thrust) and push-overs and \
          pull-ups (drag) move them apart. The engine's thrust scale joins the calibrated aircraft \
-         only when it differs from 1 by {MOMENT_SIGNIFICANCE}σ or more.\n"
+         only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more.\n"
     ));
     m
 }
@@ -1730,7 +1745,7 @@ mod tests {
                 steady,
                 rolling: !steady,
                 parts,
-                thrust_x: Some(thrust),
+                thrust_accel_x: Some(thrust),
                 f_cg: [f_x, f_y, f_z],
             }
         };
@@ -1766,7 +1781,7 @@ mod tests {
         // Without a recorded thrust there is no drag fit.
         let no_thrust: Vec<EqRow> = (0..400)
             .map(|k| EqRow {
-                thrust_x: None,
+                thrust_accel_x: None,
                 ..row(k, true)
             })
             .collect();

@@ -37,6 +37,10 @@ impl<const R: usize, const C: usize> EngineLookup for EngineTable<R, C> {
     }
 }
 
+/// How far below idle (N2, %) a recorded N2 may read and still be a running engine's: the gauge's
+/// zero shift and noise.
+pub const N2_BELOW_IDLE_PCT: f32 = 1.0;
+
 /// An aircraft's engines: `count` alike, each a JSBSim `<turbine_engine>` with a direct thruster
 /// along body x.
 #[derive(Clone, Copy)]
@@ -59,7 +63,9 @@ pub struct Engine<'a> {
 impl Engine<'_> {
     /// One engine's thrust, lbf, at core speed `n2_pct`, throttle position `throttle_pos` (above 1
     /// the afterburner's share), Mach and density altitude: `FGTurbine::Run` in its running phase,
-    /// without bleed or water injection. `None` if an input is not finite.
+    /// without bleed or water injection (`scripts/extract-aero` refuses a deck with either).
+    /// `None` if an input is not finite, or N2 is more than [`N2_BELOW_IDLE_PCT`] below idle: a
+    /// running engine never is, and a starting, windmilling or stopped one has no such thrust.
     pub fn thrust_lbf(
         &self,
         n2_pct: f32,
@@ -67,7 +73,10 @@ impl Engine<'_> {
         mach: f32,
         density_altitude_ft: f32,
     ) -> Option<f32> {
-        if !(n2_pct.is_finite() && throttle_pos.is_finite()) {
+        let running = n2_pct >= self.idle_n2_pct - N2_BELOW_IDLE_PCT;
+        if !(n2_pct.is_finite() && throttle_pos.is_finite() && running)
+            || self.max_n2_pct <= self.idle_n2_pct
+        {
             return None;
         }
         let idle = self.mil_thrust_lbf * self.idle.at(mach, density_altitude_ft)?;
@@ -129,6 +138,12 @@ mod tests {
         assert_eq!(e.thrust_lbf(100.0, 1.5, 0.0, 0.0), Some(12_500.0));
         assert_eq!(e.thrust_lbf(100.0, 2.5, 0.0, 0.0), Some(15_000.0));
         assert_eq!(e.thrust_lbf(f32::NAN, 1.0, 0.0, 0.0), None);
+        // Below idle by more than the gauge's error: not a running engine.
+        assert_eq!(
+            e.thrust_lbf(59.5, 0.0, 0.0, 0.0),
+            Some(1_000.0 + 9_000.0 * (0.5f32 / 40.0).powi(2))
+        );
+        assert_eq!(e.thrust_lbf(58.9, 0.0, 0.0, 0.0), None);
         let dry = Engine { aug: None, ..e };
         assert_eq!(dry.thrust_lbf(100.0, 1.5, 0.0, 0.0), Some(10_000.0));
     }
