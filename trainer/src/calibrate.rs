@@ -232,6 +232,52 @@ impl Scales {
     }
 }
 
+impl Scales {
+    /// Several model cards' scales as one: each the cards' mean, its 1σ raised to their spread
+    /// (their standard deviation: a flight test's own draw of the sensor errors lies as far from
+    /// the mean as one card's does). One card's are its own; `None` without a card.
+    pub fn pooled(cards: &[Scales]) -> Option<Scales> {
+        let pool = |es: Vec<Estimate>| -> Estimate {
+            let n = es.len() as f64;
+            match es.as_slice() {
+                [one] => *one,
+                _ => {
+                    let mean = es.iter().map(|e| e.value).sum::<f64>() / n;
+                    let sd = (es.iter().map(|e| (e.value - mean).powi(2)).sum::<f64>() / (n - 1.0))
+                        .sqrt();
+                    let sigma = es.iter().map(|e| e.std_error).sum::<f64>() / n;
+                    Estimate {
+                        value: mean,
+                        std_error: sigma.max(sd),
+                    }
+                }
+            }
+        };
+        let one = |f: fn(&Scales) -> Estimate| pool(cards.iter().map(f).collect());
+        let opt = |f: fn(&Scales) -> Option<Estimate>| {
+            cards.iter().map(f).collect::<Option<Vec<_>>>().map(pool)
+        };
+        (!cards.is_empty()).then(|| Scales {
+            lift: one(|s| s.lift),
+            flap: one(|s| s.flap),
+            offset: one(|s| s.offset),
+            sideslip: one(|s| s.sideslip),
+            side_controls: one(|s| s.side_controls),
+            drag: opt(|s| s.drag),
+            thrust: opt(|s| s.thrust),
+            roll: opt(|s| s.roll),
+            yaw: opt(|s| s.yaw),
+            stall: core::array::from_fn(|j| {
+                cards
+                    .iter()
+                    .map(|c| c.stall.get(j).copied().flatten())
+                    .collect::<Option<Vec<_>>>()
+                    .map(pool)
+            }),
+        })
+    }
+}
+
 /// A moment or thrust scale joins the calibrated aircraft only when it differs from the model's 1
 /// by at least this many of its 1σ; otherwise the model's moment (engine deck) is kept. The yaw scale's 1σ, 0.05-0.10
 /// on the development variants, is set by the three flights' scatter, and its fit leans on the
@@ -1298,8 +1344,12 @@ pub struct Report {
     /// The thrust scale `aircraft.toml` carries ([`Scales::applied_thrust`]; `None`: the deck's).
     pub applied_thrust: Option<f64>,
     pub flight_test: Calibration,
-    /// The same card flown on the model: the identification's own bias.
+    /// The same card flown on the model: the identification's own bias. With several cards
+    /// (flown on other sensor seeds) its scales are theirs pooled ([`Scales::pooled`]), the rest
+    /// the first card's.
     pub model_card: Option<Calibration>,
+    /// How many model cards were pooled.
+    pub model_cards: usize,
     /// The model's lift terms the flap-lift scale applies to (JSBSim function names).
     pub flap_terms: Vec<String>,
     /// The lift term the offset joins.
@@ -1311,7 +1361,14 @@ pub struct Report {
 }
 
 impl Report {
-    pub fn new(flight_test: Calibration, model_card: Option<Calibration>) -> Report {
+    pub fn new(flight_test: Calibration, model_cards: Vec<Calibration>) -> Report {
+        let cards = model_cards.len();
+        let pooled = Scales::pooled(&model_cards.iter().map(|c| c.scales).collect::<Vec<_>>());
+        let model_card = model_cards
+            .into_iter()
+            .next()
+            .zip(pooled)
+            .map(|(first, scales)| Calibration { scales, ..first });
         let mut scales = match &model_card {
             Some(m) => flight_test.scales.over(&m.scales),
             // The moment scales mean something only over the model card's: alone they carry the
@@ -1341,6 +1398,7 @@ impl Report {
             scales,
             flight_test,
             model_card,
+            model_cards: cards,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
             sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
@@ -1468,6 +1526,14 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
+    if r.model_cards > 1 {
+        m.push_str(&format!(
+            "\nThe model card's rows (here and below) pool {} cards flown on consecutive sensor \
+             seeds, the first the flight test's: their mean, the 1σ raised to their spread; its \
+             flight-by-flight figures are the first card's.\n",
+            r.model_cards
+        ));
+    }
     m.push_str(&format!(
         "\nThe lift over α, over the lift scale (1 up to {}°; –: the card did not reach the knot):\n\n| | {} |\n|---|{}\n",
         STALL_KNOTS_DEG[0],
@@ -1904,6 +1970,25 @@ mod tests {
         assert_eq!(
             scales(None, e(0.8, 0.05)).applied_moments(),
             [None, Some(0.8)]
+        );
+        // Model cards pooled: one is itself; two, their mean with the 1σ raised to their spread.
+        let a = scales(e(1.0, 0.01), e(0.9, 0.05));
+        let b = scales(e(1.1, 0.03), e(0.9, 0.01));
+        assert_eq!(Scales::pooled(&[a]), Some(a));
+        assert_eq!(Scales::pooled(&[]), None);
+        let p = Scales::pooled(&[a, b]).unwrap();
+        let roll = p.roll.unwrap();
+        assert!((roll.value - 1.05).abs() < 1e-12);
+        assert!((roll.std_error - 0.1 / 2f64.sqrt()).abs() < 1e-12);
+        // No spread: the cards' mean 1σ.
+        let yaw = p.yaw.unwrap();
+        assert!(yaw.value == 0.9 && (yaw.std_error - 0.03).abs() < 1e-12);
+        // A scale one card lacks is not pooled.
+        assert_eq!(
+            Scales::pooled(&[a, scales(None, e(0.9, 0.01))])
+                .unwrap()
+                .roll,
+            None
         );
         // The engine's thrust scale by the same test.
         assert_eq!(scales(None, e(1.03, 0.02)).applied_thrust(), None);

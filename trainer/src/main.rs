@@ -438,8 +438,10 @@ enum Cmd {
         /// The same test card flown in simulation on the model the estimator knows (`hil-sim
         /// generate --preset flight-test` with the flight test's seed): the identification's own
         /// bias on the model's aircraft, divided out of the scales. Its sensors and boom only.
+        /// Repeat it for the card flown on other sensor seeds: the scales divided out are their
+        /// mean, and their spread joins the 1σ.
         #[arg(long, value_name = "DIR")]
-        model_flight_test: Option<PathBuf>,
+        model_flight_test: Vec<PathBuf>,
         /// Output directory.
         #[arg(long, value_name = "DIR", default_value = "out/calibration")]
         out: PathBuf,
@@ -963,17 +965,18 @@ fn cmd_fit_sigma(
     Ok(())
 }
 
-fn cmd_calibrate(ft: &Path, model_ft: Option<&Path>, out: &Path, json: bool) -> Result<()> {
+fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Result<()> {
     let t0 = std::time::Instant::now();
     let c = trainer::calibrate::calibrate(ft)
         .with_context(|| format!("calibrating from {}", ft.display()))?;
-    let model_card = model_ft
+    let model_cards = model_ft
+        .iter()
         .map(|d| {
             trainer::calibrate::calibrate(d)
                 .with_context(|| format!("identifying the model card {}", d.display()))
         })
-        .transpose()?;
-    let r = trainer::calibrate::Report::new(c, model_card);
+        .collect::<Result<Vec<_>>>()?;
+    let r = trainer::calibrate::Report::new(c, model_cards);
     let spec = trainer::calibrate::spec_toml(&r, ft);
     let md =
         trainer::calibrate::markdown(&r, &command_line(), &machine(), t0.elapsed().as_secs_f64());
@@ -1834,7 +1837,7 @@ fn run() -> Result<()> {
             model_flight_test,
             out,
             json,
-        } => cmd_calibrate(flight_test, model_flight_test.as_deref(), out, *json),
+        } => cmd_calibrate(flight_test, model_flight_test, out, *json),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Bars { spec, out } => cmd_bars(spec, out),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
