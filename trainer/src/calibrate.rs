@@ -238,19 +238,15 @@ impl Scales {
     /// the mean as one card's does). One card's are its own; `None` without a card.
     pub fn pooled(cards: &[Scales]) -> Option<Scales> {
         let pool = |es: Vec<Estimate>| -> Estimate {
-            let n = es.len() as f64;
-            match es.as_slice() {
-                [one] => *one,
-                _ => {
-                    let mean = es.iter().map(|e| e.value).sum::<f64>() / n;
-                    let sd = (es.iter().map(|e| (e.value - mean).powi(2)).sum::<f64>() / (n - 1.0))
-                        .sqrt();
-                    let sigma = es.iter().map(|e| e.std_error).sum::<f64>() / n;
-                    Estimate {
-                        value: mean,
-                        std_error: sigma.max(sd),
-                    }
-                }
+            let values: Vec<f64> = es.iter().map(|e| e.value).collect();
+            match mean_sd(&values) {
+                Some((mean, sd)) => Estimate {
+                    value: mean,
+                    std_error: (es.iter().map(|e| e.std_error).sum::<f64>() / es.len() as f64)
+                        .max(sd),
+                },
+                // One card: its own.
+                None => es.first().copied().unwrap_or_default(),
             }
         };
         let one = |f: fn(&Scales) -> Estimate| pool(cards.iter().map(f).collect());
@@ -404,15 +400,39 @@ fn with_scatter(fit: &Fit, name: &str, spread: &[f64]) -> Estimate {
 
 /// `e` with its 1σ raised to `spread`'s standard deviation over √n, when there are two or more.
 fn raised_to_scatter(e: Estimate, spread: &[f64]) -> Estimate {
-    let n = spread.len() as f64;
-    if spread.len() < 2 {
+    let Some((_, sd)) = mean_sd(spread) else {
         return e;
-    }
-    let mean = spread.iter().sum::<f64>() / n;
-    let sd = (spread.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    };
     Estimate {
         value: e.value,
-        std_error: e.std_error.max(sd / n.sqrt()),
+        std_error: e.std_error.max(sd / (spread.len() as f64).sqrt()),
+    }
+}
+
+/// The mean and the (sample) standard deviation of `v`; `None` with fewer than two values.
+fn mean_sd(v: &[f64]) -> Option<(f64, f64)> {
+    let n = v.len() as f64;
+    if v.len() < 2 {
+        return None;
+    }
+    let mean = v.iter().sum::<f64>() / n;
+    let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    Some((mean, sd))
+}
+
+/// An estimate as a table cell, `value ± 1σ` (– where there is none).
+fn cell(e: Option<Estimate>) -> String {
+    e.map_or("–".into(), |e| {
+        format!("{:.4} ± {:.4}", e.value, e.std_error)
+    })
+}
+
+/// What the calibrated aircraft carries of a scale that passes [`SCALE_SIGNIFICANCE`] (`applied`)
+/// or not (the model's 1), as a table cell.
+fn carried_cell(e: Option<Estimate>, applied: Option<f64>) -> String {
+    match applied {
+        Some(k) => format!("**{k:.4}** (applied)"),
+        None => format!("1 (kept: {} is within {SCALE_SIGNIFICANCE}σ of 1)", cell(e)),
     }
 }
 
@@ -1039,13 +1059,10 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
         .filter(|r| r.steady && r.alpha_deg < MAX_DRAG_ALPHA_DEG)
         .filter_map(|r| Some((*r, r.thrust_accel_x?)))
         .collect();
-    fn p(r: &EqRow) -> &Parts {
-        &r.parts
-    }
     least_squares(
         &["k_drag", "k_thrust", "bias_mps2"],
         &[
-            rows.iter().map(|(r, _)| p(r).drag[0]).collect(),
+            rows.iter().map(|(r, _)| r.parts.drag[0]).collect(),
             rows.iter().map(|(_, t)| *t).collect(),
             vec![1.0; rows.len()],
         ],
@@ -1053,11 +1070,11 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
             .iter()
             .map(|(r, _)| {
                 r.f_cg[0]
-                    - k_l * p(r).lift[0]
-                    - k_f * p(r).flap[0]
-                    - dcl * p(r).unit_lift[0]
-                    - k_b * p(r).sideslip[0]
-                    - k_y * p(r).side_rest[0]
+                    - k_l * r.parts.lift[0]
+                    - k_f * r.parts.flap[0]
+                    - dcl * r.parts.unit_lift[0]
+                    - k_b * r.parts.sideslip[0]
+                    - k_y * r.parts.side_rest[0]
             })
             .collect::<Vec<_>>(),
     )
@@ -1448,11 +1465,7 @@ fn moments_markdown(r: &Report) -> String {
             why.unwrap_or_default()
         );
     };
-    let e = |e: Option<Estimate>| {
-        e.map_or("–".into(), |e| {
-            format!("{:.4} ± {:.4}", e.value, e.std_error)
-        })
-    };
+    let e = cell;
     let arm = |f: &[Fit; 2]| {
         let a = |f: &Fit| {
             f.estimate("arm_m").map_or("–".into(), |e| {
@@ -1479,14 +1492,10 @@ fn moments_markdown(r: &Report) -> String {
         ));
     }
     let applied = r.applied_moments;
-    let cell = |s: Option<Estimate>, a: Option<f64>| match a {
-        Some(k) => format!("**{k:.4}** (applied)"),
-        None => format!("1 (kept: {} is within {SCALE_SIGNIFICANCE}σ of 1)", e(s)),
-    };
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
-        cell(r.scales.roll, applied[0]),
-        cell(r.scales.yaw, applied[1])
+        carried_cell(r.scales.roll, applied[0]),
+        carried_cell(r.scales.yaw, applied[1])
     ));
     m.push_str(&format!(
         "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
@@ -1507,7 +1516,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         "Command: `{command}`  \nMachine: {machine}; {seconds:.1} s. Flights: {}.\n\n",
         c.flights.join(", ")
     ));
-    let e = |e: &Estimate| format!("{:.4} ± {:.4}", e.value, e.std_error);
+    let e = |e: &Estimate| cell(Some(*e));
     let row = |what: &str, s: &Scales| {
         format!(
             "| {what} | {} | {} | {} | {} | {} |\n",
@@ -1693,11 +1702,7 @@ fn drag_markdown(r: &Report) -> String {
             r.drag_why().unwrap_or_default()
         );
     };
-    let e = |e: Option<Estimate>| {
-        e.map_or("–".into(), |e| {
-            format!("{:.4} ± {:.4}", e.value, e.std_error)
-        })
-    };
+    let e = cell;
     let mut m = String::from(
         "\n| drag and thrust (± 1σ) | drag scale | engine thrust scale |\n|---|---|---|\n",
     );
@@ -1717,13 +1722,7 @@ fn drag_markdown(r: &Report) -> String {
         "| **calibrated aircraft** (aircraft.toml) | **{:.4}** ± {:.4} | {} |\n",
         d.value,
         d.std_error,
-        match r.applied_thrust {
-            Some(k) => format!("**{k:.4}** (applied)"),
-            None => format!(
-                "1 (kept: {} is within {SCALE_SIGNIFICANCE}σ of 1)",
-                e(r.scales.thrust)
-            ),
-        }
+        carried_cell(r.scales.thrust, r.applied_thrust)
     ));
     m.push_str(&format!(
         "\nThe thrust T is the engine deck's (`aero::ENGINE`) at the recorded N2 and throttle \

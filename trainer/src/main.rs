@@ -424,13 +424,16 @@ enum Cmd {
         #[command(flatten)]
         action: SweepAction,
     },
-    /// Flight-test calibration: from a `flight-test` dataset's production sensors and nose boom
-    /// (never its truth columns), check the boom against the inertial data and identify the lift
-    /// scale, the flap-lift scale, a lift offset, the side force's two scales (its sideslip
-    /// terms', and its surface and rate terms', from the rolling frames) and the roll and yaw
-    /// moment scales (the gyros differentiated; carried when 2σ or more from 1, and only over the
-    /// model card) of the aircraft against the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant
-    /// spec of the calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
+    /// Flight-test calibration: from a `flight-test` dataset's production sensors, nose boom and
+    /// engine channels (never its truth columns), check the boom against the inertial data and
+    /// identify the lift scale, the flap-lift scale, a lift offset, the side force's two scales
+    /// (its sideslip terms', and its surface and rate terms', from the rolling frames), the drag
+    /// and the engine deck's thrust scales (the thrust carried when 2σ or more from 1) and the
+    /// roll and yaw moment scales (the gyros differentiated; carried when 2σ or more from 1, and
+    /// only over the model card) of the aircraft against the model the estimator knows (equation
+    /// error); writes calibration.json, calibration.md and aircraft.toml (a
+    /// scripts/airframe-variant spec of the calibrated aircraft) into --out. scripts/calibrate runs
+    /// it and builds the rest.
     Calibrate {
         /// The flight-test dataset (`hil-sim generate --preset flight-test`).
         #[arg(long, value_name = "DIR")]
