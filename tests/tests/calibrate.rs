@@ -1,6 +1,7 @@
 //! Flight-test calibration reads only what a flight-test aircraft records, and finds a variant's
 //! scales: a flight-test dataset flown on variant C (lift × 0.94, side force × 1.10), calibrated
-//! with and without its truth columns, against the same card flown on the model (JSBSim's F-16).
+//! with and without its truth columns, against the same card flown on the model (JSBSim's F-16)
+//! on four other sensor seeds. A model card on the flight test's seed is refused.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,14 +27,18 @@ fn ok(cmd: &mut Command) {
     );
 }
 
-fn calibration(ft: &Path, model: &Path, out: &Path) -> serde_json::Value {
-    ok(Command::new(bin("trainer"))
-        .args(["calibrate", "--flight-test"])
-        .arg(ft)
-        .arg("--model-flight-test")
-        .arg(model)
-        .arg("--out")
-        .arg(out));
+fn calibrate(ft: &Path, models: &[PathBuf], out: &Path) -> Command {
+    let mut cmd = Command::new(bin("trainer"));
+    cmd.args(["calibrate", "--flight-test"]).arg(ft);
+    for m in models {
+        cmd.arg("--model-flight-test").arg(m);
+    }
+    cmd.arg("--out").arg(out);
+    cmd
+}
+
+fn calibration(ft: &Path, models: &[PathBuf], out: &Path) -> serde_json::Value {
+    ok(&mut calibrate(ft, models, out));
     serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap()
 }
 
@@ -51,11 +56,38 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         .arg(&ft)
         .arg("--aircraft-dir")
         .arg(&aircraft));
-    let model = dir.join("model-ft");
-    ok(Command::new(bin("hil-sim"))
-        .args(["generate", "--preset", "flight-test", "--out"])
-        .arg(&model));
-    let with_truth = calibration(&ft, &model, &dir.join("cal"));
+    let models: Vec<PathBuf> = (2..=5)
+        .map(|seed| {
+            let model = dir.join(format!("model-ft-seed{seed}"));
+            ok(Command::new(bin("hil-sim"))
+                .args(["generate", "--preset", "flight-test", "--seed"])
+                .arg(seed.to_string())
+                .arg("--out")
+                .arg(&model));
+            model
+        })
+        .collect();
+    let with_truth = calibration(&ft, &models, &dir.join("cal"));
+    assert_eq!(
+        with_truth["model_card_seeds"],
+        serde_json::json!([2, 3, 4, 5])
+    );
+
+    // A model card that shares the flight test's sensor draws (here the flight test itself, seed
+    // 1), or another card's, is refused, and nothing is written.
+    for (cards, what) in [
+        (vec![ft.clone()], "the flight test's"),
+        (vec![models[0].clone(), models[0].clone()], "too;"),
+    ] {
+        let out = dir.join("cal-refused");
+        let o = calibrate(&ft, &cards, &out).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("sensor seed") && err.contains(what),
+            "{cards:?}: {err}"
+        );
+        assert!(!out.join("calibration.json").exists());
+    }
 
     // The same dataset with every truth column deleted from every flight CSV.
     let stripped = dir.join("ft-no-truth");
@@ -84,18 +116,19 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         }
         std::fs::write(stripped.join(&name), out).unwrap();
     }
-    let without = calibration(&stripped, &model, &dir.join("cal-no-truth"));
+    let without = calibration(&stripped, &models, &dir.join("cal-no-truth"));
     assert_eq!(with_truth, without, "the calibration read a truth column");
 
     // Within 2 % (lift) and 5 % (side force, the flap terms, drag) of the truth, and the error
     // inside 2σ: C scales the whole lift axis, flaps included, the whole side axis, its sideslip
     // terms as much as its surface and rate terms, and the drag axis (its thrust is the model's),
-    // and has no lift offset.
+    // and has no lift offset. The surface and rate terms' scale moves with the EGI's heading
+    // error of the flight test's own draw (docs/calibration.md): its 1σ, not 5 %, bounds it.
     for (axis, truth, tolerance) in [
         ("lift", 0.94, 0.02),
         ("flap", 0.94, 0.05),
         ("sideslip", 1.10, 0.05),
-        ("side_controls", 1.10, 0.05),
+        ("side_controls", 1.10, 0.25),
         ("drag", 1.10, 0.05),
     ] {
         let e = &with_truth["scales"][axis];

@@ -147,6 +147,8 @@ pub struct Fit {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Calibration {
     pub flights: Vec<String>,
+    /// The dataset's sensor seed (`config.seed` of its manifest; `None`: not recorded).
+    pub sensor_seed: Option<u64>,
     /// Boom α: `kinematic = gain·boom + offset_deg_k` (deg; one offset per flight k).
     pub boom_alpha: Fit,
     pub boom_beta: Fit,
@@ -604,6 +606,43 @@ fn quasi_steady(r: &Row) -> bool {
     r.omega_dot <= MAX_OMEGA_DOT_RPS2 && r.angle_step <= MAX_ANGLE_STEP_DEG
 }
 
+/// Refuses model cards that share sensor draws with the flight test or with one another. A card
+/// flown on the flight test's sensor seed carries the same accelerometer, EGI, boom and N2 errors,
+/// and dividing by it would cancel errors a real flight test's model card cannot know; two cards
+/// on one seed are one card, and their spread would read 0. Datasets that record no seed are not
+/// compared.
+pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Result<()> {
+    let seed = |dir: &Path| -> Result<Option<u64>> {
+        Ok(hil_sim::dataset::Manifest::read(dir)?
+            .config
+            .get("seed")
+            .and_then(serde_json::Value::as_u64))
+    };
+    let mut seen = vec![(flight_test, seed(flight_test)?)];
+    for card in cards {
+        let s = seed(card)?;
+        if let Some((other, _)) = seen.iter().find(|(_, o)| s.is_some() && *o == s) {
+            let whose = if *other == flight_test {
+                "the flight test's: it would share its sensor errors, which a real flight test's \
+                 model card cannot"
+                    .to_string()
+            } else {
+                format!("that of the model card {} too", other.display())
+            };
+            return Err(Error::ModelCard {
+                card: card.clone(),
+                why: format!(
+                    "its sensor seed {} is {whose}; fly it on another seed (hil-sim generate \
+                     --preset flight-test --seed N)",
+                    s.unwrap_or_default()
+                ),
+            });
+        }
+        seen.push((card, s));
+    }
+    Ok(())
+}
+
 /// Runs the identification on the flights of a flight-test dataset.
 pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
@@ -901,6 +940,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         }),
     };
     Ok(Calibration {
+        sensor_seed: m.config.get("seed").and_then(serde_json::Value::as_u64),
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
         boom_alpha,
@@ -1367,6 +1407,8 @@ pub struct Report {
     pub model_card: Option<Calibration>,
     /// How many model cards were pooled.
     pub model_cards: usize,
+    /// Their sensor seeds, in the order given (each `None` where its manifest records none).
+    pub model_card_seeds: Vec<Option<u64>>,
     /// The model's lift terms the flap-lift scale applies to (JSBSim function names).
     pub flap_terms: Vec<String>,
     /// The lift term the offset joins.
@@ -1380,6 +1422,7 @@ pub struct Report {
 impl Report {
     pub fn new(flight_test: Calibration, model_cards: Vec<Calibration>) -> Report {
         let cards = model_cards.len();
+        let model_card_seeds = model_cards.iter().map(|c| c.sensor_seed).collect();
         let pooled = Scales::pooled(&model_cards.iter().map(|c| c.scales).collect::<Vec<_>>());
         let model_card = model_cards
             .into_iter()
@@ -1416,6 +1459,7 @@ impl Report {
             flight_test,
             model_card,
             model_cards: cards,
+            model_card_seeds,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
             sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
@@ -1536,11 +1580,19 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
     if r.model_cards > 1 {
+        let seeds: Vec<String> = r
+            .model_card_seeds
+            .iter()
+            .map(|s| s.map_or("?".into(), |s| s.to_string()))
+            .collect();
         m.push_str(&format!(
-            "\nThe model card's rows (here and below) pool {} cards flown on consecutive sensor \
-             seeds, the first the flight test's: their mean, the 1σ raised to their spread; its \
+            "\nThe model card's rows (here and below) pool {} cards flown on the sensor seeds {} \
+             (the flight test's: {}): their mean, the 1σ raised to their spread; its \
              flight-by-flight figures are the first card's.\n",
-            r.model_cards
+            r.model_cards,
+            seeds.join(", "),
+            c.sensor_seed
+                .map_or("not recorded".into(), |s| s.to_string()),
         ));
     }
     m.push_str(&format!(

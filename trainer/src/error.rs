@@ -15,6 +15,9 @@ pub enum Error {
     Dataset(#[from] hil_sim::dataset::DatasetError),
     #[error("dataset {0}: {1}")]
     Split(PathBuf, String),
+    /// A model card that cannot stand for the model in a flight-test calibration.
+    #[error("model card {card}: {why}")]
+    ModelCard { card: PathBuf, why: String },
     /// Sweep results that cannot be read or do not belong to the grid.
     #[error("sweep: {0}")]
     Sweep(String),
