@@ -52,7 +52,14 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         .arg(&aircraft));
     let ft = dir.join("ft");
     ok(Command::new(bin("hil-sim"))
-        .args(["generate", "--preset", "flight-test", "--out"])
+        .args([
+            "generate",
+            "--preset",
+            "flight-test",
+            "--seed",
+            "1",
+            "--out",
+        ])
         .arg(&ft)
         .arg("--aircraft-dir")
         .arg(&aircraft));
@@ -75,18 +82,31 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
 
     // A model card that shares the flight test's sensor draws (here the flight test itself, seed
     // 1), or another card's, is refused, and nothing is written.
+    let copy = dir.join("model-ft-seed2-copy");
+    std::fs::create_dir_all(&copy).unwrap();
+    for e in std::fs::read_dir(&models[0]).unwrap().flatten() {
+        std::fs::copy(e.path(), copy.join(e.file_name())).unwrap();
+    }
     for (cards, what) in [
-        (vec![ft.clone()], "the flight test's"),
-        (vec![models[0].clone(), models[0].clone()], "too;"),
+        (vec![ft.clone()], "sensor seed 1 is the flight test's"),
+        (
+            vec![models[0].clone(), copy],
+            "sensor seed 2 is that of the model card",
+        ),
+        (vec![models[0].clone(), models[0].clone()], "given twice"),
     ] {
         let out = dir.join("cal-refused");
         let o = calibrate(&ft, &cards, &out).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
-            !o.status.success() && err.contains("sensor seed") && err.contains(what),
+            !o.status.success() && err.contains(what),
             "{cards:?}: {err}"
         );
-        assert!(!out.join("calibration.json").exists());
+        assert!(
+            !out.exists(),
+            "a refused calibration wrote {}",
+            out.display()
+        );
     }
 
     // The same dataset with every truth column deleted from every flight CSV.

@@ -601,6 +601,9 @@ fn rows(
     out
 }
 
+/// The step of β by which the sideslip terms are differentiated, deg.
+const BETA_STEP_DEG: f64 = 0.05;
+
 /// A frame whose inputs change slowly enough for differently lagged signals to agree.
 fn quasi_steady(r: &Row) -> bool {
     r.omega_dot <= MAX_OMEGA_DOT_RPS2 && r.angle_step <= MAX_ANGLE_STEP_DEG
@@ -621,21 +624,29 @@ pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Re
     let mut seen = vec![(flight_test, seed(flight_test)?)];
     for card in cards {
         let s = seed(card)?;
-        if let Some((other, _)) = seen.iter().find(|(_, o)| s.is_some() && *o == s) {
-            let whose = if *other == flight_test {
-                "the flight test's: it would share its sensor errors, which a real flight test's \
-                 model card cannot"
-                    .to_string()
+        let clash = s.and_then(|s| {
+            let (other, _) = seen.iter().find(|(_, o)| *o == Some(s))?;
+            Some((s, *other))
+        });
+        if let Some((s, other)) = clash {
+            let why = if other == flight_test {
+                format!(
+                    "its sensor seed {s} is the flight test's: it would carry the same sensor \
+                     errors, which a real flight test's model card cannot know; fly it on a seed \
+                     other than {s} (hil-sim generate --preset flight-test --seed N)"
+                )
+            } else if other == card.as_path() {
+                "given twice: each model card counts once".to_string()
             } else {
-                format!("that of the model card {} too", other.display())
+                format!(
+                    "its sensor seed {s} is that of the model card {} too: one draw of the \
+                     sensor errors counts once; fly it on another seed",
+                    other.display()
+                )
             };
             return Err(Error::ModelCard {
                 card: card.clone(),
-                why: format!(
-                    "its sensor seed {} is {whose}; fly it on another seed (hil-sim generate \
-                     --preset flight-test --seed N)",
-                    s.unwrap_or_default()
-                ),
+                why,
             });
         }
         seen.push((card, s));
@@ -765,11 +776,18 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         let Some(parts) = force_parts(&r.inp, alpha, beta, tas, mach, rho) else {
             continue;
         };
+        let at = |d_deg: f64| force_parts(&r.inp, alpha, beta + d_deg.to_radians(), tas, mach, rho);
+        let Some((up, down)) = at(BETA_STEP_DEG).zip(at(-BETA_STEP_DEG)) else {
+            continue;
+        };
         eq.push(EqRow {
             flight: r.flight,
             alpha_deg: alpha.to_degrees(),
             steady,
             rolling,
+            sideslip_per_deg: core::array::from_fn(|i| {
+                (up.sideslip[i] - down.sideslip[i]) / (2.0 * BETA_STEP_DEG)
+            }),
             parts,
             thrust_accel_x: thrust_accel_x(r, mach),
             f_cg: r.f_cg,
@@ -1035,17 +1053,30 @@ pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> 
 /// aerodynamic reference point, the gyros turn about the CG: the side force there adds its moment
 /// with arms a_l (the reference point's height above the CG) and a_n (its distance ahead of the CG,
 /// negative when it lies aft), m, with the inertia's share; the CG is as unknown to the flight test
-/// as the moments, and the arms are fitted beside the scales. The constants take the gyros' bias
-/// drift and the moments no model term carries.
+/// as the moments, and the arms are fitted beside the scales. The constants, one per flight, take
+/// the gyros' bias drift, the moments no model term carries, and C_lβ·Δβ, C_nβ·Δβ of the corrected
+/// boom β's offset, which the EGI's heading error sets flight by flight ([`side_fit`]).
 fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
+    let mut flights: Vec<usize> = rows.iter().map(|r| r.flight).collect();
+    flights.dedup();
+    let bias_names: Vec<String> = flights.iter().map(|k| format!("bias_{k}")).collect();
     let fit = |axis: usize, name: &str| {
+        let mut names = vec![name, "arm_m"];
+        names.extend(bias_names.iter().map(String::as_str));
+        let mut x = vec![
+            rows.iter().map(|r| r.model[axis]).collect(),
+            rows.iter().map(|r| r.side).collect(),
+        ];
+        for &k in &flights {
+            x.push(
+                rows.iter()
+                    .map(|r| f64::from(u8::from(r.flight == k)))
+                    .collect(),
+            );
+        }
         least_squares(
-            &[name, "arm_m", "bias"],
-            &[
-                rows.iter().map(|r| r.model[axis]).collect(),
-                rows.iter().map(|r| r.side).collect(),
-                vec![1.0; rows.len()],
-            ],
+            &names,
+            &x,
             &rows.iter().map(|r| r.measured[axis]).collect::<Vec<_>>(),
         )
     };
@@ -1062,6 +1093,8 @@ struct EqRow {
     /// Rolling ([`MIN_ROLL_RATE_RPS`]): the side-force fit reads it.
     rolling: bool,
     parts: Parts,
+    /// The sideslip terms' specific force per degree of β (body axes, m/s² per deg).
+    sideslip_per_deg: [f64; 3],
     /// The engines' thrust over the mass, m/s² along body x, from the engine deck at the recorded
     /// N2 and throttle (`None`: no deck, or no N2 recorded).
     thrust_accel_x: Option<f64>,
@@ -1122,8 +1155,8 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 
 /// The side-force fit over the rolling frames, then the lift fit over the quasi-steady ones with
 /// the side force at its scales:
-/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + b_y` (the model's drag: its lateral share,
-/// sin β of it, is small, and k_D comes later),
+/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + Σ_k c_k·∂sideslip_y/∂β·[flight k] + b_y`
+/// (the model's drag: its lateral share, sin β of it, is small, and k_D comes later),
 /// `f_z − k_β·sideslip_z − k_Y·surfaces_z − k_D·drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
 /// In quasi-steady flight the surfaces' side force is a fixed share of the sideslip terms' (the
 /// rudder and aileron hold the sideslip; −0.32 on JSBSim's F-16 card), so those frames tell only
@@ -1133,15 +1166,41 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// 0.01 m/s² of the normal force into y) would otherwise bias the scale. The lift offset ΔC_L is
 /// told apart from that constant by dynamic pressure (the test points span 3:1 in it), and from
 /// k_L because in quasi-steady flight the lift carries the weight at every speed while q varies.
+/// The corrected boom β of a flight is off by a constant Δβ_k: the compatibility offset takes the
+/// EGI's heading error at its mean over the flight (0.08° rms; up to 0.17° on the card), which no
+/// model card shares. Read through the sideslip terms, whose slope moves with q̄ over a flight's
+/// rolls and stall approach, it is not a constant side force, and left to b_y it moved the
+/// surface terms' scale by 0.09 (1σ) from one sensor draw to the next; c_k = k_β·Δβ_k, one per
+/// flight, takes it (0.012).
 fn side_fit(all: &[&EqRow]) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
+    let mut flights: Vec<usize> = rolling.iter().map(|r| r.flight).collect();
+    flights.dedup();
+    let offset_names: Vec<String> = flights.iter().map(|k| format!("beta_offset_{k}")).collect();
+    let mut names = vec!["k_sideslip", "k_side_controls", "bias_mps2"];
+    names.extend(offset_names.iter().map(String::as_str));
+    let mut x = vec![
+        rolling.iter().map(|r| r.parts.sideslip[1]).collect(),
+        rolling.iter().map(|r| r.parts.side_rest[1]).collect(),
+        vec![1.0; rolling.len()],
+    ];
+    for &k in &flights {
+        x.push(
+            rolling
+                .iter()
+                .map(|r| {
+                    if r.flight == k {
+                        r.sideslip_per_deg[1]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect(),
+        );
+    }
     least_squares(
-        &["k_sideslip", "k_side_controls", "bias_mps2"],
-        &[
-            rolling.iter().map(|r| r.parts.sideslip[1]).collect(),
-            rolling.iter().map(|r| r.parts.side_rest[1]).collect(),
-            vec![1.0; rolling.len()],
-        ],
+        &names,
+        &x,
         &rolling
             .iter()
             .map(|r| r.f_cg[1] - r.parts.drag[1])
@@ -1579,21 +1638,29 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
-    if r.model_cards > 1 {
+    if r.model_cards > 0 {
         let seeds: Vec<String> = r
             .model_card_seeds
             .iter()
             .map(|s| s.map_or("?".into(), |s| s.to_string()))
             .collect();
-        m.push_str(&format!(
-            "\nThe model card's rows (here and below) pool {} cards flown on the sensor seeds {} \
-             (the flight test's: {}): their mean, the 1σ raised to their spread; its \
-             flight-by-flight figures are the first card's.\n",
-            r.model_cards,
-            seeds.join(", "),
-            c.sensor_seed
-                .map_or("not recorded".into(), |s| s.to_string()),
-        ));
+        let ft_seed = c
+            .sensor_seed
+            .map_or("not recorded".into(), |s| s.to_string());
+        m.push_str(&if r.model_cards == 1 {
+            format!(
+                "\nThe model card is flown on the sensor seed {} (the flight test's: {ft_seed}).\n",
+                seeds.join(", ")
+            )
+        } else {
+            format!(
+                "\nThe model card's rows (here and below) pool {} cards flown on the sensor seeds \
+                 {} (the flight test's: {ft_seed}): their mean, the 1σ raised to their spread; \
+                 its flight-by-flight figures are the first card's.\n",
+                r.model_cards,
+                seeds.join(", "),
+            )
+        });
     }
     m.push_str(&format!(
         "\nThe lift over α, over the lift scale (1 up to {}°; –: the card did not reach the knot):\n\n| | {} |\n|---|{}\n",
@@ -1848,7 +1915,10 @@ mod tests {
                 unit_lift: [0.0, 0.0, -(20.0 + 5.0 * (0.2 * t).sin())],
             };
             let (kb, ky) = (0.9, 1.1);
-            let f_y = kb * b + ky * rest + 0.01;
+            // The corrected β 0.1° off the air's (the EGI's heading error in the compatibility
+            // offset), read through the sideslip terms' slope, which moves with q̄.
+            let per_deg = 0.5 + 0.2 * (0.11 * t).cos();
+            let f_y = kb * b + ky * rest + 0.01 + kb * 0.1 * per_deg;
             // α sweeps 5°…20°; the lift loses 10 % between 10° and 19°, linearly (the stall
             // knots' shape).
             let alpha_deg = 5.0 + 15.0 * k as f64 / 400.0;
@@ -1862,6 +1932,7 @@ mod tests {
                 steady,
                 rolling: !steady,
                 parts,
+                sideslip_per_deg: [0.0, per_deg, 0.0],
                 thrust_accel_x: Some(thrust),
                 f_cg: [f_x, f_y, f_z],
             }
@@ -1871,8 +1942,10 @@ mod tests {
         let side = side_fit(&all).unwrap();
         let (kb, ky) = side_scales(&side);
         assert!(
-            (kb - 0.9).abs() < 1e-9 && (ky - 1.1).abs() < 1e-9,
-            "{kb} {ky}"
+            (kb - 0.9).abs() < 1e-9
+                && (ky - 1.1).abs() < 1e-9
+                && (side.get("beta_offset_0") - 0.09).abs() < 1e-9,
+            "{side:?}"
         );
         // Three knots (13°, 16°, 19°) have their frames; 22° is beyond the sweep.
         let knots = stall_knots(&all, 10);
@@ -1987,9 +2060,15 @@ mod tests {
             .map(|k| {
                 let t = k as f64 * 0.05;
                 let (model, side) = ((1.3 * t).sin() * 0.01, (0.7 * t).cos() * 0.02);
+                // Two flights, each with its own constant (a β offset times C_lβ, C_nβ).
+                let flight = k / 200;
+                let bias = [1e-4, -2e-4][flight];
                 MomentRow {
-                    flight: 0,
-                    measured: [1.1 * model + 0.2 * side + 1e-4, 0.9 * model - 0.05 * side],
+                    flight,
+                    measured: [
+                        1.1 * model + 0.2 * side + bias,
+                        0.9 * model - 0.05 * side - bias,
+                    ],
                     model: [model, model],
                     side,
                 }
@@ -1998,6 +2077,9 @@ mod tests {
         let rows: Vec<&MomentRow> = rows.iter().collect();
         let [roll, yaw] = moment_fits(&rows).unwrap();
         assert!((roll.get("k_roll") - 1.1).abs() < 1e-9 && (roll.get("arm_m") - 0.2).abs() < 1e-9);
+        assert!(
+            (roll.get("bias_1") + 2e-4).abs() < 1e-12 && (yaw.get("bias_0") + 1e-4).abs() < 1e-12
+        );
         assert!((yaw.get("k_yaw") - 0.9).abs() < 1e-9 && (yaw.get("arm_m") + 0.05).abs() < 1e-9);
         assert!(moment_fits(&rows[..3]).is_none());
         let e = |value, std_error| Some(Estimate { value, std_error });

@@ -441,9 +441,9 @@ enum Cmd {
         /// The same test card flown in simulation on the model the estimator knows (`hil-sim
         /// generate --preset flight-test --seed N`, N not the flight test's seed): the
         /// identification's own bias on the model's aircraft, divided out of the scales. Its
-        /// sensors and boom only. Repeat it for the card flown on other sensor seeds
-        /// (scripts/calibrate flies 8): the scales divided out are their mean, and their spread
-        /// joins the 1σ.
+        /// sensors and boom only. Repeat it for the card flown on further sensor seeds, one
+        /// directory each (scripts/calibrate flies 8): the scales divided out are their mean, and
+        /// their spread joins the 1σ.
         #[arg(long, value_name = "DIR")]
         model_flight_test: Vec<PathBuf>,
         /// Output directory.
@@ -971,7 +971,8 @@ fn cmd_fit_sigma(
 
 fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Result<()> {
     let t0 = std::time::Instant::now();
-    trainer::calibrate::check_model_cards(ft, model_ft)?;
+    trainer::calibrate::check_model_cards(ft, model_ft)
+        .with_context(|| format!("checking the model cards against {}", ft.display()))?;
     let c = trainer::calibrate::calibrate(ft)
         .with_context(|| format!("calibrating from {}", ft.display()))?;
     let model_cards = model_ft
