@@ -277,7 +277,7 @@ impl Scales {
 }
 
 /// A moment or thrust scale joins the calibrated aircraft only when it differs from the model's 1
-/// by at least this many of its 1σ; otherwise the model's moment (engine deck) is kept. The yaw scale's 1σ, 0.05-0.10
+/// by at least this many of its 1σ; otherwise the model's moment (engine deck) is kept. The yaw scale's 1σ, 0.04-0.09
 /// on the development variants, is set by the three flights' scatter, and its fit leans on the
 /// boom's β noise where the side force differs from the model's: a scale written from that alone
 /// would move a moment the flight test did not show wrong (docs/calibration.md).
