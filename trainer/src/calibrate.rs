@@ -445,7 +445,7 @@ pub fn least_squares(names: &[&str], x: &[Vec<f64>], y: &[f64]) -> Option<Fit> {
     if p == 0 || n <= p + 2 || x.iter().any(|c| c.len() != n) {
         return None;
     }
-    // Normal equations (p ≤ 3 here), solved by the baselines' Cholesky; (XᵀX)⁻¹'s diagonal, for
+    // Normal equations (a few parameters), solved by the baselines' Cholesky; (XᵀX)⁻¹'s diagonal, for
     // the standard errors, by solving against each unit vector.
     let mut xtx = vec![0.0; p * p];
     for i in 0..p {
@@ -776,18 +776,18 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         let Some(parts) = force_parts(&r.inp, alpha, beta, tas, mach, rho) else {
             continue;
         };
+        // The sideslip terms' slope; a frame where the model cannot be evaluated beside its β
+        // leaves the side fit only.
         let at = |d_deg: f64| force_parts(&r.inp, alpha, beta + d_deg.to_radians(), tas, mach, rho);
-        let Some((up, down)) = at(BETA_STEP_DEG).zip(at(-BETA_STEP_DEG)) else {
-            continue;
-        };
+        let slope = at(BETA_STEP_DEG).zip(at(-BETA_STEP_DEG)).map(|(up, down)| {
+            core::array::from_fn(|i| (up.sideslip[i] - down.sideslip[i]) / (2.0 * BETA_STEP_DEG))
+        });
         eq.push(EqRow {
             flight: r.flight,
             alpha_deg: alpha.to_degrees(),
             steady,
-            rolling,
-            sideslip_per_deg: core::array::from_fn(|i| {
-                (up.sideslip[i] - down.sideslip[i]) / (2.0 * BETA_STEP_DEG)
-            }),
+            rolling: rolling && slope.is_some(),
+            sideslip_per_deg: slope.unwrap_or_default(),
             parts,
             thrust_accel_x: thrust_accel_x(r, mach),
             f_cg: r.f_cg,
@@ -1058,6 +1058,7 @@ pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> 
 /// boom β's offset, which the EGI's heading error sets flight by flight ([`side_fit`]).
 fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
     let mut flights: Vec<usize> = rows.iter().map(|r| r.flight).collect();
+    flights.sort_unstable();
     flights.dedup();
     let bias_names: Vec<String> = flights.iter().map(|k| format!("bias_{k}")).collect();
     let fit = |axis: usize, name: &str| {
@@ -1171,10 +1172,11 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// model card shares. Read through the sideslip terms, whose slope moves with q̄ over a flight's
 /// rolls and stall approach, it is not a constant side force, and left to b_y it moved the
 /// surface terms' scale by 0.09 (1σ) from one sensor draw to the next; c_k = k_β·Δβ_k, one per
-/// flight, takes it (0.012).
+/// flight, takes it (0.011).
 fn side_fit(all: &[&EqRow]) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
     let mut flights: Vec<usize> = rolling.iter().map(|r| r.flight).collect();
+    flights.sort_unstable();
     flights.dedup();
     let offset_names: Vec<String> = flights.iter().map(|k| format!("beta_offset_{k}")).collect();
     let mut names = vec!["k_sideslip", "k_side_controls", "bias_mps2"];
@@ -1980,6 +1982,51 @@ mod tests {
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
         assert!(side_fit(&steady).is_none());
+    }
+
+    #[test]
+    fn the_side_fit_takes_each_flights_beta_offset_in_any_row_order() {
+        // Two flights, their rows interleaved, each with its own β offset (0.1°, −0.2°) read
+        // through a slope that moves with q̄.
+        let rows: Vec<EqRow> = (0..600)
+            .map(|k| {
+                let t = k as f64 * 0.37;
+                let flight = k % 2;
+                let (b, rest) = (2.0 * t.sin(), 0.8 * (1.3 * t).cos());
+                let per_deg = 0.5 + 0.2 * (0.11 * t).cos() + 0.3 * flight as f64;
+                let offset = [0.1, -0.2][flight];
+                EqRow {
+                    flight,
+                    alpha_deg: 5.0,
+                    steady: false,
+                    rolling: true,
+                    parts: Parts {
+                        drag: [0.0; 3],
+                        sideslip: [0.0, b, 0.0],
+                        side_rest: [0.0, rest, 0.0],
+                        lift: [0.0; 3],
+                        flap: [0.0; 3],
+                        unit_lift: [0.0; 3],
+                    },
+                    sideslip_per_deg: [0.0, per_deg, 0.0],
+                    thrust_accel_x: None,
+                    f_cg: [
+                        0.0,
+                        0.9 * b + 1.1 * rest + 0.01 + 0.9 * offset * per_deg,
+                        0.0,
+                    ],
+                }
+            })
+            .collect();
+        let all: Vec<&EqRow> = rows.iter().collect();
+        let side = side_fit(&all).unwrap();
+        assert!(
+            (side.get("k_sideslip") - 0.9).abs() < 1e-9
+                && (side.get("k_side_controls") - 1.1).abs() < 1e-9
+                && (side.get("beta_offset_0") - 0.09).abs() < 1e-9
+                && (side.get("beta_offset_1") + 0.18).abs() < 1e-9,
+            "{side:?}"
+        );
     }
 
     #[test]
