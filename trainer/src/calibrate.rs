@@ -228,10 +228,29 @@ impl Scales {
             yaw: self.yaw.zip(model.yaw).map(|(a, b)| ratio(a, b)),
             stall: core::array::from_fn(|j| match (self.stall[j], model.stall[j]) {
                 (Some(a), Some(b)) => Some(ratio(a, b)),
+                (Some(a), None) => beyond_the_model_card(&model.stall, j).map(|b| ratio(a, b)),
                 _ => None,
             }),
         }
     }
+}
+
+/// The model card's bias at stall knot `j`, which the flight test reached and the card did not
+/// (JSBSim's F-16 tops out at 20° α under its limiter, a variant that stalls softer flies on): the
+/// card's last knot's, held, its 1σ raised by the card's change over its last knot interval
+/// (from 1 below the first knot) for each knot held. `None` when the card reached no knot.
+fn beyond_the_model_card(card: &[Option<Estimate>; STALL_PARAMS], j: usize) -> Option<Estimate> {
+    let last = (0..j).rev().find(|&i| card[i].is_some())?;
+    let at = card[last]?;
+    let before = last
+        .checked_sub(1)
+        .and_then(|i| card[i])
+        .map_or(1.0, |e| e.value);
+    let step = (at.value - before).abs() * (j - last) as f64;
+    Some(Estimate {
+        value: at.value,
+        std_error: at.std_error.hypot(step),
+    })
 }
 
 impl Scales {
@@ -1982,6 +2001,22 @@ mod tests {
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
         assert!(side_fit(&steady).is_none());
+    }
+
+    #[test]
+    fn a_stall_knot_beyond_the_model_cards_holds_its_last_bias() {
+        let e = |value, std_error| Some(Estimate { value, std_error });
+        let card = [e(0.999, 0.004), e(0.995, 0.004), None, None];
+        // 16° held at 19° and 22°: its 1σ raised by the card's change over 13-16° per knot.
+        let at19 = beyond_the_model_card(&card, 2).unwrap();
+        let at22 = beyond_the_model_card(&card, 3).unwrap();
+        assert_eq!(at19.value, 0.995);
+        assert!((at19.std_error - 0.004f64.hypot(0.004)).abs() < 1e-12);
+        assert!((at22.std_error - 0.004f64.hypot(0.008)).abs() < 1e-12);
+        // From 1 below the first knot; no knot reached: nothing to hold.
+        let first = beyond_the_model_card(&[e(0.99, 0.001), None, None, None], 1).unwrap();
+        assert!((first.std_error - 0.001f64.hypot(0.01)).abs() < 1e-12);
+        assert!(beyond_the_model_card(&[None; STALL_PARAMS], 1).is_none());
     }
 
     #[test]
