@@ -628,6 +628,11 @@ fn quasi_steady(r: &Row) -> bool {
     r.omega_dot <= MAX_OMEGA_DOT_RPS2 && r.angle_step <= MAX_ANGLE_STEP_DEG
 }
 
+/// A dataset's sensor seed (its manifest's `config.seed`; `None`: not recorded).
+fn sensor_seed(m: &hil_sim::dataset::Manifest) -> Option<u64> {
+    m.config.get("seed").and_then(serde_json::Value::as_u64)
+}
+
 /// Refuses model cards that share sensor draws with the flight test or with one another. A card
 /// flown on the flight test's sensor seed carries the same accelerometer, EGI, boom and N2 errors,
 /// and dividing by it would cancel errors a real flight test's model card cannot know; two cards
@@ -635,10 +640,7 @@ fn quasi_steady(r: &Row) -> bool {
 /// compared.
 pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Result<()> {
     let seed = |dir: &Path| -> Result<Option<u64>> {
-        Ok(hil_sim::dataset::Manifest::read(dir)?
-            .config
-            .get("seed")
-            .and_then(serde_json::Value::as_u64))
+        Ok(sensor_seed(&hil_sim::dataset::Manifest::read(dir)?))
     };
     let mut seen = vec![(flight_test, seed(flight_test)?)];
     for card in cards {
@@ -977,7 +979,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         }),
     };
     Ok(Calibration {
-        sensor_seed: m.config.get("seed").and_then(serde_json::Value::as_u64),
+        sensor_seed: sensor_seed(&m),
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
         boom_alpha,
@@ -1076,24 +1078,13 @@ pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> 
 /// the gyros' bias drift, the moments no model term carries, and C_lβ·Δβ, C_nβ·Δβ of the corrected
 /// boom β's offset, which the EGI's heading error sets flight by flight ([`side_fit`]).
 fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
-    let mut flights: Vec<usize> = rows.iter().map(|r| r.flight).collect();
-    flights.sort_unstable();
-    flights.dedup();
-    let bias_names: Vec<String> = flights.iter().map(|k| format!("bias_{k}")).collect();
+    let (bias_names, biases) = per_flight_columns(rows, |r| r.flight, "bias", |_| 1.0);
+    let side: Vec<f64> = rows.iter().map(|r| r.side).collect();
     let fit = |axis: usize, name: &str| {
         let mut names = vec![name, "arm_m"];
         names.extend(bias_names.iter().map(String::as_str));
-        let mut x = vec![
-            rows.iter().map(|r| r.model[axis]).collect(),
-            rows.iter().map(|r| r.side).collect(),
-        ];
-        for &k in &flights {
-            x.push(
-                rows.iter()
-                    .map(|r| f64::from(u8::from(r.flight == k)))
-                    .collect(),
-            );
-        }
+        let mut x = vec![rows.iter().map(|r| r.model[axis]).collect(), side.clone()];
+        x.extend(biases.iter().cloned());
         least_squares(
             &names,
             &x,
@@ -1194,10 +1185,12 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// flight, takes it (0.011).
 fn side_fit(all: &[&EqRow]) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
-    let mut flights: Vec<usize> = rolling.iter().map(|r| r.flight).collect();
-    flights.sort_unstable();
-    flights.dedup();
-    let offset_names: Vec<String> = flights.iter().map(|k| format!("beta_offset_{k}")).collect();
+    let (offset_names, offsets) = per_flight_columns(
+        &rolling,
+        |r| r.flight,
+        "beta_offset",
+        |r| r.sideslip_per_deg[1],
+    );
     let mut names = vec!["k_sideslip", "k_side_controls", "bias_mps2"];
     names.extend(offset_names.iter().map(String::as_str));
     let mut x = vec![
@@ -1205,20 +1198,7 @@ fn side_fit(all: &[&EqRow]) -> Option<Fit> {
         rolling.iter().map(|r| r.parts.side_rest[1]).collect(),
         vec![1.0; rolling.len()],
     ];
-    for &k in &flights {
-        x.push(
-            rolling
-                .iter()
-                .map(|r| {
-                    if r.flight == k {
-                        r.sideslip_per_deg[1]
-                    } else {
-                        0.0
-                    }
-                })
-                .collect(),
-        );
-    }
+    x.extend(offsets);
     least_squares(
         &names,
         &x,
@@ -1227,6 +1207,30 @@ fn side_fit(all: &[&EqRow]) -> Option<Fit> {
             .map(|r| r.f_cg[1] - r.parts.drag[1])
             .collect::<Vec<_>>(),
     )
+}
+
+/// One regressor per flight that has rows, `{prefix}_{k}`: `value` on flight k's rows, 0 on the
+/// others (a flight's own constant, or its own offset through a slope, in a fit over several
+/// flights). The rows may come in any order.
+fn per_flight_columns<R>(
+    rows: &[&R],
+    flight: fn(&R) -> usize,
+    prefix: &str,
+    value: impl Fn(&R) -> f64,
+) -> (Vec<String>, Vec<Vec<f64>>) {
+    let mut flights: Vec<usize> = rows.iter().map(|r| flight(r)).collect();
+    flights.sort_unstable();
+    flights.dedup();
+    let names = flights.iter().map(|k| format!("{prefix}_{k}")).collect();
+    let columns = flights
+        .iter()
+        .map(|&k| {
+            rows.iter()
+                .map(|r| if flight(r) == k { value(r) } else { 0.0 })
+                .collect()
+        })
+        .collect();
+    (names, columns)
 }
 
 /// The name of stall knot `j`'s parameter in the lift fit.

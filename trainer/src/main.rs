@@ -989,7 +989,12 @@ fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Res
     let text = serde_json::to_string_pretty(&r)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     std::fs::write(out.join("calibration.json"), &text)?;
-    std::fs::write(out.join("aircraft.toml"), spec)?;
+    // The same calibrated aircraft keeps its file and its time: scripts/calibrate rebuilds the
+    // aircraft and its estimator only when the spec is newer.
+    let spec_path = out.join("aircraft.toml");
+    if std::fs::read_to_string(&spec_path).ok().as_deref() != Some(spec.as_str()) {
+        std::fs::write(&spec_path, spec)?;
+    }
     std::fs::write(out.join("calibration.md"), md)?;
     if json {
         println!("{}", serde_json::to_string(&r)?);
