@@ -171,6 +171,55 @@ def beta_terms():
     return out
 
 
+# The side force's terms that read the aerodynamic body rates (JSBSim's velocities/p-aero-rad_sec and
+# r-aero-rad_sec: the body rates less the turbulence's rotational rates, FGAuxiliary's vAeroPQR =
+# vPQR − TurbPQR). A gyro measures the body rates, so the part of these terms that the rotational
+# turbulence makes is a lateral force no sensor reads. Each term is of degree 1 in its rate (the
+# rate times factors free of it: F-16 and c172p CYp, CYr; the f15's side force has none).
+_RATE_PROPS = {"velocities/p-aero-rad_sec": "p", "velocities/r-aero-rad_sec": "r"}
+
+
+def rate_terms():
+    """{'p': [...], 'r': [...]}: the model's SIDE aero/coefficient functions that read each aero rate."""
+    aero = _MODEL.find("aerodynamics")
+
+    def reads(fn):
+        return [(e.text or "").strip() for e in fn.iter() if e.tag in ("property", "independentVar")]
+    hidden = {fn.get("name") for fn in aero.findall("function") if any(p in _RATE_PROPS for p in reads(fn))}
+    out = {"p": [], "r": []}
+    for a in aero.findall("axis"):
+        if a.get("name") != "SIDE":
+            continue
+        for fn in a.findall("function"):
+            props = reads(fn)
+            if any(p in hidden for p in props):
+                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads an aero rate through a helper function")
+            rates = {_RATE_PROPS[p] for p in props if p in _RATE_PROPS}
+            if len(rates) > 1:
+                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads both aero rates: not a degree-1 rate term")
+            for rate in rates:
+                out[rate].append(fn.get("name"))
+    return out
+
+
+def turbulence_side_force_lbs(r):
+    """The lateral force (lbf) the rotational turbulence makes through the side force's rate terms, at
+    every step of a replay `r`: each term's value per unit of its aero rate, times the aero rate less
+    the body rate (the gyro's). A step whose aero rate is near 0 takes its neighbours' value per rate."""
+    out = np.zeros_like(r["aero__beta_rad"])
+    for rate, terms in rate_terms().items():
+        if not terms:
+            continue
+        aero = r[key(f"velocities/{rate}-aero-rad_sec")]
+        body = r[key(f"velocities/{rate}-rad_sec")]
+        s = sum(r[key(t)] for t in terms)
+        ok = np.abs(aero) > 1e-4
+        per = np.where(ok, s / np.where(ok, aero, 1.0), np.nan)
+        per = np.interp(np.arange(len(per)), np.flatnonzero(ok), per[ok])
+        out = out + per * (aero - body)
+    return out
+
+
 def key(prop):
     """A JSBSim property's key in a replay (replay120.py)."""
     return prop.replace("/", "__").replace("-", "_")

@@ -15,6 +15,10 @@ misalignment, turn-on and in-run bias, white noise, Δv quantization). Converted
 oracle's truth: δβ = e_Ay·m / (∂F_y,body/∂β), ∂F_y,body/∂β ≈ q̄S·(CYβ − C_D − β·∂C_D/∂β) from the
 replay's JSBSim terms (common.side_force_slope_lbs; on the F-16 CYβ(M) − C_D, its drag having no β
 term; on the f15 and c172p the CDbeta term, of |β|, adds −2·CDβ·|β| to the slope).
+Rotational turbulence ("+ rotational turbulence"): the lateral force of the side force's aero-rate
+terms less what they give with the gyros' body rates (common.turbulence_side_force_lbs: JSBSim's
+C_Yp, C_Yr read velocities/p-, r-aero-rad_sec, the body rates less the turbulence's), turned into β
+as e_Ay is and added through the same lag: a force no sensor model accounts for.
 "White" variant: e_Ay minus its 2-s centred moving mean (its slow part, bias and the misalignment
 and scale-factor errors on slow forces, removed; noise, quantization and the fast part kept).
 
@@ -27,7 +31,7 @@ import sys
 import numpy as np
 
 from common import (AIRCRAFT, FT, LEVER, beta_term_slopes, butter_120, flights, imu_filter_120, imu_lag_120, mae,
-                    manifest, side_force_slope_lbs)
+                    manifest, rate_terms, side_force_slope_lbs, turbulence_side_force_lbs)
 from d_turb import parts
 from f_floor import TESTS, lags
 from frames import table
@@ -78,11 +82,16 @@ def prep(n):
     # 6 Hz channel with its real error: (channel − Butterworth∘lag of the truth) in β at the frames
     e20 = (d["accel_y_mps2"] - butter_120(imu_lag_120(fy_imu))[i]) * k_beta[i]
     lagged = imu_lag_120(bt)
+    # The rotational turbulence's lateral force (the side force's aero-rate terms less what the gyros'
+    # body rates give them), in β as the accelerometer error is: a force the oracle cannot tell from β.
+    e_b_rot = turbulence_side_force_lbs(r) / ms * FT * k_beta
     return dict(
         i=i, bt=bt[i], b_nt=b_nt[i], b_all=b_all[i],
         f6=imu_filter_120(bt, fc=6.0)[i],
         f6_real=imu_filter_120(bt, fc=6.0)[i] + e20,
         y120=lagged, y120_real=lagged + e_b, y120_white=lagged + e_b_white,
+        y120_rot=lagged + imu_lag_120(e_b_rot), y120_real_rot=lagged + e_b + imu_lag_120(e_b_rot),
+        e_b_rot_mae=mae(e_b_rot[i]),
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
         f_per_deg=np.median(1 / np.abs(k_beta[i])), f_per_deg0=np.median(1 / np.abs(k_beta0[i])),
@@ -128,7 +137,9 @@ def main():
     w = fit(lambda p: feat20(p["f6_real"], 5))
     rows.append(("6 Hz + real accel error, deconvolved (lags 0..5 frames)", score(lambda p: p["b_nt"] + feat20(p["f6_real"], 5) @ w)))
     for key, lab in (("y120", "120 Hz lag-only (perfect accel)"), ("y120_real", "120 Hz + real accel error"),
-                     ("y120_white", "120 Hz + accel noise & quantization only (slow error removed)")):
+                     ("y120_white", "120 Hz + accel noise & quantization only (slow error removed)"),
+                     ("y120_rot", "120 Hz lag-only + rotational turbulence"),
+                     ("y120_real_rot", "120 Hz + real accel error + rotational turbulence")):
         rows.append((f"{lab}, as filtered (sub5)", score(lambda p, k=key: p["b_nt"] + p[k][p["i"]])))
         for L in (2, 6, 12, 18):
             w = fit(lambda p, k=key, L=L: feat120(p[k], p["i"], L))
@@ -149,6 +160,13 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for n, p in te.items():
         print(f"| {n} | {nfr[n]} | {p['chk']:.2e} | {p['e_ay_mean']:.2e} | {p['e_ay_std']:.2e} | {p['k_beta']:.3f} | {p['e_b_mae']:.4f} | {p['e_b_white_mae']:.4f} |")
+    terms = rate_terms()
+    print("\n## The rotational turbulence's side force, as β, test flights\n")
+    print(f"The side force's aero-rate terms: {', '.join(terms['p'] + terms['r']) or 'none'}.\n")
+    print("| flight | MAE, deg |")
+    print("|---|---|")
+    for n, p in te.items():
+        print(f"| {n} | {p['e_b_rot_mae']:.4f} |")
     print("\n## Lateral specific force per degree of β, test flights (medians over the frames)\n")
     print("| flight | m/s² per deg | without the drag's β term (CYβ − C_D) | mean q̄ kPa | mean mass kg |")
     print("|---|---|---|---|---|")
