@@ -213,11 +213,50 @@ def turbulence_side_force_lbs(r):
         aero = r[key(f"velocities/{rate}-aero-rad_sec")]
         body = r[key(f"velocities/{rate}-rad_sec")]
         s = sum(r[key(t)] for t in terms)
-        ok = np.abs(aero) > 1e-4
-        per = np.where(ok, s / np.where(ok, aero, 1.0), np.nan)
-        per = np.interp(np.arange(len(per)), np.flatnonzero(ok), per[ok])
-        out = out + per * (aero - body)
+        out = out + per_unit(s, aero) * (aero - body)
     return out
+
+
+def surface_terms():
+    """[(term, property, column, factor)]: each SIDE aero/coefficient function that reads a surface the
+    aircraft senses (its description's [surfaces]), the surface property the term reads, the dataset
+    column of the sensed surface (degrees) and the factor from that column to the term's property
+    (1/deg_per_unit, times π/180 or 180/π where the term reads the -rad twin of a sensed -deg property
+    or the reverse). Each term reads one surface, to degree 1 (its value is the surface times factors
+    free of it: F-16 CYDa, CYdr; f15 and c172p CYda, CYdr)."""
+    sensed = {}
+    for col, spec in (AIRCRAFT_DESC.get("surfaces") or {}).items():
+        if not isinstance(spec, dict) or "property" not in spec:
+            continue
+        prop, per = spec["property"], float(spec.get("deg_per_unit", 1.0))
+        sensed[prop] = (col, 1.0 / per)
+        for a, b, c in (("-deg", "-rad", np.pi / 180.0), ("-rad", "-deg", 180.0 / np.pi)):
+            if prop.endswith(a):
+                sensed.setdefault(prop[: -len(a)] + b, (col, c / per))
+    aero = _MODEL.find("aerodynamics")
+    out = []
+    for a in aero.findall("axis"):
+        if a.get("name") != "SIDE":
+            continue
+        for fn in a.findall("function"):
+            # factors only: a surface that indexes a table (the c172p's flap in CYb, CYp, CYr) is not
+            # a degree-1 term of it, and its sensor's 0.02° moves such a term by nothing that counts
+            props = [(e.text or "").strip() for e in fn.iter("property")]
+            hits = [p for p in dict.fromkeys(props) if p in sensed]
+            if len(hits) > 1:
+                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads two sensed surfaces {hits}")
+            for p in hits:
+                out.append((fn.get("name"), p, *sensed[p]))
+    return out
+
+
+def per_unit(value, x, floor=1e-4):
+    """value / x at every step; where |x| ≤ floor, the neighbours' ratio (a term of degree 1 in x)."""
+    ok = np.abs(x) > floor
+    per = np.where(ok, value / np.where(ok, x, 1.0), np.nan)
+    if not ok.any():
+        return np.zeros_like(value)
+    return np.interp(np.arange(len(per)), np.flatnonzero(ok), per[ok])
 
 
 def key(prop):

@@ -31,7 +31,7 @@ import sys
 import numpy as np
 
 from common import (AIRCRAFT, FT, LEVER, beta_term_slopes, butter_120, flights, imu_filter_120, imu_lag_120, mae,
-                    manifest, rate_terms, side_force_slope_lbs, turbulence_side_force_lbs)
+                    key, manifest, per_unit, rate_terms, side_force_slope_lbs, surface_terms, turbulence_side_force_lbs)
 from d_turb import parts
 from f_floor import TESTS, lags
 from frames import table
@@ -85,13 +85,26 @@ def prep(n):
     # The rotational turbulence's lateral force (the side force's aero-rate terms less what the gyros'
     # body rates give them), in β as the accelerometer error is: a force the oracle cannot tell from β.
     e_b_rot = turbulence_side_force_lbs(r) / ms * FT * k_beta
+    # The surface sensors' errors: the side force an estimator computes from the sensed surfaces (the
+    # unit's 120 Hz samples, truth + ADC noise, quantized) less the true one, which it takes from the
+    # lateral force before reading β.
+    d_y = np.zeros(n120)
+    surf_std = {}
+    for term, prop, col, factor in surface_terms():
+        true = r[key(prop)]
+        err = sub_series(d, col, n120) * factor - true
+        surf_std[col] = float(np.std(err) / factor)
+        d_y = d_y + per_unit(r[key(term)], true) * err
+    e_b_surf = -d_y / ms * FT * k_beta
     return dict(
         i=i, bt=bt[i], b_nt=b_nt[i], b_all=b_all[i],
         f6=imu_filter_120(bt, fc=6.0)[i],
         f6_real=imu_filter_120(bt, fc=6.0)[i] + e20,
         y120=lagged, y120_real=lagged + e_b, y120_white=lagged + e_b_white,
         y120_rot=lagged + imu_lag_120(e_b_rot), y120_real_rot=lagged + e_b + imu_lag_120(e_b_rot),
-        e_b_rot_mae=mae(e_b_rot[i]),
+        y120_real_surf=lagged + e_b + e_b_surf,
+        y120_all=lagged + e_b + imu_lag_120(e_b_rot) + e_b_surf,
+        e_b_rot_mae=mae(e_b_rot[i]), e_b_surf_mae=mae(e_b_surf[i]), surf_std=surf_std,
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
         f_per_deg=np.median(1 / np.abs(k_beta[i])), f_per_deg0=np.median(1 / np.abs(k_beta0[i])),
@@ -139,7 +152,9 @@ def main():
     for key, lab in (("y120", "120 Hz lag-only (perfect accel)"), ("y120_real", "120 Hz + real accel error"),
                      ("y120_white", "120 Hz + accel noise & quantization only (slow error removed)"),
                      ("y120_rot", "120 Hz lag-only + rotational turbulence"),
-                     ("y120_real_rot", "120 Hz + real accel error + rotational turbulence")):
+                     ("y120_real_rot", "120 Hz + real accel error + rotational turbulence"),
+                     ("y120_real_surf", "120 Hz + real accel error + surface sensor errors"),
+                     ("y120_all", "120 Hz + real accel error + rotational turbulence + surface sensor errors")):
         rows.append((f"{lab}, as filtered (sub5)", score(lambda p, k=key: p["b_nt"] + p[k][p["i"]])))
         for L in (2, 6, 12, 18):
             w = fit(lambda p, k=key, L=L: feat120(p[k], p["i"], L))
@@ -167,6 +182,15 @@ def main():
     print("|---|---|")
     for n, p in te.items():
         print(f"| {n} | {p['e_b_rot_mae']:.4f} |")
+    surf = surface_terms()
+    print("\n## The surface sensors' errors in the side force, as β, test flights\n")
+    print("The side force's sensed-surface terms: " +
+          (", ".join(f"{t} ({prop}, sensed as {col})" for t, prop, col, _ in surf) or "none") + ".\n")
+    print("| flight | MAE, deg | error std per surface (sensed − true, deg) |")
+    print("|---|---|---|")
+    for n, p in te.items():
+        stds = ", ".join(f"{c} {v:.4f}" for c, v in p["surf_std"].items())
+        print(f"| {n} | {p['e_b_surf_mae']:.4f} | {stds} |")
     print("\n## Lateral specific force per degree of β, test flights (medians over the frames)\n")
     print("| flight | m/s² per deg | without the drag's β term (CYβ − C_D) | mean q̄ kPa | mean mass kg |")
     print("|---|---|---|---|---|")

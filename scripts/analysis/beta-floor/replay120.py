@@ -3,8 +3,9 @@ properties at every 120 Hz step: the aero side-force terms, turbulence, aero vs 
 forces. Analysis only (reads $DATA/<name>.xml and _init.xml, writes $WORK/replay/<name>.npz).
 The script's aircraft must be $AIRCRAFT's JSBSim model (paths.py). The fcs/* and aero/coefficient/*
 names below are the F-16's: on another aircraft those its model lacks are recorded as NaN; the
-model's own β terms of side force and drag (common.beta_terms) and its side force's aero-rate
-terms (common.rate_terms) are recorded on every aircraft.
+model's own β terms of side force and drag (common.beta_terms), its side force's aero-rate
+terms (common.rate_terms) and its side force's sensed-surface terms with their surfaces
+(common.surface_terms) are recorded on every aircraft.
 
 usage: [AIRCRAFT=f15] nice -n 19 <repo>/.venv/bin/python replay120.py test_aggressive_03 [more names]
 """
@@ -16,7 +17,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import jsbsim
 
-from common import AIRCRAFT, JSBSIM_MODEL, beta_terms, key, rate_terms
+from common import AIRCRAFT, JSBSIM_MODEL, beta_terms, key, rate_terms, surface_terms
 from paths import DATA, WORK
 
 OUT = os.path.join(WORK, "replay")
@@ -58,7 +59,8 @@ def props():
            for p in PROPS]
     terms = beta_terms()
     rates = rate_terms()
-    extra = terms["SIDE"] + terms["DRAG"] + rates["p"] + rates["r"]
+    surfaces = [x for t, prop, _, _ in surface_terms() for x in (t, prop)]
+    extra = terms["SIDE"] + terms["DRAG"] + rates["p"] + rates["r"] + surfaces
     return out + [p for p in dict.fromkeys(extra) if p not in out]
 
 
