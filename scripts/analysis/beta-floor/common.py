@@ -205,7 +205,8 @@ def rate_terms():
 def turbulence_side_force_lbs(r):
     """The lateral force (lbf) the rotational turbulence makes through the side force's rate terms, at
     every step of a replay `r`: each term's value per unit of its aero rate, times the aero rate less
-    the body rate (the gyro's). A step whose aero rate is near 0 takes its neighbours' value per rate."""
+    the body rate (`velocities/p-rad_sec`, relative to the Earth; the gyros read it plus the Earth's
+    rate, 7e-5 rad/s). A step whose aero rate is near 0 takes its neighbours' value per rate."""
     out = np.zeros_like(r["aero__beta_rad"])
     for rate, terms in rate_terms().items():
         if not terms:
@@ -255,7 +256,8 @@ def per_unit(value, x, floor=1e-4):
     ok = np.abs(x) > floor
     per = np.where(ok, value / np.where(ok, x, 1.0), np.nan)
     if not ok.any():
-        return np.zeros_like(value)
+        # a surface or rate held at 0 all flight: its term's slope cannot be read from the replay
+        raise SystemExit("per_unit: the variable never leaves 0; its term's slope is unknown")
     return np.interp(np.arange(len(per)), np.flatnonzero(ok), per[ok])
 
 

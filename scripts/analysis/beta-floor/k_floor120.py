@@ -19,6 +19,11 @@ Rotational turbulence ("+ rotational turbulence"): the lateral force of the side
 terms less what they give with the gyros' body rates (common.turbulence_side_force_lbs: JSBSim's
 C_Yp, C_Yr read velocities/p-, r-aero-rad_sec, the body rates less the turbulence's), turned into β
 as e_Ay is and added through the same lag: a force no sensor model accounts for.
+Surface sensors ("+ surface sensor errors"): the side force of each sensed surface's term
+(common.surface_terms) per unit of the surface, times the dataset's 120 Hz sample less the replay's
+truth, taken from the force as an estimator that subtracts the surfaces' side force would; added
+without the IMU's lag (the surfaces' sensors have none), so the lag-inverting fit amplifies it a
+little (f15: 0.0430 without the fit, 0.0441 with it).
 "White" variant: e_Ay minus its 2-s centred moving mean (its slow part, bias and the misalignment
 and scale-factor errors on slow forces, removed; noise, quantization and the fast part kept).
 

@@ -61,7 +61,8 @@ def props():
     rates = rate_terms()
     surfaces = [x for t, prop, _, _ in surface_terms() for x in (t, prop)]
     extra = terms["SIDE"] + terms["DRAG"] + rates["p"] + rates["r"] + surfaces
-    return out + [p for p in dict.fromkeys(extra) if p not in out]
+    have = {p.lstrip("?") for p in out}
+    return out + [p for p in dict.fromkeys(extra) if p not in have]
 
 
 def main():
