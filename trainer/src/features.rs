@@ -321,6 +321,13 @@ impl FeatureSet {
                 &subsamples(&SUB_ALPHA),
                 &subsamples(&SUB_BETA),
             ),
+            // egi120 plus, for β, the side-force scale the filter learns in flight: on an airframe
+            // whose side force is not the model's, how far the lateral force per degree of β is off.
+            // Measured, not shipped: better on the model, worse on three of the four variants
+            // (docs/airframes.md).
+            "egi120-side-scale" => {
+                FeatureSet::parse("egi120")?.extended(spec, &[], &[Feature::FilterSideScale])
+            }
             // egi-hybrid-fast-d2 plus the force scales the filter learns in flight: what tells an
             // airframe unlike the model. Measured, not shipped: it loses on the 20-minute test
             // flight (docs/airframes.md).
@@ -342,7 +349,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi120-side-scale, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -409,6 +416,16 @@ mod tests {
             assert_eq!(with[base.len()..], FILTER_SCALE_FEATURES[..]);
         }
         assert_eq!(s.suite(), Suite::Egi);
+    }
+
+    #[test]
+    fn the_side_scale_set_is_egi120_with_the_side_force_scale_last_in_beta() {
+        let base = FeatureSet::parse("egi120").unwrap();
+        let s = FeatureSet::parse("egi120-side-scale").unwrap();
+        assert_eq!(s.alpha, base.alpha);
+        assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
+        assert_eq!(s.beta[base.beta.len()..], [Feature::FilterSideScale]);
+        assert_eq!(s.suite(), Suite::Egi120);
     }
 
     #[test]
