@@ -181,21 +181,21 @@ def main():
     for n, p in te.items():
         print(f"| {n} | {nfr[n]} | {p['chk']:.2e} | {p['e_ay_mean']:.2e} | {p['e_ay_std']:.2e} | {p['k_beta']:.3f} | {p['e_b_mae']:.4f} | {p['e_b_white_mae']:.4f} |")
     terms = rate_terms()
-    print("\n## The rotational turbulence's side force, as β, test flights\n")
-    print(f"The side force's aero-rate terms: {', '.join(terms['p'] + terms['r']) or 'none'}.\n")
-    print("| flight | MAE, deg |")
-    print("|---|---|")
-    for n, p in te.items():
-        print(f"| {n} | {p['e_b_rot_mae']:.4f} |")
     surf = surface_terms()
-    print("\n## The surface sensors' errors in the side force, as β, test flights\n")
-    print("The side force's sensed-surface terms: " +
-          (", ".join(f"{t} ({prop}, sensed as {col})" for t, prop, col, _ in surf) or "none") + ".\n")
-    print("| flight | MAE, deg | error std per surface (sensed − true, deg) |")
-    print("|---|---|---|")
-    for n, p in te.items():
-        stds = ", ".join(f"{c} {v:.4f}" for c, v in p["surf_std"].items())
-        print(f"| {n} | {p['e_b_surf_mae']:.4f} | {stds} |")
+    unseen = [
+        ("The rotational turbulence's side force", "aero-rate terms", terms["p"] + terms["r"],
+         "e_b_rot_mae", None),
+        ("The surface sensors' errors in the side force", "sensed-surface terms",
+         [f"{t} ({prop}, sensed as {col})" for t, prop, col, _ in surf], "e_b_surf_mae",
+         lambda p: ", ".join(f"{c} {v:.4f}" for c, v in p["surf_std"].items())),
+    ]
+    for title, what, names, mae_key, extra in unseen:
+        print(f"\n## {title}, as β, test flights\n")
+        print(f"The side force's {what}: {', '.join(names) or 'none'}.\n")
+        print("| flight | MAE, deg |" + (" error std per surface (sensed − true, deg) |" if extra else ""))
+        print("|---|---|" + ("---|" if extra else ""))
+        for n, p in te.items():
+            print(f"| {n} | {p[mae_key]:.4f} |" + (f" {extra(p)} |" if extra else ""))
     print("\n## Lateral specific force per degree of β, test flights (medians over the frames)\n")
     print("| flight | m/s² per deg | without the drag's β term (CYβ − C_D) | mean q̄ kPa | mean mass kg |")
     print("|---|---|---|---|---|")
