@@ -171,10 +171,12 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// `egi-dynamics` (dynamics + [`EGI_ALPHA`] / [`EGI_BETA`]: needs the `egi` suite), `egi-hybrid`
 /// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
 /// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]),
-/// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas: the shipped
-/// set), `egi-hybrid-turb`
-/// (egi-hybrid + the filter's turbulence index), or explicit
-/// comma-separated lists `alpha=a,b,...;beta=c,d,...`.
+/// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas), `egi120-beta`
+/// and `egi120` (egi-hybrid-fast-d2 + the 120 Hz sub-samples of β's, and α's, channels: `egi120` is
+/// the shipped set), `egi120-side-scale` (egi120 + the filter's side-force scale for β),
+/// `egi-hybrid-scales` (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
+/// `egi-hybrid-turb` (egi-hybrid + the filter's turbulence index), or explicit comma-separated
+/// lists `alpha=a,b,...;beta=c,d,...`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FeatureSet {
     pub name: String,
@@ -422,6 +424,7 @@ mod tests {
     fn the_side_scale_set_is_egi120_with_the_side_force_scale_last_in_beta() {
         let base = FeatureSet::parse("egi120").unwrap();
         let s = FeatureSet::parse("egi120-side-scale").unwrap();
+        assert_eq!(s.name, "egi120-side-scale");
         assert_eq!(s.alpha, base.alpha);
         assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
         assert_eq!(s.beta[base.beta.len()..], [Feature::FilterSideScale]);
