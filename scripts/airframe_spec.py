@@ -1,10 +1,16 @@
 """What scripts/airframe-sensitivity and scripts/airframe-randomise share: the F-16's mean
-aerodynamic chord and a writer of the scripts/airframe-variant specs they make (top-level scalars,
-then tables of scalars, lists and inline tables)."""
+aerodynamic chord, the aerodynamic terms the randomiser draws and how widely, and a writer of the
+scripts/airframe-variant specs they make (top-level scalars, then tables of scalars, lists and
+inline tables)."""
 
 import json
 
 MAC_IN = 11.32 * 12  # the F-16's mean aerodynamic chord (f16.xml <chord>), inches
+
+# `scripts/airframe-randomise --terms`: each term times a factor uniform in 1 ± width·spread, drawn in
+# this order (a seed's draws depend on it); SPREAD is its default spread.
+SPREAD = 0.1
+TERM_WIDTHS = (("CLDflaps", 2.0), ("CLDlef", 2.0), ("CYDa", 2.0), ("CYdr", 2.0), ("CYb", 1.0))
 
 
 def toml_key(k):

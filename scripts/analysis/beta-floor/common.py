@@ -148,26 +148,39 @@ def isa(alt_m):
 _BETA_PROPS = ("aero/beta-rad", "aero/mag-beta-rad", "aero/beta-deg", "aero/mag-beta-deg")
 
 
+def _reads(fn, tags=("property", "independentVar")):
+    """The properties a JSBSim function reads: its factors and, by default, its tables' indices."""
+    return [(e.text or "").strip() for e in fn.iter() if e.tag in tags]
+
+
+def _axis_functions(*axes):
+    """(axis, function) for every aero/coefficient function of the model's `axes`."""
+    for a in _MODEL.find("aerodynamics").findall("axis"):
+        if a.get("name") in axes:
+            for fn in a.findall("function"):
+                yield a.get("name"), fn
+
+
+def _helpers_reading(test):
+    """The model's helper functions (aero/function/...) that read a property passing `test`: a term
+    that reads one of them reads that property without naming it."""
+    return {fn.get("name") for fn in _MODEL.find("aerodynamics").findall("function")
+            if any(test(p) for p in _reads(fn))}
+
+
 def beta_terms():
     """{'SIDE': [...], 'DRAG': [...]}: the model's aero/coefficient functions of those axes that read β."""
-    aero = _MODEL.find("aerodynamics")
-    axes = {a.get("name") for a in aero.findall("axis")}
+    axes = {a.get("name") for a in _MODEL.find("aerodynamics").findall("axis")}
     if not {"DRAG", "SIDE", "LIFT"} <= axes:
         raise SystemExit(f"{AIRCRAFT_XML}: aerodynamics not in wind axes ({sorted(axes)})")
-    def reads(fn):
-        return [(e.text or "").strip() for e in fn.iter() if e.tag in ("property", "independentVar")]
-    # helper functions (aero/function/...) that read β would hide it from the test below
-    hidden = {fn.get("name") for fn in aero.findall("function") if any("beta" in p for p in reads(fn))}
+    hidden = _helpers_reading(lambda p: "beta" in p)
     out = {"SIDE": [], "DRAG": []}
-    for a in aero.findall("axis"):
-        if a.get("name") not in out:
-            continue
-        for fn in a.findall("function"):
-            beta = [p for p in reads(fn) if "beta" in p or p in hidden]
-            if any(p not in _BETA_PROPS for p in beta):
-                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads {beta}: not a known degree-1 β term")
-            if beta:
-                out[a.get("name")].append(fn.get("name"))
+    for axis, fn in _axis_functions(*out):
+        beta = [p for p in _reads(fn) if "beta" in p or p in hidden]
+        if any(p not in _BETA_PROPS for p in beta):
+            raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads {beta}: not a known degree-1 β term")
+        if beta:
+            out[axis].append(fn.get("name"))
     return out
 
 
@@ -181,24 +194,17 @@ _RATE_PROPS = {"velocities/p-aero-rad_sec": "p", "velocities/r-aero-rad_sec": "r
 
 def rate_terms():
     """{'p': [...], 'r': [...]}: the model's SIDE aero/coefficient functions that read each aero rate."""
-    aero = _MODEL.find("aerodynamics")
-
-    def reads(fn):
-        return [(e.text or "").strip() for e in fn.iter() if e.tag in ("property", "independentVar")]
-    hidden = {fn.get("name") for fn in aero.findall("function") if any(p in _RATE_PROPS for p in reads(fn))}
+    hidden = _helpers_reading(lambda p: p in _RATE_PROPS)
     out = {"p": [], "r": []}
-    for a in aero.findall("axis"):
-        if a.get("name") != "SIDE":
-            continue
-        for fn in a.findall("function"):
-            props = reads(fn)
-            if any(p in hidden for p in props):
-                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads an aero rate through a helper function")
-            rates = {_RATE_PROPS[p] for p in props if p in _RATE_PROPS}
-            if len(rates) > 1:
-                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads both aero rates: not a degree-1 rate term")
-            for rate in rates:
-                out[rate].append(fn.get("name"))
+    for _, fn in _axis_functions("SIDE"):
+        props = _reads(fn)
+        if any(p in hidden for p in props):
+            raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads an aero rate through a helper function")
+        rates = {_RATE_PROPS[p] for p in props if p in _RATE_PROPS}
+        if len(rates) > 1:
+            raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads both aero rates: not a degree-1 rate term")
+        for rate in rates:
+            out[rate].append(fn.get("name"))
     return out
 
 
@@ -234,20 +240,15 @@ def surface_terms():
         for a, b, c in (("-deg", "-rad", np.pi / 180.0), ("-rad", "-deg", 180.0 / np.pi)):
             if prop.endswith(a):
                 sensed.setdefault(prop[: -len(a)] + b, (col, c / per))
-    aero = _MODEL.find("aerodynamics")
     out = []
-    for a in aero.findall("axis"):
-        if a.get("name") != "SIDE":
-            continue
-        for fn in a.findall("function"):
-            # factors only: a surface that indexes a table (the c172p's flap in CYb, CYp, CYr) is not
-            # a degree-1 term of it, and its sensor's 0.02° moves such a term by nothing that counts
-            props = [(e.text or "").strip() for e in fn.iter("property")]
-            hits = [p for p in dict.fromkeys(props) if p in sensed]
-            if len(hits) > 1:
-                raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads two sensed surfaces {hits}")
-            for p in hits:
-                out.append((fn.get("name"), p, *sensed[p]))
+    for _, fn in _axis_functions("SIDE"):
+        # factors only: a surface that indexes a table (the c172p's flap in CYb, CYp, CYr) is not a
+        # degree-1 term of it, and its sensor's 0.02° moves such a term by nothing that counts
+        hits = [p for p in dict.fromkeys(_reads(fn, ("property",))) if p in sensed]
+        if len(hits) > 1:
+            raise SystemExit(f"{AIRCRAFT_XML}: {fn.get('name')} reads two sensed surfaces {hits}")
+        for p in hits:
+            out.append((fn.get("name"), p, *sensed[p]))
     return out
 
 
@@ -269,13 +270,10 @@ def key(prop):
 def beta_term_slopes(r):
     """(∂Y/∂β, ∂D/∂β), lbf per rad, at every step of a replay `r` (replay120.py)."""
     b = r["aero__beta_rad"]
-    ok = b != 0.0
     t = beta_terms()
 
-    def per_beta(axis):
-        s = sum(r[key(p)] for p in t[axis]) if t[axis] else np.zeros_like(b)
-        v = np.where(ok, s / np.where(ok, b, 1.0), np.nan)
-        return np.interp(np.arange(len(v)), np.flatnonzero(ok), v[ok])  # β exactly 0: the neighbours'
+    def per_beta(axis):  # β exactly 0: the neighbours' slope
+        return per_unit(sum(r[key(p)] for p in t[axis]), b, floor=0.0) if t[axis] else np.zeros_like(b)
     return per_beta("SIDE"), per_beta("DRAG")
 
 

@@ -90,6 +90,7 @@ def prep(n):
     # The rotational turbulence's lateral force (the side force's aero-rate terms less what the gyros'
     # body rates give them), in β as the accelerometer error is: a force the oracle cannot tell from β.
     e_b_rot = turbulence_side_force_lbs(r) / ms * FT * k_beta
+    rot_lagged = imu_lag_120(e_b_rot)  # through the accelerometer, as the turbulent β is
     # The surface sensors' errors: the side force an estimator computes from the sensed surfaces (the
     # unit's 120 Hz samples, truth + ADC noise, quantized) less the true one, which it takes from the
     # lateral force before reading β.
@@ -106,9 +107,8 @@ def prep(n):
         f6=imu_filter_120(bt, fc=6.0)[i],
         f6_real=imu_filter_120(bt, fc=6.0)[i] + e20,
         y120=lagged, y120_real=lagged + e_b, y120_white=lagged + e_b_white,
-        y120_rot=lagged + imu_lag_120(e_b_rot), y120_real_rot=lagged + e_b + imu_lag_120(e_b_rot),
-        y120_real_surf=lagged + e_b + e_b_surf,
-        y120_all=lagged + e_b + imu_lag_120(e_b_rot) + e_b_surf,
+        y120_rot=lagged + rot_lagged, y120_real_rot=lagged + e_b + rot_lagged,
+        y120_real_surf=lagged + e_b + e_b_surf, y120_all=lagged + e_b + rot_lagged + e_b_surf,
         e_b_rot_mae=mae(e_b_rot[i]), e_b_surf_mae=mae(e_b_surf[i]), surf_std=surf_std,
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
