@@ -421,11 +421,11 @@ pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 /// this many more frames in which that angle is computed (2 s at 20 Hz), whatever its 1σ: set at
 /// once, cleared late. The networks' errors stay correlated for seconds (a lag behind a fast α
 /// change near the stall), so a 1σ that has just come back under the limit does not yet mean the
-/// error has. Chosen on the validation flights of `large` with the shipped estimator: frames with α
-/// off by more than 2° or β by more than 1° and no flag, against the share of frames flagged
-/// `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 19, 10, 3, 2, 1, 1 frames and 8.9,
-/// 11.2, 11.8, 12.2, 12.6, 12.9 % (docs/filter.md). Past 40 frames each further
-/// half second buys at most one frame.
+/// error has. Measured on the validation flights of `large` with the shipped estimator: frames
+/// with α off by more than 2° or β by more than 1° and no flag, against the share of frames
+/// flagged `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 16, 9, 1, 1, 1, 1 frames
+/// and 8.9, 10.9, 11.4, 11.7, 12.0, 12.3 % (docs/filter.md). One constant for every aircraft: on
+/// the c172p's validation flights 40 frames still buy 10 frames over 30.
 pub const UNCERTAIN_HOLD_FRAMES: u8 = 40;
 
 /// One angle's [`Flags::UNCERTAIN`]: raised at once when its 1σ goes above the limit, lowered
