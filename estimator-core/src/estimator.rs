@@ -424,8 +424,8 @@ pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 /// error has. Measured on the validation flights of `large` with the shipped estimator: frames
 /// with α off by more than 2° or β by more than 1° and no flag, against the share of frames
 /// flagged `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 16, 9, 1, 1, 1, 1 frames
-/// and 8.9, 10.9, 11.4, 11.7, 12.0, 12.3 % (docs/filter.md). One constant for every aircraft: on
-/// the c172p's validation flights 40 frames still buy 10 frames over 30.
+/// and 8.9, 10.9, 11.4, 11.7, 12.0, 12.3 % (docs/filter.md). One constant for every aircraft: 40
+/// was chosen on an earlier 1σ fit, and with the current one 30 and 40 leave the same one frame.
 pub const UNCERTAIN_HOLD_FRAMES: u8 = 40;
 
 /// One angle's [`Flags::UNCERTAIN`]: raised at once when its 1σ goes above the limit, lowered
