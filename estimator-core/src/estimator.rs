@@ -97,10 +97,10 @@ impl Flags {
     /// estimate is computed; its 1σ says how far to trust it.
     pub const UNCERTAIN: u16 = 1 << 14;
 
-    /// The flags that say an angle was computed from less than training saw (the 1σ's `Caution`
-    /// term, [`crate::uncertainty::Term::Caution`]).
+    /// The flags that say an angle was computed from less than training saw and raise the 1σ's
+    /// `Caution` term ([`crate::uncertainty::Term::Caution`]). `FILTER_DIVERGED`, also a caution,
+    /// raises a term of its own ([`crate::uncertainty::Term::FilterDiverged`]).
     pub const CAUTIONS: u16 = Self::HISTORY_SHORT
-        | Self::FILTER_DIVERGED
         | Self::GPS_SUBSTITUTED
         | Self::ALPHA_FROM_FILTER
         | Self::BETA_DISAGREES;
@@ -676,6 +676,7 @@ impl<'m> Estimator<'m> {
             out_of_envelope: flags & Flags::OUT_OF_ENVELOPE != 0,
             turbulent: flags & Flags::TURBULENCE != 0,
             caution: flags & Flags::CAUTIONS != 0,
+            filter_diverged: flags & Flags::FILTER_DIVERGED != 0,
         };
         let angles = [
             (

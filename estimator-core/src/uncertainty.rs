@@ -65,10 +65,14 @@ pub enum Term {
     Turbulent,
     /// One degree with any other caution ([`Indicators::caution`]).
     Caution,
+    /// One degree with `FILTER_DIVERGED` ([`Indicators::filter_diverged`]): a step on which the
+    /// filter gave its prediction alone or kept failing its gate costs more than a frame lost on
+    /// the link, so it has its own weight.
+    FilterDiverged,
 }
 
 /// How many terms there are.
-pub const TERMS: usize = 13;
+pub const TERMS: usize = 14;
 
 impl Term {
     /// Every term, in index order.
@@ -86,6 +90,7 @@ impl Term {
         Term::OutOfEnvelope,
         Term::Turbulent,
         Term::Caution,
+        Term::FilterDiverged,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -103,6 +108,7 @@ impl Term {
             Term::OutOfEnvelope => "out_of_envelope",
             Term::Turbulent => "turbulent",
             Term::Caution => "caution",
+            Term::FilterDiverged => "filter_diverged",
         }
     }
 }
@@ -115,9 +121,10 @@ pub struct Indicators {
     pub out_of_envelope: bool,
     /// `TURBULENCE`.
     pub turbulent: bool,
-    /// `HISTORY_SHORT`, `FILTER_DIVERGED`, `GPS_SUBSTITUTED`, `ALPHA_FROM_FILTER` or
-    /// `BETA_DISAGREES`.
+    /// `HISTORY_SHORT`, `GPS_SUBSTITUTED`, `ALPHA_FROM_FILTER` or `BETA_DISAGREES`.
     pub caution: bool,
+    /// `FILTER_DIVERGED`.
+    pub filter_diverged: bool,
 }
 
 /// Which angle a 1σ is for.
@@ -264,6 +271,7 @@ pub fn terms(
             Term::OutOfEnvelope => on(flags.out_of_envelope),
             Term::Turbulent => on(flags.turbulent),
             Term::Caution => on(flags.caution),
+            Term::FilterDiverged => on(flags.filter_diverged),
         };
     }
     t
@@ -328,6 +336,14 @@ mod tests {
         assert_eq!(t[Term::OutOfEnvelope as usize], ONE_DEG);
         assert_eq!(t[Term::Caution as usize], ONE_DEG);
         assert_eq!(t[Term::Turbulent as usize], 0);
+        assert_eq!(t[Term::FilterDiverged as usize], 0);
+        let diverged = Indicators {
+            filter_diverged: true,
+            ..Indicators::default()
+        };
+        let t = terms(Angle::Alpha, &v, 0, diverged, 0);
+        assert_eq!(t[Term::FilterDiverged as usize], ONE_DEG);
+        assert_eq!(t[Term::Caution as usize], 0);
     }
 
     #[test]
