@@ -6,7 +6,12 @@ default_aircraft=f16
 
 # aircraft_build NAME: refuses an undescribed NAME (exit 2); sets `target` to the build's target
 # directory and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for another aircraft (unsets them
-# for the default one).
+# for the default one). Another aircraft's first build starts from a copy of the default build's
+# compiled dependencies (target/release, target/thumbv7em-none-eabihf) when those exist: only the
+# crates that read the aircraft (estimator-core and the workspace crates above it) are compiled
+# again, instead of every dependency (about 13 min on 2 cores). Cargo's fingerprints do not
+# depend on the target directory; hil-sim's build script, which records it, reruns with
+# ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR.
 aircraft_build() {
   if [ ! -f "$root/aircraft/$1.toml" ]; then
     local known
@@ -21,5 +26,17 @@ aircraft_build() {
     export ESTIMATOR_AIRCRAFT="$1"
     target="$root/target/$1"
     export CARGO_TARGET_DIR="$target"
+    local dir
+    for dir in release thumbv7em-none-eabihf; do
+      if [ ! -e "$target/$dir" ] && [ -d "$root/target/$dir" ]; then
+        mkdir -p "$target"
+        rm -rf "$target/$dir.seeding"
+        cp -a "$root/target/$dir" "$target/$dir.seeding"
+        # Not the default aircraft's binaries: only what cargo rebuilds or finds fresh.
+        find "$target/$dir.seeding" -maxdepth 2 -type f ! -path '*/.fingerprint/*' ! -path '*/deps/*' \
+          ! -path '*/build/*' -delete
+        mv "$target/$dir.seeding" "$target/$dir"
+      fi
+    done
   fi
 }
