@@ -424,7 +424,7 @@ pub const UNCERTAIN_BETA_MDEG: u16 = 250;
 /// error has. Measured on the validation flights of `large` with the shipped estimator: frames
 /// with α off by more than 2° or β by more than 1° and no flag, against the share of frames
 /// flagged `UNCERTAIN`, for holds of 0, 20, 30, 40, 50 and 60 frames: 16, 9, 1, 1, 1, 1 frames
-/// and 8.9, 10.9, 11.4, 11.7, 12.0, 12.3 % (docs/filter.md). One constant for every aircraft: 40
+/// and 8.9, 11.0, 11.6, 12.0, 12.3, 12.7 % (docs/filter.md). One constant for every aircraft: 40
 /// was chosen on an earlier 1σ fit, and with the current one 30 and 40 leave the same one frame.
 pub const UNCERTAIN_HOLD_FRAMES: u8 = 40;
 

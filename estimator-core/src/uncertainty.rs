@@ -63,7 +63,8 @@ pub enum Term {
     OutOfEnvelope,
     /// One degree with `TURBULENCE` ([`Indicators::turbulent`]).
     Turbulent,
-    /// One degree with any other caution ([`Indicators::caution`]).
+    /// One degree with a caution of `Flags::CAUTIONS` (not `FILTER_DIVERGED`, which has its own
+    /// term; [`Indicators::caution`]).
     Caution,
     /// One degree with `FILTER_DIVERGED` ([`Indicators::filter_diverged`]): a step on which the
     /// filter gave its prediction alone or kept failing its gate costs more than a frame lost on

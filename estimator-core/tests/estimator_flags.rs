@@ -489,6 +489,62 @@ fn turbulence_beyond_the_trained_envelope_is_flagged_while_the_filter_has_input(
 }
 
 #[test]
+fn filter_diverged_and_the_other_cautions_raise_their_own_sigma_terms() {
+    use estimator_core::uncertainty::Term;
+    let b = net(Channel::Rudder, Channel::GyroP, 400_000);
+    // α reads the filter, which gates this made-up flight's updates (`FILTER_DIVERGED`), or not;
+    // either α reads the 200 ms change of the elevator (`HISTORY_SHORT` on frames 0-3 and on
+    // frame 14, after the lost frame 10).
+    let with_filter = net_of(
+        Feature::FilterAirspeed,
+        Feature::Delta(Channel::Elevator, Lag::F4),
+        400_000_000,
+    );
+    let without = net_of(
+        Feature::Sensor(Channel::GpsSpeed),
+        Feature::Delta(Channel::Elevator, Lag::F4),
+        400_000_000,
+    );
+    let (mut diverged, mut caution_alone) = (0, 0);
+    for a in [&with_filter, &without] {
+        let mut e = Estimator::new(a, &b);
+        for s in (0..40).filter(|&s| s != 10) {
+            let mut f = egi_frame(s, 200_000);
+            f.raw[Channel::Heading.index()] += i32::from(s % 3);
+            let flags = e.step(&f).flags;
+            let terms = e.sigma_terms();
+            let on = |set: bool| if set { 1_000 } else { 0 };
+            let fd = flags.has(Flags::FILTER_DIVERGED);
+            let caution = flags.0 & Flags::CAUTIONS != 0;
+            for (angle, held) in [(0, Flags::ALPHA_HELD), (1, Flags::BETA_HELD)] {
+                if flags.has(held) {
+                    continue;
+                }
+                let t = terms[angle];
+                assert_eq!(
+                    t[Term::FilterDiverged as usize],
+                    on(fd),
+                    "frame {s}: {flags:?}"
+                );
+                assert_eq!(
+                    t[Term::Caution as usize],
+                    on(caution),
+                    "frame {s}: {flags:?}"
+                );
+            }
+            diverged += usize::from(fd);
+            caution_alone += usize::from(caution && !fd);
+        }
+    }
+    // Both cases occur, so the assertions above are about something.
+    assert!(
+        diverged > 0 && caution_alone > 0,
+        "{diverged} {caution_alone}"
+    );
+    assert_eq!(Flags::CAUTIONS & Flags::FILTER_DIVERGED, 0);
+}
+
+#[test]
 fn a_filter_lift_scale_outside_training_flags_a_model_that_does_not_read_it() {
     // α reads the filter's α and β, not its lift scale; β reads Table 1 channels only.
     let mut a = net_of(Feature::FilterAlpha, Feature::FilterBeta, 400_000_000);

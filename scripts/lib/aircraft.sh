@@ -4,14 +4,37 @@
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
 default_aircraft=f16
 
+# seed_build DIR: target/NAME/DIR (`target`) starts as a copy of the default build's target/DIR,
+# when the one is missing and the other exists, so that another aircraft's first build compiles
+# only the crates that read the aircraft (estimator-core and the workspace crates above it), not
+# every dependency again as in an empty target directory. Cargo's fingerprints do not depend on
+# the target directory; hil-sim's build script, which records it, reruns with ESTIMATOR_AIRCRAFT.
+# Held under a lock of its own (two scripts seeding the same aircraft) and under cargo's locks of
+# the source (no build writes it mid-copy); a failed copy leaves no target/NAME/DIR behind.
+seed_build() {
+  local src="$root/target/$1" dst="$target/$1"
+  if [ -e "$dst" ] || [ ! -d "$src" ]; then return 0; fi
+  mkdir -p "$target"
+  (
+    exec {mine}>"$target/.seeding.lock"
+    flock "$mine"
+    [ -e "$dst" ] && exit 0
+    local lock fd
+    while IFS= read -r lock; do
+      exec {fd}>"$lock"
+      flock "$fd"
+    done < <(find "$src" -maxdepth 2 -name .cargo-lock)
+    rm -rf "$dst.seeding"
+    cp -a "$src" "$dst.seeding"
+    # Not the default aircraft's binaries: at depth 2 only deps/ holds files cargo reuses.
+    (cd "$dst.seeding" && find . -maxdepth 2 -type f ! -path './deps/*' -delete)
+    mv -T "$dst.seeding" "$dst"
+  )
+}
+
 # aircraft_build NAME: refuses an undescribed NAME (exit 2); sets `target` to the build's target
 # directory and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for another aircraft (unsets them
-# for the default one). Another aircraft's first build starts from a copy of the default build's
-# compiled dependencies (target/release, target/thumbv7em-none-eabihf) when those exist: only the
-# crates that read the aircraft (estimator-core and the workspace crates above it) are compiled
-# again, instead of every dependency (about 13 min on 2 cores). Cargo's fingerprints do not
-# depend on the target directory; hil-sim's build script, which records it, reruns with
-# ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR.
+# for the default one). Another aircraft's first build starts from the default's (seed_build).
 aircraft_build() {
   if [ ! -f "$root/aircraft/$1.toml" ]; then
     local known
@@ -26,17 +49,7 @@ aircraft_build() {
     export ESTIMATOR_AIRCRAFT="$1"
     target="$root/target/$1"
     export CARGO_TARGET_DIR="$target"
-    local dir
-    for dir in release thumbv7em-none-eabihf; do
-      if [ ! -e "$target/$dir" ] && [ -d "$root/target/$dir" ]; then
-        mkdir -p "$target"
-        rm -rf "$target/$dir.seeding"
-        cp -a "$root/target/$dir" "$target/$dir.seeding"
-        # Not the default aircraft's binaries: only what cargo rebuilds or finds fresh.
-        find "$target/$dir.seeding" -maxdepth 2 -type f ! -path '*/.fingerprint/*' ! -path '*/deps/*' \
-          ! -path '*/build/*' -delete
-        mv "$target/$dir.seeding" "$target/$dir"
-      fi
-    done
+    seed_build release
+    seed_build thumbv7em-none-eabihf
   fi
 }
