@@ -4,16 +4,27 @@
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
 default_aircraft=f16
 
-# seed_build DIR: target/NAME/DIR (`target`) starts as a copy of the default build's target/DIR,
-# when the one is missing and the other exists, so that another aircraft's first build compiles
-# only the crates that read the aircraft (estimator-core and the workspace crates above it), not
-# every dependency again as in an empty target directory. Cargo's fingerprints do not depend on
-# the target directory; hil-sim's build script, which records it, reruns with ESTIMATOR_AIRCRAFT.
-# Held under a lock of its own (two scripts seeding the same aircraft) and under cargo's locks of
-# the source (no build writes it mid-copy); a failed copy leaves no target/NAME/DIR behind.
+# seed_build DIR NAME: target/NAME/DIR (`target`) starts as a copy of another aircraft's
+# target/OTHER/DIR when there is one (it holds what the same commands compiled for that aircraft),
+# else of the default build's target/DIR, so that NAME's first build compiles only the crates that
+# read the aircraft (estimator-core and the workspace crates above it), not every dependency again
+# as in an empty target directory (a dependency is compiled once per feature set, and
+# `cargo test -p A` and `cargo build -p B` ask for different ones). Cargo's fingerprints do not
+# depend on the target directory; hil-sim's build script, which records it, reruns with
+# ESTIMATOR_AIRCRAFT. Held under a lock of its own (two scripts seeding the same aircraft) and
+# under cargo's locks of the source (no build writes it mid-copy); a failed copy leaves no
+# target/NAME/DIR behind.
 seed_build() {
-  local src="$root/target/$1" dst="$target/$1"
-  if [ -e "$dst" ] || [ ! -d "$src" ]; then return 0; fi
+  local dst="$target/$1" src="$root/target/$1" toml other
+  if [ -e "$dst" ]; then return 0; fi
+  for toml in "$root"/aircraft/*.toml; do
+    other="$(basename "$toml" .toml)"
+    if [ "$other" != "$2" ] && [ "$other" != "$default_aircraft" ] && [ -d "$root/target/$other/$1" ]; then
+      src="$root/target/$other/$1"
+      break
+    fi
+  done
+  if [ ! -d "$src" ]; then return 0; fi
   mkdir -p "$target"
   (
     exec {mine}>"$target/.seeding.lock"
@@ -26,7 +37,7 @@ seed_build() {
     done < <(find "$src" -maxdepth 2 -name .cargo-lock)
     rm -rf "$dst.seeding"
     cp -a "$src" "$dst.seeding"
-    # Not the default aircraft's binaries: at depth 2 only deps/ holds files cargo reuses.
+    # Not the source's binaries: at depth 2 only deps/ holds files cargo reuses.
     (cd "$dst.seeding" && find . -maxdepth 2 -type f ! -path './deps/*' -delete)
     mv -T "$dst.seeding" "$dst"
   )
@@ -49,7 +60,8 @@ aircraft_build() {
     export ESTIMATOR_AIRCRAFT="$1"
     target="$root/target/$1"
     export CARGO_TARGET_DIR="$target"
-    seed_build release
-    seed_build thumbv7em-none-eabihf
+    seed_build release "$1"
+    seed_build thumbv7em-none-eabihf "$1"
+    seed_build firmware "$1"  # the flight image's host side: its build scripts and proc macros
   fi
 }
