@@ -18,8 +18,6 @@ fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     let target_dir = out.ancestors().nth(4).unwrap();
     println!("cargo:rustc-env=HIL_TARGET_DIR={}", target_dir.display());
-    // A target directory seeded from another one (scripts/lib/aircraft.sh) must not keep its path.
-    println!("cargo:rerun-if-env-changed=CARGO_TARGET_DIR");
     let path = manifest.join("src/maneuver").join(format!("{name}.rs"));
     println!("cargo:rerun-if-changed={}", path.display());
     assert!(

@@ -45,7 +45,8 @@ seed_build() {
 
 # aircraft_build NAME: refuses an undescribed NAME (exit 2); sets `target` to the build's target
 # directory and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for another aircraft (unsets them
-# for the default one). Another aircraft's first build starts from the default's (seed_build).
+# for the default one). Another aircraft's first build starts from a sibling's or the default's
+# (seed_build).
 aircraft_build() {
   if [ ! -f "$root/aircraft/$1.toml" ]; then
     local known
