@@ -1,4 +1,4 @@
-# Sourced by scripts/hil, scripts/wcet and scripts/test: which build flies aircraft NAME
+# Sourced by scripts/hil, scripts/wcet, scripts/e2e-small and scripts/test: which build flies aircraft NAME
 # (aircraft/NAME.toml). The default aircraft (DEFAULT_AIRCRAFT in estimator-core/aircraft_name.rs)
 # is the tree's own build in target/; another keeps its own, target/NAME, so the default's stays as
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
