@@ -4,7 +4,8 @@ because of its airframe or because the same gust is a larger angle at its airspe
 For every test flight of the datasets given: the Milspec severity its script set, its gust angle
 (the RMS of the wind's turbulent part, every axis, over the mean true airspeed: the angle a gust
 of that size makes) and the shipped estimator's α and β MAE (from `trainer eval --json`, written
-beside the dataset as DIR.eval.json). Prints Markdown: one table by severity, one by gust angle.
+beside the dataset as DIR.eval.json). Prints Markdown: one table by severity, one by gust angle,
+and one of the estimate's 1σ and flags over the same flights, per aircraft.
 
 usage: .venv/bin/python scripts/analysis/beta-by-gust/table.py NAME=DIR[,DIR...] ...
 """
@@ -20,6 +21,27 @@ import numpy as np
 # The turbulent part of the wind: what a 30 s centred moving mean does not explain (the steady wind
 # and its slow changes, and the 1-cosine gusts' slow part, stay in the mean).
 WINDOW_S, HZ = 30.0, 20
+
+
+def sigma_row(name, dirs):
+    """Per aircraft: the share of α and β errors within 2σ, `UNCERTAIN` frames, and the silent
+    frames (every flag clear, α off by more than 2° or β by more than 1°) with the flights that
+    hold them."""
+    frames = within_a = within_b = uncertain = silent = 0
+    holders = []
+    for d in dirs:
+        ev = json.load(open(d.rstrip("/") + ".eval.json"))
+        k = ev["sigma"]["alpha"]["frames"]
+        frames += k
+        within_a += ev["sigma"]["alpha"]["within_2sigma"] * k
+        within_b += ev["sigma"]["beta"]["within_2sigma"] * k
+        for f in ev["flagged"]:
+            uncertain += f["uncertain"]
+            silent += f["silent"]
+            if f["silent"]:
+                holders.append(f"{os.path.basename(d.rstrip('/'))}/{f['flight']} {f['silent']}")
+    return (f"| {name} | {frames} | {100 * within_a / frames:.1f} % | {100 * within_b / frames:.1f} % | "
+            f"{100 * uncertain / frames:.1f} % | {silent} | {', '.join(holders) or '–'} |")
 
 
 def flight_rows(name, d):
@@ -48,6 +70,7 @@ def main():
         sys.exit(__doc__)
     rows = []
     names = []
+    sigma = []
     for arg in sys.argv[1:]:
         name, _, dirs = arg.partition("=")
         if not dirs:
@@ -55,6 +78,7 @@ def main():
         names.append(name)
         for d in dirs.split(","):
             rows += list(flight_rows(name, d))
+        sigma.append(sigma_row(name, dirs.split(",")))
 
     def table(title, key, bins, label):
         print(f"### {title}\n")
@@ -83,6 +107,10 @@ def main():
         sel = [r for r in rows if r["aircraft"] == n]
         print(f"- {n}: mean true airspeed {np.mean([r['vt'] for r in sel]):.0f} m/s, "
               f"gust RMS {np.mean([r['sigma_mps'] for r in sel]):.2f} m/s")
+    print("\n### The 1σ and the flags on the same flights\n")
+    print("| aircraft | frames | α within 2σ | β within 2σ | `UNCERTAIN` | silent frames | flights with silent frames |")
+    print("|---|---|---|---|---|---|---|")
+    print("\n".join(sigma))
 
 
 if __name__ == "__main__":
