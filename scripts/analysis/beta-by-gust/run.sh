@@ -9,19 +9,19 @@
 #
 # Needs each aircraft's release build (the F-16's in target/, another's in target/NAME:
 # ESTIMATOR_AIRCRAFT=NAME CARGO_TARGET_DIR=target/NAME cargo build --release -p hil-sim -p trainer)
-# and the project's .venv (scripts/bootstrap). Writes into out/turb/; about 1 min per aircraft on
-# 2 cores.
+# and the project's .venv (scripts/bootstrap). Writes into out/turb/ (flights kept; an evaluation
+# redone when its build is newer); about 1 min per aircraft on 2 cores.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh
+. scripts/lib/aircraft.sh  # default_aircraft
 [ $# -gt 0 ] || set -- "$default_aircraft" c172p
 out=out/turb
 mkdir -p "$out"
 args=()
 for name in "$@"; do
-  (aircraft_build "$name") || exit 2  # refuses an undescribed name
+  [ -f "aircraft/$name.toml" ] || { echo "beta-by-gust: no aircraft/$name.toml (docs/aircraft.md)" >&2; exit 2; }
   bin=target/release opt=()
   [ "$name" = "$default_aircraft" ] || bin="target/$name/release" opt=(--aircraft "$name")
   for b in hil-sim trainer; do
@@ -30,8 +30,11 @@ for name in "$@"; do
   dirs=()
   for seed in 11 12 13 14 15 16 17 18; do
     d="$out/$name-$seed"
-    [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate "${opt[@]}" --preset paper --test-only --seed "$seed" --out "$d" >&2
-    [ -f "$d.eval.json" ] || "$bin/trainer" eval "${opt[@]}" --data "$d" --json > "$d.eval.json"
+    [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate ${opt[@]+"${opt[@]}"} --preset paper --test-only --seed "$seed" --out "$d" >&2
+    if [ ! "$d.eval.json" -nt "$bin/trainer" ]; then
+      "$bin/trainer" eval ${opt[@]+"${opt[@]}"} --data "$d" --json > "$d.eval.json.new"
+      mv "$d.eval.json.new" "$d.eval.json"
+    fi
     dirs+=("$d")
   done
   args+=("$name=$(IFS=,; echo "${dirs[*]}")")

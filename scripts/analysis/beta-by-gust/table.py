@@ -27,20 +27,21 @@ def sigma_row(name, dirs):
     """Per aircraft: the share of α and β errors within 2σ, `UNCERTAIN` frames, and the silent
     frames (every flag clear, α off by more than 2° or β by more than 1°) with the flights that
     hold them."""
-    frames = within_a = within_b = uncertain = silent = 0
+    frames = frames_b = within_a = within_b = uncertain = silent = 0
     holders = []
     for d in dirs:
         ev = json.load(open(d.rstrip("/") + ".eval.json"))
-        k = ev["sigma"]["alpha"]["frames"]
+        k, kb = ev["sigma"]["alpha"]["frames"], ev["sigma"]["beta"]["frames"]
         frames += k
+        frames_b += kb
         within_a += ev["sigma"]["alpha"]["within_2sigma"] * k
-        within_b += ev["sigma"]["beta"]["within_2sigma"] * k
+        within_b += ev["sigma"]["beta"]["within_2sigma"] * kb
         for f in ev["flagged"]:
             uncertain += f["uncertain"]
             silent += f["silent"]
             if f["silent"]:
                 holders.append(f"{os.path.basename(d.rstrip('/'))}/{f['flight']} {f['silent']}")
-    return (f"| {name} | {frames} | {100 * within_a / frames:.1f} % | {100 * within_b / frames:.1f} % | "
+    return (f"| {name} | {frames} | {100 * within_a / frames:.1f} % | {100 * within_b / frames_b:.1f} % | "
             f"{100 * uncertain / frames:.1f} % | {silent} | {', '.join(holders) or '–'} |")
 
 

@@ -18,6 +18,13 @@ def columns(path, names):
 truth = columns(sys.argv[1], ["time_s", "vt_mps", "tef_deg", "alpha_deg", "wind_down_mps"])
 est = columns(sys.argv[2], ["time_s", "received", "alpha_true_deg", "alpha_deg", "sigma_alpha_deg",
                             "beta_true_deg", "beta_deg", "sigma_beta_deg"])
+# The vertical wind's departure from its 30-s centred mean (the ends: what the window holds), over
+# the airspeed: the gust's angle, on the whole flight before frames are matched.
+w = truth["wind_down_mps"]
+c = np.concatenate([[0.0], np.cumsum(w)])
+i = np.arange(len(w))
+lo, hi = np.maximum(0, i - 300), np.minimum(len(w), i + 300)
+truth["gust_deg"] = np.degrees(np.abs(w - (c[hi] - c[lo]) / (hi - lo)) / truth["vt_mps"])
 # Frames are matched by their 20 Hz index; lost frames carry no estimate.
 frame = {int(round(t * 20)): i for i, t in enumerate(truth["time_s"])}
 pick = np.array([frame.get(int(round(t * 20)), -1) for t in est["time_s"]])
@@ -27,12 +34,7 @@ est = {k: v[keep] for k, v in est.items()}
 err_a = np.abs(est["alpha_deg"] - est["alpha_true_deg"])
 err_b = np.abs(est["beta_deg"] - est["beta_true_deg"])
 sig_a, sig_b = est["sigma_alpha_deg"], est["sigma_beta_deg"]
-# The vertical wind's departure from its 30-s centred mean, over the airspeed: the gust's angle.
-w = truth["wind_down_mps"]
-c = np.concatenate([[0.0], np.cumsum(w)])
-i = np.arange(len(w))
-lo, hi = np.maximum(0, i - 300), np.minimum(len(w), i + 300)
-gust = np.degrees(np.abs(w - (c[hi] - c[lo]) / (hi - lo)) / truth["vt_mps"])
+gust = truth["gust_deg"]
 
 
 def row(label, s):
