@@ -1,30 +1,21 @@
-# Sourced by scripts/hil, scripts/wcet, scripts/e2e-small and scripts/test: which build flies aircraft NAME
+# Sourced by scripts/hil, scripts/wcet, scripts/e2e-small, scripts/test and scripts/analysis: which build flies aircraft NAME
 # (aircraft/NAME.toml). The default aircraft (DEFAULT_AIRCRAFT in estimator-core/aircraft_name.rs)
 # is the tree's own build in target/; another keeps its own, target/NAME, so the default's stays as
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
 default_aircraft=f16
 
-# seed_build DIR NAME: target/NAME/DIR (`target`) starts as a copy of another aircraft's
-# target/OTHER/DIR when there is one (it holds what the same commands compiled for that aircraft),
-# else of the default build's target/DIR, so that NAME's first build compiles only the crates that
-# read the aircraft (estimator-core and the workspace crates above it), not every dependency again
-# as in an empty target directory (a dependency is compiled once per feature set, and
-# `cargo test -p A` and `cargo build -p B` ask for different ones). Cargo's fingerprints do not
-# depend on the target directory; hil-sim's build script, which records it, reruns with
-# ESTIMATOR_AIRCRAFT. Held under a lock of its own (two scripts seeding the same aircraft) and
-# under cargo's locks of the source (no build writes it mid-copy); a failed copy leaves no
-# target/NAME/DIR behind.
+# seed_build DIR: target/NAME/DIR (`target`) starts as a copy of the default build's target/DIR,
+# when the one is missing and the other exists, so that another aircraft's first build compiles
+# only the crates that read the aircraft (estimator-core and the workspace crates above it), not
+# every dependency again as in an empty target directory. The default's holds every dependency the
+# scripts' builds need, once: they all resolve the same features (scripts/check-features). Cargo's
+# fingerprints do not depend on the target directory; hil-sim's build script, which records it,
+# reruns with ESTIMATOR_AIRCRAFT. Held under a lock of its own (two scripts seeding the same
+# aircraft) and under cargo's locks of the source (no build writes it mid-copy); a failed copy
+# leaves no target/NAME/DIR behind.
 seed_build() {
-  local dst="$target/$1" src="$root/target/$1" toml other
-  if [ -e "$dst" ]; then return 0; fi
-  for toml in "$root"/aircraft/*.toml; do
-    other="$(basename "$toml" .toml)"
-    if [ "$other" != "$2" ] && [ "$other" != "$default_aircraft" ] && [ -d "$root/target/$other/$1" ]; then
-      src="$root/target/$other/$1"
-      break
-    fi
-  done
-  if [ ! -d "$src" ]; then return 0; fi
+  local src="$root/target/$1" dst="$target/$1"
+  if [ -e "$dst" ] || [ ! -d "$src" ]; then return 0; fi
   mkdir -p "$target"
   (
     exec {mine}>"$target/.seeding.lock"
@@ -43,26 +34,29 @@ seed_build() {
   )
 }
 
-# aircraft_build NAME: refuses an undescribed NAME (exit 2); sets `target` to the build's target
-# directory and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for another aircraft (unsets them
-# for the default one). Another aircraft's first build starts from a sibling's or the default's
-# (seed_build).
-aircraft_build() {
+# aircraft_target NAME: refuses an undescribed NAME (exit 2); sets `target` to its build's target
+# directory (for reading its binaries: nothing is built or exported).
+aircraft_target() {
   if [ ! -f "$root/aircraft/$1.toml" ]; then
     local known
     known="$(cd "$root/aircraft" && ls -- *.toml | sed 's/\.toml$//' | paste -sd' ' -)"
     echo "scripts/$(basename "$0"): --aircraft $1: no aircraft/$1.toml (described: $known; docs/aircraft.md)" >&2
     exit 2
   fi
+  if [ "$1" = "$default_aircraft" ]; then target="$root/target"; else target="$root/target/$1"; fi
+}
+
+# aircraft_build NAME: aircraft_target, and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for
+# another aircraft (unsets them for the default one). Another aircraft's first build starts from
+# the default's (seed_build).
+aircraft_build() {
+  aircraft_target "$1"
   if [ "$1" = "$default_aircraft" ]; then
     unset ESTIMATOR_AIRCRAFT CARGO_TARGET_DIR
-    target="$root/target"
   else
-    export ESTIMATOR_AIRCRAFT="$1"
-    target="$root/target/$1"
-    export CARGO_TARGET_DIR="$target"
-    seed_build release "$1"
-    seed_build thumbv7em-none-eabihf "$1"
-    seed_build firmware "$1"  # the flight image's host side: its build scripts and proc macros
+    export ESTIMATOR_AIRCRAFT="$1" CARGO_TARGET_DIR="$target"
+    seed_build release
+    seed_build thumbv7em-none-eabihf
+    seed_build firmware  # the flight image's host side: its build scripts and proc macros
   fi
 }

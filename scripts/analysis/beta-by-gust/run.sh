@@ -15,24 +15,23 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft
+. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target
 [ $# -gt 0 ] || set -- "$default_aircraft" c172p
 out=out/turb
 mkdir -p "$out"
 args=()
 for name in "$@"; do
-  [ -f "aircraft/$name.toml" ] || { echo "beta-by-gust: no aircraft/$name.toml (docs/aircraft.md)" >&2; exit 2; }
-  bin=target/release opt=()
-  [ "$name" = "$default_aircraft" ] || bin="target/$name/release" opt=(--aircraft "$name")
+  aircraft_target "$name"
+  bin="$target/release"
   for b in hil-sim trainer; do
     [ -x "$bin/$b" ] || { echo "beta-by-gust: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
   done
   dirs=()
   for seed in 11 12 13 14 15 16 17 18; do
     d="$out/$name-$seed"
-    [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate ${opt[@]+"${opt[@]}"} --preset paper --test-only --seed "$seed" --out "$d" >&2
+    [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate --aircraft "$name" --preset paper --test-only --seed "$seed" --out "$d" >&2
     if [ ! "$d.eval.json" -nt "$bin/trainer" ]; then
-      "$bin/trainer" eval ${opt[@]+"${opt[@]}"} --data "$d" --json > "$d.eval.json.new"
+      "$bin/trainer" eval --aircraft "$name" --data "$d" --json > "$d.eval.json.new"
       mv "$d.eval.json.new" "$d.eval.json"
     fi
     dirs+=("$d")

@@ -18,7 +18,7 @@ aircraft="$1" csv="$2"
 [ -f "$csv" ] || { echo "sigma-by-bin: no $csv (a flight of a dataset: hil-sim generate or fly)" >&2; exit 2; }
 # shellcheck source=../../lib/aircraft.sh
 . scripts/lib/aircraft.sh
-aircraft_build "$aircraft"
+aircraft_target "$aircraft"
 hil="$target/release/hil-sim"
 [ -x "$hil" ] || { echo "sigma-by-bin: no $hil: build the aircraft's release build first (header)" >&2; exit 2; }
 out="out/sigma-by-bin/$aircraft-$(basename "$csv" .csv)"
