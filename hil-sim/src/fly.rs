@@ -207,13 +207,17 @@ fn fly_planned(
 mod tests {
     use super::*;
 
-    /// 30 s of the stock test flight (a climbing turn with its sensors' GPS fixes, EGI outputs and
-    /// fuel updates), flown once reading only what the plan names and once reading every property
-    /// at every step: every sample's truth and sensed values are the same bits. Moving any property
-    /// of `read_plan` to a schedule that misses a step where it is used fails this.
+    /// 30 s of the build's aircraft's stock test flight (`flights/NAME_test_flight.xml`: for the
+    /// F-16 a climbing turn with its sensors' GPS fixes, EGI outputs and fuel updates), flown once
+    /// reading only what the plan names and once reading every property at every step: every
+    /// sample's truth and sensed values are the same bits. Moving any property of `read_plan` to a
+    /// schedule that misses a step where it is used fails this.
     #[test]
     fn a_planned_flight_is_the_every_step_flight_bit_for_bit() {
-        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../flights/f16_test_flight.xml");
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!(
+            "../flights/{}_test_flight.xml",
+            estimator_core::aircraft::AIRCRAFT.name
+        ));
         let cfg = FlyConfig {
             seed: 7,
             max_time_s: Some(30.0),
