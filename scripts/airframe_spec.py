@@ -1,9 +1,16 @@
 """What scripts/airframe-sensitivity and scripts/airframe-randomise share: the F-16's mean
-aerodynamic chord, the aerodynamic terms the randomiser draws and how widely, and a writer of the
-scripts/airframe-variant specs they make (top-level scalars, then tables of scalars, lists and
-inline tables)."""
+aerodynamic chord, the aerodynamic terms the randomiser draws and how widely, what a base model
+offers a variant (`base_model`: its chord, terms and whether its engines are turbines), and a writer
+of the scripts/airframe-variant specs they make (top-level scalars, then tables of scalars, lists
+and inline tables)."""
 
 import json
+import os
+import subprocess
+import tomllib
+import xml.etree.ElementTree as ET
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 MAC_IN = 11.32 * 12  # the F-16's mean aerodynamic chord (f16.xml <chord>), inches
 
@@ -11,6 +18,42 @@ MAC_IN = 11.32 * 12  # the F-16's mean aerodynamic chord (f16.xml <chord>), inch
 # this order (a seed's draws depend on it); SPREAD is its default spread.
 SPREAD = 0.1
 TERM_WIDTHS = (("CLDflaps", 2.0), ("CLDlef", 2.0), ("CYDa", 2.0), ("CYdr", 2.0), ("CYb", 1.0))
+
+
+def aircraft_model(name):
+    """The JSBSim model of the aircraft description aircraft/NAME.toml (its `[jsbsim] model`)."""
+    path = os.path.join(ROOT, "aircraft", name + ".toml")
+    try:
+        with open(path, "rb") as f:
+            return tomllib.load(f)["jsbsim"]["model"]
+    except (OSError, tomllib.TOMLDecodeError, KeyError) as e:
+        known = " ".join(sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "aircraft")) if f.endswith(".toml")))
+        raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
+
+
+def base_model(model):
+    """What the pinned jsbsim package's MODEL/MODEL.xml offers a variant: its mean aerodynamic chord
+    in inches (`<chord>`), the names of its aerodynamic terms, and whether every engine is a
+    turbine (the only engine whose thrust scripts/airframe-variant scales)."""
+    py = os.environ.get("HIL_PYTHON") or os.path.join(ROOT, ".venv", "bin", "python")
+    r = subprocess.run([py, "-c", "import jsbsim; print(jsbsim.get_default_root_dir())"],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"no jsbsim package in {py}: run scripts/bootstrap\n{r.stderr[-500:]}")
+    data = r.stdout.strip()
+    root = ET.parse(os.path.join(data, "aircraft", model, model + ".xml")).getroot()
+    chord = root.find("metrics/chord")
+    to_in = {"FT": 12.0, "IN": 1.0, "M": 39.37007874015748}
+    if chord is None or chord.get("unit", "FT") not in to_in:
+        raise SystemExit(f"{model}.xml: no <chord> in FT, IN or M")
+    terms = {fn.get("name", "").rsplit("/", 1)[-1] for fn in root.iterfind("aerodynamics/axis/function")}
+    def turbine(file):
+        local = os.path.join(data, "aircraft", model, "Engines", file + ".xml")
+        path = local if os.path.exists(local) else os.path.join(data, "engine", file + ".xml")
+        return ET.parse(path).getroot().tag == "turbine_engine"
+    engines = [e.get("file") for e in root.iterfind("propulsion/engine")]
+    return {"mac_in": float(chord.text) * to_in[chord.get("unit", "FT")], "terms": terms,
+            "turbines": bool(engines) and all(turbine(e) for e in engines)}
 
 
 def toml_key(k):
