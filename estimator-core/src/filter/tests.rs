@@ -37,11 +37,7 @@ impl World {
         let world = world_point();
         let WorldPoint { alpha, v, .. } = world;
         let beta = 1f32.to_radians();
-        let vb = Vector3::new(
-            v * libm::cosf(alpha) * libm::cosf(beta),
-            v * libm::sinf(beta),
-            v * libm::sinf(alpha) * libm::cosf(beta),
-        );
+        let vb = body_air_velocity(alpha, beta, v);
         let phi = 40f32.to_radians() * libm::sinf(t / 20.0);
         let theta = alpha;
         let psi = wrap_pi(0.8 * t / 10.0 + 0.3 * libm::sinf(t / 7.0));
@@ -80,6 +76,15 @@ impl World {
         inp.accel_mps2 = [f.x, f.y, f.z];
         (inp, Truth { alpha, beta })
     }
+}
+
+/// The body-axis air velocity at `alpha`, `beta` (rad) and true airspeed `v` (m/s).
+fn body_air_velocity(alpha: f32, beta: f32, v: f32) -> Vector3<f32> {
+    Vector3::new(
+        v * libm::cosf(alpha) * libm::cosf(beta),
+        v * libm::sinf(beta),
+        v * libm::sinf(alpha) * libm::cosf(beta),
+    )
 }
 
 /// Half the aircraft's internal fuel, kg.
@@ -169,11 +174,7 @@ fn cruise_speed(cfg: &Config, alpha: f32, alt_m: f32) -> f32 {
     // The lift grows with v² (and a little with Mach): a few fixed-point steps.
     let mut v = 100.0f32;
     for _ in 0..4 {
-        let vb = Vector3::new(
-            v * libm::cosf(alpha) * libm::cosf(beta),
-            v * libm::sinf(beta),
-            v * libm::sinf(alpha) * libm::cosf(beta),
-        );
+        let vb = body_air_velocity(alpha, beta, v);
         let f = model_force(
             &vb,
             &inp,
@@ -650,11 +651,7 @@ fn normal_force_sigma(c: &Config) -> f32 {
         )
         .map_or(f32::NAN, |f| f.z)
     };
-    let vb = Vector3::new(
-        v * libm::cosf(alpha) * libm::cosf(beta),
-        v * libm::sinf(beta),
-        v * libm::sinf(alpha) * libm::cosf(beta),
-    );
+    let vb = body_air_velocity(alpha, beta, v);
     let gust = force(vb + Vector3::new(0.0, 0.0, c.gust_sigma)) - force(vb);
     libm::hypotf(gust, c.accel_sigma[1])
 }
