@@ -26,7 +26,7 @@ def aircraft_model(name):
     try:
         with open(path, "rb") as f:
             return tomllib.load(f)["jsbsim"]["model"]
-    except (OSError, tomllib.TOMLDecodeError, KeyError) as e:
+    except (OSError, tomllib.TOMLDecodeError, KeyError, TypeError) as e:
         known = " ".join(sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "aircraft")) if f.endswith(".toml")))
         raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
 
@@ -36,23 +36,32 @@ def base_model(model):
     in inches (`<chord>`), the names of its aerodynamic terms, and whether every engine is a
     turbine (the only engine whose thrust scripts/airframe-variant scales)."""
     py = os.environ.get("HIL_PYTHON") or os.path.join(ROOT, ".venv", "bin", "python")
-    r = subprocess.run([py, "-c", "import jsbsim; print(jsbsim.get_default_root_dir())"],
-                       capture_output=True, text=True)
+    try:
+        r = subprocess.run([py, "-c", "import jsbsim; print(jsbsim.get_default_root_dir())"],
+                           capture_output=True, text=True)
+    except OSError as e:
+        raise SystemExit(f"cannot run {py} ({e}): run scripts/bootstrap")
     if r.returncode != 0:
         raise SystemExit(f"no jsbsim package in {py}: run scripts/bootstrap\n{r.stderr[-500:]}")
     data = r.stdout.strip()
-    root = ET.parse(os.path.join(data, "aircraft", model, model + ".xml")).getroot()
+    xml = os.path.join(data, "aircraft", model, model + ".xml")
+    try:
+        root = ET.parse(xml).getroot()
+    except (OSError, ET.ParseError) as e:
+        raise SystemExit(f"cannot read the JSBSim model {xml}: {e}")
     chord = root.find("metrics/chord")
     to_in = {"FT": 12.0, "IN": 1.0, "M": 39.37007874015748}
-    if chord is None or chord.get("unit", "FT") not in to_in:
-        raise SystemExit(f"{model}.xml: no <chord> in FT, IN or M")
+    try:
+        mac_in = float(chord.text) * to_in[chord.get("unit", "FT")]
+    except (AttributeError, TypeError, ValueError, KeyError):
+        raise SystemExit(f"{xml}: no <chord> in FT, IN or M") from None
     terms = {fn.get("name", "").rsplit("/", 1)[-1] for fn in root.iterfind("aerodynamics/axis/function")}
     def turbine(file):
         local = os.path.join(data, "aircraft", model, "Engines", file + ".xml")
         path = local if os.path.exists(local) else os.path.join(data, "engine", file + ".xml")
         return ET.parse(path).getroot().tag == "turbine_engine"
     engines = [e.get("file") for e in root.iterfind("propulsion/engine")]
-    return {"mac_in": float(chord.text) * to_in[chord.get("unit", "FT")], "terms": terms,
+    return {"mac_in": mac_in, "terms": terms,
             "turbines": bool(engines) and all(turbine(e) for e in engines)}
 
 

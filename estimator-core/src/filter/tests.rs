@@ -476,7 +476,8 @@ fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
         1.0,
         "a filter without the state holds the side-force scale"
     );
-    assert_learnt("side-force scale", run(learning), 1.15, 0.1, 0.03);
+    let sigma0 = learning.side_scale_sigma0;
+    assert_learnt("side-force scale", run(learning), 1.15, sigma0, 0.03);
 }
 
 #[test]
@@ -649,7 +650,8 @@ fn normal_force_sigma(c: &Config) -> f32 {
             c.gear_norm,
             Unsteady::default(),
         )
-        .map_or(f32::NAN, |f| f.z)
+        .map(|f| f.z)
+        .expect("the model's force at the world point")
     };
     let vb = body_air_velocity(alpha, beta, v);
     let gust = force(vb + Vector3::new(0.0, 0.0, c.gust_sigma)) - force(vb);
@@ -658,7 +660,7 @@ fn normal_force_sigma(c: &Config) -> f32 {
 
 /// The normal accelerometer's error in the gate test: 4 g, or twice the gate's reach (√gate times
 /// [`normal_force_sigma`], 10σ) where that is more: 12.6 g for the c172p, whose filter takes a
-/// 4 g error in after 7 gated steps as the 5σ gust its prior allows (docs/aircraft.md).
+/// 4 g error in after 7 gated steps as a 3.2σ gust of its prior (docs/aircraft.md).
 fn gross_normal_error(c: &Config) -> f32 {
     40f32.max(2.0 * libm::sqrtf(c.gate) * normal_force_sigma(c))
 }
