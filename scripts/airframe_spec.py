@@ -1,9 +1,10 @@
-"""What scripts/airframe-sensitivity and scripts/airframe-randomise share: the F-16's mean
-aerodynamic chord, the aerodynamic terms the randomiser draws and how widely, what a base model
-offers a variant (`base_model`: its chord, terms and whether its engines are turbines), and a writer
+"""What scripts/airframe-sensitivity, airframe-randomise and airframe-variant share: the aerodynamic
+terms the randomiser draws and how widely, what a base model offers a variant (`base_model`: its
+chord, terms and whether its engines are turbines), where JSBSim finds an engine file, and a writer
 of the scripts/airframe-variant specs they make (top-level scalars, then tables of scalars, lists
 and inline tables)."""
 
+import functools
 import json
 import os
 import subprocess
@@ -11,8 +12,6 @@ import tomllib
 import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-MAC_IN = 11.32 * 12  # the F-16's mean aerodynamic chord (f16.xml <chord>), inches
 
 # `scripts/airframe-randomise --terms`: each term times a factor uniform in 1 ± width·spread, drawn in
 # this order (a seed's draws depend on it); SPREAD is its default spread.
@@ -31,10 +30,16 @@ def aircraft_model(name):
         raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
 
 
-def base_model(model):
-    """What the pinned jsbsim package's MODEL/MODEL.xml offers a variant: its mean aerodynamic chord
-    in inches (`<chord>`), the names of its aerodynamic terms, and whether every engine is a
-    turbine (the only engine whose thrust scripts/airframe-variant scales)."""
+def engine_file(data_root, model_dir, name):
+    """The engine file JSBSim loads for `<engine file="NAME">` of the model in `model_dir`: the
+    model's own `Engines/NAME.xml`, else the package's `engine/NAME.xml` under `data_root`."""
+    local = os.path.join(model_dir, "Engines", name + ".xml")
+    return local if os.path.exists(local) else os.path.join(data_root, "engine", name + ".xml")
+
+
+@functools.cache
+def jsbsim_root():
+    """The pinned jsbsim package's data root, asked of the project's venv (or HIL_PYTHON)."""
     py = os.environ.get("HIL_PYTHON") or os.path.join(ROOT, ".venv", "bin", "python")
     try:
         r = subprocess.run([py, "-c", "import jsbsim; print(jsbsim.get_default_root_dir())"],
@@ -43,8 +48,16 @@ def base_model(model):
         raise SystemExit(f"cannot run {py} ({e}): run scripts/bootstrap")
     if r.returncode != 0:
         raise SystemExit(f"no jsbsim package in {py}: run scripts/bootstrap\n{r.stderr[-500:]}")
-    data = r.stdout.strip()
-    xml = os.path.join(data, "aircraft", model, model + ".xml")
+    return r.stdout.strip()
+
+
+def base_model(model):
+    """What the pinned jsbsim package's MODEL/MODEL.xml offers a variant: its mean aerodynamic chord
+    in inches (`<chord>`), the names of its aerodynamic terms, and whether every engine is a
+    turbine (the only engine whose thrust scripts/airframe-variant scales)."""
+    data = jsbsim_root()
+    model_dir = os.path.join(data, "aircraft", model)
+    xml = os.path.join(model_dir, model + ".xml")
     try:
         root = ET.parse(xml).getroot()
     except (OSError, ET.ParseError) as e:
@@ -57,9 +70,7 @@ def base_model(model):
         raise SystemExit(f"{xml}: no <chord> in FT, IN or M") from None
     terms = {fn.get("name", "").rsplit("/", 1)[-1] for fn in root.iterfind("aerodynamics/axis/function")}
     def turbine(file):
-        local = os.path.join(data, "aircraft", model, "Engines", file + ".xml")
-        path = local if os.path.exists(local) else os.path.join(data, "engine", file + ".xml")
-        return ET.parse(path).getroot().tag == "turbine_engine"
+        return ET.parse(engine_file(data, model_dir, file)).getroot().tag == "turbine_engine"
     engines = [e.get("file") for e in root.iterfind("propulsion/engine")]
     return {"mac_in": mac_in, "terms": terms,
             "turbines": bool(engines) and all(turbine(e) for e in engines)}
