@@ -27,9 +27,21 @@ seed_build() {
       flock "$fd"
     done < <(find "$src" -maxdepth 2 -name .cargo-lock)
     rm -rf "$dst.seeding"
-    cp -a "$src" "$dst.seeding"
-    # Not the source's binaries: at depth 2 only deps/ holds files cargo reuses.
-    (cd "$dst.seeding" && find . -maxdepth 2 -type f ! -path './deps/*' -delete)
+    # Only what cargo reuses, of each profile's directory (DIR itself, as target/release, or the
+    # ones under a target triple's): its fingerprints, the build scripts' outputs and the compiled
+    # crates; not the binaries, examples or anything else a command left there, nor the test and
+    # binary executables in deps/ (they link estimator-core, so are rebuilt anyway).
+    local profile part
+    while IFS= read -r profile; do
+      mkdir -p "$dst.seeding/$profile"
+      for part in .fingerprint build deps; do
+        if [ -d "$src/$profile/$part" ]; then cp -a "$src/$profile/$part" "$dst.seeding/$profile/$part"; fi
+      done
+      if [ -d "$dst.seeding/$profile/deps" ]; then
+        find "$dst.seeding/$profile/deps" -maxdepth 1 -type f \
+          ! -name '*.rlib' ! -name '*.rmeta' ! -name '*.so' ! -name '*.d' -delete
+      fi
+    done < <(cd "$src" && if [ -d .fingerprint ]; then echo .; else find . -mindepth 2 -maxdepth 2 -name .fingerprint -type d -printf '%h\n'; fi)
     mv -T "$dst.seeding" "$dst"
   )
 }
