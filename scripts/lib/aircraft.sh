@@ -4,10 +4,11 @@
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
 default_aircraft=f16
 
-# seed_build DIR: target/NAME/DIR (`target`) starts as a copy of the default build's target/DIR,
-# when the one is missing and the other exists, so that another aircraft's first build compiles
-# only the crates that read the aircraft (estimator-core and the workspace crates above it), not
-# every dependency again as in an empty target directory. The default's holds every dependency the
+# seed_build DIR: target/NAME/DIR (`target`) starts from the default build's target/DIR (what
+# cargo reuses of its profile directories: see below), when the one is missing and the other
+# exists, so that another aircraft's first build compiles only the crates that read the aircraft
+# (estimator-core and the workspace crates above it), not every dependency again as in an empty
+# target directory. The default's holds every dependency the
 # scripts' builds need, once: they all resolve the same features (scripts/check-features). Cargo's
 # fingerprints do not depend on the target directory; hil-sim's build script, which records it,
 # reruns with ESTIMATOR_AIRCRAFT. Held under a lock of its own (two scripts seeding the same
@@ -29,8 +30,9 @@ seed_build() {
     rm -rf "$dst.seeding"
     # Only what cargo reuses, of each profile's directory (DIR itself, as target/release, or the
     # ones under a target triple's): its fingerprints, the build scripts' outputs and the compiled
-    # crates; not the binaries, examples or anything else a command left there, nor the test and
-    # binary executables in deps/ (they link estimator-core, so are rebuilt anyway).
+    # crates (rlib, rmeta, a, so and their .d); not the binaries, examples or anything else a
+    # command left there, nor the test and binary executables in deps/ (they link estimator-core,
+    # so are rebuilt anyway).
     local profile part
     while IFS= read -r profile; do
       mkdir -p "$dst.seeding/$profile"
@@ -39,9 +41,10 @@ seed_build() {
       done
       if [ -d "$dst.seeding/$profile/deps" ]; then
         find "$dst.seeding/$profile/deps" -maxdepth 1 -type f \
-          ! -name '*.rlib' ! -name '*.rmeta' ! -name '*.so' ! -name '*.d' -delete
+          ! -name '*.rlib' ! -name '*.rmeta' ! -name '*.a' ! -name '*.so' ! -name '*.d' -delete
       fi
     done < <(cd "$src" && if [ -d .fingerprint ]; then echo .; else find . -mindepth 2 -maxdepth 2 -name .fingerprint -type d -printf '%h\n'; fi)
+    [ -d "$dst.seeding" ] || exit 0  # no profile built there yet: nothing to seed
     mv -T "$dst.seeding" "$dst"
   )
 }
