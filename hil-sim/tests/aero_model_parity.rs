@@ -2,8 +2,9 @@
 //! flight, flown by stock JSBSim (`scripts/jsbsim-stock`), each force term, the wind-axis sums and
 //! the body-axis forces of `estimator_core::aero::MODEL` agree with JSBSim's own
 //! (`aero/coefficient/*`, `forces/fw{x,y,z}-aero-lbs`, `forces/fb{x,y,z}-aero-lbs`, over
-//! `qbar·Sw`) to a small fraction of each coefficient's range over the flight; so do the roll and
-//! yaw moment terms of `aero::MOMENTS` (over `qbar·Sw·bw`), which flight-test calibration reads.
+//! `qbar·Sw`) to a small fraction of each coefficient's range over the flight; so do the roll,
+//! pitch and yaw moment terms of `aero::MOMENTS` (over `qbar·Sw·bw`, in pitch `qbar·Sw·cbarw`),
+//! which flight-test calibration reads.
 //!
 //! Two input paths: JSBSim's own property values in JSBSim's units (checks the tables, products and
 //! the wind-to-body turn alone), and the estimator's units (degrees as the sensor channels carry
@@ -27,7 +28,7 @@ use estimator_core::aero::{
 /// one unit of the XML's last digit (1e-4) in a table cell the flight uses is ~6e-5 of it.
 const TOLERANCE: f64 = 1e-6;
 
-const INPUTS: [&str; 35] = [
+const INPUTS: [&str; 36] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -35,6 +36,7 @@ const INPUTS: [&str; 35] = [
     "aero/qbar-psf",
     "metrics/Sw-sqft",
     "metrics/bw-ft",
+    "metrics/cbarw-ft",
     "velocities/p-aero-rad_sec",
     "velocities/q-aero-rad_sec",
     "velocities/r-aero-rad_sec",
@@ -80,10 +82,22 @@ fn terms() -> impl Iterator<Item = &'static Term<'static>> {
     MODEL.drag.iter().chain(MODEL.side).chain(MODEL.lift)
 }
 
-/// The roll and yaw moment axes (flight-test calibration reads them).
-fn moment_axes() -> [(&'static str, &'static [Term<'static>]); 2] {
-    let m = aero::MOMENTS.expect("JSBSim's F-16 has roll and yaw moments the evaluator reads");
-    [("ROLL", m.roll), ("YAW", m.yaw)]
+/// A moment axis: its name, its terms and JSBSim's coefficient of a term's property.
+type MomentAxis = (
+    &'static str,
+    &'static [Term<'static>],
+    fn(&Step, &str) -> f64,
+);
+
+/// The roll, pitch and yaw moment axes (flight-test calibration reads them), in the order of
+/// [`aero::Moments::coefficients_at`].
+fn moment_axes() -> [MomentAxis; 3] {
+    let m = aero::MOMENTS.expect("JSBSim's F-16 has moments the evaluator reads");
+    [
+        ("ROLL", m.roll, Step::moment_coef),
+        ("PITCH", m.pitch, Step::pitch_coef),
+        ("YAW", m.yaw, Step::moment_coef),
+    ]
 }
 
 /// One JSBSim step: every property above, by name.
@@ -101,9 +115,14 @@ impl Step {
         self.get(p) / (self.get("aero/qbar-psf") * self.get("metrics/Sw-sqft"))
     }
 
-    /// A moment property over qbar·Sw·bw.
+    /// A roll or yaw moment property over qbar·Sw·bw.
     fn moment_coef(&self, p: &str) -> f64 {
         self.coef(p) / self.get("metrics/bw-ft")
+    }
+
+    /// A pitch moment property over qbar·Sw·cbarw.
+    fn pitch_coef(&self, p: &str) -> f64 {
+        self.coef(p) / self.get("metrics/cbarw-ft")
     }
 
     /// JSBSim's own values, in JSBSim's units.
@@ -185,7 +204,7 @@ fn flight() -> &'static [Step] {
             .chain(
                 moment_axes()
                     .into_iter()
-                    .flat_map(|(_, a)| a.iter().map(|t| t.name)),
+                    .flat_map(|(_, a, _)| a.iter().map(|t| t.name)),
             )
             .chain(FORCES)
             .collect();
@@ -349,20 +368,19 @@ fn every_term_and_force_matches_jsbsim_over_the_test_flight() {
     ] {
         ok &= compare_terms(steps, axis, range_of(steps, force), Step::coef);
     }
-    // The roll and yaw moment terms, against the range of their axis's sum; and the sums.
-    for (axis, moment) in moment_axes() {
-        let sum = |s: &Step| moment.iter().map(|t| s.moment_coef(t.name)).sum::<f64>();
+    // The moment terms, against the range of their axis's sum; and the sums.
+    for (k, (axis, moment, coef)) in moment_axes().into_iter().enumerate() {
+        let sum = |s: &Step| moment.iter().map(|t| coef(s, t.name)).sum::<f64>();
         let mut total = Worst::default();
         for s in steps {
             total.add(0.0, 0.0, sum(s));
         }
         let scale = total.range();
-        ok &= compare_terms(steps, moment, scale, Step::moment_coef);
+        ok &= compare_terms(steps, moment, scale, coef);
         let mut w = Worst::default();
         let m = aero::MOMENTS.unwrap();
         for s in steps {
-            let [roll, yaw] = m.coefficients_at(&s.point()).unwrap();
-            let ours = [roll, yaw][usize::from(axis == "YAW")];
+            let ours = m.coefficients_at(&s.point()).unwrap()[k];
             w.add(s.get("simulation/sim-time-sec"), ours, sum(s));
         }
         ok &= report(&format!("{axis} (sum)"), &w, scale);

@@ -41,7 +41,7 @@ const TOLERANCE: f64 = 1e-6;
 
 /// The evaluator's inputs, by the JSBSim property each stands for (|β| and |δe| are derived from
 /// β and δe), and what the coefficients are divided by.
-const INPUTS: [&str; 18] = [
+const INPUTS: [&str; 19] = [
     "aero/alpha-rad",
     "aero/beta-rad",
     "velocities/mach",
@@ -60,6 +60,7 @@ const INPUTS: [&str; 18] = [
     "aero/qbar-psf",
     "metrics/Sw-sqft",
     "metrics/bw-ft",
+    "metrics/cbarw-ft",
 ];
 const FORCES: [&str; 3] = [
     "forces/fwx-aero-lbs",
@@ -71,9 +72,17 @@ fn terms<'a>(m: &'a Model<'a>) -> impl Iterator<Item = &'a Term<'a>> {
     m.drag.iter().chain(m.side).chain(m.lift)
 }
 
-/// The roll and yaw moment terms, where extracted.
-fn moment_terms<'a>(m: &'a Option<Moments<'a>>) -> impl Iterator<Item = &'a Term<'a>> {
-    m.iter().flat_map(|m| m.roll.iter().chain(m.yaw))
+/// The roll, pitch and yaw moment terms, where extracted, each with the length JSBSim's moment
+/// carries beside qbar·Sw (the span in roll and yaw, the mean chord in pitch).
+fn moment_terms<'a>(
+    m: &'a Option<Moments<'a>>,
+) -> impl Iterator<Item = (&'a Term<'a>, &'static str)> {
+    m.iter().flat_map(|m| {
+        let with = |terms: &'a [Term<'a>], length| terms.iter().map(move |t| (t, length));
+        with(m.roll, "metrics/bw-ft")
+            .chain(with(m.pitch, "metrics/cbarw-ft"))
+            .chain(with(m.yaw, "metrics/bw-ft"))
+    })
 }
 
 /// Engine `i`'s deck inputs and JSBSim's thrust, by property.
@@ -98,7 +107,7 @@ fn flight(
         .chain(FORCES.iter())
         .map(|s| s.to_string())
         .chain(terms(model).map(|t| t.name.to_string()))
-        .chain(moment_terms(moments).map(|t| t.name.to_string()))
+        .chain(moment_terms(moments).map(|(t, _)| t.name.to_string()))
         .chain(
             engine
                 .iter()
@@ -152,7 +161,7 @@ fn parity(
     let names: Vec<&str> = terms(model)
         .map(|t| t.name)
         .chain(["CD", "CY", "CL"])
-        .chain(moment_terms(moments).map(|t| t.name))
+        .chain(moment_terms(moments).map(|(t, _)| t.name))
         .collect();
     // (max |err|, min, max) of each quantity; a NaN anywhere fails.
     let mut worst = vec![(0.0f64, f64::MAX, f64::MIN); names.len()];
@@ -167,14 +176,14 @@ fn parity(
                 assert!(c.valid, "{aircraft}: invalid at α {}", p.alpha_rad);
                 [c.wind.drag, c.wind.side, c.wind.lift]
             })
-            .chain(moment_terms(moments).map(|t| t.eval(&p).expect("finite").value));
+            .chain(moment_terms(moments).map(|(t, _)| t.eval(&p).expect("finite").value));
         // JSBSim: each term's property is its force (lbs), as are the wind-axis sums (drag, side,
         // lift with JSBSim's signs, as `Wind` has them).
         let theirs = terms(model)
             .map(|t| s[t.name] / qs)
             .chain(FORCES.map(|f| s[f] / qs))
-            // A moment term's property is its moment (lbs·ft): over qbar·Sw·bw.
-            .chain(moment_terms(moments).map(|t| s[t.name] / (qs * s["metrics/bw-ft"])));
+            // A moment term's property is its moment (lbs·ft): over qbar·Sw·bw (pitch: ·cbarw).
+            .chain(moment_terms(moments).map(|(t, length)| s[t.name] / (qs * s[length])));
         for (((w, o), j), n) in worst.iter_mut().zip(ours).zip(theirs).zip(&names) {
             let e = (f64::from(o) - j).abs();
             if e.is_nan() {

@@ -31,7 +31,12 @@
 //!    `C_l = k_roll·C_l,model + a_l·Y/(q̄Sb) + b_l`, `C_n` alike, the side force's arms a fitted
 //!    beside (the model's moments are about the aerodynamic reference point, the gyros turn about
 //!    the unknown CG). A moment scale joins the calibrated aircraft only when it differs from 1 by
-//!    [`SCALE_SIGNIFICANCE`]·1σ or more.
+//!    [`SCALE_SIGNIFICANCE`]·1σ or more. The pitch moment alike, over q̄·S·c̄:
+//!    `C_m = k_pitch·C_m,model + x·Z/(q̄Sc̄) + z·X/(q̄Sc̄) + b_m`, X and Z the body forces the
+//!    accelerometers measure; x, the normal force's arm, is the CG's distance ahead of the
+//!    reference point, so over the model card's it gives the CG's shift from the model's. The
+//!    pitch scale and the CG are identified and reported, not yet carried by the calibrated
+//!    aircraft.
 //!
 //! 4. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
@@ -60,6 +65,8 @@ use std::path::Path;
 
 /// kg·m² in a slug·ft².
 const SLUG_FT2: f64 = 1.355_817_948;
+/// m in an inch.
+const IN_TO_M: f64 = 0.0254;
 /// N in a pound-force.
 const LBF_TO_N: f64 = 4.448_221_615_260_5;
 /// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
@@ -169,6 +176,9 @@ pub struct Calibration {
     pub moments: Option<[Fit; 2]>,
     /// Why the moments are not identified (`None` when they are).
     pub moments_why: Option<String>,
+    /// Pitch moment coefficient: k_pitch and the normal and axial forces' arms, m (`None`: not
+    /// identified, with the roll and yaw moments, [`Calibration::moments_why`] says why).
+    pub pitch: Option<Fit>,
     /// The corrections identified from each flight alone.
     pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
@@ -198,6 +208,12 @@ pub struct Scales {
     /// The roll and yaw moment axes, × these (`None`: not identified, the model's kept).
     pub roll: Option<Estimate>,
     pub yaw: Option<Estimate>,
+    /// The pitch moment axis, × this (`None`: not identified). Reported, not carried.
+    pub pitch: Option<Estimate>,
+    /// The CG's distance aft of the aerodynamic reference point, in (the normal force's arm in
+    /// pitch, with the inertia's share); over the model card's: the CG's shift aft of the model's,
+    /// as `cg_shift_in` of an airframe spec (`None`: not identified). Reported, not carried.
+    pub cg_aft_in: Option<Estimate>,
     /// The lift's scale at each of [`STALL_KNOTS_DEG`] after the first, over `lift` (1: the
     /// model's stall); `None` where the card did not reach it.
     pub stall: [Option<Estimate>; STALL_PARAMS],
@@ -226,6 +242,16 @@ impl Scales {
             thrust: self.thrust.zip(model.thrust).map(|(a, b)| ratio(a, b)),
             roll: self.roll.zip(model.roll).map(|(a, b)| ratio(a, b)),
             yaw: self.yaw.zip(model.yaw).map(|(a, b)| ratio(a, b)),
+            pitch: self.pitch.zip(model.pitch).map(|(a, b)| ratio(a, b)),
+            // Both arms carry the measured moment's own scale (the description's inertia, the
+            // gyros' filter), which the model card's pitch scale is: the difference over it.
+            cg_aft_in: match (self.cg_aft_in, model.cg_aft_in, model.pitch) {
+                (Some(a), Some(b), Some(k)) => Some(Estimate {
+                    value: (a.value - b.value) / k.value,
+                    std_error: a.std_error.hypot(b.std_error) / k.value,
+                }),
+                _ => None,
+            },
             stall: core::array::from_fn(|j| match (self.stall[j], model.stall[j]) {
                 (Some(a), Some(b)) => Some(ratio(a, b)),
                 (Some(a), None) => beyond_the_model_card(&model.stall, j).map(|b| ratio(a, b)),
@@ -284,6 +310,8 @@ impl Scales {
             thrust: opt(|s| s.thrust),
             roll: opt(|s| s.roll),
             yaw: opt(|s| s.yaw),
+            pitch: opt(|s| s.pitch),
+            cg_aft_in: opt(|s| s.cg_aft_in),
             stall: core::array::from_fn(|j| {
                 cards
                     .iter()
@@ -409,6 +437,9 @@ pub struct PerFlight {
     /// The roll and yaw moment scales (`None`: not identified).
     pub roll: Option<f64>,
     pub yaw: Option<f64>,
+    /// The pitch moment scale and the CG aft of the reference point, in (`None`: not identified).
+    pub pitch: Option<f64>,
+    pub cg_aft_in: Option<f64>,
     /// The lift's scale at the stall knots over the lift scale, where this flight reaches them.
     pub stall: [Option<f64>; STALL_PARAMS],
 }
@@ -882,6 +913,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 thrust: d.as_ref().map(|d| d.get("k_thrust")),
                 roll: None,
                 yaw: None,
+                pitch: None,
+                cg_aft_in: None,
                 stall: core::array::from_fn(|j| {
                     let l = l.as_ref().filter(|_| j < n)?;
                     Some(stall_scale(l, j + 1, &[]).value)
@@ -907,13 +940,13 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             moment_row(r, omega_dot, air(r))
         })
         .collect();
-    let moments_of = |k: Option<usize>| {
-        let rows: Vec<&MomentRow> = mom
-            .iter()
+    let rows_of = |k: Option<usize>| -> Vec<&MomentRow> {
+        mom.iter()
             .filter(|m| k.is_none_or(|k| m.flight == k))
-            .collect();
-        moment_fits(&rows)
+            .collect()
     };
+    let moments_of = |k: Option<usize>| moment_fits(&rows_of(k));
+    let pitch_of = |k: Option<usize>| pitch_fit(&rows_of(k));
     // A card that determines the forces but not the moments still calibrates the forces.
     let (moments, moments_why) = match (MOMENTS, moments_of(None)) {
         (None, _) => (
@@ -933,6 +966,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         ),
         (Some(_), Some(m)) => (Some(m), None),
     };
+    let pitch = moments.as_ref().and_then(|_| pitch_of(None));
     let per_flight: Vec<PerFlight> = per_flight
         .into_iter()
         .enumerate()
@@ -941,6 +975,9 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 let f = moments_of(Some(k));
                 p.roll = f.as_ref().map(|[r, _]| r.get("k_roll"));
                 p.yaw = f.as_ref().map(|[_, y]| y.get("k_yaw"));
+                let f = pitch_of(Some(k));
+                p.pitch = f.as_ref().map(|f| f.get("k_pitch"));
+                p.cg_aft_in = f.as_ref().map(|f| -f.get("arm_x_m") / IN_TO_M);
             }
             p
         })
@@ -965,6 +1002,19 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         yaw: moments
             .as_ref()
             .map(|[_, y]| with_scatter(y, "k_yaw", &spread(|f| f.yaw))),
+        pitch: pitch
+            .as_ref()
+            .map(|p| with_scatter(p, "k_pitch", &spread(|f| f.pitch))),
+        // The arm is the CG's distance ahead of the reference point, m: aft, in inches.
+        cg_aft_in: pitch.as_ref().and_then(|p| p.estimate("arm_x_m")).map(|e| {
+            raised_to_scatter(
+                Estimate {
+                    value: -e.value / IN_TO_M,
+                    std_error: e.std_error / IN_TO_M,
+                },
+                &spread(|f| f.cg_aft_in),
+            )
+        }),
         stall: core::array::from_fn(|j| {
             (j < knots).then(|| {
                 stall_scale(
@@ -991,6 +1041,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         drag_why,
         moments,
         moments_why,
+        pitch,
         per_flight,
         scales,
     })
@@ -1000,10 +1051,18 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
 /// the model's at the corrected boom's air data.
 struct MomentRow {
     flight: usize,
+    /// Roll and yaw, over q̄·S·b.
     measured: [f64; 2],
     model: [f64; 2],
     /// The side force over q̄·S·b, 1/m: the regressor of the moment arm.
     side: f64,
+    /// The pitch moment coefficient the gyros measure and the model's, over q̄·S·c̄.
+    pitch_measured: f64,
+    pitch_model: f64,
+    /// The body forces along x and z (the accelerometers' specific force at the CG times the
+    /// mass) over q̄·S·c̄, 1/m: the regressors of the pitch moment's arms.
+    axial: f64,
+    normal: f64,
 }
 
 /// The moment coefficients of a frame (see [`moment_fits`]) at angular acceleration `omega_dot`
@@ -1029,25 +1088,28 @@ fn moment_row(
         CONFIG.gear_norm,
         estimator_core::aero::Unsteady::default(),
     )?;
-    let model = moments.coefficients_at(&point)?.map(f64::from);
-    let [m_x, _, m_z] = body_moment(
+    let [roll, pitch, yaw] = moments.coefficients_at(&point)?.map(f64::from);
+    let [m_x, m_y, m_z] = body_moment(
         estimator_core::aircraft::AIRCRAFT.mass.inertia_slug_ft2,
         r.inp.gyro_rps.map(f64::from),
         omega_dot,
     );
-    // The side force, N: the accelerometers' lateral specific force at the CG times the mass (no
-    // thrust along y).
-    let fy = f64::from(CONFIG.mass_kg(r.inp.fuel_kg)) * r.f_cg[1];
-    let q_s_b = qbar
-        * f64::from(MODEL.wing_area_ft2)
-        * (FT_TO_M * FT_TO_M)
-        * f64::from(MODEL.wingspan_ft)
-        * FT_TO_M;
+    // The body forces, N: the accelerometers' specific force at the CG times the mass (no thrust
+    // along y; along x the thrust's, whose line the axial arm takes as the drag's).
+    let mass = f64::from(CONFIG.mass_kg(r.inp.fuel_kg));
+    let [fx, fy, fz] = r.f_cg.map(|f| mass * f);
+    let q_s = qbar * f64::from(MODEL.wing_area_ft2) * (FT_TO_M * FT_TO_M);
+    let q_s_b = q_s * f64::from(MODEL.wingspan_ft) * FT_TO_M;
+    let q_s_c = q_s * f64::from(MODEL.chord_ft) * FT_TO_M;
     Some(MomentRow {
         flight: r.flight,
         measured: [m_x / q_s_b, m_z / q_s_b],
-        model,
+        model: [roll, yaw],
         side: fy / q_s_b,
+        pitch_measured: m_y / q_s_c,
+        pitch_model: pitch,
+        axial: fx / q_s_c,
+        normal: fz / q_s_c,
     })
 }
 
@@ -1092,6 +1154,31 @@ fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
         )
     };
     Some([fit(0, "k_roll")?, fit(1, "k_yaw")?])
+}
+
+/// The pitch moment by equation error: `C_m = k_pitch·C_m,model + x·Z/(q̄Sc̄) + z·X/(q̄Sc̄) + b_m`
+/// over `rows` (see [`moment_fits`]), X and Z the body forces the accelerometers measure. JSBSim's
+/// pitch moment is about the aerodynamic reference point and the gyros turn about the CG: with
+/// body x forward and z down, a force there adds `Δz·X − Δx·Z` about the CG (Δ = the reference
+/// point less the CG), so x = −Δx is the CG's distance ahead of the reference point, m, and z its
+/// height below it (the thrust's line taken as the drag's). The constants, one per flight, take
+/// the gyros' bias drift and the moment no model term carries. `None` if the rows do not
+/// determine them.
+fn pitch_fit(rows: &[&MomentRow]) -> Option<Fit> {
+    let (bias_names, biases) = per_flight_columns(rows, |r| r.flight, "bias", |_| 1.0);
+    let mut names = vec!["k_pitch", "arm_x_m", "arm_z_m"];
+    names.extend(bias_names.iter().map(String::as_str));
+    let mut x = vec![
+        rows.iter().map(|r| r.pitch_model).collect(),
+        rows.iter().map(|r| r.normal).collect(),
+        rows.iter().map(|r| r.axial).collect::<Vec<f64>>(),
+    ];
+    x.extend(biases);
+    least_squares(
+        &names,
+        &x,
+        &rows.iter().map(|r| r.pitch_measured).collect::<Vec<_>>(),
+    )
 }
 
 /// One frame of the force equations.
@@ -1521,6 +1608,8 @@ impl Report {
             None => Scales {
                 roll: None,
                 yaw: None,
+                pitch: None,
+                cg_aft_in: None,
                 ..flight_test.scales
             },
         };
@@ -1633,6 +1722,45 @@ fn moments_markdown(r: &Report) -> String {
          yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale; the scale is written into the \
          calibrated aircraft only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more.\n"
     ));
+    m.push_str(&pitch_markdown(r));
+    m
+}
+
+/// The pitch part of `calibration.md`'s moment section: the pitch scale and the CG.
+fn pitch_markdown(r: &Report) -> String {
+    let c = &r.flight_test;
+    let cg = |e: Option<Estimate>| {
+        e.map_or("–".into(), |e| {
+            format!("{:+.2} ± {:.2}", e.value, e.std_error)
+        })
+    };
+    let mut m = String::from(
+        "\n| pitch (± 1σ) | pitch-moment scale | CG aft of the aerodynamic reference point, in |\n|---|---|---|\n",
+    );
+    m.push_str(&format!(
+        "| flight test | {} | {} |\n",
+        cell(c.scales.pitch),
+        cg(c.scales.cg_aft_in)
+    ));
+    if let Some(mc) = &r.model_card {
+        m.push_str(&format!(
+            "| the same card flown on the model | {} | {} |\n",
+            cell(mc.scales.pitch),
+            cg(mc.scales.cg_aft_in)
+        ));
+        m.push_str(&format!(
+            "| **over the model card's** (the CG: its shift aft of the model's) | {} | {} |\n",
+            cell(r.scales.pitch),
+            cg(r.scales.cg_aft_in)
+        ));
+    }
+    m.push_str(
+        "\nThe pitch moment the gyros measure (over q̄·S·c̄) against the model's PITCH axis, with the \
+         arms of the normal and axial forces the accelerometers measure fitted beside: the normal \
+         force's is the CG's distance ahead of the reference point, both arms in the measured \
+         moment's own scale, which the model card's pitch scale removes. They are identified, not \
+         yet carried by the calibrated aircraft.\n",
+    );
     m
 }
 
@@ -1739,7 +1867,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             (None, _) => "–".to_string(),
         };
         format!(
-            "{} / {} / {} / {} / {} / {} / {} / {}",
+            "{} / {} / {} / {} / {} / {} / {} / {} / {} / {}",
             v(p.lift, false),
             v(p.flap, false),
             v(p.offset, true),
@@ -1747,11 +1875,13 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
             v(p.side_controls, false),
             v(p.drag, false),
             v(p.roll, false),
-            v(p.yaw, false)
+            v(p.yaw, false),
+            v(p.pitch, false),
+            v(p.cg_aft_in, true)
         )
     };
     m.push_str(
-        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale / drag scale / roll-moment scale / yaw-moment scale):\n\n| flight | flight test |",
+        "\nFlight by flight (lift scale / flap-lift scale / lift offset / sideslip side-force scale / surface side-force scale / drag scale / roll-moment scale / yaw-moment scale / pitch-moment scale / CG aft of the reference point, in):\n\n| flight | flight test |",
     );
     if r.model_card.is_some() {
         m.push_str(" model card |");
@@ -2141,11 +2271,13 @@ mod tests {
 
     #[test]
     fn the_moment_fits_recover_scale_and_arm_and_only_a_clear_scale_is_applied() {
-        // Two regressors that move independently (a doublet's model moment, a side force).
+        // Regressors that move independently (a doublet's model moment, a side force; in pitch
+        // the normal and axial forces of a pull-up and a throttle step).
         let rows: Vec<MomentRow> = (0..400)
             .map(|k| {
                 let t = k as f64 * 0.05;
                 let (model, side) = ((1.3 * t).sin() * 0.01, (0.7 * t).cos() * 0.02);
+                let (normal, axial) = (-2.0 - (0.4 * t).sin(), 0.1 * (0.9 * t).cos());
                 // Two flights, each with its own constant (a β offset times C_lβ, C_nβ).
                 let flight = k / 200;
                 let bias = [1e-4, -2e-4][flight];
@@ -2157,10 +2289,20 @@ mod tests {
                     ],
                     model: [model, model],
                     side,
+                    // A CG 0.07 m aft of the reference point (its arm −0.07 m), 0.3 m below it.
+                    pitch_measured: 0.95 * model - 0.07 * normal + 0.3 * axial + bias,
+                    pitch_model: model,
+                    axial,
+                    normal,
                 }
             })
             .collect();
         let rows: Vec<&MomentRow> = rows.iter().collect();
+        let pitch = pitch_fit(&rows).unwrap();
+        assert!((pitch.get("k_pitch") - 0.95).abs() < 1e-9);
+        assert!((pitch.get("arm_x_m") + 0.07).abs() < 1e-9);
+        assert!((pitch.get("arm_z_m") - 0.3).abs() < 1e-9);
+        assert!(pitch_fit(&rows[..4]).is_none());
         let [roll, yaw] = moment_fits(&rows).unwrap();
         assert!((roll.get("k_roll") - 1.1).abs() < 1e-9 && (roll.get("arm_m") - 0.2).abs() < 1e-9);
         assert!(
@@ -2179,6 +2321,8 @@ mod tests {
             thrust: yaw,
             roll,
             yaw,
+            pitch: roll,
+            cg_aft_in: yaw,
             stall: [None; STALL_PARAMS],
         };
         // 2.5σ from 1: applied; 1.5σ: the model's kept; not identified: kept.
@@ -2213,5 +2357,14 @@ mod tests {
         assert_eq!(scales(None, e(1.03, 0.02)).applied_thrust(), None);
         assert_eq!(scales(None, e(0.95, 0.001)).applied_thrust(), Some(0.95));
         assert_eq!(scales(None, None).applied_thrust(), None);
+        // Over the model card's: the pitch scale a ratio, the CG the arms' difference over the
+        // card's pitch scale (both arms carry the measured moment's scale).
+        let ft = scales(e(0.76, 0.0), e(2.0, 0.3));
+        let card = scales(e(0.8, 0.0), e(1.2, 0.4));
+        let over = ft.over(&card);
+        assert!((over.pitch.unwrap().value - 0.95).abs() < 1e-12);
+        let cg = over.cg_aft_in.unwrap();
+        assert!((cg.value - 1.0).abs() < 1e-12 && (cg.std_error - 0.625).abs() < 1e-12);
+        assert_eq!(ft.over(&scales(None, e(1.2, 0.4))).cg_aft_in, None);
     }
 }

@@ -6,8 +6,8 @@
 //     aircraft/c172p/c172p.xml  sha256 0af58c613f7bca7e1d85f4b2e178a4d7b0b14dda6d5f79b38c571d9911187aa4
 //         (metrics, aerodynamics, flight control)
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
-// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
-// ascending at compile time.
+// term's: qbar·Sw·bw, in pitch qbar·Sw·cbarw) divided out; the factors keep the XML's order.
+// Breakpoints are checked ascending at compile time.
 
 use super::{Engine, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
@@ -252,9 +252,9 @@ pub static MODEL: Model<'static> = Model {
     stall_hysteresis_rad: Some((0.09, 0.36)),
 };
 
-/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
-/// flight-test calibration identifies their scales; the flight software reads none of them.
-/// Not extracted: aircraft/c172p/c172p.xml axis YAW aero/coefficient/Cndr: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/bw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/bw-ft': 1}): only then is it qbar·Sw·bw times a coefficient
+/// The roll, pitch and yaw moment axes as JSBSim flies them (about the aerodynamic reference
+/// point): flight-test calibration identifies them; the flight software reads none of them.
+/// Not extracted: aircraft/c172p/c172p.xml axis PITCH aero/coefficient/Cmde: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/cbarw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/cbarw-ft': 1}): only then is it qbar·Sw·cbarw times a coefficient
 pub static MOMENTS: Option<Moments<'static>> = None;
 
 /// The engine deck (JSBSim's turbine, `aero::Engine`): flight-test calibration computes the

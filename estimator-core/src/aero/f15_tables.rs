@@ -8,8 +8,8 @@
 //     engine/F100-PW-229.xml  sha256 92fd101fdcc60dc8f41f449a297e134419ff062f5293c2e58678fd07d8127e69
 //         (the engine deck: flight-test calibration's thrust)
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
-// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
-// ascending at compile time.
+// term's: qbar·Sw·bw, in pitch qbar·Sw·cbarw) divided out; the factors keep the XML's order.
+// Breakpoints are checked ascending at compile time.
 
 use super::{Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
@@ -28,6 +28,14 @@ pub static KCLGE: Table1<13> = Table1 {
     y: [1.0610, 1.0330, 1.0310, 1.0330, 1.0280, 1.0110, 1.0090, 1.0050, 1.0020, 1.0000, 1.0000, 1.0000, 1.0000],
 };
 const _: () = assert!(strictly_ascending(&KCLGE.x));
+
+/// `aero/function/kCmge`: Change_in_pitch_due_to_ground_effect
+pub static KCMGE: Table1<13> = Table1 {
+    key: Var::HOverBMac,
+    x: [0.0000, 0.1000, 0.1500, 0.2000, 0.3000, 0.4000, 0.5000, 0.6000, 0.7000, 0.8000, 0.9000, 1.0000, 1.1000],
+    y: [0.9920, 0.9960, 0.9990, 0.9970, 1.0000, 1.0000, 1.0020, 1.0010, 0.9980, 0.9990, 1.0000, 1.0000, 1.0000],
+};
+const _: () = assert!(strictly_ascending(&KCMGE.x));
 
 /// `aero/coefficient/CDalpha`: Drag_due_to_alpha.
 pub static CDALPHA: Table2<11, 2> = Table2 {
@@ -127,6 +135,14 @@ pub static CLDA: Table1<5> = Table1 {
     y: [0.0172, 0.0372, 0.0401, 0.0057, 0.0057],
 };
 const _: () = assert!(strictly_ascending(&CLDA.x));
+
+/// `aero/coefficient/Cmalpha`: Pitch_moment_due_to_alpha.
+pub static CMALPHA: Table1<8> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.3490, -0.2620, -0.1310, 0.0000, 0.2790, 0.4190, 0.5590, 0.8730],
+    y: [-1.1459, -0.5730, -0.0573, -0.2292, -0.5157, -0.8594, -0.4584, -0.5157],
+};
+const _: () = assert!(strictly_ascending(&CMALPHA.x));
 
 /// `aero/coefficient/Cnb`: Yaw_moment_due_to_beta.
 pub static CNB: Table1<5> = Table1 {
@@ -248,6 +264,35 @@ pub static ROLL: [Term<'static>; 5] = [
     },
 ];
 
+/// The PITCH axis: the sum of these terms is the pitch moment coefficient (over qbar·Sw·cbarw).
+pub static PITCH: [Term<'static>; 5] = [
+    // qbar · Sw · cbarw · aero/alpha-rad · aero/function/kCmge · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cmalpha",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Table(&KCMGE), Factor::Table(&CMALPHA)],
+    },
+    // qbar · Sw · cbarw · aero/ci2vel · aero/alphadot-rad_sec · -11.8870
+    Term {
+        name: "aero/coefficient/Cmadot",
+        factors: &[Factor::Var(Var::Ci2Vel), Factor::Var(Var::AlphaDotRps), Factor::Const(-11.8870)],
+    },
+    // qbar · Sw · cbarw · velocities/mach · -0.0000
+    Term {
+        name: "aero/coefficient/CmM",
+        factors: &[Factor::Var(Var::Mach), Factor::Const(-0.0000)],
+    },
+    // qbar · Sw · cbarw · aero/ci2vel · velocities/q-aero-rad_sec · -4.7000
+    Term {
+        name: "aero/coefficient/Cmq",
+        factors: &[Factor::Var(Var::Ci2Vel), Factor::Var(Var::QAeroRps), Factor::Const(-4.7000)],
+    },
+    // qbar · Sw · cbarw · fcs/elevator-pos-rad · -0.4580
+    Term {
+        name: "aero/coefficient/Cmde",
+        factors: &[Factor::Var(Var::ElevatorRad), Factor::Const(-0.4580)],
+    },
+];
+
 /// The YAW axis: the sum of these terms is the yaw moment coefficient (over qbar·Sw·bw).
 pub static YAW: [Term<'static>; 5] = [
     // qbar · Sw · bw · aero/beta-rad · table(aero/alpha-rad)
@@ -289,9 +334,9 @@ pub static MODEL: Model<'static> = Model {
     stall_hysteresis_rad: None,
 };
 
-/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
-/// flight-test calibration identifies their scales; the flight software reads none of them.
-pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, yaw: &YAW });
+/// The roll, pitch and yaw moment axes as JSBSim flies them (about the aerodynamic reference
+/// point): flight-test calibration identifies them; the flight software reads none of them.
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, pitch: &PITCH, yaw: &YAW });
 
 /// `IdleThrust` of F100-PW-229.xml.
 pub static ENGINE_IDLE: EngineTable<6, 8> = EngineTable {

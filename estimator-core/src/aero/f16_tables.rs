@@ -12,8 +12,8 @@
 //     engine/F100-PW-229.xml  sha256 92fd101fdcc60dc8f41f449a297e134419ff062f5293c2e58678fd07d8127e69
 //         (the engine deck: flight-test calibration's thrust)
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
-// term's: qbar·Sw·bw) divided out; the factors keep the XML's order. Breakpoints are checked
-// ascending at compile time.
+// term's: qbar·Sw·bw, in pitch qbar·Sw·cbarw) divided out; the factors keep the XML's order.
+// Breakpoints are checked ascending at compile time.
 
 use super::{Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
 
@@ -281,6 +281,54 @@ pub static CLDR: Table2<12, 7> = Table2 {
 };
 const _: () = assert!(strictly_ascending(&CLDR.rows));
 const _: () = assert!(strictly_ascending(&CLDR.cols));
+
+/// `aero/coefficient/CmDh`: Pitch_moment_due_to_horizontal_tail_deflection.
+pub static CMDH: Table2<12, 5> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::ElevatorRad,
+    rows: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    cols: [-0.4360, -0.2180, 0.0000, 0.2180, 0.4360],
+    data: [
+        [ 0.2050,  0.0810, -0.0460, -0.1740, -0.2590], // aero/alpha-rad = -0.1750
+        [ 0.1680,  0.0770, -0.0200, -0.1450, -0.2020], // aero/alpha-rad = -0.0870
+        [ 0.1860,  0.1070, -0.0090, -0.1210, -0.1840], // aero/alpha-rad = 0.0000
+        [ 0.1960,  0.1100, -0.0050, -0.1270, -0.1930], // aero/alpha-rad = 0.0870
+        [ 0.2130,  0.1100, -0.0060, -0.1290, -0.1990], // aero/alpha-rad = 0.1750
+        [ 0.2510,  0.1410,  0.0100, -0.1020, -0.1500], // aero/alpha-rad = 0.2620
+        [ 0.2450,  0.1270,  0.0060, -0.0970, -0.1600], // aero/alpha-rad = 0.3490
+        [ 0.2380,  0.1190, -0.0010, -0.1130, -0.1670], // aero/alpha-rad = 0.4360
+        [ 0.2520,  0.1330,  0.0140, -0.0870, -0.1040], // aero/alpha-rad = 0.5240
+        [ 0.2310,  0.1080,  0.0000, -0.0840, -0.0760], // aero/alpha-rad = 0.6110
+        [ 0.1980,  0.0810, -0.0130, -0.0690, -0.0410], // aero/alpha-rad = 0.6980
+        [ 0.1920,  0.0930,  0.0320, -0.0060, -0.0050], // aero/alpha-rad = 0.7850
+    ],
+};
+const _: () = assert!(strictly_ascending(&CMDH.rows));
+const _: () = assert!(strictly_ascending(&CMDH.cols));
+
+/// `aero/coefficient/Cma_M`: Change_in_Pitch_moment_due_to_alpha_due_to_mach.
+pub static CMA_M: Table1<6> = Table1 {
+    key: Var::Mach,
+    x: [0.6000, 0.8000, 0.9000, 1.0000, 1.1000, 1.2000],
+    y: [0.0000, 0.0974, -0.3323, -0.9626, -0.8480, -0.7907],
+};
+const _: () = assert!(strictly_ascending(&CMA_M.x));
+
+/// `aero/coefficient/CmDsb`: Change_in_Pitch_moment_due_to_speedbrake.
+pub static CMDSB: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-0.0036, -0.0036, -0.0036, 0.0303, 0.0225, 0.0128, 0.0252, 0.0275, -0.0171, -0.0448, -0.0737, -0.0884],
+};
+const _: () = assert!(strictly_ascending(&CMDSB.x));
+
+/// `aero/coefficient/Cmq`: Pitch_moment_due_to_pitch_rate.
+pub static CMQ: Table1<12> = Table1 {
+    key: Var::AlphaRad,
+    x: [-0.1750, -0.0870, 0.0000, 0.0870, 0.1750, 0.2620, 0.3490, 0.4360, 0.5240, 0.6110, 0.6980, 0.7850],
+    y: [-7.2100, -5.4000, -5.2300, -5.2600, -6.1100, -6.6400, -5.6900, -6.0000, -6.2000, -6.4000, -6.6000, -6.0000],
+};
+const _: () = assert!(strictly_ascending(&CMQ.x));
 
 /// `aero/coefficient/Cnb`: Yaw_moment_due_to_beta.
 pub static CNB: Table2<12, 13> = Table2 {
@@ -550,6 +598,30 @@ pub static ROLL: [Term<'static>; 8] = [
     },
 ];
 
+/// The PITCH axis: the sum of these terms is the pitch moment coefficient (over qbar·Sw·cbarw).
+pub static PITCH: [Term<'static>; 4] = [
+    // qbar · Sw · cbarw · table(aero/alpha-rad, fcs/elevator-pos-rad)
+    Term {
+        name: "aero/coefficient/CmDh",
+        factors: &[Factor::Table(&CMDH)],
+    },
+    // qbar · Sw · cbarw · aero/alpha-rad · table(velocities/mach)
+    Term {
+        name: "aero/coefficient/Cma_M",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Table(&CMA_M)],
+    },
+    // qbar · Sw · cbarw · fcs/speedbrake-pos-rad · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/CmDsb",
+        factors: &[Factor::Var(Var::SpeedbrakeRad), Factor::Table(&CMDSB)],
+    },
+    // qbar · Sw · cbarw · aero/ci2vel · velocities/q-aero-rad_sec · table(aero/alpha-rad)
+    Term {
+        name: "aero/coefficient/Cmq",
+        factors: &[Factor::Var(Var::Ci2Vel), Factor::Var(Var::QAeroRps), Factor::Table(&CMQ)],
+    },
+];
+
 /// The YAW axis: the sum of these terms is the yaw moment coefficient (over qbar·Sw·bw).
 pub static YAW: [Term<'static>; 8] = [
     // qbar · Sw · bw · table(aero/alpha-rad, aero/beta-rad)
@@ -606,9 +678,9 @@ pub static MODEL: Model<'static> = Model {
     stall_hysteresis_rad: None,
 };
 
-/// The roll and yaw moment axes as JSBSim flies them (about the aerodynamic reference point):
-/// flight-test calibration identifies their scales; the flight software reads none of them.
-pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, yaw: &YAW });
+/// The roll, pitch and yaw moment axes as JSBSim flies them (about the aerodynamic reference
+/// point): flight-test calibration identifies them; the flight software reads none of them.
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, pitch: &PITCH, yaw: &YAW });
 
 /// `IdleThrust` of F100-PW-229.xml.
 pub static ENGINE_IDLE: EngineTable<6, 8> = EngineTable {

@@ -515,19 +515,20 @@ impl Term<'_> {
     }
 }
 
-/// An aircraft's roll and yaw moment axes (JSBSim's `ROLL` and `YAW`, body axes, about the
-/// aerodynamic reference point), each a sum of terms over `qbar·Sw·bw`. Flight-test calibration
-/// identifies their scales; the flight software reads neither.
+/// An aircraft's moment axes (JSBSim's `ROLL`, `PITCH` and `YAW`, body axes, about the
+/// aerodynamic reference point), each a sum of terms: roll and yaw over `qbar·Sw·bw`, pitch over
+/// `qbar·Sw·cbarw`. Flight-test calibration identifies them; the flight software reads none.
 #[derive(Clone, Copy)]
 pub struct Moments<'a> {
     pub roll: &'a [Term<'a>],
+    pub pitch: &'a [Term<'a>],
     pub yaw: &'a [Term<'a>],
 }
 
 impl Moments<'_> {
-    /// The roll and yaw moment coefficients at `p`; `None` if `p` or a sum is not finite.
-    pub fn coefficients_at(&self, p: &Point) -> Option<[f32; 2]> {
-        let c = [self.roll, self.yaw].map(|terms| Model::axis(terms, p).value);
+    /// The roll, pitch and yaw moment coefficients at `p`; `None` if `p` or a sum is not finite.
+    pub fn coefficients_at(&self, p: &Point) -> Option<[f32; 3]> {
+        let c = [self.roll, self.pitch, self.yaw].map(|terms| Model::axis(terms, p).value);
         (p.is_finite() && c.iter().all(|v| v.is_finite())).then_some(c)
     }
 }
