@@ -34,9 +34,10 @@
 //!    [`SCALE_SIGNIFICANCE`]·1σ or more. The pitch moment alike, over q̄·S·c̄:
 //!    `C_m = k_pitch·C_m,model + x·Z/(q̄Sc̄) + z·X/(q̄Sc̄) + b_m`, X and Z the body forces the
 //!    accelerometers measure; x, the normal force's arm, is the CG's distance ahead of the
-//!    reference point, so over the model card's it gives the CG's shift from the model's. The
-//!    pitch scale and the CG are identified and reported, not yet carried by the calibrated
-//!    aircraft.
+//!    reference point, so over the model card's it gives the CG's shift from the model's. The CG
+//!    joins the calibrated aircraft (as the empty aircraft's shift) when it differs from the
+//!    model's by [`SCALE_SIGNIFICANCE`]·1σ or more; the pitch scale is reported, not carried (it
+//!    cannot be told from an inertia that is not the description's).
 //!
 //! 4. **The method's own bias, removed.** The model evaluated from the recorded channels is not
 //!    exactly the one the aircraft flies (the leading-edge flap from its schedule, one flaperon from
@@ -179,6 +180,9 @@ pub struct Calibration {
     /// Pitch moment coefficient: k_pitch and the normal and axial forces' arms, m (`None`: not
     /// identified, with the roll and yaw moments, [`Calibration::moments_why`] says why).
     pub pitch: Option<Fit>,
+    /// The aircraft's mean mass over the frames of the moment fits, kg, from the recorded fuel
+    /// (0 without such frames): the CG shift identified is the whole aircraft's at this mass.
+    pub moment_mass_kg: f64,
     /// The corrections identified from each flight alone.
     pub per_flight: Vec<PerFlight>,
     /// The scales of this flight test: the fits' values, 1σ raised to the per-flight scatter.
@@ -208,11 +212,13 @@ pub struct Scales {
     /// The roll and yaw moment axes, × these (`None`: not identified, the model's kept).
     pub roll: Option<Estimate>,
     pub yaw: Option<Estimate>,
-    /// The pitch moment axis, × this (`None`: not identified). Reported, not carried.
+    /// The pitch moment axis, × this (`None`: not identified). Reported, not carried: the flight
+    /// test measures moment over inertia, and an inertia that is not the description's reads as it.
     pub pitch: Option<Estimate>,
     /// The CG's distance aft of the aerodynamic reference point, in (the normal force's arm in
-    /// pitch, with the inertia's share); over the model card's: the CG's shift aft of the model's,
-    /// as `cg_shift_in` of an airframe spec (`None`: not identified). Reported, not carried.
+    /// pitch, with the inertia's share); over the model card's: the whole aircraft's CG shift aft
+    /// of the model's at the flight test's mass (`None`: not identified; carried as
+    /// [`Report::applied_cg_shift_in`]).
     pub cg_aft_in: Option<Estimate>,
     /// The lift's scale at each of [`STALL_KNOTS_DEG`] after the first, over `lift` (1: the
     /// model's stall); `None` where the card did not reach it.
@@ -341,6 +347,18 @@ impl Scales {
     /// kept unless the flight test shows it wrong.
     pub fn applied_thrust(&self) -> Option<f64> {
         significant(self.thrust)
+    }
+
+    /// The CG shift aft the calibrated aircraft carries, in, as a shift of the empty aircraft's
+    /// CG (an airframe spec's `cg_shift_in`): the identified shift of the whole aircraft's at
+    /// `mass_kg` times `mass_kg` over the empty mass (fuel and crew do not move), when it differs
+    /// from 0 by at least [`SCALE_SIGNIFICANCE`]·1σ; `None` keeps the model's CG.
+    pub fn applied_cg_shift_in(&self, mass_kg: f64) -> Option<f64> {
+        use estimator_core::aircraft::{AIRCRAFT, LB_TO_KG};
+        let empty_kg = AIRCRAFT.mass.empty_weight_lb * f64::from(LB_TO_KG);
+        self.cg_aft_in
+            .filter(|e| e.value.abs() >= SCALE_SIGNIFICANCE * e.std_error && mass_kg > 0.0)
+            .map(|e| e.value * mass_kg / empty_kg)
     }
 }
 
@@ -967,6 +985,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         (Some(_), Some(m)) => (Some(m), None),
     };
     let pitch = moments.as_ref().and_then(|_| pitch_of(None));
+    let moment_mass_kg = mom.iter().map(|m| m.mass_kg).sum::<f64>() / mom.len().max(1) as f64;
     let per_flight: Vec<PerFlight> = per_flight
         .into_iter()
         .enumerate()
@@ -1042,6 +1061,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         moments,
         moments_why,
         pitch,
+        moment_mass_kg,
         per_flight,
         scales,
     })
@@ -1063,6 +1083,8 @@ struct MomentRow {
     /// mass) over q̄·S·c̄, 1/m: the regressors of the pitch moment's arms.
     axial: f64,
     normal: f64,
+    /// The aircraft's mass, kg (the description's empty mass and the recorded fuel).
+    mass_kg: f64,
 }
 
 /// The moment coefficients of a frame (see [`moment_fits`]) at angular acceleration `omega_dot`
@@ -1110,6 +1132,7 @@ fn moment_row(
         pitch_model: pitch,
         axial: fx / q_s_c,
         normal: fz / q_s_c,
+        mass_kg: mass,
     })
 }
 
@@ -1495,7 +1518,10 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
     };
     let drag_text = drag.map_or(String::new(), |k| format!(", drag x {k:.5}"))
         + &r.applied_thrust
-            .map_or(String::new(), |k| format!(", engine thrust x {k:.5}"));
+            .map_or(String::new(), |k| format!(", engine thrust x {k:.5}"))
+        + &r.applied_cg_shift_in.map_or(String::new(), |x| {
+            format!(", empty-weight CG {x:+.3} in aft")
+        });
     // The moment scales that pass the significance test (none: the text is the forces' alone).
     let moments: Vec<(&str, f64)> = ["ROLL", "YAW"]
         .into_iter()
@@ -1554,6 +1580,9 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
     if let Some(k) = r.applied_thrust {
         t.push_str(&format!("[propulsion]\nthrust_scale = {k:.5}\n"));
     }
+    if let Some(x) = r.applied_cg_shift_in {
+        t.push_str(&format!("[mass]\ncg_shift_in = [{x:.3}, 0.0, 0.0]\n"));
+    }
     t
 }
 
@@ -1571,6 +1600,9 @@ pub struct Report {
     pub scale_significance: f64,
     /// The thrust scale `aircraft.toml` carries ([`Scales::applied_thrust`]; `None`: the deck's).
     pub applied_thrust: Option<f64>,
+    /// The empty aircraft's CG shift aft `aircraft.toml` carries, in
+    /// ([`Scales::applied_cg_shift_in`] at the flight test's mass; `None`: the model's CG).
+    pub applied_cg_shift_in: Option<f64>,
     pub flight_test: Calibration,
     /// The same card flown on the model: the identification's own bias. With several cards
     /// (flown on other sensor seeds) its scales are theirs pooled ([`Scales::pooled`]), the rest
@@ -1627,6 +1659,7 @@ impl Report {
         Report {
             applied_moments: scales.applied_moments(),
             applied_thrust: scales.applied_thrust(),
+            applied_cg_shift_in: scales.applied_cg_shift_in(flight_test.moment_mass_kg),
             scale_significance: SCALE_SIGNIFICANCE,
             scales,
             flight_test,
@@ -1758,9 +1791,22 @@ fn pitch_markdown(r: &Report) -> String {
         "\nThe pitch moment the gyros measure (over q̄·S·c̄) against the model's PITCH axis, with the \
          arms of the normal and axial forces the accelerometers measure fitted beside: the normal \
          force's is the CG's distance ahead of the reference point, both arms in the measured \
-         moment's own scale, which the model card's pitch scale removes. They are identified, not \
-         yet carried by the calibrated aircraft.\n",
+         moment's own scale, which the model card's pitch scale removes. The pitch scale is \
+         reported, not carried (an inertia that is not the description's reads as it).\n",
     );
+    m.push_str(&match (r.applied_cg_shift_in, r.scales.cg_aft_in) {
+        (Some(x), _) => format!(
+            "\nThe calibrated aircraft carries the CG: its empty-weight CG {x:+.3} in aft of the model's \
+             (the shift above at the flight test's mean {:.0} kg, over the empty aircraft's mass; \
+             fuel and crew do not move).\n",
+            c.moment_mass_kg
+        ),
+        (None, Some(_)) => format!(
+            "\nThe CG shift is within {SCALE_SIGNIFICANCE}σ of 0: the calibrated aircraft keeps the \
+             model's CG.\n"
+        ),
+        (None, None) => String::new(),
+    });
     m
 }
 
@@ -2294,6 +2340,7 @@ mod tests {
                     pitch_model: model,
                     axial,
                     normal,
+                    mass_kg: 9_000.0,
                 }
             })
             .collect();
@@ -2366,5 +2413,19 @@ mod tests {
         let cg = over.cg_aft_in.unwrap();
         assert!((cg.value - 1.0).abs() < 1e-12 && (cg.std_error - 0.625).abs() < 1e-12);
         assert_eq!(ft.over(&scales(None, e(1.2, 0.4))).cg_aft_in, None);
+        // The CG is carried 2σ or more from 0, as the empty aircraft's shift: the whole
+        // aircraft's times its mass over the empty mass (17,400 lb: 7,892.5 kg).
+        let empty_kg = 17_400.0 * f64::from(estimator_core::aircraft::LB_TO_KG);
+        let x = scales(None, e(2.0, 0.5)).applied_cg_shift_in(2.0 * empty_kg);
+        assert!((x.unwrap() - 4.0).abs() < 1e-9);
+        assert_eq!(
+            scales(None, e(0.9, 0.5)).applied_cg_shift_in(empty_kg),
+            None
+        );
+        assert_eq!(
+            scales(None, e(-1.5, 0.5)).applied_cg_shift_in(empty_kg),
+            Some(-1.5)
+        );
+        assert_eq!(scales(None, e(2.0, 0.5)).applied_cg_shift_in(0.0), None);
     }
 }
