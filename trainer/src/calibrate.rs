@@ -1759,6 +1759,19 @@ fn moments_markdown(r: &Report) -> String {
     m
 }
 
+/// A `calibration.md` table's rows of the flight test's scales and, with a model card, the card's:
+/// `cells` gives a row's cells after its name.
+fn card_rows(r: &Report, cells: impl Fn(&Scales) -> String) -> String {
+    let mut m = format!("| flight test | {} |\n", cells(&r.flight_test.scales));
+    if let Some(mc) = &r.model_card {
+        m.push_str(&format!(
+            "| the same card flown on the model | {} |\n",
+            cells(&mc.scales)
+        ));
+    }
+    m
+}
+
 /// The pitch part of `calibration.md`'s moment section: the pitch scale and the CG.
 fn pitch_markdown(r: &Report) -> String {
     let c = &r.flight_test;
@@ -1770,17 +1783,10 @@ fn pitch_markdown(r: &Report) -> String {
     let mut m = String::from(
         "\n| pitch (± 1σ) | pitch-moment scale | CG aft of the aerodynamic reference point, in |\n|---|---|---|\n",
     );
-    m.push_str(&format!(
-        "| flight test | {} | {} |\n",
-        cell(c.scales.pitch),
-        cg(c.scales.cg_aft_in)
-    ));
-    if let Some(mc) = &r.model_card {
-        m.push_str(&format!(
-            "| the same card flown on the model | {} | {} |\n",
-            cell(mc.scales.pitch),
-            cg(mc.scales.cg_aft_in)
-        ));
+    m.push_str(&card_rows(r, |s| {
+        format!("{} | {}", cell(s.pitch), cg(s.cg_aft_in))
+    }));
+    if r.model_card.is_some() {
         m.push_str(&format!(
             "| **over the model card's** (the CG: its shift aft of the model's) | {} | {} |\n",
             cell(r.scales.pitch),
@@ -2015,29 +2021,18 @@ pub fn drag_line(r: &Report) -> String {
 
 /// The drag section of `calibration.md`.
 fn drag_markdown(r: &Report) -> String {
-    let c = &r.flight_test;
     let (Some(d), None) = (r.scales.drag, r.drag_why()) else {
         return format!(
             "\nDrag is not identified: {}. The calibrated aircraft keeps the model's drag.\n",
             r.drag_why().unwrap_or_default()
         );
     };
-    let e = cell;
     let mut m = String::from(
         "\n| drag and thrust (± 1σ) | drag scale | engine thrust scale |\n|---|---|---|\n",
     );
-    m.push_str(&format!(
-        "| flight test | {} | {} |\n",
-        e(c.scales.drag),
-        e(c.scales.thrust)
-    ));
-    if let Some(mc) = &r.model_card {
-        m.push_str(&format!(
-            "| the same card flown on the model | {} | {} |\n",
-            e(mc.scales.drag),
-            e(mc.scales.thrust)
-        ));
-    }
+    m.push_str(&card_rows(r, |s| {
+        format!("{} | {}", cell(s.drag), cell(s.thrust))
+    }));
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | **{:.4}** ± {:.4} | {} |\n",
         d.value,
