@@ -217,8 +217,9 @@ pub struct Scales {
     pub pitch: Option<Estimate>,
     /// The CG's distance aft of the aerodynamic reference point, in (the normal force's arm in
     /// pitch, with the inertia's share); over the model card's: the whole aircraft's CG shift aft
-    /// of the model's at the flight test's mass (`None`: not identified; carried as
-    /// [`Report::applied_cg_shift_in`]).
+    /// of the model's at the flight test's mass, with which the model's pitch moment trims as the
+    /// flight test's aircraft does (each arm over its own pitch scale; `None`: not identified;
+    /// carried as [`Report::applied_cg_shift_in`]).
     pub cg_aft_in: Option<Estimate>,
     /// The lift's scale at each of [`STALL_KNOTS_DEG`] after the first, over `lift` (1: the
     /// model's stall); `None` where the card did not reach it.
@@ -249,12 +250,13 @@ impl Scales {
             roll: self.roll.zip(model.roll).map(|(a, b)| ratio(a, b)),
             yaw: self.yaw.zip(model.yaw).map(|(a, b)| ratio(a, b)),
             pitch: self.pitch.zip(model.pitch).map(|(a, b)| ratio(a, b)),
-            // Both arms carry the measured moment's own scale (the description's inertia, the
-            // gyros' filter), which the model card's pitch scale is: the difference over it.
-            cg_aft_in: match (self.cg_aft_in, model.cg_aft_in, model.pitch) {
-                (Some(a), Some(b), Some(k)) => Some(Estimate {
-                    value: (a.value - b.value) / k.value,
-                    std_error: a.std_error.hypot(b.std_error) / k.value,
+            // Each arm over its own pitch scale: the arm the model's pitch moment needs to trim as
+            // the aircraft does (both carry the measured moment's scale, the description's inertia
+            // and the gyros' filter, which the ratio removes); the flight test's less the card's.
+            cg_aft_in: match (self.cg_aft_in, self.pitch, model.cg_aft_in, model.pitch) {
+                (Some(a), Some(ka), Some(b), Some(kb)) => Some(Estimate {
+                    value: a.value / ka.value - b.value / kb.value,
+                    std_error: (a.std_error / ka.value).hypot(b.std_error / kb.value),
                 }),
                 _ => None,
             },
@@ -1183,8 +1185,10 @@ fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
 /// over `rows` (see [`moment_fits`]), X and Z the body forces the accelerometers measure. JSBSim's
 /// pitch moment is about the aerodynamic reference point and the gyros turn about the CG: with
 /// body x forward and z down, a force there adds `Δz·X − Δx·Z` about the CG (Δ = the reference
-/// point less the CG), so x = −Δx is the CG's distance ahead of the reference point, m, and z its
-/// height below it (the thrust's line taken as the drag's). The constants, one per flight, take
+/// point less the CG), so x = −Δx is the CG's distance ahead of the reference point, m, and z = Δz
+/// the reference point's depth below the CG (the thrust's line taken as the drag's). The model's
+/// moment is evaluated with α̇ = 0 (an α̇ term, as the f15's, is left to the constants and the
+/// scale, on the flight test and the model card alike). The constants, one per flight, take
 /// the gyros' bias drift and the moment no model term carries. `None` if the rows do not
 /// determine them.
 fn pitch_fit(rows: &[&MomentRow]) -> Option<Fit> {
@@ -2330,7 +2334,7 @@ mod tests {
                     ],
                     model: [model, model],
                     side,
-                    // A CG 0.07 m aft of the reference point (its arm −0.07 m), 0.3 m below it.
+                    // A CG 0.07 m aft of the reference point (its arm −0.07 m), 0.3 m above it.
                     pitch_measured: 0.95 * model - 0.07 * normal + 0.3 * axial + bias,
                     pitch_model: model,
                     axial,
@@ -2399,14 +2403,17 @@ mod tests {
         assert_eq!(scales(None, e(1.03, 0.02)).applied_thrust(), None);
         assert_eq!(scales(None, e(0.95, 0.001)).applied_thrust(), Some(0.95));
         assert_eq!(scales(None, None).applied_thrust(), None);
-        // Over the model card's: the pitch scale a ratio, the CG the arms' difference over the
-        // card's pitch scale (both arms carry the measured moment's scale).
-        let ft = scales(e(0.76, 0.0), e(2.0, 0.3));
+        // Over the model card's: the pitch scale a ratio, the CG each arm over its own pitch
+        // scale, the flight test's less the card's.
+        let ft = scales(e(0.8, 0.0), e(2.0, 0.3));
         let card = scales(e(0.8, 0.0), e(1.2, 0.4));
         let over = ft.over(&card);
-        assert!((over.pitch.unwrap().value - 0.95).abs() < 1e-12);
+        assert!((over.pitch.unwrap().value - 1.0).abs() < 1e-12);
         let cg = over.cg_aft_in.unwrap();
         assert!((cg.value - 1.0).abs() < 1e-12 && (cg.std_error - 0.625).abs() < 1e-12);
+        // A pitch moment 5 % weaker (or an inertia 5 % heavier): the arm it trims with.
+        let weak = scales(e(0.76, 0.0), e(1.9, 0.3)).over(&card).cg_aft_in.unwrap();
+        assert!((weak.value - (1.9 / 0.76 - 1.5)).abs() < 1e-12);
         assert_eq!(ft.over(&scales(None, e(1.2, 0.4))).cg_aft_in, None);
         // The CG is carried 2σ or more from 0, as the empty aircraft's shift: the whole
         // aircraft's times its mass over the empty mass (17,400 lb: 7,892.5 kg).
