@@ -270,7 +270,8 @@ fn report(what: &str, w: &Worst, scale: f64) -> bool {
 }
 
 /// Each of `terms` at JSBSim's own inputs against its JSBSim property (`theirs`: over qbar·Sw, or
-/// qbar·Sw·bw for a moment), within TOLERANCE of `scale`.
+/// qbar·Sw·bw for a roll or yaw moment, qbar·Sw·cbarw for a pitch moment), within TOLERANCE of
+/// `scale`.
 fn compare_terms(
     steps: &[Step],
     terms: &[Term<'_>],

@@ -3,8 +3,8 @@
 //! --jsbsim-model`, listed in its generated `fixtures.rs`), evaluated at JSBSim's own property
 //! values over a flight of each (`NAME_parity.xml` beside it, flown by stock JSBSim through
 //! `scripts/jsbsim-stock`), agree with JSBSim's `aero/coefficient/*` term by term and with the
-//! wind-axis force sums, and so do their roll and yaw moment terms where extracted (over
-//! `qbar·Sw·bw`), and where an engine deck is extracted (`ENGINE`) each engine's thrust from its
+//! wind-axis force sums, and so do their roll, pitch and yaw moment terms where extracted (over
+//! `qbar·Sw·bw`, in pitch `qbar·Sw·cbarw`), and where an engine deck is extracted (`ENGINE`) each engine's thrust from its
 //! N2, throttle position, Mach and density altitude is JSBSim's. The fixtures read what the F-16
 //! does not: |β| and |δe| (slope: the
 //! sign), a left aileron, α̇, a flap in degrees, 2-D tables in α × Mach and α × flap, and a stall
@@ -148,7 +148,7 @@ fn point(s: &HashMap<String, f64>) -> Point {
 }
 
 /// Largest error of each term and wind-axis sum over the flight, against its own range; and of
-/// each roll and yaw moment term, where extracted.
+/// each roll, pitch and yaw moment term, where extracted.
 fn parity(
     aircraft: &str,
     model: &Model<'_>,

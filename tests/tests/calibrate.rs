@@ -1,7 +1,8 @@
 //! Flight-test calibration reads only what a flight-test aircraft records, and finds a variant's
 //! scales: a flight-test dataset flown on variant C (lift × 0.94, side force × 1.10), calibrated
 //! with and without its truth columns, against the same card flown on the model (JSBSim's F-16)
-//! on four other sensor seeds. A model card on the flight test's seed is refused.
+//! on four other sensor seeds (its CG and pitch moment the model's too). A model card on the
+//! flight test's seed is refused.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -193,5 +194,25 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
             "lift over α {v} ± {se}, truth 1"
         );
     }
+    // C has the model's CG and pitch moment: the CG shift is 0 and the pitch scale 1 within 2σ,
+    // and the calibrated aircraft keeps the model's CG.
+    let value = |what: &str| {
+        let e = &with_truth["scales"][what];
+        (
+            e["value"].as_f64().unwrap(),
+            e["std_error"].as_f64().unwrap(),
+        )
+    };
+    let (cg, se) = value("cg_aft_in");
+    assert!(
+        cg.abs() < 0.3 && cg.abs() <= 2.0 * se,
+        "CG shift {cg} ± {se} in, truth 0"
+    );
+    let (k, se) = value("pitch");
+    assert!(
+        (k - 1.0).abs() < 0.02 && (k - 1.0).abs() <= 2.0 * se,
+        "pitch scale {k} ± {se}, truth 1"
+    );
+    assert!(with_truth["applied_cg_shift_in"].is_null());
     std::fs::remove_dir_all(&dir).ok();
 }

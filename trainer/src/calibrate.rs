@@ -370,10 +370,11 @@ fn significant(e: Option<Estimate>) -> Option<f64> {
         .map(|e| e.value)
 }
 
-/// One line on the moment scales: identified, and whether the calibrated aircraft carries them.
+/// One line on the moments: the roll and yaw scales, the pitch scale and the CG, identified, and
+/// whether the calibrated aircraft carries them.
 pub fn moments_line(r: &Report) -> String {
     if let Some(why) = r.moments_why() {
-        return format!("roll and yaw moments not identified: {why}");
+        return format!("roll, pitch and yaw moments not identified: {why}");
     }
     let (s, applied) = (&r.scales, r.applied_moments);
     let one = |what: &str, e: Option<Estimate>, a: Option<f64>| match (e, a) {
@@ -387,8 +388,25 @@ pub fn moments_line(r: &Report) -> String {
             e.value, e.std_error
         ),
     };
+    let pitch = s.pitch.map_or("pitch moment not identified".into(), |e| {
+        format!(
+            "pitch moment scale {:.4} ± {:.4} (reported)",
+            e.value, e.std_error
+        )
+    });
+    let cg = match (s.cg_aft_in, r.applied_cg_shift_in) {
+        (None, _) => "CG not identified".to_string(),
+        (Some(e), Some(x)) => format!(
+            "CG {:+.2} ± {:.2} in aft (applied: empty-weight CG {x:+.3} in)",
+            e.value, e.std_error
+        ),
+        (Some(e), None) => format!(
+            "CG {:+.2} ± {:.2} in aft (within {SCALE_SIGNIFICANCE}σ of 0: the model's kept)",
+            e.value, e.std_error
+        ),
+    };
     format!(
-        "{}; {}",
+        "{}; {}; {pitch}; {cg}",
         one("roll", s.roll, applied[0]),
         one("yaw", s.yaw, applied[1])
     )
@@ -2412,7 +2430,10 @@ mod tests {
         let cg = over.cg_aft_in.unwrap();
         assert!((cg.value - 1.0).abs() < 1e-12 && (cg.std_error - 0.625).abs() < 1e-12);
         // A pitch moment 5 % weaker (or an inertia 5 % heavier): the arm it trims with.
-        let weak = scales(e(0.76, 0.0), e(1.9, 0.3)).over(&card).cg_aft_in.unwrap();
+        let weak = scales(e(0.76, 0.0), e(1.9, 0.3))
+            .over(&card)
+            .cg_aft_in
+            .unwrap();
         assert!((weak.value - (1.9 / 0.76 - 1.5)).abs() < 1e-12);
         assert_eq!(ft.over(&scales(None, e(1.2, 0.4))).cg_aft_in, None);
         // The CG is carried 2σ or more from 0, as the empty aircraft's shift: the whole
