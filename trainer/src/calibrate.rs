@@ -342,13 +342,13 @@ impl Scales {
     /// The roll and yaw moment scales the calibrated aircraft carries: each identified one that
     /// differs from 1 by at least [`SCALE_SIGNIFICANCE`]·1σ; `None` keeps the model's.
     pub fn applied_moments(&self) -> [Option<f64>; 2] {
-        [self.roll, self.yaw].map(significant)
+        [self.roll, self.yaw].map(|e| significant(e, 1.0))
     }
 
     /// The thrust scale the calibrated aircraft carries, by the same test: the engine deck is
     /// kept unless the flight test shows it wrong.
     pub fn applied_thrust(&self) -> Option<f64> {
-        significant(self.thrust)
+        significant(self.thrust, 1.0)
     }
 
     /// The CG shift aft the calibrated aircraft carries, in, as a shift of the empty aircraft's
@@ -358,15 +358,16 @@ impl Scales {
     pub fn applied_cg_shift_in(&self, mass_kg: f64) -> Option<f64> {
         use estimator_core::aircraft::{AIRCRAFT, LB_TO_KG};
         let empty_kg = AIRCRAFT.mass.empty_weight_lb * f64::from(LB_TO_KG);
-        self.cg_aft_in
-            .filter(|e| e.value.abs() >= SCALE_SIGNIFICANCE * e.std_error && mass_kg > 0.0)
-            .map(|e| e.value * mass_kg / empty_kg)
+        significant(self.cg_aft_in, 0.0)
+            .filter(|_| mass_kg > 0.0)
+            .map(|x| x * mass_kg / empty_kg)
     }
 }
 
-/// `e`'s value when it differs from 1 by at least [`SCALE_SIGNIFICANCE`]·1σ.
-fn significant(e: Option<Estimate>) -> Option<f64> {
-    e.filter(|e| (e.value - 1.0).abs() >= SCALE_SIGNIFICANCE * e.std_error)
+/// `e`'s value when it differs from the model's `null` (1 for a scale, 0 for a shift) by at least
+/// [`SCALE_SIGNIFICANCE`]·1σ.
+fn significant(e: Option<Estimate>, null: f64) -> Option<f64> {
+    e.filter(|e| (e.value - null).abs() >= SCALE_SIGNIFICANCE * e.std_error)
         .map(|e| e.value)
 }
 
@@ -1016,7 +1017,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
                 p.yaw = f.as_ref().map(|[_, y]| y.get("k_yaw"));
                 let f = pitch_of(Some(k));
                 p.pitch = f.as_ref().map(|f| f.get("k_pitch"));
-                p.cg_aft_in = f.as_ref().map(|f| -f.get("arm_x_m") / IN_TO_M);
+                p.cg_aft_in = f.as_ref().and_then(cg_aft_in).map(|e| e.value);
             }
             p
         })
@@ -1044,16 +1045,10 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         pitch: pitch
             .as_ref()
             .map(|p| with_scatter(p, "k_pitch", &spread(|f| f.pitch))),
-        // The arm is the CG's distance ahead of the reference point, m: aft, in inches.
-        cg_aft_in: pitch.as_ref().and_then(|p| p.estimate("arm_x_m")).map(|e| {
-            raised_to_scatter(
-                Estimate {
-                    value: -e.value / IN_TO_M,
-                    std_error: e.std_error / IN_TO_M,
-                },
-                &spread(|f| f.cg_aft_in),
-            )
-        }),
+        cg_aft_in: pitch
+            .as_ref()
+            .and_then(cg_aft_in)
+            .map(|e| raised_to_scatter(e, &spread(|f| f.cg_aft_in))),
         stall: core::array::from_fn(|j| {
             (j < knots).then(|| {
                 stall_scale(
@@ -1183,20 +1178,47 @@ pub fn body_moment(inertia_slug_ft2: [f64; 4], w: [f64; 3], w_dot: [f64; 3]) -> 
 /// the gyros' bias drift, the moments no model term carries, and C_lβ·Δβ, C_nβ·Δβ of the corrected
 /// boom β's offset, which the EGI's heading error sets flight by flight ([`side_fit`]).
 fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
-    let (bias_names, biases) = per_flight_columns(rows, |r| r.flight, "bias", |_| 1.0);
-    let side: Vec<f64> = rows.iter().map(|r| r.side).collect();
     let fit = |axis: usize, name: &str| {
-        let mut names = vec![name, "arm_m"];
-        names.extend(bias_names.iter().map(String::as_str));
-        let mut x = vec![rows.iter().map(|r| r.model[axis]).collect(), side.clone()];
-        x.extend(biases.iter().cloned());
-        least_squares(
-            &names,
-            &x,
-            &rows.iter().map(|r| r.measured[axis]).collect::<Vec<_>>(),
+        moment_fit(
+            rows,
+            &[name, "arm_m"],
+            &[&|r| r.model[axis], &|r| r.side],
+            |r| r.measured[axis],
         )
     };
     Some([fit(0, "k_roll")?, fit(1, "k_yaw")?])
+}
+
+/// Least squares of `measured` on the `regressors` (named `names`, in order) and one constant per
+/// flight (`bias_K`), over the moment rows.
+fn moment_fit(
+    rows: &[&MomentRow],
+    names: &[&str],
+    regressors: &[&dyn Fn(&MomentRow) -> f64],
+    measured: impl Fn(&MomentRow) -> f64,
+) -> Option<Fit> {
+    let (bias_names, biases) = per_flight_columns(rows, |r| r.flight, "bias", |_| 1.0);
+    let names: Vec<&str> = names
+        .iter()
+        .copied()
+        .chain(bias_names.iter().map(String::as_str))
+        .collect();
+    let x: Vec<Vec<f64>> = regressors
+        .iter()
+        .map(|f| rows.iter().map(|r| f(r)).collect())
+        .chain(biases)
+        .collect();
+    let y: Vec<f64> = rows.iter().map(|r| measured(r)).collect();
+    least_squares(&names, &x, &y)
+}
+
+/// The CG aft of the reference point, in, from a pitch fit's normal-force arm (the CG's distance
+/// ahead of it, m; [`pitch_fit`]).
+fn cg_aft_in(pitch: &Fit) -> Option<Estimate> {
+    pitch.estimate("arm_x_m").map(|e| Estimate {
+        value: -e.value / IN_TO_M,
+        std_error: e.std_error / IN_TO_M,
+    })
 }
 
 /// The pitch moment by equation error: `C_m = k_pitch·C_m,model + x·Z/(q̄Sc̄) + z·X/(q̄Sc̄) + b_m`
@@ -1210,19 +1232,11 @@ fn moment_fits(rows: &[&MomentRow]) -> Option<[Fit; 2]> {
 /// the gyros' bias drift and the moment no model term carries. `None` if the rows do not
 /// determine them.
 fn pitch_fit(rows: &[&MomentRow]) -> Option<Fit> {
-    let (bias_names, biases) = per_flight_columns(rows, |r| r.flight, "bias", |_| 1.0);
-    let mut names = vec!["k_pitch", "arm_x_m", "arm_z_m"];
-    names.extend(bias_names.iter().map(String::as_str));
-    let mut x = vec![
-        rows.iter().map(|r| r.pitch_model).collect(),
-        rows.iter().map(|r| r.normal).collect(),
-        rows.iter().map(|r| r.axial).collect::<Vec<f64>>(),
-    ];
-    x.extend(biases);
-    least_squares(
-        &names,
-        &x,
-        &rows.iter().map(|r| r.pitch_measured).collect::<Vec<_>>(),
+    moment_fit(
+        rows,
+        &["k_pitch", "arm_x_m", "arm_z_m"],
+        &[&|r| r.pitch_model, &|r| r.normal, &|r| r.axial],
+        |r| r.pitch_measured,
     )
 }
 
