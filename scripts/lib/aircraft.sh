@@ -1,4 +1,5 @@
-# Sourced by scripts/hil, scripts/wcet, scripts/e2e-small, scripts/test and scripts/analysis: which build flies aircraft NAME
+# Sourced by scripts/hil, scripts/wcet, scripts/e2e-small, scripts/test, scripts/build-estimator,
+# scripts/calibrate and scripts/analysis: which build flies aircraft NAME
 # (aircraft/NAME.toml). The default aircraft (DEFAULT_AIRCRAFT in estimator-core/aircraft_name.rs)
 # is the tree's own build in target/; another keeps its own, target/NAME, so the default's stays as
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
@@ -74,4 +75,16 @@ aircraft_build() {
     seed_build thumbv7em-none-eabihf
     seed_build firmware  # the flight image's host side: its build scripts and proc macros
   fi
+}
+
+# aircraft_model NAME: prints the JSBSim model of aircraft/NAME.toml (its `[jsbsim] model`: the
+# aircraft directory's MODEL/MODEL.xml).
+aircraft_model() {
+  python3 - "$root/aircraft/$1.toml" <<'PY'
+import sys, tomllib
+try:
+    print(tomllib.load(open(sys.argv[1], "rb"))["jsbsim"]["model"])
+except (OSError, KeyError, tomllib.TOMLDecodeError) as e:
+    sys.exit(f"{sys.argv[1]}: no `[jsbsim] model` ({e!r}): describe the aircraft there (docs/aircraft.md)")
+PY
 }

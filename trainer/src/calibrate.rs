@@ -122,6 +122,13 @@ fn identified_drag(
     (None, Some(why))
 }
 
+/// The sideslip terms' scale is identified apart from the surface and rate terms' only where they
+/// move at least this share of the lateral force over the rolling frames ([`sideslip_share`]).
+/// Where the surfaces dominate (JSBSim's F-15: its rudder's side force is about four times its
+/// sideslip's over the card's rolls) the sideslip scale comes out precise and wrong: an
+/// unmodelled lateral force a few per cent of the surfaces' lands on it (on the development
+/// variants 1.38 ± 0.05 for a true 1.15), so the whole side force takes one scale there.
+const MIN_SIDESLIP_SHARE: f64 = 1.0;
 /// The side-force fit reads the frames rolling faster than this, rad/s (the card's roll doublets
 /// and bank captures): there the aileron and roll-rate terms' side force is unlike the sideslip
 /// terms'.
@@ -163,8 +170,14 @@ pub struct Calibration {
     /// Boom airspeed against the inertial speed (m/s).
     pub boom_tas: Fit,
     /// Lateral specific force over the rolling frames, m/s²: k_β (the sideslip terms' scale) and
-    /// k_Y (the surface and body-rate terms').
+    /// k_Y (the surface and body-rate terms'); one scale, both names, where the sideslip terms
+    /// move less of it than [`MIN_SIDESLIP_SHARE`].
     pub side: Fit,
+    /// The sideslip terms' share of the lateral force over the rolling frames
+    /// ([`sideslip_share`]; `None`: the surface and rate terms do not move).
+    pub sideslip_share: Option<f64>,
+    /// Whether the sideslip terms got a scale of their own ([`MIN_SIDESLIP_SHARE`]).
+    pub sideslip_identified: bool,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
     /// Axial specific force, m/s²: k_D (drag scale) and k_T (the engine deck's thrust scale)
@@ -196,8 +209,9 @@ pub struct Calibration {
 pub struct Scales {
     /// The lift terms not driven by the trailing-edge flaps, × this.
     pub lift: Estimate,
-    /// The lift terms driven by the trailing-edge flaps ([`flap_lift_terms`]), × this.
-    pub flap: Estimate,
+    /// The lift terms driven by the trailing-edge flaps ([`flap_lift_terms`]), × this; `None`
+    /// when the model has no such terms or the card never moves them (then they are the lift's).
+    pub flap: Option<Estimate>,
     /// A lift-coefficient offset ΔC_L added to the lift axis.
     pub offset: Estimate,
     /// The side-force terms driven by sideslip ([`sideslip_side_terms`]), × this.
@@ -238,7 +252,7 @@ impl Scales {
         };
         Scales {
             lift: ratio(self.lift, model.lift),
-            flap: ratio(self.flap, model.flap),
+            flap: self.flap.zip(model.flap).map(|(a, b)| ratio(a, b)),
             offset: Estimate {
                 value: self.offset.value - model.offset.value,
                 std_error: self.offset.std_error.hypot(model.offset.std_error),
@@ -310,7 +324,7 @@ impl Scales {
         };
         (!cards.is_empty()).then(|| Scales {
             lift: one(|s| s.lift),
-            flap: one(|s| s.flap),
+            flap: opt(|s| s.flap),
             offset: one(|s| s.offset),
             sideslip: one(|s| s.sideslip),
             side_controls: one(|s| s.side_controls),
@@ -748,6 +762,11 @@ pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Re
 /// Runs the identification on the flights of a flight-test dataset.
 pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
+    // The identification evaluates this build's aircraft model: a flight test (or model card) of
+    // another aircraft is refused, with how to build for it.
+    if let Some(why) = m.other_aircraft() {
+        return Err(Error::Split(dir.to_path_buf(), why));
+    }
     // The boom's arm as the dataset recorded it (`config.boom`).
     let arm_m = m
         .config
@@ -944,7 +963,10 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             PerFlight {
                 flight: name.clone(),
                 lift: l.as_ref().map(|l| l.get("k_lift")),
-                flap: l.as_ref().map(|l| l.get("k_flap")),
+                flap: l
+                    .as_ref()
+                    .and_then(|l| l.estimate("k_flap"))
+                    .map(|e| e.value),
                 offset: l.as_ref().map(|l| l.get("offset_cl")),
                 sideslip: s.as_ref().map(|s| s.get("k_sideslip")),
                 side_controls: s.as_ref().map(|s| s.get("k_side_controls")),
@@ -1026,7 +1048,9 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         |f: fn(&PerFlight) -> Option<f64>| per_flight.iter().filter_map(f).collect::<Vec<_>>();
     let scales = Scales {
         lift: with_scatter(&lift, "k_lift", &spread(|f| f.lift)),
-        flap: with_scatter(&lift, "k_flap", &spread(|f| f.flap)),
+        flap: lift
+            .estimate("k_flap")
+            .map(|e| raised_to_scatter(e, &spread(|f| f.flap))),
         offset: with_scatter(&lift, "offset_cl", &spread(|f| f.offset)),
         sideslip: with_scatter(&side, "k_sideslip", &spread(|f| f.sideslip)),
         side_controls: with_scatter(&side, "k_side_controls", &spread(|f| f.side_controls)),
@@ -1062,7 +1086,16 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             })
         }),
     };
+    let share = sideslip_share(
+        &all_eq
+            .iter()
+            .copied()
+            .filter(|r| r.rolling)
+            .collect::<Vec<_>>(),
+    );
     Ok(Calibration {
+        sideslip_share: share,
+        sideslip_identified: share.is_some_and(|s| s >= MIN_SIDESLIP_SHARE),
         sensor_seed: sensor_seed(&m),
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
@@ -1279,11 +1312,10 @@ fn thrust_accel_x(r: &Row, mach: f64) -> Option<f64> {
 /// two scales come apart, and the test points' span in dynamic pressure tells k_D from the
 /// accelerometer's constant b_x.
 fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
-    let (k_l, k_f, dcl) = (
-        lift.get("k_lift"),
-        lift.get("k_flap"),
-        lift.get("offset_cl"),
-    );
+    let k_l = lift.get("k_lift");
+    // Without a flap scale of their own the flap terms are the lift's.
+    let k_f = lift.estimate("k_flap").map_or(k_l, |e| e.value);
+    let dcl = lift.get("offset_cl");
     let rows: Vec<(&EqRow, f64)> = all
         .iter()
         .filter(|r| r.steady && r.alpha_deg < MAX_DRAG_ALPHA_DEG)
@@ -1345,14 +1377,34 @@ fn side_fit(all: &[&EqRow]) -> Option<Fit> {
         vec![1.0; rolling.len()],
     ];
     x.extend(offsets);
-    least_squares(
-        &names,
-        &x,
-        &rolling
-            .iter()
-            .map(|r| r.f_cg[1] - r.parts.drag[1])
-            .collect::<Vec<_>>(),
-    )
+    let y: Vec<f64> = rolling
+        .iter()
+        .map(|r| r.f_cg[1] - r.parts.drag[1])
+        .collect();
+    if sideslip_share(&rolling).is_some_and(|s| s >= MIN_SIDESLIP_SHARE) {
+        return least_squares(&names, &x, &y);
+    }
+    // One scale for the whole side force: the sideslip terms take the others'.
+    let sum: Vec<f64> = x[0].iter().zip(&x[1]).map(|(b, c)| b + c).collect();
+    x.splice(0..2, [sum]);
+    names.splice(0..2, ["k_side_controls"]);
+    let mut fit = least_squares(&names, &x, &y)?;
+    let k = fit.estimate("k_side_controls")?;
+    fit.params.insert(0, ("k_sideslip".to_string(), k));
+    Some(fit)
+}
+
+/// The sideslip terms' share of the lateral force the rolling frames `rows` move: the standard
+/// deviation of the model's sideslip part over that of its surface and rate part (`None` when
+/// the latter does not move).
+fn sideslip_share(rows: &[&EqRow]) -> Option<f64> {
+    let sd = |f: fn(&EqRow) -> f64| {
+        let n = rows.len() as f64;
+        let mean = rows.iter().map(|r| f(r)).sum::<f64>() / n;
+        (rows.iter().map(|r| (f(r) - mean).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    let (b, c) = (sd(|r| r.parts.sideslip[1]), sd(|r| r.parts.side_rest[1]));
+    (c > 0.0 && !rows.is_empty()).then(|| b / c)
 }
 
 /// One regressor per flight that has rows, `{prefix}_{k}`: `value` on flight k's rows, 0 on the
@@ -1409,14 +1461,20 @@ fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, k_d: f64, knots: usize) -> Optio
     let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
     let ones = vec![1.0; rows.len()];
     let stall_names: Vec<String> = (1..=knots).map(stall_name).collect();
-    let mut names = vec!["k_lift", "k_flap", "offset_cl", "bias_mps2"];
-    names.extend(stall_names.iter().map(String::as_str));
+    let mut names = vec!["k_lift", "offset_cl", "bias_mps2"];
     let mut x = vec![
         rows.iter().map(|r| r.parts.lift[2]).collect(),
-        rows.iter().map(|r| r.parts.flap[2]).collect(),
         rows.iter().map(|r| r.parts.unit_lift[2]).collect(),
         ones,
     ];
+    // The flap terms' own scale, where the model has them and the card moves them (the F-16's
+    // flaperons); otherwise their lift is the lift axis's (a column of zeros has no scale).
+    let flap: Vec<f64> = rows.iter().map(|r| r.parts.flap[2]).collect();
+    if flap.iter().any(|v| *v != 0.0) {
+        names.insert(1, "k_flap");
+        x.insert(1, flap);
+    }
+    names.extend(stall_names.iter().map(String::as_str));
     for j in 1..=knots {
         x.push(
             rows.iter()
@@ -1538,11 +1596,14 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
     let (scales, c, corrected) = (&r.scales, &r.flight_test, r.model_card.is_some());
     let (l, f, o, sb, sc) = (
         scales.lift.value,
-        scales.flap.value,
+        scales.flap.map_or(scales.lift.value, |e| e.value),
         scales.offset.value,
         scales.sideslip.value,
         scales.side_controls.value,
     );
+    let flap_text = scales
+        .flap
+        .map_or(String::new(), |e| format!(", flap lift x {:.5}", e.value));
     let drag = scales.drag.map(|d| d.value);
     let how = match (corrected, drag) {
         (true, Some(_)) => "equation error, over the same card flown on the model",
@@ -1570,7 +1631,7 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .collect();
     let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}, flap lift x {f:.5}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){drag_text}{moments_text} ({how}).\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}{flap_text}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){drag_text}{moments_text} ({how}).\"\n\
          [axes]\nLIFT = {l:.5}\nSIDE = {sc:.5}\n",
         ft.display(),
         c.flights.len()
@@ -1865,7 +1926,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         format!(
             "| {what} | {} | {} | {} | {} | {} |\n",
             e(&s.lift),
-            e(&s.flap),
+            cell(s.flap),
             e(&s.offset),
             e(&s.sideslip),
             e(&s.side_controls)
@@ -1879,6 +1940,16 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
+    if !c.sideslip_identified {
+        m.push_str(&format!(
+            "\nThe side force has one scale: over the rolling frames its sideslip terms move {} of \
+             what its surface and rate terms move, below the {MIN_SIDESLIP_SHARE} needed to tell \
+             their scale apart (an unmodelled lateral force a few per cent of the surfaces' would \
+             land on it).\n",
+            c.sideslip_share
+                .map_or("none".to_string(), |s| format!("{s:.2}"))
+        ));
+    }
     if r.model_cards > 0 {
         let seeds: Vec<String> = r
             .model_card_seeds
@@ -2391,7 +2462,7 @@ mod tests {
         let e = |value, std_error| Some(Estimate { value, std_error });
         let scales = |roll, yaw| Scales {
             lift: Estimate::default(),
-            flap: Estimate::default(),
+            flap: None,
             offset: Estimate::default(),
             sideslip: Estimate::default(),
             side_controls: Estimate::default(),

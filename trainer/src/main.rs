@@ -1000,19 +1000,19 @@ fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Res
     if json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
-        let (l, f, o, sb, sc) = (
+        let (l, o, sb, sc) = (
             &r.scales.lift,
-            &r.scales.flap,
             &r.scales.offset,
             &r.scales.sideslip,
             &r.scales.side_controls,
         );
+        let flap = r.scales.flap.map_or(String::new(), |f| {
+            format!(", flap-lift scale {:.4} ± {:.4}", f.value, f.std_error)
+        });
         println!(
-            "lift scale {:.4} ± {:.4}, flap-lift scale {:.4} ± {:.4}, lift offset {:+.4} ± {:.4}, side-force scale {:.4} ± {:.4} (sideslip terms) and {:.4} ± {:.4} (surface and rate terms) ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
+            "lift scale {:.4} ± {:.4}{flap}, lift offset {:+.4} ± {:.4}, side-force scale {:.4} ± {:.4} (sideslip terms) and {:.4} ± {:.4} (surface and rate terms) ({} flights{}); wrote {}/calibration.md, calibration.json, aircraft.toml",
             l.value,
             l.std_error,
-            f.value,
-            f.std_error,
             o.value,
             o.std_error,
             sb.value,
