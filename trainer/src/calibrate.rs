@@ -58,7 +58,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{ENGINE, Factor, MODEL, MOMENTS, Term, Var};
+use estimator_core::aero::{ENGINE, MODEL, MOMENTS, Term, Var};
 use estimator_core::filter::{self, CONFIG, Input};
 use hil_sim::flight::FT_TO_M;
 use serde::Serialize;
@@ -70,8 +70,17 @@ const SLUG_FT2: f64 = 1.355_817_948;
 const IN_TO_M: f64 = 0.0254;
 /// N in a pound-force.
 const LBF_TO_N: f64 = 4.448_221_615_260_5;
-/// Frames below this dynamic pressure, Pa, are left out (the force equation is noise there).
-const MIN_QBAR_PA: f64 = 3_000.0;
+/// Frames where a unit force coefficient is less specific force than this, q̄·S/m in m/s², are
+/// left out (the force equation is the accelerometers' noise there): JSBSim's F-16 at 3 kPa and
+/// its card's mean mass (9,622 kg); the c172p at 1,000 kg is there at 540 Pa.
+const MIN_QBAR_S_OVER_M: f64 = 8.7;
+
+/// Whether a frame at dynamic pressure `qbar` (Pa) with `fuel_kg` of fuel passes
+/// [`MIN_QBAR_S_OVER_M`].
+fn enough_air(qbar: f64, fuel_kg: f32) -> bool {
+    let area_m2 = f64::from(MODEL.wing_area_ft2) * (FT_TO_M * FT_TO_M);
+    qbar * area_m2 >= MIN_QBAR_S_OVER_M * f64::from(CONFIG.mass_kg(fuel_kg))
+}
 /// Frames beyond this α (deg) are left out (beyond the card's stall approach).
 const MAX_ALPHA_DEG: f64 = 25.0;
 /// The lift's scale over α: 1 (the lift scale k_L alone) up to the first knot, then one parameter
@@ -879,7 +888,10 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         let qbar = 0.5 * f64::from(rho) * tas * tas;
         let steady = quasi_steady(r);
         let rolling = f64::from(r.inp.gyro_rps[0]).abs() >= MIN_ROLL_RATE_RPS;
-        if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG || !(steady || rolling) {
+        if !enough_air(qbar, r.inp.fuel_kg)
+            || alpha.to_degrees().abs() > MAX_ALPHA_DEG
+            || !(steady || rolling)
+        {
             continue;
         }
         let mach = tas / f64::from(a_sound);
@@ -907,9 +919,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     let count = |f: fn(&EqRow) -> bool| eq.iter().filter(|r| f(r)).count();
     let side = side_fit(&all_eq).ok_or_else(|| {
         Error::Numeric(format!(
-            "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
+            "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
             count(|r| r.rolling),
-            MIN_QBAR_PA / 1000.0
         ))
     })?;
     let (k_b, k_y) = side_scales(&side);
@@ -1020,9 +1031,8 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         (Some(_), None) => (
             None,
             Some(format!(
-                "{} frames (q̄ ≥ {} kPa, |α| ≤ {MAX_ALPHA_DEG}°) do not determine them: the card needs roll and rudder inputs",
+                "{} frames (q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine them: the card needs roll and rudder inputs",
                 mom.len(),
-                MIN_QBAR_PA / 1000.0
             )),
         ),
         (Some(_), Some(m)) => (Some(m), None),
@@ -1136,7 +1146,7 @@ struct MomentRow {
 }
 
 /// The moment coefficients of a frame (see [`moment_fits`]) at angular acceleration `omega_dot`
-/// and air data `(α, β, airspeed, density, speed of sound)`; `None` below [`MIN_QBAR_PA`], beyond
+/// and air data `(α, β, airspeed, density, speed of sound)`; `None` below [`MIN_QBAR_S_OVER_M`], beyond
 /// [`MAX_ALPHA_DEG`] or where the model cannot be evaluated.
 fn moment_row(
     r: &Row,
@@ -1145,7 +1155,7 @@ fn moment_row(
 ) -> Option<MomentRow> {
     let moments = MOMENTS?;
     let qbar = 0.5 * f64::from(rho) * tas * tas;
-    if qbar < MIN_QBAR_PA || alpha.to_degrees().abs() > MAX_ALPHA_DEG {
+    if !enough_air(qbar, r.inp.fuel_kg) || alpha.to_degrees().abs() > MAX_ALPHA_DEG {
         return None;
     }
     let point = filter::model_point(
@@ -1531,16 +1541,13 @@ pub fn sideslip_side_terms() -> impl Iterator<Item = &'static Term<'static>> {
     terms_reading(MODEL.side, &[Var::BetaRad, Var::MagBetaRad])
 }
 
-/// The terms of a force axis with a factor among `vars`.
+/// The terms of a force axis with a factor among `vars`, or a table looked up by one.
 fn terms_reading(
     axis: &'static [Term<'static>],
     vars: &'static [Var],
 ) -> impl Iterator<Item = &'static Term<'static>> {
-    axis.iter().filter(move |t| {
-        t.factors
-            .iter()
-            .any(|f| matches!(f, Factor::Var(v) if vars.contains(v)))
-    })
+    axis.iter()
+        .filter(move |t| t.factors.iter().any(|f| vars.iter().any(|&v| f.reads(v))))
 }
 
 /// The summed coefficient of `terms` at `point` (`None` if one cannot be evaluated there).
@@ -2190,6 +2197,47 @@ mod tests {
             se(&slow),
             se(&white)
         );
+    }
+
+    #[test]
+    fn a_side_force_its_surfaces_dominate_takes_one_scale_and_a_model_without_flaps_no_flap_scale()
+    {
+        // Rolling frames where the surface terms move five times the sideslip terms' lateral
+        // force (JSBSim's F-15): one scale for both, the truth's 1.07 exactly; no flap terms.
+        let row = |k: usize| {
+            let t = k as f64 * 0.37;
+            let b = 0.2 * t.sin();
+            let rest = 1.0 * (1.3 * t).cos();
+            let lift = 9.0 + (0.5 * t).sin();
+            let per_deg = 0.5 + 0.2 * (0.11 * t).cos();
+            EqRow {
+                flight: 0,
+                alpha_deg: 5.0,
+                steady: k % 2 == 0,
+                rolling: true,
+                parts: Parts {
+                    drag: [-0.8, 0.0, 0.0],
+                    sideslip: [0.0, b, 0.0],
+                    side_rest: [0.0, rest, 0.0],
+                    lift: [0.0, 0.0, -lift],
+                    flap: [0.0; 3],
+                    unit_lift: [0.0, 0.0, -(20.0 + 5.0 * (0.2 * t).sin())],
+                },
+                sideslip_per_deg: [0.0, per_deg, 0.0],
+                thrust_accel_x: None,
+                f_cg: [0.0, 1.07 * (b + rest) + 0.01, -0.95 * lift + 0.02],
+            }
+        };
+        let rows: Vec<EqRow> = (0..400).map(row).collect();
+        let all: Vec<&EqRow> = rows.iter().collect();
+        let share = sideslip_share(&all).unwrap();
+        assert!((0.1..MIN_SIDESLIP_SHARE).contains(&share), "{share}");
+        let side = side_fit(&all).unwrap();
+        let (kb, ky) = side_scales(&side);
+        assert!((kb - 1.07).abs() < 1e-9 && kb == ky, "{side:?}");
+        let lift = lift_fit(&all, kb, ky, 1.0, 0).unwrap();
+        assert!(lift.estimate("k_flap").is_none(), "{lift:?}");
+        assert!((lift.get("k_lift") - 0.95).abs() < 1e-9, "{lift:?}");
     }
 
     #[test]

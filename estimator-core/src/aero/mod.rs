@@ -371,6 +371,8 @@ impl Point {
 pub trait Lookup: Sync {
     #[doc(hidden)]
     fn look_up(&self, p: &Point, _: sealed::Token) -> Partial;
+    /// Whether the table is looked up by `v` (one of its keys).
+    fn reads(&self, v: Var) -> bool;
 }
 
 mod sealed {
@@ -419,6 +421,10 @@ fn segment(bp: &[f32], k: f32) -> Option<(usize, f32, f32)> {
 }
 
 impl<const N: usize> Lookup for Table1<N> {
+    fn reads(&self, v: Var) -> bool {
+        self.key == v
+    }
+
     fn look_up(&self, p: &Point, _: sealed::Token) -> Partial {
         let k = p.get(self.key);
         let ends = (self.x.first(), self.y.first(), self.x.last(), self.y.last());
@@ -444,6 +450,10 @@ impl<const N: usize> Lookup for Table1<N> {
 }
 
 impl<const R: usize, const C: usize> Lookup for Table2<R, C> {
+    fn reads(&self, v: Var) -> bool {
+        self.row == v || self.col == v
+    }
+
     fn look_up(&self, p: &Point, _: sealed::Token) -> Partial {
         let (rk, ck) = (p.get(self.row), p.get(self.col));
         let (Some((r, rf, rinv)), Some((c, cf, cinv))) =
@@ -480,6 +490,15 @@ pub enum Factor<'a> {
 }
 
 impl Factor<'_> {
+    /// Whether the factor reads `v`: is it, or a table looked up by it.
+    pub fn reads(&self, v: Var) -> bool {
+        match *self {
+            Factor::Const(_) => false,
+            Factor::Var(w) => w == v,
+            Factor::Table(t) => t.reads(v),
+        }
+    }
+
     fn eval(&self, p: &Point) -> Partial {
         match *self {
             Factor::Const(c) => Partial {
