@@ -1,8 +1,10 @@
 //! Flight-test calibration reads only what a flight-test aircraft records, and finds a variant's
-//! scales: a flight-test dataset flown on variant C (lift × 0.94, side force × 1.10), calibrated
-//! with and without its truth columns, against the same card flown on the model (JSBSim's F-16)
-//! on four other sensor seeds (its CG and pitch moment the model's too). A model card on the
-//! flight test's seed is refused.
+//! scales: a flight-test dataset flown on the build's aircraft's variant C
+//! (`airframes/NAME-variants/c-pure-scales.toml`: lift × 0.94, side force × 1.10, drag × 1.10),
+//! calibrated with and without its truth columns, against the same card flown on the model
+//! (JSBSim's model of the aircraft) on four other sensor seeds (its CG and pitch moment the
+//! model's too). A model card on the flight test's seed is refused. scripts/test runs it in every
+//! build whose aircraft has development variants.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -45,11 +47,15 @@ fn calibration(ft: &Path, models: &[PathBuf], out: &Path) -> serde_json::Value {
 
 #[test]
 fn calibration_reads_no_truth_and_finds_the_variants_scales() {
+    let air = estimator_core::aircraft::AIRCRAFT;
     let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "calibrate");
     let aircraft = dir.join("c");
     ok(Command::new(root().join("scripts/airframe-variant"))
-        .arg(root().join("airframes/f16-variants/c-pure-scales.toml"))
-        .arg("--out")
+        .arg(root().join(format!(
+            "airframes/{}-variants/c-pure-scales.toml",
+            air.name
+        )))
+        .args(["--model", air.jsbsim_model, "--out"])
         .arg(&aircraft));
     let ft = dir.join("ft");
     ok(Command::new(bin("hil-sim"))
@@ -57,10 +63,10 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
             "generate",
             "--preset",
             "flight-test",
-            "--seed",
-            "1",
-            "--out",
+            "--aircraft",
+            air.name,
         ])
+        .args(["--seed", "1", "--out"])
         .arg(&ft)
         .arg("--aircraft-dir")
         .arg(&aircraft));
@@ -68,7 +74,14 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         .map(|seed| {
             let model = dir.join(format!("model-ft-seed{seed}"));
             ok(Command::new(bin("hil-sim"))
-                .args(["generate", "--preset", "flight-test", "--seed"])
+                .args([
+                    "generate",
+                    "--preset",
+                    "flight-test",
+                    "--aircraft",
+                    air.name,
+                ])
+                .arg("--seed")
                 .arg(seed.to_string())
                 .arg("--out")
                 .arg(&model));
@@ -143,7 +156,12 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     // Within 2 % (lift) and 5 % (side force, the flap terms, drag) of the truth, and the error
     // inside 2σ: C scales the whole lift axis, flaps included, the whole side axis, its sideslip
     // terms as much as its surface and rate terms, and the drag axis (its thrust is the model's),
-    // and has no lift offset.
+    // and has no lift offset. A model without flap terms (the F-15) has no flap scale.
+    let flap_terms = with_truth["flap_terms"].as_array().unwrap();
+    assert!(
+        !flap_terms.is_empty() || with_truth["scales"]["flap"].is_null(),
+        "a flap scale without flap terms"
+    );
     for (axis, truth, tolerance) in [
         ("lift", 0.94, 0.02),
         ("flap", 0.94, 0.05),
@@ -152,6 +170,9 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         ("drag", 1.10, 0.05),
     ] {
         let e = &with_truth["scales"][axis];
+        if axis == "flap" && e.is_null() {
+            continue;
+        }
         let (k, se) = (
             e["value"].as_f64().unwrap(),
             e["std_error"].as_f64().unwrap(),
@@ -194,8 +215,9 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
             "lift over α {v} ± {se}, truth 1"
         );
     }
-    // C has the model's CG and pitch moment: the CG shift is 0 and the pitch scale 1 within 2σ,
-    // and the calibrated aircraft keeps the model's CG.
+    // C has the model's CG and pitch moment: the CG shift is 0 and the pitch scale 1 within 2σ
+    // (a 1σ below 0.5 in and 0.15: the F-16's are 0.06 in and 0.006, the F-15's 0.36 in and
+    // 0.11), and the calibrated aircraft keeps the model's CG.
     let value = |what: &str| {
         let e = &with_truth["scales"][what];
         (
@@ -205,12 +227,12 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     };
     let (cg, se) = value("cg_aft_in");
     assert!(
-        cg.abs() < 0.3 && cg.abs() <= 2.0 * se,
+        se < 0.5 && cg.abs() <= 2.0 * se,
         "CG shift {cg} ± {se} in, truth 0"
     );
     let (k, se) = value("pitch");
     assert!(
-        (k - 1.0).abs() < 0.02 && (k - 1.0).abs() <= 2.0 * se,
+        se < 0.15 && (k - 1.0).abs() <= 2.0 * se,
         "pitch scale {k} ± {se}, truth 1"
     );
     assert!(with_truth["applied_cg_shift_in"].is_null());

@@ -185,7 +185,8 @@ pub struct Calibration {
     /// The sideslip terms' share of the lateral force over the rolling frames
     /// ([`sideslip_share`]; `None`: the surface and rate terms do not move).
     pub sideslip_share: Option<f64>,
-    /// Whether the sideslip terms got a scale of their own ([`MIN_SIDESLIP_SHARE`]).
+    /// Whether the sideslip terms got a scale of their own ([`MIN_SIDESLIP_SHARE`], or the
+    /// flight test's decision for a model card).
     pub sideslip_identified: bool,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
@@ -768,8 +769,11 @@ pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Re
     Ok(())
 }
 
-/// Runs the identification on the flights of a flight-test dataset.
-pub fn calibrate(dir: &Path) -> Result<Calibration> {
+/// Runs the identification on the flights of a flight-test dataset. `sideslip_apart`: whether the
+/// sideslip terms get a side-force scale of their own; `None` decides it from these flights'
+/// rolling frames ([`MIN_SIDESLIP_SHARE`]). The model cards take the flight test's decision, so
+/// that the scales divided are the same ones.
+pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
     // The identification evaluates this build's aircraft model: a flight test (or model card) of
     // another aircraft is refused, with how to build for it.
@@ -917,7 +921,15 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
     }
     let all_eq: Vec<&EqRow> = eq.iter().collect();
     let count = |f: fn(&EqRow) -> bool| eq.iter().filter(|r| f(r)).count();
-    let side = side_fit(&all_eq).ok_or_else(|| {
+    let share = sideslip_share(
+        &all_eq
+            .iter()
+            .copied()
+            .filter(|r| r.rolling)
+            .collect::<Vec<_>>(),
+    );
+    let apart = sideslip_apart.unwrap_or(share.is_some_and(|s| s >= MIN_SIDESLIP_SHARE));
+    let side = side_fit(&all_eq, apart).ok_or_else(|| {
         Error::Numeric(format!(
             "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
             count(|r| r.rolling),
@@ -962,7 +974,7 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
         .enumerate()
         .map(|(k, name)| {
             let rows: Vec<&EqRow> = eq.iter().filter(|r| r.flight == k).collect();
-            let s = side_fit(&rows);
+            let s = side_fit(&rows, apart);
             let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
             let n = stall_knots(&rows, MIN_STALL_FRAMES_PER_FLIGHT).min(knots);
             let d = drag.as_ref().and_then(|_| {
@@ -1096,16 +1108,9 @@ pub fn calibrate(dir: &Path) -> Result<Calibration> {
             })
         }),
     };
-    let share = sideslip_share(
-        &all_eq
-            .iter()
-            .copied()
-            .filter(|r| r.rolling)
-            .collect::<Vec<_>>(),
-    );
     Ok(Calibration {
         sideslip_share: share,
-        sideslip_identified: share.is_some_and(|s| s >= MIN_SIDESLIP_SHARE),
+        sideslip_identified: apart,
         sensor_seed: sensor_seed(&m),
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
@@ -1371,7 +1376,7 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// rolls and stall approach, it is not a constant side force, and left to b_y it moved the
 /// surface terms' scale by 0.09 (1σ) from one sensor draw to the next; c_k = k_β·Δβ_k, one per
 /// flight, takes it (0.011).
-fn side_fit(all: &[&EqRow]) -> Option<Fit> {
+fn side_fit(all: &[&EqRow], sideslip_apart: bool) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
     let (offset_names, offsets) = per_flight_columns(
         &rolling,
@@ -1391,7 +1396,7 @@ fn side_fit(all: &[&EqRow]) -> Option<Fit> {
         .iter()
         .map(|r| r.f_cg[1] - r.parts.drag[1])
         .collect();
-    if sideslip_share(&rolling).is_some_and(|s| s >= MIN_SIDESLIP_SHARE) {
+    if sideslip_apart {
         return least_squares(&names, &x, &y);
     }
     // One scale for the whole side force: the sideslip terms take the others'.
@@ -1528,11 +1533,12 @@ struct Parts {
     unit_lift: [f64; 3],
 }
 
-/// The model's lift terms driven by the trailing-edge flaps (a factor `fcs/flaperon-mix-rad`).
+/// The model's lift terms driven by the trailing-edge flaps (a factor or table key
+/// `fcs/flaperon-mix-rad`, or `fcs/flap-pos-deg`: the c172p's CLDf).
 /// Their scale is a parameter of its own: in JSBSim's F-16 the trailing-edge flap cancels in the
 /// mix, which follows the aileron, so their lift is unlike either the axis scale or an offset.
 pub fn flap_lift_terms() -> impl Iterator<Item = &'static Term<'static>> {
-    terms_reading(MODEL.lift, &[Var::FlaperonMixRad])
+    terms_reading(MODEL.lift, &[Var::FlaperonMixRad, Var::FlapDeg])
 }
 
 /// The model's side-force terms driven by sideslip (a factor β or |β|): `CYb` and `CYb_M` in
@@ -1694,6 +1700,8 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
 /// card's (when given) and the scales the calibrated aircraft carries.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
+    /// The aircraft description whose model the identification evaluates (the build's).
+    pub aircraft: &'static str,
     /// The identified scales, over the model card's: the calibrated aircraft (`aircraft.toml`)
     /// carries the force scales and [`Report::applied_moments`].
     pub scales: Scales,
@@ -1761,6 +1769,7 @@ impl Report {
             }
         }
         Report {
+            aircraft: estimator_core::aircraft::AIRCRAFT.name,
             applied_moments: scales.applied_moments(),
             applied_thrust: scales.applied_thrust(),
             applied_cg_shift_in: scales.applied_cg_shift_in(flight_test.moment_mass_kg),
@@ -1949,12 +1958,14 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
     if !c.sideslip_identified {
         m.push_str(&format!(
-            "\nThe side force has one scale: over the rolling frames its sideslip terms move {} of \
+            "\nThe side force has one scale: over the rolling frames its sideslip terms move {} \
              what its surface and rate terms move, below the {MIN_SIDESLIP_SHARE} needed to tell \
              their scale apart (an unmodelled lateral force a few per cent of the surfaces' would \
-             land on it).\n",
-            c.sideslip_share
-                .map_or("none".to_string(), |s| format!("{s:.2}"))
+             land on it); the model cards take the flight test's decision.\n",
+            c.sideslip_share.map_or(
+                "less than (the surface and rate terms do not move)".to_string(),
+                |s| format!("{s:.2} of")
+            )
         ));
     }
     if r.model_cards > 0 {
@@ -2213,7 +2224,7 @@ mod tests {
             EqRow {
                 flight: 0,
                 alpha_deg: 5.0,
-                steady: k % 2 == 0,
+                steady: k.is_multiple_of(2),
                 rolling: true,
                 parts: Parts {
                     drag: [-0.8, 0.0, 0.0],
@@ -2232,9 +2243,22 @@ mod tests {
         let all: Vec<&EqRow> = rows.iter().collect();
         let share = sideslip_share(&all).unwrap();
         assert!((0.1..MIN_SIDESLIP_SHARE).contains(&share), "{share}");
-        let side = side_fit(&all).unwrap();
+        let side = side_fit(&all, share >= MIN_SIDESLIP_SHARE).unwrap();
         let (kb, ky) = side_scales(&side);
         assert!((kb - 1.07).abs() < 1e-9 && kb == ky, "{side:?}");
+        // One regressor for the two: its column is the sum, and only its name is a fit's own.
+        assert_eq!(
+            side.params.first().map(|(n, _)| n.as_str()),
+            Some("k_sideslip")
+        );
+        assert!(
+            side.params
+                .iter()
+                .filter(|(n, _)| n == "k_side_controls")
+                .count()
+                == 1
+        );
+        assert!(side.rows == all.len() && side.r2 > 0.999_999, "{side:?}");
         let lift = lift_fit(&all, kb, ky, 1.0, 0).unwrap();
         assert!(lift.estimate("k_flap").is_none(), "{lift:?}");
         assert!((lift.get("k_lift") - 0.95).abs() < 1e-9, "{lift:?}");
@@ -2290,7 +2314,7 @@ mod tests {
         };
         let rows: Vec<EqRow> = (0..400).map(|k| row(k, k % 3 != 0)).collect();
         let all: Vec<&EqRow> = rows.iter().collect();
-        let side = side_fit(&all).unwrap();
+        let side = side_fit(&all, true).unwrap();
         let (kb, ky) = side_scales(&side);
         assert!(
             (kb - 0.9).abs() < 1e-9
@@ -2330,7 +2354,7 @@ mod tests {
         assert!(drag_fit(&no_thrust, kb, ky, &lift).is_none());
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
-        assert!(side_fit(&steady).is_none());
+        assert!(side_fit(&steady, true).is_none());
     }
 
     #[test]
@@ -2384,7 +2408,7 @@ mod tests {
             })
             .collect();
         let all: Vec<&EqRow> = rows.iter().collect();
-        let side = side_fit(&all).unwrap();
+        let side = side_fit(&all, true).unwrap();
         assert!(
             (side.get("k_sideslip") - 0.9).abs() < 1e-9
                 && (side.get("k_side_controls") - 1.1).abs() < 1e-9

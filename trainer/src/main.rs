@@ -974,12 +974,12 @@ fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Res
     let t0 = std::time::Instant::now();
     trainer::calibrate::check_model_cards(ft, model_ft)
         .with_context(|| format!("checking the model cards against {}", ft.display()))?;
-    let c = trainer::calibrate::calibrate(ft)
+    let c = trainer::calibrate::calibrate(ft, None)
         .with_context(|| format!("calibrating from {}", ft.display()))?;
     let model_cards = model_ft
         .iter()
         .map(|d| {
-            trainer::calibrate::calibrate(d)
+            trainer::calibrate::calibrate(d, Some(c.sideslip_identified))
                 .with_context(|| format!("identifying the model card {}", d.display()))
         })
         .collect::<Result<Vec<_>>>()?;
