@@ -57,34 +57,31 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         )))
         .args(["--model", air.jsbsim_model, "--out"])
         .arg(&aircraft));
-    let ft = dir.join("ft");
-    ok(Command::new(bin("hil-sim"))
-        .args([
+    // The flight-test card on sensor seed `seed`, flown on the variant or (None) the model.
+    let card = |seed: u32, out: &Path, variant: Option<&Path>| {
+        let mut cmd = Command::new(bin("hil-sim"));
+        cmd.args([
             "generate",
             "--preset",
             "flight-test",
             "--aircraft",
             air.name,
         ])
-        .args(["--seed", "1", "--out"])
-        .arg(&ft)
-        .arg("--aircraft-dir")
-        .arg(&aircraft));
+        .arg("--seed")
+        .arg(seed.to_string())
+        .arg("--out")
+        .arg(out);
+        if let Some(v) = variant {
+            cmd.arg("--aircraft-dir").arg(v);
+        }
+        ok(&mut cmd);
+    };
+    let ft = dir.join("ft");
+    card(1, &ft, Some(&aircraft));
     let models: Vec<PathBuf> = (2..=5)
         .map(|seed| {
             let model = dir.join(format!("model-ft-seed{seed}"));
-            ok(Command::new(bin("hil-sim"))
-                .args([
-                    "generate",
-                    "--preset",
-                    "flight-test",
-                    "--aircraft",
-                    air.name,
-                ])
-                .arg("--seed")
-                .arg(seed.to_string())
-                .arg("--out")
-                .arg(&model));
+            card(seed, &model, None);
             model
         })
         .collect();
