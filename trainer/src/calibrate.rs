@@ -138,6 +138,11 @@ fn identified_drag(
 /// unmodelled lateral force a few per cent of the surfaces' lands on it (on the development
 /// variants 1.38 ± 0.05 for a true 1.15), so the whole side force takes one scale there.
 const MIN_SIDESLIP_SHARE: f64 = 1.0;
+/// The trailing-edge flap terms get a lift scale of their own only where they move at least this
+/// share of the lift over the quasi-steady frames (the flap part's standard deviation over the
+/// other lift terms'): JSBSim's F-16's flaperons 0.12–0.35 per flight, the c172p's flaps, up
+/// throughout its card, 0.004–0.007 (the flap sensor's noise read through CLDf).
+const MIN_FLAP_SHARE: f64 = 0.05;
 /// The side-force fit reads the frames rolling faster than this, rad/s (the card's roll doublets
 /// and bank captures): there the aileron and roll-rate terms' side force is unlike the sideslip
 /// terms'.
@@ -185,9 +190,12 @@ pub struct Calibration {
     /// The sideslip terms' share of the lateral force over the rolling frames
     /// ([`sideslip_share`]; `None`: the surface and rate terms do not move).
     pub sideslip_share: Option<f64>,
-    /// Whether the sideslip terms got a scale of their own ([`MIN_SIDESLIP_SHARE`], or the
-    /// flight test's decision for a model card).
-    pub sideslip_identified: bool,
+    /// The trailing-edge flap terms' share of the lift over the quasi-steady frames (the
+    /// standard deviation of their normal force over the other lift terms'; `None`: no frames).
+    pub flap_share: Option<f64>,
+    /// Which scales the force fits have: decided from the flight test's frames, a model card's
+    /// the flight test's.
+    pub structure: Structure,
     /// Normal specific force, m/s²: k_L (lift scale), k_F (flap-lift scale), ΔC_L (lift offset).
     pub lift: Fit,
     /// Axial specific force, m/s²: k_D (drag scale) and k_T (the engine deck's thrust scale)
@@ -769,11 +777,19 @@ pub fn check_model_cards(flight_test: &Path, cards: &[std::path::PathBuf]) -> Re
     Ok(())
 }
 
-/// Runs the identification on the flights of a flight-test dataset. `sideslip_apart`: whether the
-/// sideslip terms get a side-force scale of their own; `None` decides it from these flights'
-/// rolling frames ([`MIN_SIDESLIP_SHARE`]). The model cards take the flight test's decision, so
-/// that the scales divided are the same ones.
-pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration> {
+/// Which scales the force fits have: the model cards take the flight test's, so that the scales
+/// divided are the same ones.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Structure {
+    /// The sideslip terms get a side-force scale of their own ([`MIN_SIDESLIP_SHARE`]).
+    pub sideslip_apart: bool,
+    /// The trailing-edge flap terms get a lift scale of their own ([`MIN_FLAP_SHARE`]).
+    pub flap_apart: bool,
+}
+
+/// Runs the identification on the flights of a flight-test dataset, with the fits' `structure`
+/// (`None`: decided from these flights, [`Structure`]).
+pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
     // The identification evaluates this build's aircraft model: a flight test (or model card) of
     // another aircraft is refused, with how to build for it.
@@ -928,7 +944,13 @@ pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration
             .filter(|r| r.rolling)
             .collect::<Vec<_>>(),
     );
-    let apart = sideslip_apart.unwrap_or(share.is_some_and(|s| s >= MIN_SIDESLIP_SHARE));
+    let steady_rows: Vec<&EqRow> = all_eq.iter().copied().filter(|r| r.steady).collect();
+    let flap_share = spread_ratio(&steady_rows, |r| r.parts.flap[2], |r| r.parts.lift[2]);
+    let structure = structure.unwrap_or(Structure {
+        sideslip_apart: share.is_some_and(|s| s >= MIN_SIDESLIP_SHARE),
+        flap_apart: flap_share.is_some_and(|s| s >= MIN_FLAP_SHARE),
+    });
+    let apart = structure.sideslip_apart;
     let side = side_fit(&all_eq, apart).ok_or_else(|| {
         Error::Numeric(format!(
             "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
@@ -947,7 +969,7 @@ pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration
     }
     let knots = stall_knots(&all_eq, MIN_STALL_FRAMES);
     let lift_at = |k_d: f64| {
-        lift_fit(&all_eq, k_b, k_y, k_d, knots).ok_or_else(|| {
+        lift_fit(&all_eq, k_b, k_y, k_d, knots, structure.flap_apart).ok_or_else(|| {
             Error::Numeric(format!(
                 "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
                 count(|r| r.steady)
@@ -978,11 +1000,11 @@ pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration
             let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
             let n = stall_knots(&rows, MIN_STALL_FRAMES_PER_FLIGHT).min(knots);
             let d = drag.as_ref().and_then(|_| {
-                let l = lift_fit(&rows, kb, ky, k_d, n)?;
+                let l = lift_fit(&rows, kb, ky, k_d, n, structure.flap_apart)?;
                 drag_fit(&rows, kb, ky, &l)
             });
             let kd = d.as_ref().map_or(k_d, |d| d.get("k_drag"));
-            let l = lift_fit(&rows, kb, ky, kd, n);
+            let l = lift_fit(&rows, kb, ky, kd, n, structure.flap_apart);
             PerFlight {
                 flight: name.clone(),
                 lift: l.as_ref().map(|l| l.get("k_lift")),
@@ -1110,7 +1132,8 @@ pub fn calibrate(dir: &Path, sideslip_apart: Option<bool>) -> Result<Calibration
     };
     Ok(Calibration {
         sideslip_share: share,
-        sideslip_identified: apart,
+        flap_share,
+        structure,
         sensor_seed: sensor_seed(&m),
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
@@ -1413,13 +1436,18 @@ fn side_fit(all: &[&EqRow], sideslip_apart: bool) -> Option<Fit> {
 /// deviation of the model's sideslip part over that of its surface and rate part (`None` when
 /// the latter does not move).
 fn sideslip_share(rows: &[&EqRow]) -> Option<f64> {
+    spread_ratio(rows, |r| r.parts.sideslip[1], |r| r.parts.side_rest[1])
+}
+
+/// The standard deviation of `a` over `rows` over that of `b` (`None` when `b` does not move).
+fn spread_ratio(rows: &[&EqRow], a: fn(&EqRow) -> f64, b: fn(&EqRow) -> f64) -> Option<f64> {
     let sd = |f: fn(&EqRow) -> f64| {
         let n = rows.len() as f64;
         let mean = rows.iter().map(|r| f(r)).sum::<f64>() / n;
         (rows.iter().map(|r| (f(r) - mean).powi(2)).sum::<f64>() / n).sqrt()
     };
-    let (b, c) = (sd(|r| r.parts.sideslip[1]), sd(|r| r.parts.side_rest[1]));
-    (c > 0.0 && !rows.is_empty()).then(|| b / c)
+    let (a, b) = (sd(a), sd(b));
+    (b > 0.0 && !rows.is_empty()).then(|| a / b)
 }
 
 /// One regressor per flight that has rows, `{prefix}_{k}`: `value` on flight k's rows, 0 on the
@@ -1472,7 +1500,14 @@ fn stall_scale(lift: &Fit, j: usize, per_flight: &[f64]) -> Estimate {
 /// The lift fit ([`side_fit`]'s doc) with the side force at the scales `k_b`, `k_y`, the drag at
 /// `k_d`, and the first `knots` stall knots' lift changes `d_j · lift_z · basis_j(α)`
 /// ([`STALL_KNOTS_DEG`]).
-fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, k_d: f64, knots: usize) -> Option<Fit> {
+fn lift_fit(
+    all: &[&EqRow],
+    k_b: f64,
+    k_y: f64,
+    k_d: f64,
+    knots: usize,
+    flap_apart: bool,
+) -> Option<Fit> {
     let rows: Vec<&EqRow> = all.iter().copied().filter(|r| r.steady).collect();
     let ones = vec![1.0; rows.len()];
     let stall_names: Vec<String> = (1..=knots).map(stall_name).collect();
@@ -1482,12 +1517,16 @@ fn lift_fit(all: &[&EqRow], k_b: f64, k_y: f64, k_d: f64, knots: usize) -> Optio
         rows.iter().map(|r| r.parts.unit_lift[2]).collect(),
         ones,
     ];
-    // The flap terms' own scale, where the model has them and the card moves them (the F-16's
-    // flaperons); otherwise their lift is the lift axis's (a column of zeros has no scale).
+    // The flap terms' own scale where they move enough of the lift ([`MIN_FLAP_SHARE`]: the
+    // F-16's flaperons); otherwise their lift is the lift axis's.
     let flap: Vec<f64> = rows.iter().map(|r| r.parts.flap[2]).collect();
-    if flap.iter().any(|v| *v != 0.0) {
+    if flap_apart {
         names.insert(1, "k_flap");
         x.insert(1, flap);
+    } else {
+        for (l, f) in x[0].iter_mut().zip(flap) {
+            *l += f;
+        }
     }
     names.extend(stall_names.iter().map(String::as_str));
     for j in 1..=knots {
@@ -1956,7 +1995,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
-    if !c.sideslip_identified {
+    if !c.structure.sideslip_apart {
         m.push_str(&format!(
             "\nThe side force has one scale: over the rolling frames its sideslip terms move {} \
              what its surface and rate terms move, below the {MIN_SIDESLIP_SHARE} needed to tell \
@@ -2259,7 +2298,9 @@ mod tests {
                 == 1
         );
         assert!(side.rows == all.len() && side.r2 > 0.999_999, "{side:?}");
-        let lift = lift_fit(&all, kb, ky, 1.0, 0).unwrap();
+        let flap_share = spread_ratio(&all, |r| r.parts.flap[2], |r| r.parts.lift[2]).unwrap();
+        assert!(flap_share < MIN_FLAP_SHARE, "{flap_share}");
+        let lift = lift_fit(&all, kb, ky, 1.0, 0, flap_share >= MIN_FLAP_SHARE).unwrap();
         assert!(lift.estimate("k_flap").is_none(), "{lift:?}");
         assert!((lift.get("k_lift") - 0.95).abs() < 1e-9, "{lift:?}");
     }
@@ -2325,7 +2366,7 @@ mod tests {
         // Three knots (13°, 16°, 19°) have their frames; 22° is beyond the sweep.
         let knots = stall_knots(&all, 10);
         assert_eq!(knots, 3);
-        let lift = lift_fit(&all, kb, ky, 1.0, knots).unwrap();
+        let lift = lift_fit(&all, kb, ky, 1.0, knots, true).unwrap();
         assert!(
             (lift.get("k_lift") - 0.95).abs() < 1e-9,
             "{}",

@@ -979,7 +979,7 @@ fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Res
     let model_cards = model_ft
         .iter()
         .map(|d| {
-            trainer::calibrate::calibrate(d, Some(c.sideslip_identified))
+            trainer::calibrate::calibrate(d, Some(c.structure))
                 .with_context(|| format!("identifying the model card {}", d.display()))
         })
         .collect::<Result<Vec<_>>>()?;
