@@ -160,6 +160,16 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         !flap_terms.is_empty() || with_truth["scales"]["flap"].is_null(),
         "a flap scale without flap terms"
     );
+    // The flap terms get their own scale exactly where they move 5 % of the lift.
+    let ft = &with_truth["flight_test"];
+    let apart = ft["structure"]["flap_apart"].as_bool().unwrap();
+    assert_eq!(
+        apart,
+        ft["flap_share"].as_f64().is_some_and(|s| s >= 0.05),
+        "{}",
+        ft["flap_share"]
+    );
+    assert_eq!(with_truth["scales"]["flap"].is_null(), !apart);
     for (axis, truth, tolerance) in [
         ("lift", 0.94, 0.02),
         ("flap", 0.94, 0.05),
@@ -173,6 +183,7 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         }
         if axis == "drag" && estimator_core::aero::ENGINE.is_none() {
             assert!(e.is_null(), "a drag scale without an engine deck: {e}");
+            assert!(with_truth["scales"]["thrust"].is_null());
             continue;
         }
         let (k, se) = (
@@ -219,7 +230,14 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         "the flight test reached no stall knot: {}",
         with_truth["flight_test"]["scales"]["stall"]
     );
-    for (v, se) in knots(&with_truth["scales"]) {
+    // Where the model card reached a knot too, the calibrated aircraft carries one.
+    let calibrated = knots(&with_truth["scales"]);
+    assert!(
+        knots(&with_truth["model_card"]["scales"]).is_empty() || !calibrated.is_empty(),
+        "no calibrated stall knot: {}",
+        with_truth["scales"]["stall"]
+    );
+    for (v, se) in calibrated {
         assert!(
             (v - 1.0).abs() < 0.02 && (v - 1.0).abs() <= 2.0 * se,
             "lift over α {v} ± {se}, truth 1"
@@ -231,9 +249,12 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     // (the c172p's) has neither.
     assert!(with_truth["applied_cg_shift_in"].is_null());
     if estimator_core::aero::MOMENTS.is_none() {
-        assert!(
-            with_truth["scales"]["cg_aft_in"].is_null() && with_truth["scales"]["pitch"].is_null()
-        );
+        for what in ["cg_aft_in", "pitch", "roll", "yaw"] {
+            assert!(
+                with_truth["scales"][what].is_null(),
+                "{what} without moments"
+            );
+        }
         std::fs::remove_dir_all(&dir).ok();
         return;
     }

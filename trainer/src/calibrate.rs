@@ -1520,7 +1520,8 @@ fn lift_fit(
     // The flap terms' own scale where they move enough of the lift ([`MIN_FLAP_SHARE`]: the
     // F-16's flaperons); otherwise their lift is the lift axis's.
     let flap: Vec<f64> = rows.iter().map(|r| r.parts.flap[2]).collect();
-    if flap_apart {
+    // A flight whose flap terms hold still has no flap scale of its own (its fit would be singular).
+    if flap_apart && flap.iter().any(|v| *v != flap[0]) {
         names.insert(1, "k_flap");
         x.insert(1, flap);
     } else {
@@ -1995,6 +1996,15 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         m.push_str(&row("the same card flown on the model", &mc.scales));
     }
     m.push_str(&row("**calibrated aircraft** (aircraft.toml)", &r.scales));
+    if !c.structure.flap_apart && flap_lift_terms().next().is_some() {
+        m.push_str(&format!(
+            "\nThe flap terms take the lift's scale: over the quasi-steady frames they move {} of \
+             the other lift terms' normal force, below the {MIN_FLAP_SHARE} a scale of their own \
+             needs.\n",
+            c.flap_share
+                .map_or("(none)".to_string(), |s| format!("{s:.3}"))
+        ));
+    }
     if !c.structure.sideslip_apart {
         m.push_str(&format!(
             "\nThe side force has one scale: over the rolling frames its sideslip terms move {} \
