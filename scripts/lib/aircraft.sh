@@ -78,13 +78,7 @@ aircraft_build() {
 }
 
 # aircraft_model NAME: prints the JSBSim model of aircraft/NAME.toml (its `[jsbsim] model`: the
-# aircraft directory's MODEL/MODEL.xml).
+# aircraft directory's MODEL/MODEL.xml), as scripts/airframe_spec.py reads it.
 aircraft_model() {
-  python3 - "$root/aircraft/$1.toml" <<'PY'
-import sys, tomllib
-try:
-    print(tomllib.load(open(sys.argv[1], "rb"))["jsbsim"]["model"])
-except (OSError, KeyError, tomllib.TOMLDecodeError) as e:
-    sys.exit(f"{sys.argv[1]}: no `[jsbsim] model` ({e!r}): describe the aircraft there (docs/aircraft.md)")
-PY
+  PYTHONPATH="$root/scripts" python3 -c 'import sys; from airframe_spec import aircraft_model; print(aircraft_model(sys.argv[1]))' "$1"
 }
