@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 18] = [
+    let cases: [(&str, &str, &str); 19] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -111,6 +111,11 @@ fn descriptions_are_validated_key_by_key() {
             "speedbrake_deg = { property",
             "airbrake_deg = { property",
             "surfaces: unknown airbrake_deg",
+        ),
+        (
+            "stall_knots_deg = [10.0, 13.0, 16.0, 19.0, 22.0]",
+            "stall_knots_deg = [10.0, 13.0, 16.0, 22.0, 19.0]",
+            "calibration.stall_knots_deg is 5 increasing angles within (0, 25.0] deg",
         ),
         (
             "flap_share = 0.0",

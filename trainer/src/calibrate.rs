@@ -86,8 +86,10 @@ const MAX_ALPHA_DEG: f64 = 25.0;
 /// The lift's scale over α: 1 (the lift scale k_L alone) up to the first knot, then one parameter
 /// per knot, linear between knots and held beyond the last (a `[stall]` table of the spec). A
 /// knot is identified when at least [`MIN_STALL_FRAMES`] quasi-steady frames lie nearer to it
-/// than to its neighbours, and every knot before it is.
-pub const STALL_KNOTS_DEG: [f64; 5] = [10.0, 13.0, 16.0, 19.0, 22.0];
+/// than to its neighbours, and every knot before it is. The knots are the aircraft description's
+/// (`[calibration] stall_knots_deg`).
+pub const STALL_KNOTS_DEG: [f64; estimator_core::aircraft::STALL_KNOTS] =
+    estimator_core::aircraft::AIRCRAFT.stall_knots_deg;
 /// At high α the drag's body-z share, D·sin α, reads as lift: a stall knot's 1σ includes this
 /// share of the drag's normal force there, the drag error a wind-tunnel model carries beyond what
 /// the drag fit sees (it reads the frames below the first knot; docs/calibration.md), and the

@@ -28,6 +28,11 @@ pub struct Aircraft {
     pub surfaces: [Option<SurfaceSensor>; SURFACE_CHANNELS.len()],
     /// The `flight-test` preset's test points.
     pub flight_test_points: &'static [TestPoint],
+    /// The α knots (deg) of the lift's change over α that flight-test calibration identifies
+    /// (`trainer calibrate`): the lift scale alone up to the first, one parameter per knot after
+    /// it. The first is where the model's lift curve leaves its straight part; the others span what
+    /// the card's stall approach reaches.
+    pub stall_knots_deg: [f64; STALL_KNOTS],
     /// The flight-control system's surface logic the filter reproduces for surfaces no channel
     /// carries.
     pub fcs: Fcs,
@@ -182,6 +187,9 @@ impl Aircraft {
         }
     }
 }
+
+/// How many stall knots a description gives ([`Aircraft::stall_knots_deg`]).
+pub const STALL_KNOTS: usize = 5;
 
 /// A flight-test point: trimmed start altitude and calibrated airspeed.
 #[derive(Clone, Copy, Debug, PartialEq)]
