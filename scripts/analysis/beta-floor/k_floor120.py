@@ -110,11 +110,26 @@ def prep(n):
         y120_rot=lagged + rot_lagged, y120_real_rot=lagged + e_b + rot_lagged,
         y120_real_surf=lagged + e_b + e_b_surf, y120_all=lagged + e_b + rot_lagged + e_b_surf,
         e_b_rot_mae=mae(e_b_rot[i]), e_b_surf_mae=mae(e_b_surf[i]), surf_std=surf_std,
+        gust_rate_r2=gust_rate_r2(r, bt),
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
         f_per_deg=np.median(1 / np.abs(k_beta[i])), f_per_deg0=np.median(1 / np.abs(k_beta0[i])),
         qbar_kpa=np.mean(r["aero__qbar_psf"][i]) * PSF_PA / 1000, mass_kg=np.mean(ms[i]) * SLUG_KG,
     )
+
+
+def gust_rate_r2(r, bt):
+    """{rate: R²} of each gust rate (aero less body rate, rad/s) on the turbulent β over ±1 s (every
+    other 120 Hz step, least squares with a constant): how much of the rotational turbulence a
+    history of the lateral gust could tell, were the gust rate the gust's own rate of change
+    (MIL-F-8785C's r_g)."""
+    out = {}
+    for rate in ("p", "r"):
+        g = (r[key(f"velocities/{rate}-aero-rad_sec")] - r[key(f"velocities/{rate}-rad_sec")])[120:-120]
+        x = np.stack([bt[120 + k:len(bt) - 120 + k] for k in range(-120, 121, 2)] + [np.ones(len(g))], 1)
+        w, *_ = np.linalg.lstsq(x, g, rcond=None)
+        out[rate] = float(1 - np.var(g - x @ w) / max(np.var(g), 1e-30))
+    return out
 
 
 def feat20(x, L):
@@ -161,7 +176,7 @@ def main():
                      ("y120_real_surf", "120 Hz + real accel error + surface sensor errors"),
                      ("y120_all", "120 Hz + real accel error + rotational turbulence + surface sensor errors")):
         rows.append((f"{lab}, as filtered (sub5)", score(lambda p, k=key: p["b_nt"] + p[k][p["i"]])))
-        for L in (2, 6, 12, 18):
+        for L in (2, 6, 12, 18, 120, 240):
             w = fit(lambda p, k=key, L=L: feat120(p[k], p["i"], L))
             rows.append((f"{lab}, deconvolved (120 Hz lags 0..{L-1})",
                          score(lambda p, k=key, L=L, w=w: p["b_nt"] + feat120(p[k], p["i"], L) @ w)))
@@ -196,6 +211,12 @@ def main():
         print("|---|---|" + ("---|" if extra else ""))
         for n, p in te.items():
             print(f"| {n} | {p[mae_key]:.4f} |" + (f" {extra(p)} |" if extra else ""))
+    print("\n## The gust rates against the turbulent β's history, test flights\n")
+    print("R² of each gust rate (aero less body rate) on the turbulent β over ±1 s (`gust_rate_r2`).\n")
+    print("| flight | p_g R² | r_g R² |")
+    print("|---|---|---|")
+    for n, p in te.items():
+        print(f"| {n} | {p['gust_rate_r2']['p']:.3f} | {p['gust_rate_r2']['r']:.3f} |")
     print("\n## Lateral specific force per degree of β, test flights (medians over the frames)\n")
     print("| flight | m/s² per deg | without the drag's β term (CYβ − C_D) | mean q̄ kPa | mean mass kg |")
     print("|---|---|---|---|---|")
