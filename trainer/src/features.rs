@@ -174,6 +174,7 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas), `egi120-beta`
 /// and `egi120` (egi-hybrid-fast-d2 + the 120 Hz sub-samples of β's, and α's, channels: `egi120` is
 /// the shipped set), `egi120-side-scale` (egi120 + the filter's side-force scale for β),
+/// `egi120-gyro-p` (egi120 + the roll gyro's 120 Hz sub-samples for β),
 /// `egi-hybrid-scales` (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
 /// `egi-hybrid-turb` (egi-hybrid + the filter's turbulence index), or explicit comma-separated
 /// lists `alpha=a,b,...;beta=c,d,...`.
@@ -330,6 +331,12 @@ impl FeatureSet {
             "egi120-side-scale" => {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &[Feature::FilterSideScale])
             }
+            // egi120 plus, for β, the roll gyro's 120 Hz sub-samples: with the yaw gyro's, the
+            // angular accelerations through which the gust rates move the roll and yaw moments
+            // (docs/results/beta-floor.md).
+            "egi120-gyro-p" => {
+                FeatureSet::parse("egi120")?.extended(spec, &[], &subsamples(&[Channel::GyroP]))
+            }
             // egi-hybrid-fast-d2 plus the force scales the filter learns in flight: what tells an
             // airframe unlike the model. Measured, not shipped: it loses on the 20-minute test
             // flight (docs/airframes.md).
@@ -428,6 +435,17 @@ mod tests {
         assert_eq!(s.alpha, base.alpha);
         assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
         assert_eq!(s.beta[base.beta.len()..], [Feature::FilterSideScale]);
+        assert_eq!(s.suite(), Suite::Egi120);
+    }
+
+    #[test]
+    fn the_gyro_p_set_is_egi120_with_the_roll_gyros_sub_samples_last_in_beta() {
+        let base = FeatureSet::parse("egi120").unwrap();
+        let s = FeatureSet::parse("egi120-gyro-p").unwrap();
+        assert_eq!(s.alpha, base.alpha);
+        assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
+        let subs: Vec<Feature> = (0..6).map(|k| Feature::Sub(Channel::GyroP, k)).collect();
+        assert_eq!(s.beta[base.beta.len()..], subs[..]);
         assert_eq!(s.suite(), Suite::Egi120);
     }
 

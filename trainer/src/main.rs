@@ -141,7 +141,8 @@ struct TrainArgs {
     /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas),
     /// egi120-beta (egi-hybrid-fast-d2 + the 120 Hz sub-samples of Ay, rudder, aileron and r for
     /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α: the shipped
-    /// set), egi120-side-scale (egi120 + the filter's side-force scale for β), egi-hybrid-scales
+    /// set), egi120-side-scale (egi120 + the filter's side-force scale for β), egi120-gyro-p
+    /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi-hybrid-scales
     /// (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
     /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).

@@ -110,7 +110,7 @@ def prep(n):
         y120_rot=lagged + rot_lagged, y120_real_rot=lagged + e_b + rot_lagged,
         y120_real_surf=lagged + e_b + e_b_surf, y120_all=lagged + e_b + rot_lagged + e_b_surf,
         e_b_rot_mae=mae(e_b_rot[i]), e_b_surf_mae=mae(e_b_surf[i]), surf_std=surf_std,
-        gust_rate_r2=gust_rate_r2(r, bt),
+        gust_rate_r2=gust_rate_r2(r, bt), moments=moment_columns(d, r, i, n120),
         chk=chk, e_ay=e_ay, e_b=e_b[i], e_ay_std=e_ay.std(), e_ay_mean=e_ay.mean(),
         e_b_mae=mae(e_b), e_b_white_mae=mae(e_b_white), k_beta=np.median(np.abs(k_beta)),
         f_per_deg=np.median(1 / np.abs(k_beta[i])), f_per_deg0=np.median(1 / np.abs(k_beta0[i])),
@@ -130,6 +130,26 @@ def gust_rate_r2(r, bt):
         w, *_ = np.linalg.lstsq(x, g, rcond=None)
         out[rate] = float(1 - np.var(g - x @ w) / max(np.var(g), 1e-30))
     return out
+
+
+def moment_columns(d, r, i, n120):
+    """What the roll and yaw moments tell of the gust rates, as linear regressors at the frames: the
+    gyros' p and r sub-samples of the frame's period over q̄ and over V (their differences are the
+    angular accelerations, the moment coefficients' share of them, and the rate terms), p·q and q·r
+    over q̄ (the inertial coupling), and the sensed aileron and rudder (the 120 Hz sample at the
+    frame) and over q̄. q̄ and V are the replay's (the oracle's)."""
+    qb, v = r["aero__qbar_psf"][i], r["velocities__vt_fps"][i]
+    g = {c: sub_series(d, c, n120) for c in ("gyro_p_rps", "gyro_q_rps", "gyro_r_rps", "aileron_deg", "rudder_deg")}
+    cols = []
+    for c in ("gyro_p_rps", "gyro_r_rps"):
+        for j in range(6):
+            x = shift(g[c], j)[i]
+            cols += [x / qb, x / v]
+    p, q, rr = (g[c][i] for c in ("gyro_p_rps", "gyro_q_rps", "gyro_r_rps"))
+    cols += [p * q / qb, q * rr / qb]
+    for c in ("aileron_deg", "rudder_deg"):
+        cols += [g[c][i], g[c][i] / qb]
+    return np.stack(cols, 1)
 
 
 def feat20(x, L):
@@ -182,6 +202,14 @@ def main():
                          score(lambda p, k=key, L=L, w=w: p["b_nt"] + feat120(p[k], p["i"], L) @ w)))
             if L == 6:
                 print(f"<!-- weights {key} L=6: {np.array2string(w, precision=4)} -->")
+    # The last floor's oracle, also reading what the roll and yaw moments tell (moment_columns) and
+    # β_noturb (the moments read the whole β).
+    def with_moments(p):
+        return np.concatenate([feat120(p["y120_all"], p["i"], 6), p["b_nt"][:, None], p["moments"]], 1)
+    w = fit(with_moments)
+    rows.append(("120 Hz + real accel error + rotational turbulence + surface sensor errors, deconvolved "
+                 "(120 Hz lags 0..5), + the gyros' p and r sub-samples and the surfaces (moment_columns)",
+                 score(lambda p, w=w: p["b_nt"] + with_moments(p) @ w)))
     rows.append(("reference: β_noturb exact, β_turb = 0", score(lambda p: p["b_nt"])))
 
     print(f"# β floor with 120 Hz IMU outputs, {AIRCRAFT} (fit: {len(tr)} aggressive training flights; MAE, deg)\n")
