@@ -140,6 +140,10 @@ pub const FILTER_FAST_FEATURES: [Feature; 4] = [
 /// The lags of the `dynamics` sets' delta features (every set built on `dynamics` reads these).
 pub const DYNAMICS_LAGS: [Lag; 4] = [Lag::F1, Lag::F4, Lag::F10, Lag::F20];
 
+/// The named feature set the build's aircraft ships (its description's `estimator.features`):
+/// `trainer train`'s default and the report's shipped rows.
+pub const SHIPPED: &str = estimator_core::aircraft::AIRCRAFT.estimator.features;
+
 /// The channels whose 120 Hz sub-samples the `egi120` sets read: β's lateral force and the
 /// surfaces that make it (the rudder's chatter in turbulence is in both at 120 Hz, in neither
 /// channel at 20 Hz)...
@@ -435,6 +439,12 @@ mod tests {
         assert_eq!(s.alpha, base.alpha);
         assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
         assert_eq!(s.beta[base.beta.len()..], [Feature::FilterSideScale]);
+        assert_eq!(s.suite(), Suite::Egi120);
+    }
+
+    #[test]
+    fn the_shipped_set_of_the_builds_aircraft_is_a_known_egi120_set() {
+        let s = FeatureSet::parse(SHIPPED).unwrap();
         assert_eq!(s.suite(), Suite::Egi120);
     }
 

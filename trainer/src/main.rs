@@ -5,7 +5,7 @@ use hil_sim::dataset::machine;
 use std::path::{Path, PathBuf};
 use trainer::data::{Dataset, PAPER_TRAIN_ROWS, Role};
 use trainer::export::{plot_curves, plot_series, provenance, write_model};
-use trainer::features::{FeatureSet, parse_suite};
+use trainer::features::{FeatureSet, SHIPPED as SHIPPED_FEATURES, parse_suite};
 use trainer::metrics::FlightMetrics;
 use trainer::model::{Loss, TrainConfig};
 use trainer::pipeline::{Size, eval_shipped, train_angle};
@@ -146,8 +146,10 @@ struct TrainArgs {
     /// (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
     /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
-    #[arg(long, default_value = "egi120")]
-    features: String,
+    /// Default: the aircraft's shipped set (its description's `estimator.features`: egi120 for
+    /// the F-16 and the f15, egi120-gyro-p for the c172p).
+    #[arg(long)]
+    features: Option<String>,
     /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
     /// `filter_airspeed_mps,filter_lift_scale`): an ablation without spelling out the whole list.
     #[arg(long, default_value = "")]
@@ -185,8 +187,8 @@ struct ReportArgs {
     /// Print exactly one JSON object (the Table-2 numbers) on stdout.
     #[arg(long)]
     json: bool,
-    /// Also the rows of what ships: the shipped configuration (the hybrid: `egi120`
-    /// features on the `egi120` suite, `medium-wide-beta` networks trained with `--loss l1`, the
+    /// Also the rows of what ships: the shipped configuration (the hybrid: the aircraft's shipped
+    /// feature set, its description's `estimator.features`, on the `egi120` suite, `medium-wide-beta` networks trained with `--loss l1`, the
     /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi120` suite (format 5).
     #[arg(long)]
     shipped_rows: bool,
@@ -538,7 +540,8 @@ impl TrainArgs {
     /// The sensor suite and the feature set, checked against each other.
     fn suite_features(&self) -> Result<(Suite, FeatureSet)> {
         let suite = parse_suite(&self.suite)?;
-        let fs = FeatureSet::parse(&self.features)?.without(&self.without)?;
+        let fs = FeatureSet::parse(self.features.as_deref().unwrap_or(SHIPPED_FEATURES))?
+            .without(&self.without)?;
         fs.check_suite(suite)?;
         Ok((suite, fs))
     }
@@ -1416,7 +1419,7 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
         shipped_rows: if shipped_rows {
             ds.require(Suite::Egi120)?;
             // The configuration the shipped weights were trained with (their PROVENANCE).
-            let hybrid = FeatureSet::parse("egi120")?;
+            let hybrid = FeatureSet::parse(SHIPPED_FEATURES)?;
             hybrid.check_suite(Suite::Egi120)?;
             Some((hybrid, Size::MediumWideBeta, Loss::L1))
         } else {

@@ -114,6 +114,9 @@ pub struct EstimatorSettings {
     /// (`ALPHA_FROM_FILTER`, [`crate::estimator::filter_alpha_fallback`]). Either way the estimate
     /// says `OUT_OF_ENVELOPE`.
     pub alpha_from_filter: bool,
+    /// The named feature set (trainer/src/features.rs) the shipped networks read: `trainer
+    /// train`'s default `--features`, chosen on the aircraft's validation flights.
+    pub features: &'static str,
 }
 
 impl Mass {
