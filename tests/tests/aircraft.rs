@@ -221,3 +221,29 @@ fn every_description_has_the_tag_the_docs_give() {
         assert!(doc.contains(&said), "docs/architecture.md lacks {said}");
     }
 }
+
+/// Each aircraft's committed networks were trained with the feature set its description ships
+/// (`estimator.features`, `trainer train`'s default in its build): the export's PROVENANCE names
+/// the set, and the set is one the trainer knows.
+#[test]
+fn every_aircraft_ships_networks_of_its_descriptions_feature_set() {
+    for name in estimator_core::aircraft::descriptions() {
+        let toml = std::fs::read_to_string(root().join(format!("aircraft/{name}.toml"))).unwrap();
+        let set = toml
+            .lines()
+            .find_map(|l| l.strip_prefix("features = \""))
+            .and_then(|l| l.strip_suffix('"'))
+            .unwrap_or_else(|| panic!("aircraft/{name}.toml has no estimator.features"));
+        trainer::features::FeatureSet::parse(set)
+            .unwrap_or_else(|e| panic!("aircraft/{name}.toml: estimator.features {set:?}: {e}"));
+        let weights = root().join(format!("estimator-core/src/model/{name}/weights.rs"));
+        let Ok(code) = std::fs::read_to_string(&weights) else {
+            continue; // an aircraft without shipped networks yet
+        };
+        assert!(
+            code.contains(&format!("features: {set};")),
+            "{} was not trained with {name}'s estimator.features {set:?}",
+            weights.display()
+        );
+    }
+}

@@ -210,7 +210,7 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     );
     // C has the model's stall: the lift over α, where the card's stall approach reached a knot
     // on the flight test and on the model card, is the lift scale's (1) within 2σ; the flight
-    // test reaches at least the first knot past 10°.
+    // test reaches at least the knot after the first (the description's `stall_knots_deg`).
     let knots = |scales: &serde_json::Value| -> Vec<(f64, f64)> {
         scales["stall"]
             .as_array()

@@ -176,8 +176,8 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// (egi-hybrid-fast + [`FILTER_SLOW_FEATURES`]: all the air-data filter's estimates), `egi-hybrid-fast`
 /// (egi-dynamics + the filter outputs that recover within a second, [`FILTER_FAST_FEATURES`]),
 /// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas), `egi120-beta`
-/// and `egi120` (egi-hybrid-fast-d2 + the 120 Hz sub-samples of β's, and α's, channels: `egi120` is
-/// the shipped set), `egi120-side-scale` (egi120 + the filter's side-force scale for β),
+/// and `egi120` (egi-hybrid-fast-d2 + the 120 Hz sub-samples of β's, and α's, channels: the F-16's
+/// shipped set; each aircraft's is [`SHIPPED`]), `egi120-side-scale` (egi120 + the filter's side-force scale for β),
 /// `egi120-gyro-p` (egi120 + the roll gyro's 120 Hz sub-samples for β),
 /// `egi-hybrid-scales` (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
 /// `egi-hybrid-turb` (egi-hybrid + the filter's turbulence index), or explicit comma-separated
@@ -336,7 +336,7 @@ impl FeatureSet {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &[Feature::FilterSideScale])
             }
             // egi120 plus, for β, the roll gyro's 120 Hz sub-samples: with the yaw gyro's, the
-            // angular accelerations through which the gust rates move the roll and yaw moments
+            // body's angular accelerations, which the gust rates' roll and yaw moments move
             // (docs/results/beta-floor.md).
             "egi120-gyro-p" => {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &subsamples(&[Channel::GyroP]))

@@ -140,14 +140,13 @@ struct TrainArgs {
     /// (egi-dynamics + the filter's α, β and their 1σ, which recover within a second of an
     /// outage), egi-hybrid-fast-d2 (egi-hybrid-fast + the β dynamics channels' 2-frame deltas),
     /// egi120-beta (egi-hybrid-fast-d2 + the 120 Hz sub-samples of Ay, rudder, aileron and r for
-    /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α: the shipped
-    /// set), egi120-side-scale (egi120 + the filter's side-force scale for β), egi120-gyro-p
+    /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α),
+    /// egi120-side-scale (egi120 + the filter's side-force scale for β), egi120-gyro-p
     /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi-hybrid-scales
     /// (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
     /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
-    /// Default: the aircraft's shipped set (its description's `estimator.features`: egi120 for
-    /// the F-16 and the f15, egi120-gyro-p for the c172p).
+    /// Default: the shipped set of the build's aircraft (its description's `estimator.features`).
     #[arg(long)]
     features: Option<String>,
     /// Feature names to take out of `--features` for both angles (comma-separated, e.g.
@@ -187,9 +186,9 @@ struct ReportArgs {
     /// Print exactly one JSON object (the Table-2 numbers) on stdout.
     #[arg(long)]
     json: bool,
-    /// Also the rows of what ships: the shipped configuration (the hybrid: the aircraft's shipped
-    /// feature set, its description's `estimator.features`, on the `egi120` suite, `medium-wide-beta` networks trained with `--loss l1`, the
-    /// report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi120` suite (format 5).
+    /// Also the rows of what ships: the shipped configuration (the hybrid: the aircraft's
+    /// `estimator.features` on the `egi120` suite, `medium-wide-beta` networks trained with
+    /// `--loss l1`, the report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi120` suite (format 5).
     #[arg(long)]
     shipped_rows: bool,
     /// An out-of-distribution dataset (`hil-sim generate --preset ood`): every row also answers
