@@ -19,15 +19,24 @@ SPREAD = 0.1
 TERM_WIDTHS = (("CLDflaps", 2.0), ("CLDlef", 2.0), ("CYDa", 2.0), ("CYdr", 2.0), ("CYb", 1.0))
 
 
-def aircraft_model(name):
-    """The JSBSim model of the aircraft description aircraft/NAME.toml (its `[jsbsim] model`)."""
+def description(name):
+    """The aircraft description aircraft/NAME.toml, as a dict; refused unless it names its JSBSim
+    model (`[jsbsim] model`)."""
     path = os.path.join(ROOT, "aircraft", name + ".toml")
     try:
         with open(path, "rb") as f:
-            return tomllib.load(f)["jsbsim"]["model"]
+            d = tomllib.load(f)
+        if not isinstance(d["jsbsim"]["model"], str):
+            raise TypeError("`[jsbsim] model` is not a name")
+        return d
     except (OSError, tomllib.TOMLDecodeError, KeyError, TypeError) as e:
         known = " ".join(sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "aircraft")) if f.endswith(".toml")))
         raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
+
+
+def aircraft_model(name):
+    """The JSBSim model of the aircraft description aircraft/NAME.toml (its `[jsbsim] model`)."""
+    return description(name)["jsbsim"]["model"]
 
 
 def engine_file(data_root, model_dir, name):

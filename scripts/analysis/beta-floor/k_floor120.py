@@ -133,7 +133,7 @@ def gust_rate_r2(r, bt):
 
 
 def moment_columns(d, r, i, n120):
-    """What the roll and yaw moments tell of the gust rates, as linear regressors at the frames: the
+    """A linear stand-in for the roll and yaw moment equations, as regressors at the frames: the
     gyros' p and r sub-samples of the frame's period over q̄ and over V (their differences are the
     angular accelerations, the moment coefficients' share of them, and the rate terms), p·q and q·r
     over q̄ (the inertial coupling), and the sensed aileron and rudder (the 120 Hz sample at the
@@ -202,7 +202,7 @@ def main():
                          score(lambda p, k=key, L=L, w=w: p["b_nt"] + feat120(p[k], p["i"], L) @ w)))
             if L == 6:
                 print(f"<!-- weights {key} L=6: {np.array2string(w, precision=4)} -->")
-    # The last floor's oracle, also reading what the roll and yaw moments tell (moment_columns) and
+    # The last floor's oracle, also reading the moment equations' regressors (moment_columns) and
     # β_noturb (the moments read the whole β).
     def with_moments(p):
         return np.concatenate([feat120(p["y120_all"], p["i"], 6), p["b_nt"][:, None], p["moments"]], 1)
