@@ -9,10 +9,11 @@
 //! calibration that is left), plus a per-flight misalignment bias, through a first-order lag, plus
 //! white noise, quantized to the resolution.
 //!
-//! Beside the boom, the record carries engine 0's instrumentation (its core speed N2 and throttle
-//! position, through the same error model): flight-test calibration computes the thrust from them
-//! with the engine deck, to tell the drag from the thrust along body x. The flight-test card moves
-//! every engine's throttle together, so engine 0 stands for all.
+//! Beside the boom, the record carries engine 0's instrumentation (a turbine's core speed N2 or a
+//! propeller's speed, and the throttle position, through the same error model): flight-test
+//! calibration computes the thrust from them with the engine deck, to tell the drag from the
+//! thrust along body x. The flight-test card moves every engine's throttle together, so engine 0
+//! stands for all.
 
 #[cfg(feature = "sim")]
 use rand::SeedableRng;
@@ -55,6 +56,8 @@ pub struct BoomConfig {
     pub n2: ChannelErrors,
     /// Engine 0's throttle position (JSBSim's norm: 1 military power, 2 full afterburner).
     pub throttle: ChannelErrors,
+    /// Engine 0's propeller speed, rpm.
+    pub propeller_rpm: ChannelErrors,
 }
 
 impl Default for BoomConfig {
@@ -90,6 +93,15 @@ impl Default for BoomConfig {
                 resolution: 0.001,
                 ..ChannelErrors::default()
             },
+            // A flight-test tachometer to 1 rpm with a per-flight calibration error of 5 rpm
+            // (about 0.4 % of the thrust at 2,400 rpm).
+            propeller_rpm: ChannelErrors {
+                noise: 2.0,
+                resolution: 1.0,
+                lag_s: 0.0,
+                scale_residual: 0.0,
+                bias_sigma: 5.0,
+            },
         }
     }
 }
@@ -105,19 +117,23 @@ pub struct BoomSample {
     /// without the engine channels), and throttle position (`None` without the engine channels).
     pub engine_n2_pct: Option<f64>,
     pub engine_throttle_pos: Option<f64>,
+    /// Engine 0's propeller speed, rpm (`None` for an engine without a propeller, or a record
+    /// without the column).
+    pub engine_propeller_rpm: Option<f64>,
 }
 
 /// The columns from here on are the engine's, optional in a record read.
 const ENGINE_COLUMNS: usize = 4;
 
 /// The CSV header of `NAME.boom.csv`.
-pub const COLUMNS: [&str; 6] = [
+pub const COLUMNS: [&str; 7] = [
     "time_s",
     "boom_alpha_deg",
     "boom_beta_deg",
     "boom_tas_mps",
     "engine_n2_pct",
     "engine_throttle_pos",
+    "engine_propeller_rpm",
 ];
 
 #[cfg(feature = "sim")]
@@ -168,6 +184,7 @@ pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
     let mut engine_rng = ChaCha12Rng::seed_from_u64(seed ^ 0x656e_6769_6e65_2d6e);
     let mut n2 = Channel::new(cfg.n2, &mut engine_rng);
     let mut throttle = Channel::new(cfg.throttle, &mut engine_rng);
+    let mut propeller = Channel::new(cfg.propeller_rpm, &mut engine_rng);
     // A flight without its engine state at every sample (one read back from its CSV) records none.
     let engine = (flight.engine.len() == flight.samples.len()).then_some(&flight.engine);
     flight
@@ -189,6 +206,9 @@ pub fn record(flight: &Flight, cfg: &BoomConfig, seed: u64) -> Vec<BoomSample> {
                     .and_then(|e| e.n2_pct)
                     .map(|x| n2.step(x, &mut engine_rng)),
                 engine_throttle_pos: engine.map(|e| throttle.step(e.throttle_pos, &mut engine_rng)),
+                engine_propeller_rpm: engine
+                    .and_then(|e| e.propeller_rpm)
+                    .map(|x| propeller.step(x, &mut engine_rng)),
             }
         })
         .collect()
@@ -206,6 +226,8 @@ pub fn write_csv<W: std::io::Write>(w: W, samples: &[BoomSample]) -> Result<(), 
             s.tas_mps.to_string(),
             s.engine_n2_pct.map_or_else(String::new, |x| x.to_string()),
             s.engine_throttle_pos
+                .map_or_else(String::new, |x| x.to_string()),
+            s.engine_propeller_rpm
                 .map_or_else(String::new, |x| x.to_string()),
         ])?;
     }
@@ -253,7 +275,8 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
     let mut out = Vec::new();
     for rec in rd.records() {
         let rec = rec.map_err(|e| err(e.to_string()))?;
-        // An empty cell is a channel the aircraft does not have (a piston engine's N2).
+        // An empty cell is a channel the aircraft does not have (a piston engine's N2, a
+        // turbine's propeller speed).
         let v: Vec<Option<f64>> = idx
             .iter()
             .map(|&i| {
@@ -276,6 +299,7 @@ pub fn read_csv(path: &std::path::Path) -> Result<Vec<BoomSample>, BoomError> {
             tas_mps: need(3)?,
             engine_n2_pct: v.get(4).copied().flatten(),
             engine_throttle_pos: v.get(5).copied().flatten(),
+            engine_propeller_rpm: v.get(6).copied().flatten(),
         });
     }
     Ok(out)
@@ -312,6 +336,7 @@ mod tests {
             tas: c,
             n2: c,
             throttle: c,
+            propeller_rpm: c,
         }
     }
 
@@ -376,12 +401,14 @@ mod tests {
                 .collect()
         };
         let without_engine = record(&f, &cfg, 7);
-        // An N2 on every other sample (None: a piston engine's empty cell).
+        // An N2 on every other sample, a propeller speed on the others (None: the other kind of
+        // engine's empty cell).
         let mut f = f;
         f.engine = (0..50)
             .map(|k| crate::flight::EngineState {
                 n2_pct: (k % 2 == 0).then_some(90.0 + k as f64 * 0.01),
                 throttle_pos: 0.8,
+                propeller_rpm: (k % 2 == 1).then_some(2_400.0),
             })
             .collect();
         let (a, b) = (record(&f, &cfg, 7), record(&f, &cfg, 7));
@@ -393,11 +420,15 @@ mod tests {
                 .step_by(2)
                 .all(|s| s.engine_n2_pct.is_some_and(|n| (n - 90.25).abs() < 1.0))
         );
+        assert!(a.iter().skip(1).step_by(2).all(|s| {
+            s.engine_n2_pct.is_none()
+                && s.engine_propeller_rpm
+                    .is_some_and(|n| (n - 2_400.0).abs() < 30.0 && n.fract() == 0.0)
+        }));
         assert!(
             a.iter()
-                .skip(1)
                 .step_by(2)
-                .all(|s| s.engine_n2_pct.is_none())
+                .all(|s| s.engine_propeller_rpm.is_none())
         );
         assert!(a.iter().all(|s| s.engine_throttle_pos == Some(0.8)));
         // Without the engine state at every sample, no engine channel.
@@ -421,9 +452,10 @@ mod tests {
             (
                 old[0].tas_mps,
                 old[0].engine_n2_pct,
-                old[0].engine_throttle_pos
+                old[0].engine_throttle_pos,
+                old[0].engine_propeller_rpm
             ),
-            (150.0, None, None)
+            (150.0, None, None, None)
         );
         std::fs::write(&dir, "time_s,boom_alpha_deg,boom_beta_deg\n0.05,2.5,0.1\n").unwrap();
         assert!(matches!(

@@ -289,6 +289,9 @@ pub struct EngineState {
     pub n2_pct: Option<f64>,
     /// The engine's throttle position (`fcs/throttle-pos-norm`; above 1 the afterburner's share).
     pub throttle_pos: f64,
+    /// Propeller speed, rpm (`propulsion/engine/propeller-rpm`; `None` for an engine without a
+    /// propeller).
+    pub propeller_rpm: Option<f64>,
 }
 
 /// Train or test split.

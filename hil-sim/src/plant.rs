@@ -539,8 +539,10 @@ pub(crate) mod at {
     /// Engine 0's core speed and throttle position (optional: a piston engine has no N2).
     pub const ENGINE_N2: usize = 46;
     pub const ENGINE_THROTTLE: usize = 47;
+    /// Engine 0's propeller speed (optional: a turbine with a direct thruster has none).
+    pub const ENGINE_PROPELLER_RPM: usize = 48;
     /// Properties watched.
-    pub const COUNT: usize = ENGINE_THROTTLE + 1;
+    pub const COUNT: usize = ENGINE_PROPELLER_RPM + 1;
 }
 
 /// The properties a flight watches, each written next to its position in [`at`]; a position left
@@ -606,6 +608,7 @@ pub(crate) const WATCH: [&str; at::COUNT] = {
     // The flight-test record's engine channels (`crate::boom`): never a sensor frame's.
     w[at::ENGINE_N2] = "?propulsion/engine/n2";
     w[at::ENGINE_THROTTLE] = "?fcs/throttle-pos-norm";
+    w[at::ENGINE_PROPELLER_RPM] = "?propulsion/engine/propeller-rpm";
     let mut i = 0;
     while i < at::COUNT {
         assert!(!w[i].is_empty(), "every position in `at` has a property");
@@ -628,7 +631,7 @@ pub(crate) const OPTIONAL: [bool; at::COUNT] = {
 
 /// The [`WATCH`] positions only [`truth_of`] and the engine record read: air data, position, wind,
 /// the engine. They are needed at the 20 Hz sample instants only.
-pub(crate) const TRUTH_ONLY: [usize; 15] = [
+pub(crate) const TRUTH_ONLY: [usize; 16] = [
     at::ALPHA,
     at::BETA,
     at::U_AERO,
@@ -644,6 +647,7 @@ pub(crate) const TRUTH_ONLY: [usize; 15] = [
     at::WIND_DOWN,
     at::ENGINE_N2,
     at::ENGINE_THROTTLE,
+    at::ENGINE_PROPELLER_RPM,
 ];
 
 pub(crate) const SLUG_TO_KG: f64 = 14.593_902_937;
@@ -699,6 +703,7 @@ pub(crate) fn engine_of(r: &[f64]) -> crate::flight::EngineState {
     crate::flight::EngineState {
         n2_pct: Some(r[at::ENGINE_N2]).filter(|v| v.is_finite()),
         throttle_pos: r[at::ENGINE_THROTTLE],
+        propeller_rpm: Some(r[at::ENGINE_PROPELLER_RPM]).filter(|v| v.is_finite()),
     }
 }
 

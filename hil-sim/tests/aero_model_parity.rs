@@ -485,7 +485,9 @@ fn lift_error(model: &Model<'_>, steps: &[Step]) -> (Worst, bool) {
 #[test]
 fn the_engine_deck_gives_jsbsim_thrust() {
     let steps = flight();
-    let e = aero::ENGINE.expect("JSBSim's F-16 has a turbine deck the evaluator reads");
+    let Some(aero::Engine::Turbine(e)) = aero::ENGINE else {
+        panic!("JSBSim's F-16 has a turbine deck the evaluator reads")
+    };
     // One engine: `propulsion/engine/thrust-lbs` is all of it.
     assert_eq!(e.count, 1);
     let (mut exact, mut by_altitude) = (Worst::default(), Worst::default());

@@ -4,11 +4,11 @@
 //! values over a flight of each (`NAME_parity.xml` beside it, flown by stock JSBSim through
 //! `scripts/jsbsim-stock`), agree with JSBSim's `aero/coefficient/*` term by term and with the
 //! wind-axis force sums, and so do their roll, pitch and yaw moment terms where extracted (over
-//! `qbar·Sw·bw`, in pitch `qbar·Sw·cbarw`), and where an engine deck is extracted (`ENGINE`) each engine's thrust from its
-//! N2, throttle position, Mach and density altitude is JSBSim's. The fixtures read what the F-16
-//! does not: |β| and |δe| (slope: the
-//! sign), a left aileron, α̇, a flap in degrees, 2-D tables in α × Mach and α × flap, and a stall
-//! latch as a table key.
+//! `qbar·Sw·bw`, in pitch `qbar·Sw·cbarw`), and where the engines are extracted (`ENGINE`) each
+//! engine's thrust is JSBSim's: a turbine's from its N2, throttle position, Mach and density
+//! altitude, a propeller's from its speed, the airspeed, density and speed of sound. The fixtures
+//! read what the F-16 does not: |β| and |δe| (slope: the sign), a left aileron, α̇, a flap in
+//! degrees, 2-D tables in α × Mach and α × flap, a stall latch as a table key, and a propeller.
 //!
 //!     cargo test --release -p hil-sim --test aero_parity_other -- --nocapture   # prints the figures
 
@@ -25,12 +25,13 @@ use std::collections::HashMap;
 #[path = "aero/stock_flight.rs"]
 mod stock_flight;
 
-use estimator_core::aero::{Engine, Model, Moments, Point, Term};
+use estimator_core::aero::{Engine, Model, Moments, Point, Propeller, Term, Turbine};
 
 /// The generated fixtures, each in a module whose parent offers the names they `use super::…`.
 mod fixtures {
     pub use estimator_core::aero::{
-        Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending,
+        Engine, EngineTable, Factor, Model, Moments, Propeller, PropellerTable, Table1, Table2,
+        Term, Turbine, Var, strictly_ascending,
     };
     include!("aero/fixtures.rs");
 }
@@ -85,14 +86,29 @@ fn moment_terms<'a>(
     })
 }
 
-/// Engine `i`'s deck inputs and JSBSim's thrust, by property.
-fn engine_props(i: u8) -> [String; 4] {
-    [
-        format!("propulsion/engine[{i}]/n2"),
-        format!("fcs/throttle-pos-norm[{i}]"),
-        format!("propulsion/engine[{i}]/thrust-lbs"),
-        "atmosphere/density-altitude".to_string(),
-    ]
+/// Engine `i`'s deck inputs and JSBSim's thrust, by property: a turbine's N2, throttle position,
+/// thrust and density altitude; a propeller's speed, thrust, advance ratio, helical tip Mach,
+/// thrust coefficient, and the airspeed along body x, density and speed of sound.
+fn engine_props(engine: &Engine<'_>, i: u8) -> Vec<String> {
+    let e = |p: &str| format!("propulsion/engine[{i}]/{p}");
+    match engine {
+        Engine::Turbine(_) => vec![
+            e("n2"),
+            format!("fcs/throttle-pos-norm[{i}]"),
+            e("thrust-lbs"),
+            "atmosphere/density-altitude".to_string(),
+        ],
+        Engine::Propeller(_) => vec![
+            e("propeller-rpm"),
+            e("thrust-lbs"),
+            e("advance-ratio"),
+            e("helical-tip-Mach"),
+            e("thrust-coefficient"),
+            "velocities/u-aero-fps".to_string(),
+            "atmosphere/rho-slugs_ft3".to_string(),
+            "atmosphere/a-fps".to_string(),
+        ],
+    }
 }
 
 /// Every step of `aircraft`'s parity flight: each property by name.
@@ -111,7 +127,7 @@ fn flight(
         .chain(
             engine
                 .iter()
-                .flat_map(|e| (0..e.count).flat_map(engine_props)),
+                .flat_map(|e| (0..e.count()).flat_map(|i| engine_props(e, i))),
         )
         .collect();
     let here = stock_flight::root().join("hil-sim/tests/aero");
@@ -206,31 +222,14 @@ fn parity(
             failed.push(*n);
         }
     }
-    // Each engine's thrust, against the military thrust (a thrust held the whole flight has no
-    // range of its own).
-    for i in 0..engine.map_or(0, |e| e.count) {
-        let Some(e) = engine else { break };
-        let [n2, throttle, thrust, alt] = engine_props(i);
-        let err = steps
-            .iter()
-            .map(|s| {
-                let g = |p: &str| s[p] as f32;
-                let ours = e.thrust_lbf(g(&n2), g(&throttle), g("velocities/mach"), g(&alt));
-                ours.map_or(f64::NAN, |t| (f64::from(t) - s[&thrust]).abs())
-            })
-            .fold(0.0f64, |w, x| {
-                if w.is_nan() || x.is_nan() {
-                    f64::NAN
-                } else {
-                    w.max(x)
-                }
-            });
-        let scale = f64::from(e.mil_thrust_lbf);
-        println!(
-            "{aircraft} engine {i} thrust            max |err| {err:9.3e} lbf  err/military {:9.3e}",
-            err / scale
-        );
-        if err.is_nan() || err > TOLERANCE * scale {
+    // Each engine's thrust.
+    for i in 0..engine.map_or(0, |e| e.count()) {
+        let ok = match engine {
+            Some(Engine::Turbine(t)) => turbine_parity(aircraft, t, i, &steps),
+            Some(Engine::Propeller(p)) => propeller_parity(aircraft, p, i, &steps),
+            None => true,
+        };
+        if !ok {
             failed.push("thrust");
         }
     }
@@ -239,6 +238,96 @@ fn parity(
         failed.is_empty(),
         "{aircraft}: {failed:?} differ from JSBSim"
     );
+}
+
+/// The largest of `errs`, NaN if any is.
+fn worst(errs: impl Iterator<Item = f64>) -> f64 {
+    errs.fold(0.0f64, |w, x| {
+        if w.is_nan() || x.is_nan() {
+            f64::NAN
+        } else {
+            w.max(x)
+        }
+    })
+}
+
+/// A turbine's thrust from its N2, throttle position, Mach and density altitude, against the
+/// military thrust (a thrust held the whole flight has no range of its own).
+fn turbine_parity(aircraft: &str, e: &Turbine<'_>, i: u8, steps: &[HashMap<String, f64>]) -> bool {
+    let props = engine_props(&Engine::Turbine(*e), i);
+    let [n2, throttle, thrust, alt] = [0, 1, 2, 3].map(|k| props[k].as_str());
+    let err = worst(steps.iter().map(|s| {
+        let g = |p: &str| s[p] as f32;
+        let ours = e.thrust_lbf(g(n2), g(throttle), g("velocities/mach"), g(alt));
+        ours.map_or(f64::NAN, |t| (f64::from(t) - s[thrust]).abs())
+    }));
+    let scale = f64::from(e.mil_thrust_lbf);
+    println!(
+        "{aircraft} engine {i} thrust            max |err| {err:9.3e} lbf  err/military {:9.3e}",
+        err / scale
+    );
+    !err.is_nan() && err <= TOLERANCE * scale
+}
+
+/// A propeller's thrust, against the largest over the flight. JSBSim's thrust at a step is
+/// computed from the propeller speed and airspeed of the step before (it then turns the propeller
+/// faster or slower) and the density of this one: with JSBSim's own advance ratio and helical tip
+/// Mach of the step (the airspeed and speed of sound they imply) the evaluator's C_T(J), its
+/// `CT_MACH` factor and C_T·n²·D⁴·ρ are JSBSim's to f32 rounding. What flight-test calibration
+/// has is the speed, the airspeed along body x at the CG and the standard day's density and speed
+/// of sound at the step itself: that thrust is held to 1 % of the largest (0.63 % on the c172p's
+/// flight: a throttle step moves the propeller speed within one 1/120 s step, and the rotation's
+/// share of the airspeed at the propeller is left out).
+fn propeller_parity(
+    aircraft: &str,
+    p: &Propeller<'_>,
+    i: u8,
+    steps: &[HashMap<String, f64>],
+) -> bool {
+    let props = engine_props(&Engine::Propeller(*p), i);
+    let [rpm, thrust, j, tip, ct, u, rho, a] = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| props[k].as_str());
+    let d = f64::from(p.diameter_ft);
+    let largest = worst(steps.iter().map(|s| s[thrust].abs()));
+    let (mut exact, mut ct_err) = (Vec::new(), Vec::new());
+    for (before, s) in steps.iter().zip(steps.iter().skip(1)) {
+        let n = before[rpm] / 60.0;
+        // The airspeed along the shaft and the speed of sound JSBSim's J and tip Mach imply.
+        let axial = s[j] * n * d;
+        let sound = ((std::f64::consts::PI * n * d).powi(2) + axial * axial).sqrt() / s[tip];
+        let ours = p.thrust_lbf(
+            before[rpm] as f32,
+            axial as f32,
+            s[rho] as f32,
+            sound as f32,
+        );
+        exact.push(ours.map_or(f64::NAN, |t| (f64::from(t) - s[thrust]).abs()));
+        let c = p.thrust_coefficient.at(s[j] as f32).map(|c| {
+            f64::from(
+                c * p.ct_factor
+                    * p.tip_mach_factor
+                        .map_or(Some(1.0), |m| m.at(s[tip] as f32))
+                        .unwrap_or(f32::NAN),
+            )
+        });
+        ct_err.push(c.map_or(f64::NAN, |c| (c - s[ct]).abs()));
+    }
+    let at_step = worst(steps.iter().map(|s| {
+        let ours = p.thrust_lbf(s[rpm] as f32, s[u] as f32, s[rho] as f32, s[a] as f32);
+        ours.map_or(f64::NAN, |t| (f64::from(t) - s[thrust]).abs())
+    }));
+    let (exact, ct_err) = (worst(exact.into_iter()), worst(ct_err.into_iter()));
+    let running = steps.iter().filter(|s| s[rpm] > 500.0).count();
+    println!(
+        "{aircraft} engine {i} propeller: {running} steps above 500 rpm, largest thrust {largest:.1} lbf; \
+         C_T max |err| {ct_err:9.3e}; thrust max |err| {exact:9.3e} lbf ({:9.3e} of the largest), \
+         at the step's own speed and airspeed {at_step:.2} lbf ({:.2e})",
+        exact / largest,
+        at_step / largest
+    );
+    running > steps.len() / 2
+        && ct_err <= 1e-6
+        && exact <= TOLERANCE * largest
+        && at_step <= 0.01 * largest
 }
 
 #[test]

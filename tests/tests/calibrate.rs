@@ -154,7 +154,7 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     // inside 2σ: C scales the whole lift axis, flaps included, the whole side axis, its sideslip
     // terms as much as its surface and rate terms, and the drag axis (its thrust is the model's),
     // and has no lift offset. A model without flap terms (the F-15) has no flap scale, one without
-    // an engine deck (the c172p's piston and propeller) no drag scale.
+    // engines the evaluator reads no drag scale.
     let flap_terms = with_truth["flap_terms"].as_array().unwrap();
     assert!(
         !flap_terms.is_empty() || with_truth["scales"]["flap"].is_null(),

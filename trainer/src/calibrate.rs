@@ -1,6 +1,6 @@
 //! Flight-test calibration of the aircraft model: from what a flight-test aircraft records (the
 //! production sensors of every frame, the nose boom's vanes and pitot-static and the engine's N2
-//! and throttle, `NAME.boom.csv`),
+//! or propeller speed and throttle, `NAME.boom.csv`),
 //! never from simulator truth, identify how the real aircraft's forces and moments differ from the
 //! model's.
 //!
@@ -21,8 +21,9 @@
 //!    (k_Y): in quasi-steady flight the rudder and aileron hold the sideslip, so the two move
 //!    together there, and they are fitted over the rolling frames, where the aileron and roll-rate
 //!    terms move without sideslip. Along body x, `f_x − (lift and side parts) = k_D·f_x,drag +
-//!    k_T·T/m + b_x`, T the engine deck's thrust (`aero::ENGINE`) at the recorded N2 and throttle:
-//!    the card's throttle steps move the thrust apart from the drag. The boom step reads
+//!    k_T·T/m + b_x`, T the engines' thrust (`aero::ENGINE`): a turbine deck's at the recorded N2
+//!    and throttle, a propeller's at the recorded propeller speed and the boom's airspeed. The
+//!    card's throttle steps move the thrust apart from the drag. The boom step reads
 //!    quasi-steady frames only.
 //!
 //! 3. **Moments.** The roll and yaw moments the gyros measure (differentiated across a frame's
@@ -58,7 +59,7 @@
 
 use crate::error::{Error, Result};
 use estimator_core::SensorFrame;
-use estimator_core::aero::{ENGINE, MODEL, MOMENTS, Term, Var};
+use estimator_core::aero::{ENGINE, Engine, MODEL, MOMENTS, Term, Var};
 use estimator_core::filter::{self, CONFIG, Input};
 use hil_sim::flight::FT_TO_M;
 use serde::Serialize;
@@ -121,7 +122,7 @@ fn identified_drag(
     let why = if ENGINE.is_none() {
         "the model's engine is not a deck the evaluator reads (its tables' `ENGINE` says why), so the thrust along body x is unknown".to_string()
     } else if with_thrust == 0 {
-        "the flight test records no engine N2 (`engine_n2_pct` in NAME.boom.csv): regenerate it with `hil-sim generate --preset flight-test`".to_string()
+        "the flight test records no engine speed (`engine_n2_pct` for a turbine, `engine_propeller_rpm` for a propeller, in NAME.boom.csv): regenerate it with `hil-sim generate --preset flight-test`".to_string()
     } else {
         match drag_fit(all, k_b, k_y, lift) {
             Some(f) => return (Some(f), None),
@@ -654,8 +655,8 @@ struct Row {
     boom_alpha: f64,
     boom_beta: f64,
     boom_tas: f64,
-    /// Engine 0's recorded N2 (%) and throttle position (`None`: no N2 recorded).
-    engine: Option<[f64; 2]>,
+    /// Engine 0's recorded channels.
+    engine: EngineRecord,
     inp: Input,
     f_cg: [f64; 3],
 }
@@ -713,10 +714,11 @@ fn rows(
             boom_alpha: b.alpha_deg,
             boom_beta: b.beta_deg,
             boom_tas: b.tas_mps,
-            engine: b
-                .engine_n2_pct
-                .zip(b.engine_throttle_pos)
-                .map(|(n2, t)| [n2, t]),
+            engine: EngineRecord {
+                n2_pct: b.engine_n2_pct,
+                throttle_pos: b.engine_throttle_pos,
+                propeller_rpm: b.engine_propeller_rpm,
+            },
             inp,
             f_cg: [f.x, f.y, f.z].map(f64::from),
         });
@@ -933,7 +935,15 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
             rolling: rolling && slope.is_some(),
             sideslip_per_deg: slope.unwrap_or_default(),
             parts,
-            thrust_accel_x: thrust_accel_x(r, mach),
+            thrust_accel_x: thrust_accel_x(
+                r,
+                EngineAir {
+                    mach,
+                    axial_mps: tas * alpha.cos() * beta.cos(),
+                    rho: f64::from(rho),
+                    sound_mps: f64::from(a_sound),
+                },
+            ),
             f_cg: r.f_cg,
         });
     }
@@ -1331,14 +1341,56 @@ struct EqRow {
     f_cg: [f64; 3],
 }
 
-/// The thrust's specific force along body x of a row at Mach `mach` (see [`EqRow::thrust_accel_x`]):
-/// every engine at engine 0's recorded N2 and throttle, the altitude as the density altitude
-/// (JSBSim's standard atmosphere: they are the same).
-fn thrust_accel_x(r: &Row, mach: f64) -> Option<f64> {
-    let ([n2, throttle], engine) = r.engine.zip(ENGINE)?;
-    let alt_ft = f64::from(r.inp.alt_m) / FT_TO_M;
-    let lbf = engine.thrust_lbf(n2 as f32, throttle as f32, mach as f32, alt_ft as f32)?;
-    let newtons = f64::from(lbf) * f64::from(engine.count) * LBF_TO_N;
+/// Engine 0's recorded channels (`None`: not recorded, or not this engine's kind).
+#[derive(Clone, Copy, Debug, Default)]
+struct EngineRecord {
+    /// A turbine's core speed, %.
+    n2_pct: Option<f64>,
+    throttle_pos: Option<f64>,
+    /// A propeller's speed, rpm.
+    propeller_rpm: Option<f64>,
+}
+
+/// The air a row's engines see, from the corrected boom: Mach, the airspeed along body x (m/s),
+/// the density (kg/m³) and the speed of sound (m/s) at the altitude (JSBSim's standard day).
+#[derive(Clone, Copy, Debug)]
+struct EngineAir {
+    mach: f64,
+    axial_mps: f64,
+    rho: f64,
+    sound_mps: f64,
+}
+
+/// kg/m³ in a slug/ft³.
+const SLUG_FT3: f64 = 515.378_818;
+
+/// The thrust's specific force along body x of a row in the air `air` (see
+/// [`EqRow::thrust_accel_x`]): every engine at engine 0's recorded channels. A turbine's deck reads
+/// N2, the throttle, Mach and the altitude as the density altitude (JSBSim's standard atmosphere:
+/// they are the same); a propeller reads its speed, the airspeed along the shaft (the body-x
+/// airspeed at the CG: the rotation's share at the propeller, q and r times its offset from the
+/// CG, is left out), the density and the speed of sound.
+fn thrust_accel_x(r: &Row, air: EngineAir) -> Option<f64> {
+    let rec = r.engine;
+    let lbf = match ENGINE? {
+        Engine::Turbine(t) => {
+            let alt_ft = f64::from(r.inp.alt_m) / FT_TO_M;
+            t.thrust_lbf(
+                rec.n2_pct? as f32,
+                rec.throttle_pos? as f32,
+                air.mach as f32,
+                alt_ft as f32,
+            )?
+        }
+        Engine::Propeller(p) => p.thrust_lbf(
+            rec.propeller_rpm? as f32,
+            (air.axial_mps / FT_TO_M) as f32,
+            (air.rho / SLUG_FT3) as f32,
+            (air.sound_mps / FT_TO_M) as f32,
+        )?,
+    };
+    let count = ENGINE.map_or(0, |e| e.count());
+    let newtons = f64::from(lbf) * f64::from(count) * LBF_TO_N;
     Some(newtons / f64::from(CONFIG.mass_kg(r.inp.fuel_kg)))
 }
 
@@ -2215,9 +2267,19 @@ fn drag_markdown(r: &Report) -> String {
         d.std_error,
         carried_cell(r.scales.thrust, r.applied_thrust)
     ));
+    let thrust = match ENGINE {
+        Some(Engine::Propeller(_)) => {
+            "the propeller's (`aero::ENGINE`: JSBSim's C_T(J)·n²·D⁴·ρ) at the recorded \
+             propeller speed, the body-x airspeed of the corrected boom and the standard day's \
+             density at the altitude"
+        }
+        _ => {
+            "the engine deck's (`aero::ENGINE`) at the recorded N2 and throttle position, Mach \
+             from the corrected boom and the altitude as density altitude"
+        }
+    };
     m.push_str(&format!(
-        "\nThe thrust T is the engine deck's (`aero::ENGINE`) at the recorded N2 and throttle \
-         position, Mach from the corrected boom and the altitude as density altitude. Over the \
+        "\nThe thrust T is {thrust}. Over the \
          quasi-steady frames below {MAX_DRAG_ALPHA_DEG}° α, with the lift and side force at their \
          identified scales, the axial force is fitted as k_D·drag + k_T·T/m + b: in steady flight \
          thrust and drag balance, and the card's throttle steps (thrust) and push-overs and \

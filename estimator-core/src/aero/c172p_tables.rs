@@ -5,11 +5,13 @@
 // Files read, relative to `jsbsim.get_default_root_dir()`:
 //     aircraft/c172p/c172p.xml  sha256 0af58c613f7bca7e1d85f4b2e178a4d7b0b14dda6d5f79b38c571d9911187aa4
 //         (metrics, aerodynamics, flight control)
+//     engine/prop_75in2f.xml  sha256 6481edf1da940fdea5358913d226c3e25d3e6b8209b4805370258a9a65ca7403
+//         (the propeller: flight-test calibration's thrust)
 // Numbers are the XML's own text, as f32. Every term is JSBSim's product with qbar·Sw (a moment
 // term's: qbar·Sw·bw, in pitch qbar·Sw·cbarw) divided out; the factors keep the XML's order.
 // Breakpoints are checked ascending at compile time.
 
-use super::{Engine, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Engine, Factor, Model, Moments, Propeller, PropellerTable, Table1, Table2, Term, Var, strictly_ascending};
 
 /// `aero/function/kCDge`: Change_in_drag_due_to_ground_effect
 pub static KCDGE: Table1<13> = Table1 {
@@ -257,7 +259,26 @@ pub static MODEL: Model<'static> = Model {
 /// Not extracted: aircraft/c172p/c172p.xml axis PITCH aero/coefficient/Cmde: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/cbarw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/cbarw-ft': 1}): only then is it qbar·Sw·cbarw times a coefficient
 pub static MOMENTS: Option<Moments<'static>> = None;
 
-/// The engine deck (JSBSim's turbine, `aero::Engine`): flight-test calibration computes the
-/// thrust from the recorded N2 and throttle with it; the flight software reads none of it.
-/// Not extracted: aircraft/c172p/c172p.xml <propulsion>: thruster 'prop_75in2f': only JSBSim's direct thruster (the engine's thrust as it is) is understood, not a propeller's
-pub static ENGINE: Option<Engine<'static>> = None;
+/// `C_THRUST` of prop_75in2f.xml: the thrust coefficient over the advance ratio J.
+pub static PROPELLER_CT: PropellerTable<25> = PropellerTable {
+    x: [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8, 1.9, 2.0, 2.1, 2.2, 2.3, 5.0],
+    y: [0.073, 0.073, 0.072, 0.071, 0.069, 0.066, 0.062, 0.055, 0.045, 0.034, 0.024, 0.013, -0.006, -0.013, -0.024, -0.034, -0.045, -0.055, -0.062, -0.066, -0.069, -0.071, -0.072, -0.073, -0.073],
+};
+const _: () = assert!(strictly_ascending(&PROPELLER_CT.x));
+
+/// `CT_MACH` of prop_75in2f.xml: C_T's factor over the helical tip Mach.
+pub static PROPELLER_CT_MACH: PropellerTable<2> = PropellerTable {
+    x: [0.85, 1.05],
+    y: [1.0, 0.8],
+};
+const _: () = assert!(strictly_ascending(&PROPELLER_CT_MACH.x));
+
+/// The engines (`aero::Engine`): flight-test calibration computes their thrust from the recorded
+/// engine channels with it; the flight software reads none of it.
+pub static ENGINE: Option<Engine<'static>> = Some(Engine::Propeller(Propeller {
+    count: 1,
+    diameter_ft: 75.0 / 12.0,
+    ct_factor: 1.0,
+    thrust_coefficient: &PROPELLER_CT,
+    tip_mach_factor: Some(&PROPELLER_CT_MACH),
+}));

@@ -1,7 +1,9 @@
-//! A turbine engine's thrust deck as JSBSim flies it (`FGTurbine::Run`): the thrust from the
-//! engine's core speed N2, its throttle position, Mach and density altitude. Flight-test
-//! calibration computes the thrust with it from the recorded engine channels, to tell the drag
-//! from the thrust along body x; the flight software reads none of it.
+//! An aircraft's engines as JSBSim flies them, for their thrust along body x: a turbine's deck
+//! (`FGTurbine::Run`: the thrust from the core speed N2, the throttle position, Mach and density
+//! altitude) or a fixed-pitch propeller (`FGPropeller::Calculate`: the thrust from the propeller's
+//! speed, the axial airspeed and the air density). Flight-test calibration computes the thrust
+//! with it from the recorded engine channels, to tell the drag from the thrust along body x; the
+//! flight software reads none of it.
 
 use super::segment;
 
@@ -41,10 +43,28 @@ impl<const R: usize, const C: usize> EngineLookup for EngineTable<R, C> {
 /// zero shift and noise.
 pub const N2_BELOW_IDLE_PCT: f32 = 1.0;
 
-/// An aircraft's engines: `count` alike, each a JSBSim `<turbine_engine>` with a direct thruster
-/// along body x.
+/// An aircraft's engines, `count` alike, each thrusting along body x.
 #[derive(Clone, Copy)]
-pub struct Engine<'a> {
+pub enum Engine<'a> {
+    /// JSBSim `<turbine_engine>`s with a direct thruster.
+    Turbine(Turbine<'a>),
+    /// Engines of any kind, each turning a fixed-pitch `<propeller>`.
+    Propeller(Propeller<'a>),
+}
+
+impl Engine<'_> {
+    /// How many engines the aircraft has.
+    pub fn count(&self) -> u8 {
+        match self {
+            Engine::Turbine(t) => t.count,
+            Engine::Propeller(p) => p.count,
+        }
+    }
+}
+
+/// `count` JSBSim `<turbine_engine>`s of one deck, each with a direct thruster along body x.
+#[derive(Clone, Copy)]
+pub struct Turbine<'a> {
     /// How many engines of this deck the aircraft has.
     pub count: u8,
     /// `<milthrust>` and `<maxthrust>`, lbf.
@@ -60,7 +80,7 @@ pub struct Engine<'a> {
     pub aug: Option<&'a dyn EngineLookup>,
 }
 
-impl Engine<'_> {
+impl Turbine<'_> {
     /// One engine's thrust, lbf, at core speed `n2_pct`, throttle position `throttle_pos` (above 1
     /// the afterburner's share), Mach and density altitude: `FGTurbine::Run` in its running phase,
     /// without bleed or water injection (`scripts/extract-aero` refuses a deck with either).
@@ -92,6 +112,82 @@ impl Engine<'_> {
     }
 }
 
+/// One of a propeller's 1-D tables, looked up as JSBSim's `FGTable` does: `C_THRUST` (the thrust
+/// coefficient C_T over the advance ratio J) or `CT_MACH` (C_T's factor over the helical tip Mach).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PropellerTable<const N: usize> {
+    pub x: [f32; N],
+    pub y: [f32; N],
+}
+
+/// What a propeller needs of a table: its value at a key (`None` if the key is not finite).
+pub trait PropellerLookup: Sync {
+    fn at(&self, x: f32) -> Option<f32>;
+}
+
+impl<const N: usize> PropellerLookup for PropellerTable<N> {
+    fn at(&self, x: f32) -> Option<f32> {
+        if !x.is_finite() {
+            return None;
+        }
+        let (i, f, _) = segment(&self.x, x)?;
+        let y0 = *self.y.get(i)?;
+        let y1 = *self.y.get(i.wrapping_add(1))?;
+        Some(y0 + f * (y1 - y0))
+    }
+}
+
+/// `count` engines of one kind, each turning a fixed-pitch JSBSim `<propeller>` whose thrust line
+/// is body x.
+#[derive(Clone, Copy)]
+pub struct Propeller<'a> {
+    /// How many engines and propellers the aircraft has.
+    pub count: u8,
+    /// `<diameter>`, ft.
+    pub diameter_ft: f32,
+    /// `<ct_factor>` (1 where the file has none).
+    pub ct_factor: f32,
+    /// `C_THRUST`.
+    pub thrust_coefficient: &'a dyn PropellerLookup,
+    /// `CT_MACH`, where the file has one.
+    pub tip_mach_factor: Option<&'a dyn PropellerLookup>,
+}
+
+impl Propeller<'_> {
+    /// One propeller's thrust, lbf, at `rpm` (the propeller's own speed), the airspeed along its
+    /// axis `axial_fps`, the air density `rho_slug_ft3` and the speed of sound `sound_fps`:
+    /// `FGPropeller::Calculate`, C_T(J)·n²·D⁴·ρ with n in revolutions per second and J = V/(n·D)
+    /// (V/D below 0.01 rev/s), C_T times `CT_MACH` at the helical tip Mach √((π·n·D)² + V²)/a.
+    /// `None` if an input is not finite or the speed, density or speed of sound is not positive.
+    pub fn thrust_lbf(
+        &self,
+        rpm: f32,
+        axial_fps: f32,
+        rho_slug_ft3: f32,
+        sound_fps: f32,
+    ) -> Option<f32> {
+        let finite = [rpm, axial_fps, rho_slug_ft3, sound_fps]
+            .iter()
+            .all(|v| v.is_finite());
+        if !finite || rpm < 0.0 || rho_slug_ft3 < 0.0 || sound_fps <= 0.0 {
+            return None;
+        }
+        let d = self.diameter_ft;
+        let n = rpm / 60.0;
+        let j = if n > 0.01 {
+            axial_fps / (d * n)
+        } else {
+            axial_fps / d
+        };
+        let mut ct = self.thrust_coefficient.at(j)? * self.ct_factor;
+        if let Some(mach) = self.tip_mach_factor {
+            let tip = core::f32::consts::PI * n * d;
+            ct *= mach.at(libm::sqrtf(tip * tip + axial_fps * axial_fps) / sound_fps)?;
+        }
+        Some(ct * n * n * d * d * d * d * rho_slug_ft3)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,7 +213,7 @@ mod tests {
 
     #[test]
     fn thrust_is_idle_plus_military_by_n2_squared_and_the_afterburner_blends_to_maximum() {
-        let e = Engine {
+        let e = Turbine {
             count: 1,
             mil_thrust_lbf: 10_000.0,
             max_thrust_lbf: 15_000.0,
@@ -144,7 +240,54 @@ mod tests {
             Some(1_000.0 + 9_000.0 * (0.5f32 / 40.0).powi(2))
         );
         assert_eq!(e.thrust_lbf(58.9, 0.0, 0.0, 0.0), None);
-        let dry = Engine { aug: None, ..e };
+        let dry = Turbine { aug: None, ..e };
         assert_eq!(dry.thrust_lbf(100.0, 1.5, 0.0, 0.0), Some(10_000.0));
+        assert_eq!(Engine::Turbine(e).count(), 1);
+    }
+
+    static CT: PropellerTable<3> = PropellerTable {
+        x: [0.0, 1.0, 2.0],
+        y: [0.1, 0.05, -0.05],
+    };
+    static TIP: PropellerTable<2> = PropellerTable {
+        x: [0.85, 1.05],
+        y: [1.0, 0.8],
+    };
+
+    #[test]
+    fn propeller_thrust_is_ct_of_the_advance_ratio_times_n_squared_d4_rho() {
+        let p = Propeller {
+            count: 2,
+            diameter_ft: 2.0,
+            ct_factor: 1.0,
+            thrust_coefficient: &CT,
+            tip_mach_factor: Some(&TIP),
+        };
+        let a = 1_000.0;
+        let near = |got: Option<f32>, want: f32| {
+            got.is_some_and(|t| (t - want).abs() <= 1e-6 * want.abs().max(1.0))
+        };
+        // 600 rpm: n = 10 rev/s; 10 ft/s over n·D = 20 ft is J 0.5, C_T 0.075;
+        // 0.075·100·16·0.002 = 0.24 lbf.
+        assert!(near(p.thrust_lbf(600.0, 10.0, 0.002, a), 0.24));
+        // J beyond the table holds its end (a windmilling propeller's drag).
+        assert!(near(p.thrust_lbf(600.0, 100.0, 0.002, a), -0.16));
+        let scaled = Propeller {
+            ct_factor: 1.1,
+            ..p
+        };
+        assert!(near(scaled.thrust_lbf(600.0, 10.0, 0.002, a), 0.264));
+        // A stopped propeller: J = V/D, times n² = 0.
+        assert_eq!(p.thrust_lbf(0.0, 10.0, 0.002, a), Some(0.0));
+        assert_eq!(p.thrust_lbf(f32::NAN, 10.0, 0.002, a), None);
+        assert_eq!(p.thrust_lbf(600.0, f32::INFINITY, 0.002, a), None);
+        assert_eq!(p.thrust_lbf(-1.0, 10.0, 0.002, a), None);
+        // A helical tip Mach of 0.95 (the tip alone: no axial speed) takes C_T times 0.9.
+        let rpm = 0.95 * a / (core::f32::consts::PI * 2.0) * 60.0;
+        let n = rpm / 60.0;
+        let want = 0.1 * 0.9 * n * n * 16.0 * 0.002;
+        assert!(near(p.thrust_lbf(rpm, 0.0, 0.002, a), want));
+        assert_eq!(p.thrust_lbf(600.0, 10.0, 0.002, 0.0), None);
+        assert_eq!(Engine::Propeller(p).count(), 2);
     }
 }

@@ -15,7 +15,7 @@
 // term's: qbar·Sw·bw, in pitch qbar·Sw·cbarw) divided out; the factors keep the XML's order.
 // Breakpoints are checked ascending at compile time.
 
-use super::{Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Var, strictly_ascending};
+use super::{Engine, EngineTable, Factor, Model, Moments, Table1, Table2, Term, Turbine, Var, strictly_ascending};
 
 /// `aero/function/kCLge`: Change_in_lift_due_to_ground_effect
 pub static KCLGE: Table1<13> = Table1 {
@@ -740,9 +740,9 @@ pub static ENGINE_AUG: EngineTable<14, 8> = EngineTable {
 const _: () = assert!(strictly_ascending(&ENGINE_AUG.mach));
 const _: () = assert!(strictly_ascending(&ENGINE_AUG.density_altitude_ft));
 
-/// The engine deck (JSBSim's turbine, `aero::Engine`): flight-test calibration computes the
-/// thrust from the recorded N2 and throttle with it; the flight software reads none of it.
-pub static ENGINE: Option<Engine<'static>> = Some(Engine {
+/// The engines (`aero::Engine`): flight-test calibration computes their thrust from the recorded
+/// engine channels with it; the flight software reads none of it.
+pub static ENGINE: Option<Engine<'static>> = Some(Engine::Turbine(Turbine {
     count: 1,
     mil_thrust_lbf: 17800.0,
     max_thrust_lbf: 29000.0,
@@ -751,4 +751,4 @@ pub static ENGINE: Option<Engine<'static>> = Some(Engine {
     idle: &ENGINE_IDLE,
     mil: &ENGINE_MIL,
     aug: Some(&ENGINE_AUG),
-});
+}));

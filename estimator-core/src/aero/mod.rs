@@ -31,7 +31,9 @@ pub mod tables {
 pub use tables::{ENGINE, MODEL, MOMENTS};
 
 mod engine;
-pub use engine::{Engine, EngineLookup, EngineTable};
+pub use engine::{
+    Engine, EngineLookup, EngineTable, Propeller, PropellerLookup, PropellerTable, Turbine,
+};
 
 /// Travel of one flaperon at norm ±1, in degrees: the convention of the `Flaperon` channel, from
 /// the aircraft description (its sensor's `deg_per_unit`). JSBSim's model has no degree property
