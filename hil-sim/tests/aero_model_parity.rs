@@ -152,6 +152,7 @@ impl Step {
             alpha_dot_rps: 0.0,
             flap_deg: 0.0,
             stall_hyst_norm: 0.0,
+            slipstream_qbar_ratio: 1.0,
         }
     }
 

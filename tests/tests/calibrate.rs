@@ -246,7 +246,7 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     // C has the model's CG and pitch moment: the CG shift is 0 and the pitch scale 1 within 2σ
     // (a 1σ below 0.5 in and 0.15: the F-16's are 0.06 in and 0.006, the F-15's 0.36 in and
     // 0.11), and the calibrated aircraft keeps the model's CG. A model without extracted moments
-    // (the c172p's) has neither.
+    // has neither.
     assert!(with_truth["applied_cg_shift_in"].is_null());
     if estimator_core::aero::MOMENTS.is_none() {
         for what in ["cg_aft_in", "pitch", "roll", "yaw"] {

@@ -935,15 +935,7 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
             rolling: rolling && slope.is_some(),
             sideslip_per_deg: slope.unwrap_or_default(),
             parts,
-            thrust_accel_x: thrust_accel_x(
-                r,
-                EngineAir {
-                    mach,
-                    axial_mps: tas * alpha.cos() * beta.cos(),
-                    rho: f64::from(rho),
-                    sound_mps: f64::from(a_sound),
-                },
-            ),
+            thrust_accel_x: thrust_accel_x(r, EngineAir::at(alpha, beta, tas, rho, a_sound)),
             f_cg: r.f_cg,
         });
     }
@@ -1198,7 +1190,7 @@ fn moment_row(
     if !enough_air(qbar, r.inp.fuel_kg) || alpha.to_degrees().abs() > MAX_ALPHA_DEG {
         return None;
     }
-    let point = filter::model_point(
+    let mut point = filter::model_point(
         &r.inp,
         r.inp.gyro_rps,
         alpha as f32,
@@ -1208,6 +1200,8 @@ fn moment_row(
         CONFIG.gear_norm,
         estimator_core::aero::Unsteady::default(),
     )?;
+    let air = EngineAir::at(alpha, beta, tas, rho, a_sound);
+    point.slipstream_qbar_ratio = slipstream_ratio(r, &moments, air, tas)?;
     let [roll, pitch, yaw] = moments.coefficients_at(&point)?.map(f64::from);
     let [m_x, m_y, m_z] = body_moment(
         estimator_core::aircraft::AIRCRAFT.mass.inertia_slug_ft2,
@@ -1215,18 +1209,27 @@ fn moment_row(
         omega_dot,
     );
     // The body forces, N: the accelerometers' specific force at the CG times the mass (no thrust
-    // along y; along x the thrust's, whose line the axial arm takes as the drag's).
+    // along y; along x the thrust's, whose line the axial arm takes as the drag's, the thrust's
+    // own line below it taken out of the measured pitch moment).
     let mass = f64::from(CONFIG.mass_kg(r.inp.fuel_kg));
     let [fx, fy, fz] = r.f_cg.map(|f| mass * f);
     let q_s = qbar * f64::from(MODEL.wing_area_ft2) * (FT_TO_M * FT_TO_M);
     let q_s_b = q_s * f64::from(MODEL.wingspan_ft) * FT_TO_M;
     let q_s_c = q_s * f64::from(MODEL.chord_ft) * FT_TO_M;
+    // The thrust's moment about its own line, beyond what the axial arm gives it on the drag's.
+    let thrust_moment = match ENGINE {
+        Some(e) if e.below_reference_m() != 0.0 => {
+            let newtons = f64::from(engine_thrust_lbf(r, air)?) * f64::from(e.count()) * LBF_TO_N;
+            f64::from(e.below_reference_m()) * newtons
+        }
+        _ => 0.0,
+    };
     Some(MomentRow {
         flight: r.flight,
         measured: [m_x / q_s_b, m_z / q_s_b],
         model: [roll, yaw],
         side: fy / q_s_b,
-        pitch_measured: m_y / q_s_c,
+        pitch_measured: (m_y - thrust_moment) / q_s_c,
         pitch_model: pitch,
         axial: fx / q_s_c,
         normal: fz / q_s_c,
@@ -1309,7 +1312,12 @@ fn cg_aft_in(pitch: &Fit) -> Option<Estimate> {
 /// pitch moment is about the aerodynamic reference point and the gyros turn about the CG: with
 /// body x forward and z down, a force there adds `Δz·X − Δx·Z` about the CG (Δ = the reference
 /// point less the CG), so x = −Δx is the CG's distance ahead of the reference point, m, and z = Δz
-/// the reference point's depth below the CG (the thrust's line taken as the drag's). The model's
+/// the reference point's depth below the CG. The thrust acts on its own line, `d` below the
+/// reference point (`aero::Engine::below_reference_m`, the model's geometry): its moment beyond
+/// the axial arm's, d·T with T the engines' thrust ([`thrust_accel_x`]), is taken out of the
+/// measured moment (on the c172p, whose thrust line is 0.83 m below the reference point, the
+/// tiny calibrate test's variant C read a CG shift of +0.57 ± 0.24 in without it, −0.11 ± 0.27
+/// with it; the F-16's, 0.10 m, +0.031 ± 0.057 and −0.015 ± 0.012; both truly 0). The model's
 /// moment is evaluated with α̇ = 0 (an α̇ term, as the f15's, is left to the constants and the
 /// scale, on the flight test and the model card alike). The constants, one per flight, take
 /// the gyros' bias drift and the moment no model term carries. `None` if the rows do not
@@ -1361,6 +1369,18 @@ struct EngineAir {
     sound_mps: f64,
 }
 
+impl EngineAir {
+    /// At the corrected boom's α and β (rad), true airspeed (m/s), density and speed of sound.
+    fn at(alpha: f64, beta: f64, tas: f64, rho: f32, sound_mps: f32) -> EngineAir {
+        EngineAir {
+            mach: tas / f64::from(sound_mps),
+            axial_mps: tas * alpha.cos() * beta.cos(),
+            rho: f64::from(rho),
+            sound_mps: f64::from(sound_mps),
+        }
+    }
+}
+
 /// kg/m³ in a slug/ft³.
 const SLUG_FT3: f64 = 515.378_818;
 
@@ -1371,8 +1391,16 @@ const SLUG_FT3: f64 = 515.378_818;
 /// airspeed at the CG: the rotation's share at the propeller, q and r times its offset from the
 /// CG, is left out), the density and the speed of sound.
 fn thrust_accel_x(r: &Row, air: EngineAir) -> Option<f64> {
+    let lbf = engine_thrust_lbf(r, air)?;
+    let count = ENGINE.map_or(0, |e| e.count());
+    let newtons = f64::from(lbf) * f64::from(count) * LBF_TO_N;
+    Some(newtons / f64::from(CONFIG.mass_kg(r.inp.fuel_kg)))
+}
+
+/// One engine's thrust, lbf (see [`thrust_accel_x`]).
+fn engine_thrust_lbf(r: &Row, air: EngineAir) -> Option<f32> {
     let rec = r.engine;
-    let lbf = match ENGINE? {
+    Some(match ENGINE? {
         Engine::Turbine(t) => {
             let alt_ft = f64::from(r.inp.alt_m) / FT_TO_M;
             t.thrust_lbf(
@@ -1388,10 +1416,30 @@ fn thrust_accel_x(r: &Row, air: EngineAir) -> Option<f64> {
             (air.rho / SLUG_FT3) as f32,
             (air.sound_mps / FT_TO_M) as f32,
         )?,
+    })
+}
+
+/// The dynamic pressure in the propeller's slipstream over q̄ (`aero::Var::SlipstreamQbarRatio`)
+/// of a row in the air `air` at true airspeed `tas_mps`: 1 where no moment term reads it; else
+/// from the propeller's thrust at the recorded speed, its induced velocity by JSBSim's momentum
+/// theory, and (u + k·v_induced)²/V². `None` where it is read but cannot be computed (no propeller
+/// the evaluator reads, no propeller speed recorded).
+fn slipstream_ratio(
+    r: &Row,
+    moments: &estimator_core::aero::Moments<'_>,
+    air: EngineAir,
+    tas_mps: f64,
+) -> Option<f32> {
+    if moments.slipstream_induced_factor == 0.0 {
+        return Some(1.0);
+    }
+    let Some(Engine::Propeller(p)) = ENGINE else {
+        return None;
     };
-    let count = ENGINE.map_or(0, |e| e.count());
-    let newtons = f64::from(lbf) * f64::from(count) * LBF_TO_N;
-    Some(newtons / f64::from(CONFIG.mass_kg(r.inp.fuel_kg)))
+    let thrust = engine_thrust_lbf(r, air)?;
+    let axial_fps = (air.axial_mps / FT_TO_M) as f32;
+    let induced = p.induced_fps(thrust, axial_fps, (air.rho / SLUG_FT3) as f32)?;
+    moments.slipstream_qbar_ratio((tas_mps / FT_TO_M) as f32, axial_fps, induced)
 }
 
 /// The drag and thrust fit over the quasi-steady frames below [`MAX_DRAG_ALPHA_DEG`] with a

@@ -155,6 +155,44 @@ pub static CLDF: Table1<4> = Table1 {
 };
 const _: () = assert!(strictly_ascending(&CLDF.x));
 
+/// `aero/coefficient/Clb`: Roll_moment_due_to_beta.
+pub static CLB: Table1<3> = Table1 {
+    key: Var::BetaRad,
+    x: [-0.3490, 0.0000, 0.3490],
+    y: [0.0322, 0.0000, -0.0322],
+};
+const _: () = assert!(strictly_ascending(&CLB.x));
+
+/// `aero/coefficient/Clr`: Roll_moment_due_to_yaw_rate.
+pub static CLR: Table2<2, 2> = Table2 {
+    row: Var::AlphaRad,
+    col: Var::FlapDeg,
+    rows: [0.0000, 0.0940],
+    cols: [0.0000, 30.0000],
+    data: [
+        [0.0798, 0.1246], // aero/alpha-rad = 0.0000
+        [0.1869, 0.2317], // aero/alpha-rad = 0.0940
+    ],
+};
+const _: () = assert!(strictly_ascending(&CLR.rows));
+const _: () = assert!(strictly_ascending(&CLR.cols));
+
+/// `aero/coefficient/Cmdf`: Delta_pitching_moment_due_to_flap_deflection.
+pub static CMDF: Table1<4> = Table1 {
+    key: Var::FlapDeg,
+    x: [0.0000, 10.0000, 20.0000, 30.0000],
+    y: [0.0000, -0.0654, -0.0981, -0.1140],
+};
+const _: () = assert!(strictly_ascending(&CMDF.x));
+
+/// `aero/coefficient/Cnb`: Yaw_moment_due_to_beta.
+pub static CNB: Table1<3> = Table1 {
+    key: Var::BetaRad,
+    x: [-0.3490, 0.0000, 0.3490],
+    y: [-0.0205, 0.0000, 0.0205],
+};
+const _: () = assert!(strictly_ascending(&CNB.x));
+
 /// The DRAG axis: the sum of these terms is the drag coefficient.
 pub static DRAG: [Term<'static>; 5] = [
     // qbar · Sw · 0.027
@@ -242,6 +280,98 @@ pub static LIFT: [Term<'static>; 5] = [
     },
 ];
 
+/// The ROLL axis: the sum of these terms is the roll moment coefficient (over qbar·Sw·bw).
+pub static ROLL: [Term<'static>; 5] = [
+    // qbar · Sw · bw · table(aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Clb",
+        factors: &[Factor::Table(&CLB)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · -0.4840
+    Term {
+        name: "aero/coefficient/Clp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Const(-0.4840)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · table(aero/alpha-rad, fcs/flap-pos-deg)
+    Term {
+        name: "aero/coefficient/Clr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Table(&CLR)],
+    },
+    // qbar · Sw · bw · fcs/left-aileron-pos-rad · 0.2290
+    Term {
+        name: "aero/coefficient/ClDa",
+        factors: &[Factor::Var(Var::LeftAileronRad), Factor::Const(0.2290)],
+    },
+    // qbar · Sw · bw · fcs/rudder-pos-rad · 0.0147
+    Term {
+        name: "aero/coefficient/Cldr",
+        factors: &[Factor::Var(Var::RudderRad), Factor::Const(0.0147)],
+    },
+];
+
+/// The PITCH axis: the sum of these terms is the pitch moment coefficient (over qbar·Sw·cbarw).
+pub static PITCH: [Term<'static>; 6] = [
+    // qbar · Sw · cbarw · 0.1000
+    Term {
+        name: "aero/coefficient/Cmo",
+        factors: &[Factor::Const(0.1000)],
+    },
+    // qbar · Sw · cbarw · aero/alpha-rad · -1.8000
+    Term {
+        name: "aero/coefficient/Cmalpha",
+        factors: &[Factor::Var(Var::AlphaRad), Factor::Const(-1.8000)],
+    },
+    // qbar · Sw · cbarw · aero/ci2vel · velocities/q-aero-rad_sec · -12.4000
+    Term {
+        name: "aero/coefficient/Cmq",
+        factors: &[Factor::Var(Var::Ci2Vel), Factor::Var(Var::QAeroRps), Factor::Const(-12.4000)],
+    },
+    // qbar · Sw · cbarw · aero/ci2vel · aero/alphadot-rad_sec · -7.2700
+    Term {
+        name: "aero/coefficient/Cmadot",
+        factors: &[Factor::Var(Var::Ci2Vel), Factor::Var(Var::AlphaDotRps), Factor::Const(-7.2700)],
+    },
+    // qbar · Sw · cbarw · (slipstream qbar / qbar) · fcs/elevator-pos-rad · -1.1220
+    Term {
+        name: "aero/coefficient/Cmde",
+        factors: &[Factor::Var(Var::SlipstreamQbarRatio), Factor::Var(Var::ElevatorRad), Factor::Const(-1.1220)],
+    },
+    // qbar · Sw · cbarw · table(fcs/flap-pos-deg)
+    Term {
+        name: "aero/coefficient/Cmdf",
+        factors: &[Factor::Table(&CMDF)],
+    },
+];
+
+/// The YAW axis: the sum of these terms is the yaw moment coefficient (over qbar·Sw·bw).
+pub static YAW: [Term<'static>; 5] = [
+    // qbar · Sw · bw · table(aero/beta-rad)
+    Term {
+        name: "aero/coefficient/Cnb",
+        factors: &[Factor::Table(&CNB)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/p-aero-rad_sec · -0.0278
+    Term {
+        name: "aero/coefficient/Cnp",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::PAeroRps), Factor::Const(-0.0278)],
+    },
+    // qbar · Sw · bw · aero/bi2vel · velocities/r-aero-rad_sec · -0.0937
+    Term {
+        name: "aero/coefficient/Cnr",
+        factors: &[Factor::Var(Var::Bi2Vel), Factor::Var(Var::RAeroRps), Factor::Const(-0.0937)],
+    },
+    // qbar · Sw · bw · fcs/left-aileron-pos-rad · -0.0053
+    Term {
+        name: "aero/coefficient/Cnda",
+        factors: &[Factor::Var(Var::LeftAileronRad), Factor::Const(-0.0053)],
+    },
+    // qbar · Sw · bw · (slipstream qbar / qbar) · fcs/rudder-pos-rad · -0.0430
+    Term {
+        name: "aero/coefficient/Cndr",
+        factors: &[Factor::Var(Var::SlipstreamQbarRatio), Factor::Var(Var::RudderRad), Factor::Const(-0.0430)],
+    },
+];
+
 /// Cessna 172P (JSBSim's c172p): the three force axes as JSBSim flies them, and the lengths and gain the inputs need.
 pub static MODEL: Model<'static> = Model {
     drag: &DRAG,
@@ -256,8 +386,12 @@ pub static MODEL: Model<'static> = Model {
 
 /// The roll, pitch and yaw moment axes as JSBSim flies them (about the aerodynamic reference
 /// point): flight-test calibration identifies them; the flight software reads none of them.
-/// Not extracted: aircraft/c172p/c172p.xml axis PITCH aero/coefficient/Cmde: the product must carry aero/qbar-psf and metrics/Sw-sqft and metrics/cbarw-ft once each (found {'aero/qbar-psf': 0, 'metrics/Sw-sqft': 1, 'metrics/cbarw-ft': 1}): only then is it qbar·Sw·cbarw times a coefficient
-pub static MOMENTS: Option<Moments<'static>> = None;
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments {
+    roll: &ROLL,
+    pitch: &PITCH,
+    yaw: &YAW,
+    slipstream_induced_factor: 2.0,
+});
 
 /// `C_THRUST` of prop_75in2f.xml: the thrust coefficient over the advance ratio J.
 pub static PROPELLER_CT: PropellerTable<25> = PropellerTable {
@@ -279,6 +413,7 @@ pub static ENGINE: Option<Engine<'static>> = Some(Engine::Propeller(Propeller {
     count: 1,
     diameter_ft: 75.0 / 12.0,
     ct_factor: 1.0,
+    below_reference_m: 32.8 * 0.0254,
     thrust_coefficient: &PROPELLER_CT,
     tip_mach_factor: Some(&PROPELLER_CT_MACH),
 }));

@@ -60,6 +60,16 @@ impl Engine<'_> {
             Engine::Propeller(p) => p.count,
         }
     }
+
+    /// How far the thrust line lies below the aerodynamic reference point, m (the model's
+    /// `AERORP` height less its thrusters'): the moment arm the thrust has about the reference
+    /// point beyond the drag's.
+    pub fn below_reference_m(&self) -> f32 {
+        match self {
+            Engine::Turbine(t) => t.below_reference_m,
+            Engine::Propeller(p) => p.below_reference_m,
+        }
+    }
 }
 
 /// `count` JSBSim `<turbine_engine>`s of one deck, each with a direct thruster along body x.
@@ -73,6 +83,8 @@ pub struct Turbine<'a> {
     /// `<idlen2>` and `<maxn2>`, %.
     pub idle_n2_pct: f32,
     pub max_n2_pct: f32,
+    /// See [`Engine::below_reference_m`].
+    pub below_reference_m: f32,
     /// `IdleThrust` (share of military thrust at idle), `MilThrust` (the military thrust's lapse)
     /// and, with an afterburner (`<augmethod>` 2), `AugThrust` (the maximum thrust's lapse).
     pub idle: &'a dyn EngineLookup,
@@ -147,6 +159,8 @@ pub struct Propeller<'a> {
     pub diameter_ft: f32,
     /// `<ct_factor>` (1 where the file has none).
     pub ct_factor: f32,
+    /// See [`Engine::below_reference_m`].
+    pub below_reference_m: f32,
     /// `C_THRUST`.
     pub thrust_coefficient: &'a dyn PropellerLookup,
     /// `CT_MACH`, where the file has one.
@@ -186,6 +200,25 @@ impl Propeller<'_> {
         }
         Some(ct * n * n * d * d * d * d * rho_slug_ft3)
     }
+
+    /// The velocity the propeller induces in its disc, ft/s, at thrust `thrust_lbf`, the airspeed
+    /// along its axis `axial_fps` and the density `rho_slug_ft3`: JSBSim's momentum theory
+    /// (`FGPropeller::Calculate`, McCormick), ½·(−V ± √(±(V·|V| + 2·T/(ρ·A)))) with A the disc's
+    /// area, the signs those of the root's argument. `None` if an input is not finite or the
+    /// density is not positive.
+    pub fn induced_fps(&self, thrust_lbf: f32, axial_fps: f32, rho_slug_ft3: f32) -> Option<f32> {
+        if !(thrust_lbf.is_finite() && axial_fps.is_finite() && rho_slug_ft3 > 0.0) {
+            return None;
+        }
+        let area = 0.25 * self.diameter_ft * self.diameter_ft * core::f32::consts::PI;
+        let sum = axial_fps * libm::fabsf(axial_fps) + 2.0 * thrust_lbf / (rho_slug_ft3 * area);
+        let v = if sum > 0.0 {
+            0.5 * (-axial_fps + libm::sqrtf(sum))
+        } else {
+            0.5 * (-axial_fps - libm::sqrtf(-sum))
+        };
+        v.is_finite().then_some(v)
+    }
 }
 
 #[cfg(test)]
@@ -219,6 +252,7 @@ mod tests {
             max_thrust_lbf: 15_000.0,
             idle_n2_pct: 60.0,
             max_n2_pct: 100.0,
+            below_reference_m: 0.0,
             idle: &FLAT,
             mil: &ONE,
             aug: Some(&ONE),
@@ -260,6 +294,7 @@ mod tests {
             count: 2,
             diameter_ft: 2.0,
             ct_factor: 1.0,
+            below_reference_m: 0.5,
             thrust_coefficient: &CT,
             tip_mach_factor: Some(&TIP),
         };
@@ -289,5 +324,14 @@ mod tests {
         assert!(near(p.thrust_lbf(rpm, 0.0, 0.002, a), want));
         assert_eq!(p.thrust_lbf(600.0, 10.0, 0.002, 0.0), None);
         assert_eq!(Engine::Propeller(p).count(), 2);
+        assert_eq!(Engine::Propeller(p).below_reference_m(), 0.5);
+        // Momentum theory: 2·T/(ρ·A) = V_i² + V·V_i·2 … at V = 10 ft/s and T = 0.24 lbf over the
+        // 2-ft disc (A = π ft²): ½·(−10 + √(100 + 0.48/(0.002·π))).
+        let want = 0.5 * (-10.0 + libm::sqrtf(100.0 + 0.48 / (0.002 * core::f32::consts::PI)));
+        assert!(near(p.induced_fps(0.24, 10.0, 0.002), want));
+        // No thrust, no induced velocity; a windmilling propeller's is negative.
+        assert!(near(p.induced_fps(0.0, 10.0, 0.002), 0.0));
+        assert!(p.induced_fps(-0.16, 10.0, 0.002).is_some_and(|v| v < 0.0));
+        assert_eq!(p.induced_fps(0.24, 10.0, 0.0), None);
     }
 }

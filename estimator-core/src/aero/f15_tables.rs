@@ -336,7 +336,12 @@ pub static MODEL: Model<'static> = Model {
 
 /// The roll, pitch and yaw moment axes as JSBSim flies them (about the aerodynamic reference
 /// point): flight-test calibration identifies them; the flight software reads none of them.
-pub static MOMENTS: Option<Moments<'static>> = Some(Moments { roll: &ROLL, pitch: &PITCH, yaw: &YAW });
+pub static MOMENTS: Option<Moments<'static>> = Some(Moments {
+    roll: &ROLL,
+    pitch: &PITCH,
+    yaw: &YAW,
+    slipstream_induced_factor: 0.0,
+});
 
 /// `IdleThrust` of F100-PW-229.xml.
 pub static ENGINE_IDLE: EngineTable<6, 8> = EngineTable {
@@ -404,6 +409,7 @@ pub static ENGINE: Option<Engine<'static>> = Some(Engine::Turbine(Turbine {
     max_thrust_lbf: 29000.0,
     idle_n2_pct: 53.0,
     max_n2_pct: 100.0,
+    below_reference_m: 0.0 * 0.0254,
     idle: &ENGINE_IDLE,
     mil: &ENGINE_MIL,
     aug: Some(&ENGINE_AUG),

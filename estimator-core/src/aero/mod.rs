@@ -94,6 +94,13 @@ pub enum Var {
     /// `aero/stall-hyst-norm`: JSBSim's stall-hysteresis latch (1 once α passes the model's upper
     /// hysteresis limit, 0 again below its lower one).
     StallHystNorm,
+    /// The dynamic pressure in the propeller's slipstream over q̄: a moment term whose product
+    /// carries the model's slipstream dynamic pressure, ½·ρ·(u + k·v_induced)² (the c172p's
+    /// `aero/function/qbar-induced-psf`), in place of q̄ (`scripts/extract-aero` checks the
+    /// function's form; k is [`Moments::slipstream_induced_factor`]). No force term reads it:
+    /// [`Point::new`] sets 1, and flight-test calibration, which knows the propeller's speed, sets
+    /// it ([`Moments::slipstream_qbar_ratio`]).
+    SlipstreamQbarRatio,
 }
 
 /// A value with its partial derivatives in α and β (per radian).
@@ -179,6 +186,7 @@ pub struct Point {
     pub alpha_dot_rps: f32,
     pub flap_deg: f32,
     pub stall_hyst_norm: f32,
+    pub slipstream_qbar_ratio: f32,
 }
 
 /// The air-relative state.
@@ -302,6 +310,7 @@ impl Point {
             alpha_dot_rps: air.unsteady.alpha_dot_rps,
             flap_deg: s.flap_deg,
             stall_hyst_norm: if air.unsteady.stall_latched { 1.0 } else { 0.0 },
+            slipstream_qbar_ratio: 1.0,
         };
         // The inputs are finite (above), and so are their conversions; only the quotients by the
         // airspeed and the flaperon mix can still overflow.
@@ -335,6 +344,7 @@ impl Point {
             Var::AlphaDotRps => self.alpha_dot_rps,
             Var::FlapDeg => self.flap_deg,
             Var::StallHystNorm => self.stall_hyst_norm,
+            Var::SlipstreamQbarRatio => self.slipstream_qbar_ratio,
         }
     }
 
@@ -362,6 +372,7 @@ impl Point {
             self.alpha_dot_rps,
             self.flap_deg,
             self.stall_hyst_norm,
+            self.slipstream_qbar_ratio,
         ]
         .iter()
         .all(|v| v.is_finite())
@@ -544,9 +555,22 @@ pub struct Moments<'a> {
     pub roll: &'a [Term<'a>],
     pub pitch: &'a [Term<'a>],
     pub yaw: &'a [Term<'a>],
+    /// k of the slipstream's ½·ρ·(u + k·v_induced)² that [`Var::SlipstreamQbarRatio`] stands for
+    /// (0: no term reads it).
+    pub slipstream_induced_factor: f32,
 }
 
 impl Moments<'_> {
+    /// [`Var::SlipstreamQbarRatio`] at true airspeed `tas_fps`, airspeed along body x `u_fps` and
+    /// the propeller-induced velocity `induced_fps` (JSBSim's `prop-induced-velocity_fps`,
+    /// [`super::Propeller::induced_fps`]): (u + k·v_induced)² / V². `None` if an input is not
+    /// finite or the airspeed is not positive.
+    pub fn slipstream_qbar_ratio(&self, tas_fps: f32, u_fps: f32, induced_fps: f32) -> Option<f32> {
+        let v = u_fps + self.slipstream_induced_factor * induced_fps;
+        let r = v * v / (tas_fps * tas_fps);
+        (tas_fps > 0.0 && r.is_finite()).then_some(r)
+    }
+
     /// The roll, pitch and yaw moment coefficients at `p`; `None` if `p` or a sum is not finite.
     pub fn coefficients_at(&self, p: &Point) -> Option<[f32; 3]> {
         let c = [self.roll, self.pitch, self.yaw].map(|terms| Model::axis(terms, p).value);
@@ -773,6 +797,7 @@ mod tests {
             alpha_dot_rps: 0.05,
             flap_deg: 10.0,
             stall_hyst_norm: 0.0,
+            slipstream_qbar_ratio: 1.0,
         }
     }
 
