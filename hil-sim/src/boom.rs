@@ -94,7 +94,8 @@ impl Default for BoomConfig {
                 ..ChannelErrors::default()
             },
             // A flight-test tachometer to 1 rpm with a per-flight calibration error of 5 rpm
-            // (about 0.4 % of the thrust at 2,400 rpm).
+            // (about 0.6 % of a fixed-pitch propeller's thrust at 2,400 rpm and J 0.7: n² and
+            // C_T(J) both move with it).
             propeller_rpm: ChannelErrors {
                 noise: 2.0,
                 resolution: 1.0,

@@ -1166,7 +1166,8 @@ struct MomentRow {
     model: [f64; 2],
     /// The side force over q̄·S·b, 1/m: the regressor of the moment arm.
     side: f64,
-    /// The pitch moment coefficient the gyros measure and the model's, over q̄·S·c̄.
+    /// The pitch moment coefficient the gyros measure and the model's, over q̄·S·c̄ (measured NaN:
+    /// not known, the thrust's moment missing; [`pitch_fit`] leaves the row out).
     pitch_measured: f64,
     pitch_model: f64,
     /// The body forces along x and z (the accelerometers' specific force at the CG times the
@@ -1216,12 +1217,14 @@ fn moment_row(
     let q_s = qbar * f64::from(MODEL.wing_area_ft2) * (FT_TO_M * FT_TO_M);
     let q_s_b = q_s * f64::from(MODEL.wingspan_ft) * FT_TO_M;
     let q_s_c = q_s * f64::from(MODEL.chord_ft) * FT_TO_M;
-    // The thrust's moment about its own line, beyond what the axial arm gives it on the drag's.
+    // The thrust's moment about its own line, beyond what the axial arm gives it on the drag's:
+    // a frame without a thrust (no engine record, an engine below idle) has no pitch row (NaN),
+    // its roll and yaw stand.
     let thrust_moment = match ENGINE {
-        Some(e) if e.below_reference_m() != 0.0 => {
-            let newtons = f64::from(engine_thrust_lbf(r, air)?) * f64::from(e.count()) * LBF_TO_N;
-            f64::from(e.below_reference_m()) * newtons
-        }
+        Some(e) if e.below_reference_m() != 0.0 => engine_thrust_lbf(r, air)
+            .map_or(f64::NAN, |t| {
+                f64::from(e.below_reference_m()) * f64::from(t) * f64::from(e.count()) * LBF_TO_N
+            }),
         _ => 0.0,
     };
     Some(MomentRow {
@@ -1316,15 +1319,23 @@ fn cg_aft_in(pitch: &Fit) -> Option<Estimate> {
 /// reference point (`aero::Engine::below_reference_m`, the model's geometry): its moment beyond
 /// the axial arm's, d·T with T the engines' thrust ([`thrust_accel_x`]), is taken out of the
 /// measured moment (on the c172p, whose thrust line is 0.83 m below the reference point, the
-/// tiny calibrate test's variant C read a CG shift of +0.57 ± 0.24 in without it, −0.11 ± 0.27
-/// with it; the F-16's, 0.10 m, +0.031 ± 0.057 and −0.015 ± 0.012; both truly 0). The model's
+/// tiny calibrate test's variant C, whose CG is the model's, reads a CG shift of +0.57 ± 0.24 in
+/// without it and −0.11 ± 0.27 with it; the F-16's, 0.10 m, +0.031 ± 0.057 and −0.015 ± 0.012).
+/// The propeller's reaction torque, gyroscopic moment and P-factor, which JSBSim applies, are not
+/// modelled: they enter the constants and the scales on the flight test and the model card alike.
+/// The model's
 /// moment is evaluated with α̇ = 0 (an α̇ term, as the f15's, is left to the constants and the
 /// scale, on the flight test and the model card alike). The constants, one per flight, take
 /// the gyros' bias drift and the moment no model term carries. `None` if the rows do not
 /// determine them.
 fn pitch_fit(rows: &[&MomentRow]) -> Option<Fit> {
+    let rows: Vec<&MomentRow> = rows
+        .iter()
+        .copied()
+        .filter(|r| r.pitch_measured.is_finite())
+        .collect();
     moment_fit(
-        rows,
+        &rows,
         &["k_pitch", "arm_x_m", "arm_z_m"],
         &[&|r| r.pitch_model, &|r| r.normal, &|r| r.axial],
         |r| r.pitch_measured,

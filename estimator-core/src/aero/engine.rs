@@ -172,7 +172,8 @@ impl Propeller<'_> {
     /// axis `axial_fps`, the air density `rho_slug_ft3` and the speed of sound `sound_fps`:
     /// `FGPropeller::Calculate`, C_T(J)·n²·D⁴·ρ with n in revolutions per second and J = V/(n·D)
     /// (V/D below 0.01 rev/s), C_T times `CT_MACH` at the helical tip Mach √((π·n·D)² + V²)/a.
-    /// `None` if an input is not finite or the speed, density or speed of sound is not positive.
+    /// `None` if an input is not finite, the speed or density is negative, or the speed of sound
+    /// is not positive.
     pub fn thrust_lbf(
         &self,
         rpm: f32,
