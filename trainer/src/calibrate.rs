@@ -1202,7 +1202,9 @@ fn moment_row(
         estimator_core::aero::Unsteady::default(),
     )?;
     let air = EngineAir::at(alpha, beta, tas, rho, a_sound);
-    point.slipstream_qbar_ratio = slipstream_ratio(r, &moments, air, tas)?;
+    // One engine's thrust, read by the slipstream and the pitch moment alike.
+    let thrust = engine_thrust_lbf(r, air);
+    point.slipstream_qbar_ratio = slipstream_ratio(thrust, &moments, air, tas)?;
     let [roll, pitch, yaw] = moments.coefficients_at(&point)?.map(f64::from);
     let [m_x, m_y, m_z] = body_moment(
         estimator_core::aircraft::AIRCRAFT.mass.inertia_slug_ft2,
@@ -1221,10 +1223,9 @@ fn moment_row(
     // a frame without a thrust (no engine record, an engine below idle) has no pitch row (NaN),
     // its roll and yaw stand.
     let thrust_moment = match ENGINE {
-        Some(e) if e.below_reference_m() != 0.0 => engine_thrust_lbf(r, air)
-            .map_or(f64::NAN, |t| {
-                f64::from(e.below_reference_m()) * f64::from(t) * f64::from(e.count()) * LBF_TO_N
-            }),
+        Some(e) if e.below_reference_m() != 0.0 => thrust.map_or(f64::NAN, |t| {
+            f64::from(e.below_reference_m()) * f64::from(t) * f64::from(e.count()) * LBF_TO_N
+        }),
         _ => 0.0,
     };
     Some(MomentRow {
@@ -1436,7 +1437,7 @@ fn engine_thrust_lbf(r: &Row, air: EngineAir) -> Option<f32> {
 /// theory, and (u + k·v_induced)²/V². `None` where it is read but cannot be computed (no propeller
 /// the evaluator reads, no propeller speed recorded).
 fn slipstream_ratio(
-    r: &Row,
+    thrust_lbf: Option<f32>,
     moments: &estimator_core::aero::Moments<'_>,
     air: EngineAir,
     tas_mps: f64,
@@ -1447,7 +1448,7 @@ fn slipstream_ratio(
     let Some(Engine::Propeller(p)) = ENGINE else {
         return None;
     };
-    let thrust = engine_thrust_lbf(r, air)?;
+    let thrust = thrust_lbf?;
     let axial_fps = (air.axial_mps / FT_TO_M) as f32;
     let induced = p.induced_fps(thrust, axial_fps, (air.rho / SLUG_FT3) as f32)?;
     moments.slipstream_qbar_ratio((tas_mps / FT_TO_M) as f32, axial_fps, induced)
@@ -1456,7 +1457,7 @@ fn slipstream_ratio(
 /// The drag and thrust fit over the quasi-steady frames below [`MAX_DRAG_ALPHA_DEG`] with a
 /// recorded thrust, the lift and side force at the scales `lift` and `(k_b, k_y)` identified:
 /// `f_x − k_L·lift_x − k_F·flap_x − ΔC_L·unit_x − k_β·sideslip_x − k_Y·surfaces_x = k_D·drag_x + k_T·T/m + b_x`,
-/// T the engine deck's thrust at the recorded N2 and throttle. In steady flight thrust and drag
+/// T the engines' thrust ([`thrust_accel_x`]). In steady flight thrust and drag
 /// balance, so those frames tell only their difference; the card's accel/decel (full throttle,
 /// then idle) swings the thrust between the deck's maximum and idle within seconds while the drag
 /// follows the speed slowly, and its push-overs and pull-ups move the drag with α at the same thrust: the
