@@ -105,6 +105,10 @@ pub struct FilterSettings {
     pub gust_tau_s: f32,
     /// `LOW_CONFIDENCE` above this 1σ of α or β, rad.
     pub max_sigma_rad: f32,
+    /// Whether the filter learns its lift and side-force scales in flight; false holds both at 1
+    /// (chosen on the airframe's validation flights: where turbulence is a large angle at the
+    /// airframe's airspeed, the scales take it up instead of the airframe's forces).
+    pub learn_scales: bool,
 }
 
 /// The estimator's choices that belong to the airframe, made on its own validation flights.

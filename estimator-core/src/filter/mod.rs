@@ -157,9 +157,24 @@ impl Config {
 /// build (the values measured in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same);
 /// held at 1 in a build with `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
 #[cfg(not(filter_no_side_scale))]
-const SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
+const SIDE_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
+    [1e-6, 0.1]
+} else {
+    HELD
+};
 #[cfg(filter_no_side_scale)]
-const SIDE_SCALE: [f32; 2] = [0.0, 0.0];
+const SIDE_SCALE: [f32; 2] = HELD;
+
+/// The lift scale's random-walk PSD and initial 1σ in [`CONFIG`]: learned unless the aircraft's
+/// description holds its scales (`filter.learn_scales`).
+const LIFT_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
+    [1e-6, 0.05]
+} else {
+    HELD
+};
+
+/// A scale's PSD and initial 1σ that hold it at 1.
+const HELD: [f32; 2] = [0.0, 0.0];
 
 /// The filter for the build's aircraft in hil-sim's installation: the IMU lever arm, empty weight,
 /// pilot and gear of its description ([`crate::aircraft`]; the F-16's, `aircraft/f16.toml`), the
@@ -171,8 +186,8 @@ pub const CONFIG: Config = Config {
     mean_wind_sigma0: [15.0, 15.0, 1.0],
     gust_tau_s: AIRCRAFT.filter.gust_tau_s,
     gust_sigma: AIRCRAFT.filter.gust_sigma_mps,
-    lift_scale_psd: 1e-6,
-    lift_scale_sigma0: 0.05,
+    lift_scale_psd: LIFT_SCALE[0],
+    lift_scale_sigma0: LIFT_SCALE[1],
     side_scale_psd: SIDE_SCALE[0],
     side_scale_sigma0: SIDE_SCALE[1],
     accel_sigma: AIRCRAFT.filter.accel_sigma_mps2,

@@ -443,6 +443,33 @@ fn assert_learnt(name: &str, (k, sd): (f32, f32), truth: f32, sigma0: f32, tight
 }
 
 #[test]
+fn learns_the_scales_exactly_when_the_description_says() {
+    let learns = |psd: f32, sigma0: f32| psd > 0.0 && sigma0 > 0.0;
+    let lift = learns(CONFIG.lift_scale_psd, CONFIG.lift_scale_sigma0);
+    let side = learns(CONFIG.side_scale_psd, CONFIG.side_scale_sigma0);
+    assert_eq!(lift, AIRCRAFT.filter.learn_scales);
+    assert_eq!(
+        side,
+        AIRCRAFT.filter.learn_scales && !cfg!(filter_no_side_scale)
+    );
+    // Held, a scale stays exactly 1 through a flight whose forces are 4 % above the model's.
+    let w = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.04,
+    };
+    let c = Config {
+        lift_scale_psd: 0.0,
+        lift_scale_sigma0: 0.0,
+        side_scale_psd: 0.0,
+        side_scale_sigma0: 0.0,
+        ..cfg()
+    };
+    let mut f = AirDataFilter::new(c);
+    fly(&mut f, &w, 0.0, 240.0, |_, _, _| {});
+    assert_eq!((f.lift_scale(), f.side_scale()), (1.0, 1.0));
+}
+
+#[test]
 fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
     // The lateral force 15 % above the model's, through a turn in a steady wind.
     let w = World {
@@ -487,7 +514,12 @@ fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
         wind: Vector3::new(12.0, -7.0, 0.5),
         k: 1.04,
     };
-    let c = cfg();
+    // The F-16's prior, whatever the build's description says (`filter.learn_scales`).
+    let c = Config {
+        lift_scale_psd: 1e-6,
+        lift_scale_sigma0: 0.05,
+        ..cfg()
+    };
     let mut f = AirDataFilter::new(c);
     let mut worst_alpha = 0f32;
     fly(&mut f, &w, 0.0, 240.0, |t, out, truth| {
