@@ -55,7 +55,8 @@ fn main() {
 
 /// `ESTIMATOR_FILTER_SIDE_SCALE=off` builds the air-data filter without its side-force scale
 /// learning (`filter::CONFIG`: the seven-state filter), for networks trained with it; unset or
-/// `on`, the shipped filter, which learns it (docs/filter.md). Anything else is a failed build.
+/// `on`, the shipped filter, which learns it where the aircraft's description says so
+/// (`filter.learn_scales`, docs/filter.md). Anything else is a failed build.
 fn filter_side_scale() {
     println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_SIDE_SCALE");
     println!("cargo::rustc-check-cfg=cfg(filter_no_side_scale)");

@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 19] = [
+    let cases: [(&str, &str, &str); 21] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -126,6 +126,12 @@ fn descriptions_are_validated_key_by_key() {
             "pilot_pointmass = 0",
             "pilot_pointmass = \"0\"",
             "pilot_pointmass must be an index",
+        ),
+        ("learn_scales = true\n", "", "filter: missing learn_scales"),
+        (
+            "learn_scales = true\n",
+            "learn_scales = 1\n",
+            "filter.learn_scales must be a bool, not 1",
         ),
     ];
     for (from, to, says) in cases {

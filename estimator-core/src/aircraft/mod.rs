@@ -106,8 +106,7 @@ pub struct FilterSettings {
     /// `LOW_CONFIDENCE` above this 1σ of α or β, rad.
     pub max_sigma_rad: f32,
     /// Whether the filter learns its lift and side-force scales in flight; false holds both at 1
-    /// (chosen on the airframe's validation flights: where turbulence is a large angle at the
-    /// airframe's airspeed, the scales take it up instead of the airframe's forces).
+    /// (chosen per airframe, docs/aircraft.md).
     pub learn_scales: bool,
 }
 

@@ -153,28 +153,35 @@ impl Config {
     }
 }
 
-/// The side-force scale's random-walk PSD and initial 1σ in [`CONFIG`]: learned in the shipped
-/// build (the values measured in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same);
-/// held at 1 in a build with `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
+/// The lift scale's random-walk PSD (1/s) and initial 1σ where it is learned.
+pub const LEARNED_LIFT_SCALE: [f32; 2] = [1e-6, 0.05];
+
+/// The side-force scale's random-walk PSD (1/s) and initial 1σ where it is learned (the values
+/// measured in docs/filter.md, where 1e-5 and 1e-7 for the PSD score the same).
+pub const LEARNED_SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
+
+/// A scale's PSD and initial 1σ that hold it at 1.
+const HELD: [f32; 2] = [0.0, 0.0];
+
+/// The side-force scale's PSD and initial 1σ in [`CONFIG`]: learned where the aircraft's
+/// description says so (`filter.learn_scales`), held at 1 otherwise and in a build with
+/// `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
 #[cfg(not(filter_no_side_scale))]
 const SIDE_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
-    [1e-6, 0.1]
+    LEARNED_SIDE_SCALE
 } else {
     HELD
 };
 #[cfg(filter_no_side_scale)]
 const SIDE_SCALE: [f32; 2] = HELD;
 
-/// The lift scale's random-walk PSD and initial 1σ in [`CONFIG`]: learned unless the aircraft's
-/// description holds its scales (`filter.learn_scales`).
+/// The lift scale's PSD and initial 1σ in [`CONFIG`]: learned where the aircraft's description
+/// says so (`filter.learn_scales`), held at 1 otherwise.
 const LIFT_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
-    [1e-6, 0.05]
+    LEARNED_LIFT_SCALE
 } else {
     HELD
 };
-
-/// A scale's PSD and initial 1σ that hold it at 1.
-const HELD: [f32; 2] = [0.0, 0.0];
 
 /// The filter for the build's aircraft in hil-sim's installation: the IMU lever arm, empty weight,
 /// pilot and gear of its description ([`crate::aircraft`]; the F-16's, `aircraft/f16.toml`), the

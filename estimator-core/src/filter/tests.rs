@@ -442,31 +442,74 @@ fn assert_learnt(name: &str, (k, sd): (f32, f32), truth: f32, sigma0: f32, tight
     }
 }
 
+/// [`cfg`] with both scales learned at the priors of an aircraft whose description learns them
+/// (`filter.learn_scales = true`; the side-force scale held in a build with
+/// `ESTIMATOR_FILTER_SIDE_SCALE=off`), whatever the build's description says: the learning tests
+/// measure what each aircraft's noise sizes let the filter learn.
+fn learning_cfg() -> Config {
+    let side = if cfg!(filter_no_side_scale) {
+        HELD
+    } else {
+        LEARNED_SIDE_SCALE
+    };
+    Config {
+        lift_scale_psd: LEARNED_LIFT_SCALE[0],
+        lift_scale_sigma0: LEARNED_LIFT_SCALE[1],
+        side_scale_psd: side[0],
+        side_scale_sigma0: side[1],
+        ..cfg()
+    }
+}
+
 #[test]
 fn learns_the_scales_exactly_when_the_description_says() {
-    let learns = |psd: f32, sigma0: f32| psd > 0.0 && sigma0 > 0.0;
-    let lift = learns(CONFIG.lift_scale_psd, CONFIG.lift_scale_sigma0);
-    let side = learns(CONFIG.side_scale_psd, CONFIG.side_scale_sigma0);
-    assert_eq!(lift, AIRCRAFT.filter.learn_scales);
+    let pair = |psd: f32, sigma0: f32| [psd, sigma0];
+    let lift = pair(CONFIG.lift_scale_psd, CONFIG.lift_scale_sigma0);
+    let side = pair(CONFIG.side_scale_psd, CONFIG.side_scale_sigma0);
+    let learns = AIRCRAFT.filter.learn_scales;
+    assert_eq!(lift, if learns { LEARNED_LIFT_SCALE } else { HELD });
+    let side_learns = learns && !cfg!(filter_no_side_scale);
     assert_eq!(
         side,
-        AIRCRAFT.filter.learn_scales && !cfg!(filter_no_side_scale)
+        if side_learns {
+            LEARNED_SIDE_SCALE
+        } else {
+            HELD
+        }
     );
-    // Held, a scale stays exactly 1 through a flight whose forces are 4 % above the model's.
+    // Held (the build's own configuration where its description holds them), both scales are
+    // exactly 1 on every step of a flight whose forces are 4 % above the model's, through an
+    // outage of the inputs and a restart.
+    let held = if learns {
+        Config {
+            lift_scale_psd: 0.0,
+            lift_scale_sigma0: 0.0,
+            side_scale_psd: 0.0,
+            side_scale_sigma0: 0.0,
+            ..cfg()
+        }
+    } else {
+        cfg()
+    };
     let w = World {
         wind: Vector3::new(12.0, -7.0, 0.5),
         k: 1.04,
     };
-    let c = Config {
-        lift_scale_psd: 0.0,
-        lift_scale_sigma0: 0.0,
-        side_scale_psd: 0.0,
-        side_scale_sigma0: 0.0,
-        ..cfg()
-    };
-    let mut f = AirDataFilter::new(c);
-    fly(&mut f, &w, 0.0, 240.0, |_, _, _| {});
-    assert_eq!((f.lift_scale(), f.side_scale()), (1.0, 1.0));
+    let mut f = AirDataFilter::new(held);
+    let mut t = 0.0;
+    let mut outputs = 0;
+    while t < 240.0 {
+        if (150.0..150.0 + DT).contains(&t) {
+            f.restart();
+        }
+        let (inp, _) = w.frame(t, &held);
+        let out = f.step(&inp, !(100.0..102.0).contains(&t));
+        assert_eq!((out.lift_scale, out.side_scale), (1.0, 1.0), "at {t} s");
+        assert_eq!((f.lift_scale(), f.side_scale()), (1.0, 1.0), "at {t} s");
+        outputs += 1;
+        t += DT;
+    }
+    assert_eq!(outputs, 4800);
 }
 
 #[test]
@@ -477,14 +520,14 @@ fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
         k: 1.0,
     };
     let learning = Config {
-        side_scale_psd: 1e-6,
-        side_scale_sigma0: 0.1,
-        ..cfg()
+        side_scale_psd: LEARNED_SIDE_SCALE[0],
+        side_scale_sigma0: LEARNED_SIDE_SCALE[1],
+        ..learning_cfg()
     };
     let held = Config {
         side_scale_psd: 0.0,
         side_scale_sigma0: 0.0,
-        ..cfg()
+        ..learning_cfg()
     };
     let run = |c: Config| {
         let mut f = AirDataFilter::new(c);
@@ -514,12 +557,7 @@ fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
         wind: Vector3::new(12.0, -7.0, 0.5),
         k: 1.04,
     };
-    // The F-16's prior, whatever the build's description says (`filter.learn_scales`).
-    let c = Config {
-        lift_scale_psd: 1e-6,
-        lift_scale_sigma0: 0.05,
-        ..cfg()
-    };
+    let c = learning_cfg();
     let mut f = AirDataFilter::new(c);
     let mut worst_alpha = 0f32;
     fly(&mut f, &w, 0.0, 240.0, |t, out, truth| {
