@@ -147,6 +147,13 @@ pub fn fit(rows: &Rows) -> Result<AngleFit> {
     let median = abs[abs.len() / 2].max(1.0);
     let mut w = [0.3f64; TERMS];
     w[Term::Base as usize] = 1.25 * median / 1000.0;
+    // A term that is 0 on every row (e.g. a scale the filter holds at 1) leaves the likelihood
+    // alone whatever its weight: it gets 0, not the start value.
+    for (k, wk) in w.iter_mut().enumerate() {
+        if rows.terms.iter().all(|t| t.get(k) == Some(&0)) {
+            *wk = 0.0;
+        }
+    }
     let mut best = nll(&w, rows);
     for _ in 0..40 {
         let before = best;

@@ -163,25 +163,21 @@ pub const LEARNED_SIDE_SCALE: [f32; 2] = [1e-6, 0.1];
 /// A scale's PSD and initial 1σ that hold it at 1.
 const HELD: [f32; 2] = [0.0, 0.0];
 
-/// The side-force scale's PSD and initial 1σ in [`CONFIG`]: learned where the aircraft's
-/// description says so (`filter.learn_scales`), held at 1 otherwise and in a build with
-/// `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs).
-#[cfg(not(filter_no_side_scale))]
-const SIDE_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
-    LEARNED_SIDE_SCALE
-} else {
-    HELD
-};
-#[cfg(filter_no_side_scale)]
-const SIDE_SCALE: [f32; 2] = HELD;
+/// A scale's PSD and initial 1σ: `learned` where it is learned, [`HELD`] otherwise.
+const fn prior(learned: [f32; 2], learn: bool) -> [f32; 2] {
+    if learn { learned } else { HELD }
+}
 
 /// The lift scale's PSD and initial 1σ in [`CONFIG`]: learned where the aircraft's description
 /// says so (`filter.learn_scales`), held at 1 otherwise.
-const LIFT_SCALE: [f32; 2] = if AIRCRAFT.filter.learn_scales {
-    LEARNED_LIFT_SCALE
-} else {
-    HELD
-};
+const LIFT_SCALE: [f32; 2] = prior(LEARNED_LIFT_SCALE, AIRCRAFT.filter.learn_scales);
+
+/// The side-force scale's PSD and initial 1σ in [`CONFIG`]: as the lift scale's, and held at 1 in
+/// a build with `ESTIMATOR_FILTER_SIDE_SCALE=off` (build.rs) too.
+const SIDE_SCALE: [f32; 2] = prior(
+    LEARNED_SIDE_SCALE,
+    AIRCRAFT.filter.learn_scales && !cfg!(filter_no_side_scale),
+);
 
 /// The filter for the build's aircraft in hil-sim's installation: the IMU lever arm, empty weight,
 /// pilot and gear of its description ([`crate::aircraft`]; the F-16's, `aircraft/f16.toml`), the

@@ -447,11 +447,7 @@ fn assert_learnt(name: &str, (k, sd): (f32, f32), truth: f32, sigma0: f32, tight
 /// `ESTIMATOR_FILTER_SIDE_SCALE=off`), whatever the build's description says: the learning tests
 /// measure what each aircraft's noise sizes let the filter learn.
 fn learning_cfg() -> Config {
-    let side = if cfg!(filter_no_side_scale) {
-        HELD
-    } else {
-        LEARNED_SIDE_SCALE
-    };
+    let side = prior(LEARNED_SIDE_SCALE, !cfg!(filter_no_side_scale));
     Config {
         lift_scale_psd: LEARNED_LIFT_SCALE[0],
         lift_scale_sigma0: LEARNED_LIFT_SCALE[1],

@@ -3,8 +3,8 @@
 
 /// The 1σ weights (Q8) of the estimate, per term (base, filter_sigma, disagreement, slow_disagreement, turbulence, lift_mismatch, side_mismatch, magnitude, nis_excess, filter_unclear, out_of_envelope, turbulent, caution, filter_diverged).
 pub const SIGMA: crate::uncertainty::Coefficients = crate::uncertainty::Coefficients {
-    alpha: [17, 26, 32, 26, 107, 76, 76, 8, 0, 18, 0, 0, 0, 0],
-    beta: [0, 6, 50, 81, 130, 77, 77, 11, 8, 11, 0, 0, 12, 0],
+    alpha: [17, 26, 32, 26, 107, 0, 0, 8, 0, 18, 0, 0, 0, 0],
+    beta: [0, 6, 50, 81, 130, 0, 0, 11, 8, 11, 0, 0, 12, 0],
 };
 
 /// How [`SIGMA`] was fitted.
