@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 21] = [
+    let cases: [(&str, &str, &str); 23] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -132,6 +132,16 @@ fn descriptions_are_validated_key_by_key() {
             "learn_scales = true\n",
             "learn_scales = 1\n",
             "filter.learn_scales must be a bool, not 1",
+        ),
+        (
+            "kinematic_gate_mps2 = 26.0\n",
+            "",
+            "filter: missing kinematic_gate_mps2",
+        ),
+        (
+            "kinematic_gate_mps2 = 26.0\n",
+            "kinematic_gate_mps2 = \"26\"\n",
+            "filter.kinematic_gate_mps2 must be a number, not '26'",
         ),
     ];
     for (from, to, says) in cases {

@@ -108,6 +108,11 @@ pub struct FilterSettings {
     /// Whether the filter learns its lift and side-force scales in flight; false holds both at 1
     /// (chosen per airframe, docs/aircraft.md).
     pub learn_scales: bool,
+    /// The kinematic check's gate, m/s²: above it the running mean of the accelerometers' y or z
+    /// specific force less the one the EGI's velocity change gives keeps the step out of the
+    /// filter's update (`filter::Config::kinematic_gate_mps2`; about twice the largest the
+    /// airframe's generated flights reach, docs/filter.md).
+    pub kinematic_gate_mps2: f32,
 }
 
 /// The estimator's choices that belong to the airframe, made on its own validation flights.

@@ -75,6 +75,11 @@ pub mod flags {
     /// time the model by; or the update's arithmetic failed). With [`RESTARTED`] the outputs are
     /// the held ones instead. Not a standing condition: [`clear`] lets it pass (docs/filter.md).
     pub const PREDICTED: u8 = 1 << 6;
+    /// The y or z specific force the accelerometers measure disagrees with the one the EGI's
+    /// velocity change and gravity give ([`super::Config::kinematic_gate_mps2`]): a channel in
+    /// error, kept out of the update this step ([`PREDICTED`] too, and [`GATED`] once the run is
+    /// [`super::Config::gate_run`] steps long).
+    pub const DISAGREES: u8 = 1 << 7;
 
     /// No standing flag: every flag clear but [`PREDICTED`], a single step's. The filter's outputs
     /// may stand beside a network's and count as trusted; the estimator flags a [`PREDICTED`]
@@ -130,7 +135,17 @@ pub struct Config {
     pub r_adapt_range: [[f32; 2]; 2],
     /// What the measurement reads from a frame's 120 Hz sub-samples, when it carries them.
     pub subsamples: SubsampleUse,
+    /// Largest running mean (over [`KINEMATIC_TAU_S`]) of the y or the z specific force the
+    /// accelerometers measure less the one the EGI's velocity change over the step and gravity
+    /// give, m/s², above which the step makes no update ([`flags::DISAGREES`]). The two differ in
+    /// flight by the EGI's age and the anti-alias filter's lag alone; a larger difference is an
+    /// accelerometer channel in error, which the update would otherwise take in as wind. 0 turns
+    /// the check off.
+    pub kinematic_gate_mps2: f32,
 }
+
+/// Time constant of the kinematic check's running mean ([`Config::kinematic_gate_mps2`]), s.
+pub const KINEMATIC_TAU_S: f32 = 0.5;
 
 /// How the filter's measurement reads a frame's 120 Hz [`crate::channels::Subsamples`] (IMU and
 /// surfaces, before the anti-alias filter), when the frame carries every one it needs; otherwise
@@ -212,6 +227,7 @@ pub const CONFIG: Config = Config {
     r_adapt_tau_s: 0.0,
     r_adapt_range: [[1.0, 1.0], [1.0, 1.0]],
     subsamples: SubsampleUse::Off,
+    kinematic_gate_mps2: AIRCRAFT.filter.kinematic_gate_mps2,
 };
 
 /// One frame of what the filter reads, in SI units and radians.
@@ -417,6 +433,8 @@ pub struct AirDataFilter {
     r_adapt_age_s: f32,
     /// The model's stall latch ([`aero::Model::stall_latch`]) as the filter's α moved it.
     stall_latched: bool,
+    /// Running mean of the y and z kinematic residual, m/s² ([`Config::kinematic_gate_mps2`]).
+    kinematic: [f32; 2],
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -676,6 +694,7 @@ impl AirDataFilter {
             nu_ms: [0.0; 2],
             r_adapt_age_s: 0.0,
             stall_latched: false,
+            kinematic: [0.0; 2],
         };
         f.restart();
         f
@@ -717,6 +736,35 @@ impl AirDataFilter {
         self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.nis_mean = self.cfg.gate;
         self.r_adapt_age_s = 0.0;
+        self.kinematic = [0.0; 2];
+    }
+
+    /// Folds this step's kinematic residual into its running mean and says whether the mean is
+    /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force the IMU
+    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)` over the step (the EGI's
+    /// velocity is the IMU's point's, docs/sensors.md, so no lever-arm term enters).
+    fn kinematics_disagree(
+        &mut self,
+        inp: &Input,
+        prev: &Input,
+        cbn: &Matrix3<f32>,
+        dt: f32,
+    ) -> bool {
+        let gate = self.cfg.kinematic_gate_mps2;
+        if gate <= 0.0 || inp.dt_s <= 0.0 {
+            return false;
+        }
+        let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;
+        let f_egi = cbn * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
+        let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
+        let mut beyond = false;
+        for (mean, r) in self.kinematic.iter_mut().zip(residual) {
+            if r.is_finite() {
+                running_mean(mean, r, dt, KINEMATIC_TAU_S);
+            }
+            beyond |= libm::fabsf(*mean) > gate;
+        }
+        beyond
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -1001,7 +1049,18 @@ impl AirDataFilter {
             self.last = out;
             return out;
         }
+        // The attitude of this frame: the kinematic check's and the outputs'.
+        let cbn = c_bn(inp.euler_rad);
+        let disagrees = match self.prev {
+            Some(prev) => self.kinematics_disagree(inp, &prev, &cbn, dt),
+            None => false,
+        };
         let nis = match self.prev {
+            Some(_) if disagrees => {
+                self.gated_run = self.gated_run.saturating_add(1);
+                flags |= flags::DISAGREES;
+                None
+            }
             Some(prev) => self.update(inp, &prev, dt),
             None => None,
         };
@@ -1023,7 +1082,7 @@ impl AirDataFilter {
         if self.gated_run >= self.cfg.gate_run {
             flags |= flags::GATED;
         }
-        match self.output(inp, nis) {
+        match self.output(inp, &cbn, nis) {
             Some(mut out) => {
                 if out.sigma_alpha_rad > self.cfg.max_sigma_rad
                     || out.sigma_beta_rad > self.cfg.max_sigma_rad
@@ -1051,9 +1110,8 @@ impl AirDataFilter {
     }
 
     /// α, β, their 1σ and the rest at the current frame; `None` if anything is not finite.
-    fn output(&self, inp: &Input, nis: f32) -> Option<Output> {
+    fn output(&self, inp: &Input, cbn: &Matrix3<f32>, nis: f32) -> Option<Output> {
         let wind = self.wind();
-        let cbn = c_bn(inp.euler_rad);
         let vb = cbn * (Vector3::from(inp.vel_ned_mps) - wind);
         let v = vb.norm();
         if v.is_nan() || v <= 1.0 {
