@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
     let (ea, eb) = (estimator(&clean), estimator(&faulted));
 
     println!(
-        "{} `{arg}`: faulted less fault-free; filter flags {{1 NO_INPUT, 2 GATED, 4 RESTARTED, 8 LOW_CONFIDENCE, 16 SLOW, 32 ALT_COASTED, 64 PREDICTED}}, estimate flags as estimator_core::Flags::NAMED (hex)",
+        "{} `{arg}`: faulted less fault-free; filter flags {{1 NO_INPUT, 2 GATED, 4 RESTARTED, 8 LOW_CONFIDENCE, 16 SLOW, 32 ALT_COASTED, 64 PREDICTED, 128 DISAGREES}}, estimate flags as estimator_core::Flags::NAMED (hex)",
         estimator_core::aircraft::AIRCRAFT.name
     );
     println!(

@@ -110,7 +110,7 @@ pub struct FilterSettings {
     pub learn_scales: bool,
     /// The kinematic check's gate, m/s²: above it the running mean of the accelerometers' y or z
     /// specific force less the one the EGI's velocity change gives keeps the step out of the
-    /// filter's update (`filter::Config::kinematic_gate_mps2`; about twice the largest the
+    /// filter's update (`filter::Config::kinematic_gate_mps2`; at least twice the largest the
     /// airframe's generated flights reach, docs/filter.md).
     pub kinematic_gate_mps2: f32,
 }

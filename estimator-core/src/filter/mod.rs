@@ -741,8 +741,9 @@ impl AirDataFilter {
 
     /// Folds this step's kinematic residual into its running mean and says whether the mean is
     /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force the IMU
-    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)` over the step (the EGI's
-    /// velocity is the IMU's point's, docs/sensors.md, so no lever-arm term enters).
+    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)` over the step (the input's
+    /// velocity is the CG's and the accelerometers' force the IMU's, so the residual also holds
+    /// the lever-arm terms).
     fn kinematics_disagree(
         &mut self,
         inp: &Input,
@@ -751,20 +752,23 @@ impl AirDataFilter {
         dt: f32,
     ) -> bool {
         let gate = self.cfg.kinematic_gate_mps2;
-        if gate <= 0.0 || inp.dt_s <= 0.0 {
+        if gate <= 0.0 {
             return false;
+        }
+        let beyond = |mean: &[f32; 2]| mean.iter().any(|m| libm::fabsf(*m) > gate);
+        if inp.dt_s <= 0.0 {
+            // No velocity change to compare: the running mean stands as it is.
+            return beyond(&self.kinematic);
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;
         let f_egi = cbn * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
         let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
-        let mut beyond = false;
         for (mean, r) in self.kinematic.iter_mut().zip(residual) {
             if r.is_finite() {
                 running_mean(mean, r, dt, KINEMATIC_TAU_S);
             }
-            beyond |= libm::fabsf(*mean) > gate;
         }
-        beyond
+        beyond(&self.kinematic)
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.

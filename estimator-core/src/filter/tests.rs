@@ -351,11 +351,20 @@ fn an_accelerometer_that_disagrees_with_the_egi_is_kept_out_of_the_update() {
             // No update: the prediction alone, and after `gate_run` such steps, gated.
             assert_ne!(b.flags & flags::PREDICTED, 0, "t {t}");
         }
-        if fault(t) && t >= 60.0 + (first + 0.5) * DT {
-            assert!(says, "t {t}: step {first} of the error or later passed");
+        // The running mean passes the gate on step `first` of the error, not before.
+        if fault(t) {
+            let on = t >= 60.0 + (first - 0.5) * DT;
+            assert_eq!(
+                says, on,
+                "t {t}: step {first} of the error is the first flagged"
+            );
         }
-        if !fault(t) && (t < 60.0 || t >= 70.0 + 1.5) {
+        if !(60.0..70.0 + 1.5).contains(&t) {
             assert!(!says, "t {t}: flagged without the error");
+        }
+        if says {
+            // No update at all, not a gated one (whose NIS would be above the gate).
+            assert_eq!(b.nis, 0.0, "t {t}");
         }
         // Kept out, the error leaves α and β near the clean filter's while the filter predicts
         // (its gust state relaxes), and on them within a second of the error's end.

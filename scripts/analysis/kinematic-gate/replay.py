@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""The air-data filter's kinematic check replayed on a dataset's channels (docs/filter.md): per
+flight, the largest 0.5-s running mean of the y and z accelerometer reading less the specific
+force the EGI's velocity change and gravity give in body axes (EGI attitude of the frame), after
+the first 2 s. The EGI channels carry the IMU point's velocity, so the lever-arm terms the filter's
+CG velocity leaves in its own residual are not in this one.
+
+usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py DATA_DIR
+"""
+import glob
+import os
+import sys
+
+import numpy as np
+
+G = 9.80665
+DT = 0.05
+TAU_S = 0.5  # estimator_core::filter::KINEMATIC_TAU_S
+
+
+def body_from_ned(phi, theta, psi):
+    """Per frame, the NED → body direction-cosine matrix (as the filter's c_bn)."""
+    cp, sp, ct, st, cs, ss = np.cos(phi), np.sin(phi), np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi)
+    nb = np.empty((len(phi), 3, 3))
+    nb[:, 0, 0] = ct * cs
+    nb[:, 0, 1] = sp * st * cs - cp * ss
+    nb[:, 0, 2] = cp * st * cs + sp * ss
+    nb[:, 1, 0] = ct * ss
+    nb[:, 1, 1] = sp * st * ss + cp * cs
+    nb[:, 1, 2] = cp * st * ss - sp * cs
+    nb[:, 2, 0] = -st
+    nb[:, 2, 1] = sp * ct
+    nb[:, 2, 2] = cp * ct
+    return np.transpose(nb, (0, 2, 1))
+
+
+def largest(path):
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    accel = np.stack([d["accel_x_mps2"], d["accel_y_mps2"], d["accel_z_mps2"]], 1)
+    v = np.stack([d["egi_v_north_mps"], d["egi_v_east_mps"], d["egi_v_down_mps"]], 1)
+    bn = body_from_ned(d["egi_roll_rad"], d["egi_pitch_rad"], d["egi_heading_rad"])
+    a_ned = (v[1:] - v[:-1]) / DT - np.array([0.0, 0.0, G])
+    residual = accel[1:] - np.einsum("nij,nj->ni", bn[1:], a_ned)
+    k = DT / (TAU_S + DT)
+    mean = np.zeros(3)
+    worst = np.zeros(3)
+    for i, r in enumerate(residual):
+        ok = np.isfinite(r)
+        mean[ok] += k * (r[ok] - mean[ok])
+        if i >= 40:
+            worst = np.maximum(worst, np.abs(mean))
+    return worst[1], worst[2]
+
+
+def main():
+    if len(sys.argv) != 2 or not os.path.isfile(os.path.join(sys.argv[1], "manifest.json")):
+        sys.exit("usage: replay.py DATA_DIR (a hil-sim generate dataset)")
+    rows = [(os.path.basename(p)[:-4], *largest(p)) for p in sorted(glob.glob(os.path.join(sys.argv[1], "*.csv")))]
+    y = max(rows, key=lambda r: r[1])
+    z = max(rows, key=lambda r: r[2])
+    print(f"{len(rows)} flights; largest running mean y {y[1]:.2f} m/s² ({y[0]}), z {z[2]:.2f} m/s² ({z[0]})")
+
+
+if __name__ == "__main__":
+    main()
