@@ -137,10 +137,10 @@ pub struct Config {
     pub subsamples: SubsampleUse,
     /// Largest running mean (over [`KINEMATIC_TAU_S`]) of the y or the z specific force the
     /// accelerometers measure less the one the EGI's velocity change over the step and gravity
-    /// give, m/s², above which the step makes no update ([`flags::DISAGREES`]). The two differ in
-    /// flight by the EGI's age and the anti-alias filter's lag alone; a larger difference is an
-    /// accelerometer channel in error, which the update would otherwise take in as wind. 0 turns
-    /// the check off.
+    /// give, m/s², above which the step makes no update ([`flags::DISAGREES`]). In flight the two
+    /// differ by the sensors' errors, their timing and the lever arm (docs/filter.md); well
+    /// beyond that is an accelerometer channel in error, which the update would otherwise take in
+    /// as wind. 0 turns the check off.
     pub kinematic_gate_mps2: f32,
 }
 
@@ -1055,12 +1055,9 @@ impl AirDataFilter {
         }
         // The attitude of this frame: the kinematic check's and the outputs'.
         let cbn = c_bn(inp.euler_rad);
-        let disagrees = match self.prev {
-            Some(prev) => self.kinematics_disagree(inp, &prev, &cbn, dt),
-            None => false,
-        };
-        let nis = match self.prev {
-            Some(_) if disagrees => {
+        let prev = self.prev;
+        let nis = match prev {
+            Some(prev) if self.kinematics_disagree(inp, &prev, &cbn, dt) => {
                 self.gated_run = self.gated_run.saturating_add(1);
                 flags |= flags::DISAGREES;
                 None
