@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 23] = [
+    let cases: [(&str, &str, &str); 24] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -134,14 +134,19 @@ fn descriptions_are_validated_key_by_key() {
             "filter.learn_scales must be a bool, not 1",
         ),
         (
-            "kinematic_gate_mps2 = 26.0\n",
+            "kinematic_gate_mps2 = 16.0\n",
             "",
             "filter: missing kinematic_gate_mps2",
         ),
         (
-            "kinematic_gate_mps2 = 26.0\n",
+            "kinematic_gate_mps2 = 16.0\n",
             "kinematic_gate_mps2 = \"26\"\n",
             "filter.kinematic_gate_mps2 must be a number, not '26'",
+        ),
+        (
+            "kinematic_gate_mps2 = 16.0\n",
+            "kinematic_gate_mps2 = -1.0\n",
+            "filter.kinematic_gate_mps2 must be at least 0 (0 turns the kinematic check off), not -1.0",
         ),
     ];
     for (from, to, says) in cases {

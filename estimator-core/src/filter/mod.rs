@@ -730,20 +730,23 @@ impl AirDataFilter {
 
     /// What a start, a restart and a step without inputs all forget: the previous input, the
     /// settled wind the turbulence index compares against, and the proof that the model fits (the
-    /// NIS mean starts again at the gate).
+    /// NIS mean starts again at the gate). The kinematic check's running mean is kept: it compares
+    /// the sensors with each other, not with the filter's state, and an accelerometer in error
+    /// before an outage or a restart is in error after it until the steps show otherwise.
     fn unsettle(&mut self) {
         self.prev = None;
         self.turb_settle = TURBULENCE_SETTLE_STEPS;
         self.nis_mean = self.cfg.gate;
         self.r_adapt_age_s = 0.0;
-        self.kinematic = [0.0; 2];
     }
 
     /// Folds this step's kinematic residual into its running mean and says whether the mean is
     /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force the IMU
-    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)` over the step (the input's
-    /// velocity is the CG's and the accelerometers' force the IMU's, so the residual also holds
-    /// the lever-arm terms).
+    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)`: the velocity change is the
+    /// step's mean acceleration, so it is turned into body axes with the mean of the step's two
+    /// attitude matrices (`cbn` is this frame's), not this frame's alone, which a rolling aircraft
+    /// has turned away from it. The input's velocity is the CG's and the accelerometers' force the
+    /// IMU's, so the residual also holds the lever-arm terms.
     fn kinematics_disagree(
         &mut self,
         inp: &Input,
@@ -761,7 +764,8 @@ impl AirDataFilter {
             return beyond(&self.kinematic);
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;
-        let f_egi = cbn * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
+        let c_mid = (cbn + c_bn(prev.euler_rad)) * 0.5;
+        let f_egi = c_mid * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
         let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
         for (mean, r) in self.kinematic.iter_mut().zip(residual) {
             if r.is_finite() {

@@ -317,6 +317,22 @@ impl Turn {
     }
 }
 
+/// The step of a constant accelerometer error (0 its first) on which the kinematic check's running
+/// mean passes the gate.
+fn steps_to_pass(c: &Config, error: f32) -> u16 {
+    let mut mean = 0.0;
+    for k in 0..1000u16 {
+        running_mean(&mut mean, error, DT, KINEMATIC_TAU_S);
+        if mean > c.kinematic_gate_mps2 {
+            return k;
+        }
+    }
+    panic!(
+        "an error of {error} m/s² never passes the gate {}",
+        c.kinematic_gate_mps2
+    )
+}
+
 #[test]
 fn an_accelerometer_that_disagrees_with_the_egi_is_kept_out_of_the_update() {
     let c = CONFIG;
@@ -325,10 +341,7 @@ fn an_accelerometer_that_disagrees_with_the_egi_is_kept_out_of_the_update() {
     // 4 g on the normal axis (or 1.5 times the gate where that is more) from 60 s for 10 s: the
     // filter's own gate lets 4 g in as a gust on a light aircraft (docs/results/dropout.md).
     let error = 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
-    // The running mean of a constant error passes the gate on this step of it (0 the first).
-    let a = DT / (KINEMATIC_TAU_S + DT);
-    let first =
-        libm::ceilf(libm::logf(1.0 - c.kinematic_gate_mps2 / error) / libm::logf(1.0 - a)) - 1.0;
+    let first = f32::from(steps_to_pass(&c, error));
     let fault = |t: f32| (60.0..70.0).contains(&t);
     let mut disagreed = 0;
     // The largest α or β difference to the clean filter, °: through the error and the second
@@ -419,7 +432,10 @@ pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
             }
         };
         let [roll, pitch, heading] = inp.euler_rad;
-        let [vn, ve, vd] = inp.vel_ned_mps;
+        // The EGI channels carry the IMU point's velocity; the filter's input is the CG's.
+        let lever = Vector3::from(inp.gyro_rps).cross(&Vector3::from(CONFIG.lever_arm_m));
+        let v_imu = Vector3::from(inp.vel_ned_mps) + c_bn(inp.euler_rad).transpose() * lever;
+        let [vn, ve, vd] = [v_imu.x, v_imu.y, v_imu.z];
         let [ax, ay, az] = inp.accel_mps2;
         let [p, q, r] = inp.gyro_rps;
         for (c, v) in [
@@ -1078,4 +1094,46 @@ fn alpha_rate_is_the_rate_of_the_body_velocity() {
     assert_eq!(alpha_rate(&slow, &cbn, ned, &f_pull, gyro), 0.0);
     let nan = Vector3::new(f32::NAN, 0.0, 0.0);
     assert_eq!(alpha_rate(&vb, &cbn, ned, &nan, gyro), 0.0);
+}
+
+#[test]
+fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and_a_restart() {
+    let c = CONFIG;
+    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
+    let mut f = AirDataFilter::new(c);
+    let error = 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
+    // The error from 60 s to the end; no inputs from 65 to 66 s; a restart at 72 s.
+    let outage = |t: f32| (65.0..66.0).contains(&t);
+    let passed = 60.0 + f32::from(steps_to_pass(&c, error)) * DT;
+    let (mut flagged, mut unflagged) = (0, 0);
+    for i in 0..1800u16 {
+        let t = f32::from(i) * DT;
+        let (mut inp, _) = turn.frame(t, &c);
+        if t >= 60.0 - 0.5 * DT {
+            inp.accel_mps2[2] -= error;
+        }
+        if (72.0 - 0.5 * DT..72.0 + 0.5 * DT).contains(&t) {
+            f.restart();
+        }
+        let out = f.step(&inp, !outage(t));
+        if t < passed - 0.5 * DT {
+            continue;
+        }
+        // From the step the mean passed the gate on, no step updates the filter: the outage's
+        // steps and the first after it (and after the restart) have no previous input to update
+        // from, every other step disagrees.
+        assert_eq!(
+            out.nis, 0.0,
+            "t {t}: an update with the accelerometer in error"
+        );
+        assert_ne!(out.flags & (flags::PREDICTED | flags::NO_INPUT), 0, "t {t}");
+        if out.flags & flags::DISAGREES != 0 {
+            flagged += 1;
+        } else {
+            unflagged += 1;
+        }
+    }
+    // Not flagged: the 20 outage steps and the first step after the outage and the restart.
+    assert_eq!(unflagged, 22, "steps without DISAGREES");
+    assert!(flagged > 500, "flagged on {flagged} steps");
 }

@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """The air-data filter's kinematic check replayed on a dataset's channels (docs/filter.md): per
 flight, the largest 0.5-s running mean of the y and z accelerometer reading less the specific
-force the EGI's velocity change and gravity give in body axes (EGI attitude of the frame), after
-the first 2 s. The EGI channels carry the IMU point's velocity, so the lever-arm terms the filter's
+force the EGI's velocity change and gravity give in body axes (the mean of the step's two EGI
+attitude matrices, as the filter turns it), after the first 2 s. The EGI channels carry the IMU point's velocity, so the lever-arm terms the filter's
 CG velocity leaves in its own residual are not in this one.
 
-usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py DATA_DIR
+usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py [--mean-accel] DATA_DIR
+
+--mean-accel compares the mean of the step's two accelerometer readings instead of the frame's
+(the filter reads the frame's).
 """
 import glob
 import os
@@ -34,13 +37,15 @@ def body_from_ned(phi, theta, psi):
     return np.transpose(nb, (0, 2, 1))
 
 
-def largest(path):
+def largest(path, mean_accel):
     d = np.genfromtxt(path, delimiter=",", names=True)
     accel = np.stack([d["accel_x_mps2"], d["accel_y_mps2"], d["accel_z_mps2"]], 1)
     v = np.stack([d["egi_v_north_mps"], d["egi_v_east_mps"], d["egi_v_down_mps"]], 1)
     bn = body_from_ned(d["egi_roll_rad"], d["egi_pitch_rad"], d["egi_heading_rad"])
     a_ned = (v[1:] - v[:-1]) / DT - np.array([0.0, 0.0, G])
-    residual = accel[1:] - np.einsum("nij,nj->ni", bn[1:], a_ned)
+    if mean_accel:
+        accel[1:] = 0.5 * (accel[1:] + accel[:-1])
+    residual = accel[1:] - np.einsum("nij,nj->ni", 0.5 * (bn[1:] + bn[:-1]), a_ned)
     k = DT / (TAU_S + DT)
     mean = np.zeros(3)
     worst = np.zeros(3)
@@ -53,9 +58,13 @@ def largest(path):
 
 
 def main():
-    if len(sys.argv) != 2 or not os.path.isfile(os.path.join(sys.argv[1], "manifest.json")):
-        sys.exit("usage: replay.py DATA_DIR (a hil-sim generate dataset)")
-    rows = [(os.path.basename(p)[:-4], *largest(p)) for p in sorted(glob.glob(os.path.join(sys.argv[1], "*.csv")))]
+    args = sys.argv[1:]
+    mean_accel = args[:1] == ["--mean-accel"]
+    args = args[1:] if mean_accel else args
+    if len(args) != 1 or not os.path.isfile(os.path.join(args[0], "manifest.json")):
+        sys.exit("usage: replay.py [--mean-accel] DATA_DIR (a hil-sim generate dataset)")
+    rows = [(os.path.basename(p)[:-4], *largest(p, mean_accel))
+            for p in sorted(glob.glob(os.path.join(args[0], "*.csv")))]
     y = max(rows, key=lambda r: r[1])
     z = max(rows, key=lambda r: r[2])
     print(f"{len(rows)} flights; largest running mean y {y[1]:.2f} m/s² ({y[0]}), z {z[2]:.2f} m/s² ({z[0]})")
