@@ -415,6 +415,8 @@ pub struct AirDataFilter {
     x: Vec7,
     p: Mat7,
     prev: Option<Input>,
+    /// The NED → body matrix of `prev`'s attitude, set with it (the kinematic check's).
+    prev_cbn: Matrix3<f32>,
     gated_run: u16,
     last: Output,
     /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
@@ -685,6 +687,7 @@ impl AirDataFilter {
             x: Vec7::zeros(),
             p: Mat7::zeros(),
             prev: None,
+            prev_cbn: Matrix3::identity(),
             gated_run: 0,
             alt: None,
             last: Output::default(),
@@ -744,9 +747,9 @@ impl AirDataFilter {
     /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force the IMU
     /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)`: the velocity change is the
     /// step's mean acceleration, so it is turned into body axes with the mean of the step's two
-    /// attitude matrices (`cbn` is this frame's), not this frame's alone, which a rolling aircraft
-    /// has turned away from it. The input's velocity is the CG's and the accelerometers' force the
-    /// IMU's, so the residual also holds the lever-arm terms.
+    /// attitude matrices (`cbn` is this frame's, `prev_cbn` the previous one's), not this frame's
+    /// alone, which a rolling aircraft has turned away from it. The input's velocity is the CG's
+    /// and the accelerometers' force the IMU's, so the residual also holds the lever-arm terms.
     fn kinematics_disagree(
         &mut self,
         inp: &Input,
@@ -764,7 +767,7 @@ impl AirDataFilter {
             return beyond(&self.kinematic);
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;
-        let c_mid = (cbn + c_bn(prev.euler_rad)) * 0.5;
+        let c_mid = (cbn + self.prev_cbn) * 0.5;
         let f_egi = c_mid * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
         let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
         for (mean, r) in self.kinematic.iter_mut().zip(residual) {
@@ -1079,6 +1082,7 @@ impl AirDataFilter {
         }
         let nis = nis.unwrap_or(0.0);
         self.prev = Some(*inp);
+        self.prev_cbn = cbn;
         if !self.healthy() {
             self.restart();
             self.prev = Some(*inp);
