@@ -577,11 +577,12 @@ impl FeatureState {
         values.health = health;
         if let Some(filter) = self.filter.as_mut() {
             // After a gap longer than FILTER_RESTART_GAP_MS (no frames: link down, sender
-            // restarted) the filter starts again, exactly as a fresh one would.
+            // restarted) the filter starts again as a fresh one, with its verdict on the
+            // accelerometers kept (`AirDataFilter::start_again`).
             let mut dt_ms = match gap_ms {
                 Some(gap) if gap <= FILTER_RESTART_GAP_MS => gap,
                 Some(_) => {
-                    *filter = crate::filter::AirDataFilter::new(crate::filter::CONFIG);
+                    filter.start_again();
                     self.checkpoints = [None, None];
                     FRAME_PERIOD_MS
                 }

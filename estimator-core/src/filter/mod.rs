@@ -147,6 +147,12 @@ pub struct Config {
 /// Time constant of the kinematic check's running mean ([`Config::kinematic_gate_mps2`]), s.
 pub const KINEMATIC_TAU_S: f32 = 0.5;
 
+/// The longest step the kinematic check folds into its running mean, s (two frames: one lost
+/// frame). Over a longer gap the velocity change averages the acceleration over the whole gap
+/// while the accelerometers read the frame's instant, and the step's mean attitude no longer
+/// turns it: the running mean, and its verdict, stand as they are.
+pub const KINEMATIC_MAX_DT_S: f32 = 0.1;
+
 /// How the filter's measurement reads a frame's 120 Hz [`crate::channels::Subsamples`] (IMU and
 /// surfaces, before the anti-alias filter), when the frame carries every one it needs; otherwise
 /// it reads the 20 Hz channels.
@@ -703,6 +709,15 @@ impl AirDataFilter {
         f
     }
 
+    /// A fresh filter's state after a gap in the frames, keeping only the kinematic check's
+    /// running means (as [`AirDataFilter::restart`] does: they compare the sensors with each
+    /// other, not with the filter's state).
+    pub fn start_again(&mut self) {
+        let kinematic = self.kinematic;
+        *self = AirDataFilter::new(self.cfg);
+        self.kinematic = kinematic;
+    }
+
     /// Back to the initial state and covariance (wind unknown, lift scale 1).
     pub fn restart(&mut self) {
         let c = &self.cfg;
@@ -762,8 +777,8 @@ impl AirDataFilter {
             return false;
         }
         let beyond = |mean: &[f32; 2]| mean.iter().any(|m| libm::fabsf(*m) > gate);
-        if inp.dt_s <= 0.0 {
-            // No velocity change to compare: the running mean stands as it is.
+        if inp.dt_s <= 0.0 || inp.dt_s > KINEMATIC_MAX_DT_S {
+            // No velocity change to compare, or one over a gap: the running mean stands as it is.
             return beyond(&self.kinematic);
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;

@@ -1102,7 +1102,8 @@ fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and
     let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
     let mut f = AirDataFilter::new(c);
     let error = 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
-    // The error from 60 s to the end; no inputs from 65 to 66 s; a restart at 72 s.
+    // The error from 60 s to the end; no inputs from 65 to 66 s; a restart at 72 s, a start
+    // again (the estimator's, after a gap in the frames) at 80 s.
     let outage = |t: f32| (65.0..66.0).contains(&t);
     let passed = 60.0 + f32::from(steps_to_pass(&c, error)) * DT;
     let (mut flagged, mut unflagged) = (0, 0);
@@ -1114,6 +1115,9 @@ fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and
         }
         if (72.0 - 0.5 * DT..72.0 + 0.5 * DT).contains(&t) {
             f.restart();
+        }
+        if (80.0 - 0.5 * DT..80.0 + 0.5 * DT).contains(&t) {
+            f.start_again();
         }
         let out = f.step(&inp, !outage(t));
         if t < passed - 0.5 * DT {
@@ -1133,7 +1137,36 @@ fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and
             unflagged += 1;
         }
     }
-    // Not flagged: the 20 outage steps and the first step after the outage and the restart.
-    assert_eq!(unflagged, 22, "steps without DISAGREES");
+    // Not flagged: the 20 outage steps and the first step after the outage, the restart and the
+    // start again.
+    assert_eq!(unflagged, 23, "steps without DISAGREES");
     assert!(flagged > 500, "flagged on {flagged} steps");
+}
+
+#[test]
+fn the_kinematic_check_folds_no_step_over_a_gap() {
+    let c = CONFIG;
+    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
+    let mut f = AirDataFilter::new(c);
+    for i in 0..1220u16 {
+        let t = f32::from(i) * DT;
+        let (mut inp, _) = turn.frame(t, &c);
+        if t >= 60.0 - 0.5 * DT {
+            inp.accel_mps2[2] -= 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
+        }
+        f.step(&inp, true);
+    }
+    let before = f.kinematic;
+    assert!(before[1].abs() > c.kinematic_gate_mps2, "{before:?}");
+    // The next frame 0.5 s on, its accelerometer right again: the step spans a gap, so the
+    // running mean and its verdict stand; the step after it is folded.
+    let t = 1219.0 * DT + 0.5;
+    let (mut inp, _) = turn.frame(t, &c);
+    inp.dt_s = 0.5;
+    let out = f.step(&inp, true);
+    assert_eq!(f.kinematic, before);
+    assert_ne!(out.flags & flags::DISAGREES, 0);
+    let (inp, _) = turn.frame(t + DT, &c);
+    f.step(&inp, true);
+    assert!(f.kinematic[1].abs() < before[1].abs(), "{:?}", f.kinematic);
 }
