@@ -10,7 +10,7 @@ usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py [--mean-accel]
 --mean-accel compares the mean of the step's two accelerometer readings instead of the frame's
 (the filter reads the frame's).
 """
-import glob
+import json
 import os
 import sys
 
@@ -63,8 +63,10 @@ def main():
     args = args[1:] if mean_accel else args
     if len(args) != 1 or not os.path.isfile(os.path.join(args[0], "manifest.json")):
         sys.exit("usage: replay.py [--mean-accel] DATA_DIR (a hil-sim generate dataset)")
-    rows = [(os.path.basename(p)[:-4], *largest(p, mean_accel))
-            for p in sorted(glob.glob(os.path.join(args[0], "*.csv")))]
+    # The manifest's flights (a flight-test dataset also holds each flight's boom record).
+    with open(os.path.join(args[0], "manifest.json")) as f:
+        files = sorted(fl["file"] for fl in json.load(f)["flights"])
+    rows = [(name[:-4], *largest(os.path.join(args[0], name), mean_accel)) for name in files]
     y = max(rows, key=lambda r: r[1])
     z = max(rows, key=lambda r: r[2])
     print(f"{len(rows)} flights; largest running mean y {y[1]:.2f} m/s² ({y[0]}), z {z[2]:.2f} m/s² ({z[0]})")
