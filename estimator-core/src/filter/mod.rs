@@ -420,9 +420,9 @@ pub struct AirDataFilter {
     cfg: Config,
     x: Vec7,
     p: Mat7,
-    prev: Option<Input>,
-    /// The NED → body matrix of `prev`'s attitude, set with it (the kinematic check's).
-    prev_cbn: Matrix3<f32>,
+    /// The previous step's input and the NED → body matrix of its attitude (the kinematic
+    /// check's).
+    prev: Option<(Input, Matrix3<f32>)>,
     gated_run: u16,
     last: Output,
     /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
@@ -693,7 +693,6 @@ impl AirDataFilter {
             x: Vec7::zeros(),
             p: Mat7::zeros(),
             prev: None,
-            prev_cbn: Matrix3::identity(),
             gated_run: 0,
             alt: None,
             last: Output::default(),
@@ -765,11 +764,13 @@ impl AirDataFilter {
     /// attitude matrices (`cbn` is this frame's, `prev_cbn` the previous one's), not this frame's
     /// alone, which a rolling aircraft has turned away from it. The input's velocity is the CG's
     /// and the accelerometers' force the IMU's, so the residual also holds the lever-arm terms.
+    /// `dt` is [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s).
     fn kinematics_disagree(
         &mut self,
         inp: &Input,
         prev: &Input,
         cbn: &Matrix3<f32>,
+        prev_cbn: &Matrix3<f32>,
         dt: f32,
     ) -> bool {
         let gate = self.cfg.kinematic_gate_mps2;
@@ -777,12 +778,12 @@ impl AirDataFilter {
             return false;
         }
         let beyond = |mean: &[f32; 2]| mean.iter().any(|m| libm::fabsf(*m) > gate);
-        if inp.dt_s <= 0.0 || inp.dt_s > KINEMATIC_MAX_DT_S {
+        if dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
             // No velocity change to compare, or one over a gap: the running mean stands as it is.
             return beyond(&self.kinematic);
         }
-        let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / inp.dt_s;
-        let c_mid = (cbn + self.prev_cbn) * 0.5;
+        let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / dt;
+        let c_mid = (cbn + prev_cbn) * 0.5;
         let f_egi = c_mid * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
         let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
         for (mean, r) in self.kinematic.iter_mut().zip(residual) {
@@ -1079,12 +1080,12 @@ impl AirDataFilter {
         let cbn = c_bn(inp.euler_rad);
         let prev = self.prev;
         let nis = match prev {
-            Some(prev) if self.kinematics_disagree(inp, &prev, &cbn, dt) => {
+            Some((prev, prev_cbn)) if self.kinematics_disagree(inp, &prev, &cbn, &prev_cbn, dt) => {
                 self.gated_run = self.gated_run.saturating_add(1);
                 flags |= flags::DISAGREES;
                 None
             }
-            Some(prev) => self.update(inp, &prev, dt),
+            Some((prev, _)) => self.update(inp, &prev, dt),
             None => None,
         };
         if let Some(n) = nis {
@@ -1096,11 +1097,10 @@ impl AirDataFilter {
             flags |= flags::PREDICTED;
         }
         let nis = nis.unwrap_or(0.0);
-        self.prev = Some(*inp);
-        self.prev_cbn = cbn;
+        self.prev = Some((*inp, cbn));
         if !self.healthy() {
             self.restart();
-            self.prev = Some(*inp);
+            self.prev = Some((*inp, cbn));
             flags |= flags::RESTARTED;
         }
         if self.gated_run >= self.cfg.gate_run {

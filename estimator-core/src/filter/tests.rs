@@ -317,6 +317,17 @@ impl Turn {
     }
 }
 
+/// The kinematic tests' world: [`Turn`] through a steady 12 m/s wind (scaled for a slow aircraft).
+fn steady_turn(c: &Config) -> Turn {
+    Turn::new(Vector3::new(12.0, -7.0, 0.5), c)
+}
+
+/// The kinematic tests' accelerometer error, m/s²: 4 g on the normal axis, or 1.5 times the gate
+/// where that is more.
+fn gross_error(c: &Config) -> f32 {
+    39.2266f32.max(1.5 * c.kinematic_gate_mps2)
+}
+
 /// The step of a constant accelerometer error (0 its first) on which the kinematic check's running
 /// mean passes the gate.
 fn steps_to_pass(c: &Config, error: f32) -> u16 {
@@ -336,11 +347,11 @@ fn steps_to_pass(c: &Config, error: f32) -> u16 {
 #[test]
 fn an_accelerometer_that_disagrees_with_the_egi_is_kept_out_of_the_update() {
     let c = CONFIG;
-    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
+    let turn = steady_turn(&c);
     let (mut clean, mut faulted) = (AirDataFilter::new(c), AirDataFilter::new(c));
-    // 4 g on the normal axis (or 1.5 times the gate where that is more) from 60 s for 10 s: the
-    // filter's own gate lets 4 g in as a gust on a light aircraft (docs/results/dropout.md).
-    let error = 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
+    // A gross error from 60 s for 10 s: the filter's own gate lets 4 g in as a gust on a light
+    // aircraft (docs/results/dropout.md).
+    let error = gross_error(&c);
     let first = f32::from(steps_to_pass(&c, error));
     let fault = |t: f32| (60.0..70.0).contains(&t);
     let mut disagreed = 0;
@@ -420,7 +431,7 @@ fn fly(
 /// consistent, with no flag and a NIS mean far below 2. The noisy channels carry a one-LSB
 /// dither, so the estimator's stuck-channel check leaves them alone. For the estimator's tests.
 pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
-    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &CONFIG);
+    let turn = steady_turn(&CONFIG);
     (0..n).map(move |k| {
         let t = f32::from(k) * DT;
         let (inp, _) = turn.frame(t, &CONFIG);
@@ -1099,9 +1110,9 @@ fn alpha_rate_is_the_rate_of_the_body_velocity() {
 #[test]
 fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and_a_restart() {
     let c = CONFIG;
-    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
+    let turn = steady_turn(&c);
     let mut f = AirDataFilter::new(c);
-    let error = 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
+    let error = gross_error(&c);
     // The error from 60 s to the end; no inputs from 65 to 66 s; a restart at 72 s, a start
     // again (the estimator's, after a gap in the frames) at 80 s.
     let outage = |t: f32| (65.0..66.0).contains(&t);
@@ -1146,13 +1157,13 @@ fn the_kinematic_check_remembers_an_accelerometer_in_error_through_an_outage_and
 #[test]
 fn the_kinematic_check_folds_no_step_over_a_gap() {
     let c = CONFIG;
-    let turn = Turn::new(Vector3::new(12.0, -7.0, 0.5), &c);
+    let turn = steady_turn(&c);
     let mut f = AirDataFilter::new(c);
     for i in 0..1220u16 {
         let t = f32::from(i) * DT;
         let (mut inp, _) = turn.frame(t, &c);
         if t >= 60.0 - 0.5 * DT {
-            inp.accel_mps2[2] -= 39.2266f32.max(1.5 * c.kinematic_gate_mps2);
+            inp.accel_mps2[2] -= gross_error(&c);
         }
         f.step(&inp, true);
     }
