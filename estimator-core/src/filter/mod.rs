@@ -78,7 +78,9 @@ pub mod flags {
     /// The y or z specific force the accelerometers measure disagrees with the one the EGI's
     /// velocity change and gravity give ([`super::Config::kinematic_gate_mps2`]): a channel in
     /// error, kept out of the update this step ([`PREDICTED`] too, and [`GATED`] once the run is
-    /// [`super::Config::gate_run`] steps long).
+    /// [`super::Config::gate_run`] steps long). The check's running mean outlasts an outage, a
+    /// restart and a start again, and so do this flag (from the first step with inputs) and the
+    /// run.
     pub const DISAGREES: u8 = 1 << 7;
 
     /// No standing flag: every flag clear but [`PREDICTED`], a single step's. The filter's outputs
@@ -716,9 +718,12 @@ impl AirDataFilter {
     /// running means (as [`AirDataFilter::restart`] does: they compare the sensors with each
     /// other, not with the filter's state).
     pub fn start_again(&mut self) {
-        let kinematic = self.kinematic;
+        let (kinematic, gated_run) = (self.kinematic, self.gated_run);
         *self = AirDataFilter::new(self.cfg);
         self.kinematic = kinematic;
+        if self.kinematics_beyond_gate() {
+            self.gated_run = gated_run;
+        }
     }
 
     /// Back to the initial state and covariance (wind unknown, lift scale 1).
@@ -741,7 +746,10 @@ impl AirDataFilter {
             sq(c.lift_scale_sigma0),
             sq(c.side_scale_sigma0),
         ]));
-        self.gated_run = 0;
+        // A run of steps kept out for a channel in error goes on: the restart does not mend it.
+        if !self.kinematics_beyond_gate() {
+            self.gated_run = 0;
+        }
         self.turb_ms = 0.0;
         self.last.turbulence_rad = 0.0;
         self.stall_latched = false;
@@ -776,14 +784,12 @@ impl AirDataFilter {
         cbn: &Matrix3<f32>,
         dt: f32,
     ) -> bool {
-        let gate = self.cfg.kinematic_gate_mps2;
-        if gate <= 0.0 {
+        if self.cfg.kinematic_gate_mps2 <= 0.0 {
             return false;
         }
-        let beyond = |mean: &[f32; 2]| mean.iter().any(|m| libm::fabsf(*m) > gate);
         if dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
             // No velocity change to compare, or one over a gap: the running mean stands as it is.
-            return beyond(&self.kinematic);
+            return self.kinematics_beyond_gate();
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / dt;
         let c_mid = (cbn + self.prev_cbn) * 0.5;
@@ -794,7 +800,14 @@ impl AirDataFilter {
                 running_mean(mean, r, dt, KINEMATIC_TAU_S);
             }
         }
-        beyond(&self.kinematic)
+        self.kinematics_beyond_gate()
+    }
+
+    /// Whether the kinematic check's running mean, as it stands, is beyond its gate (never with
+    /// the check off).
+    fn kinematics_beyond_gate(&self) -> bool {
+        let gate = self.cfg.kinematic_gate_mps2;
+        gate > 0.0 && self.kinematic.iter().any(|m| libm::fabsf(*m) > gate)
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -1082,8 +1095,14 @@ impl AirDataFilter {
         // The attitude of this frame: the kinematic check's and the outputs'.
         let cbn = c_bn(inp.euler_rad);
         let prev = self.prev;
+        // Without a previous input (the first step after a start, an outage or a restart) there
+        // is no velocity change to fold, but the running mean's verdict stands.
+        let disagrees = match prev {
+            Some(prev) => self.kinematics_disagree(inp, &prev, &cbn, dt),
+            None => self.kinematics_beyond_gate(),
+        };
         let nis = match prev {
-            Some(prev) if self.kinematics_disagree(inp, &prev, &cbn, dt) => {
+            _ if disagrees => {
                 self.gated_run = self.gated_run.saturating_add(1);
                 flags |= flags::DISAGREES;
                 None
