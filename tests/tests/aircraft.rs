@@ -134,17 +134,17 @@ fn descriptions_are_validated_key_by_key() {
             "filter.learn_scales must be a bool, not 1",
         ),
         (
-            "kinematic_gate_mps2 = 16.0\n",
+            "kinematic_gate_mps2 = 2.0\n",
             "",
             "filter: missing kinematic_gate_mps2",
         ),
         (
-            "kinematic_gate_mps2 = 16.0\n",
+            "kinematic_gate_mps2 = 2.0\n",
             "kinematic_gate_mps2 = \"26\"\n",
             "filter.kinematic_gate_mps2 must be a number, not '26'",
         ),
         (
-            "kinematic_gate_mps2 = 16.0\n",
+            "kinematic_gate_mps2 = 2.0\n",
             "kinematic_gate_mps2 = -1.0\n",
             "filter.kinematic_gate_mps2 must be at least 0 (0 turns the kinematic check off), not -1.0",
         ),

@@ -149,6 +149,14 @@ pub struct Config {
 /// Time constant of the kinematic check's running mean ([`Config::kinematic_gate_mps2`]), s.
 pub const KINEMATIC_TAU_S: f32 = 0.5;
 
+/// How far apart in time the kinematic check's two specific forces may be, s: the EGI's velocity
+/// change is the mean over a step that ends up to 0.07 s before the frame (its age and its output
+/// held at 20 Hz), the accelerometers' reading lags by their anti-alias filter. The part of the
+/// residual that a specific force changing at this step's rate over that time can make is taken
+/// off each step's residual (a dead band as wide as that change), so that the gate can be set for
+/// a channel in error rather than for the timing of the hardest maneuvers (docs/filter.md).
+pub const KINEMATIC_TIMING_S: f32 = 0.05;
+
 /// The longest step the kinematic check folds into its running mean, s (two frames: one lost
 /// frame). Over a longer gap the velocity change averages the acceleration over the whole gap
 /// while the accelerometers read the frame's instant, and the step's mean attitude no longer
@@ -770,17 +778,19 @@ impl AirDataFilter {
     }
 
     /// Folds this step's kinematic residual into its running mean and says whether the mean is
-    /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force the IMU
-    /// measures less the one the EGI gives, `C_bn · (Δv / Δt − g)`: the velocity change is the
-    /// step's mean acceleration, so it is turned into body axes with the mean of the step's two
-    /// attitude matrices (`cbn` is this frame's, `prev_cbn` the previous one's), not this frame's
-    /// alone, which a rolling aircraft has turned away from it. The input's velocity is the CG's
-    /// and the accelerometers' force the IMU's, so the residual also holds the lever-arm terms.
-    /// `dt` is [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s).
+    /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force at the
+    /// CG (`f_cg`, the accelerometers' less the lever-arm terms) less the one the EGI gives,
+    /// `C_bn · (Δv / Δt − g)` with the input's CG velocity: the velocity change is the step's mean
+    /// acceleration, so it is turned into body axes with the mean of the step's two attitude
+    /// matrices (`cbn` is this frame's, `prev_cbn` the previous one's), not this frame's alone,
+    /// which a rolling aircraft has turned away from it. What of it the two sources' timing can
+    /// explain is taken off before it is folded in ([`KINEMATIC_TIMING_S`]). `dt` is
+    /// [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s).
     fn kinematics_disagree(
         &mut self,
         inp: &Input,
         prev: &Input,
+        f_cg: &Vector3<f32>,
         cbn: &Matrix3<f32>,
         dt: f32,
     ) -> bool {
@@ -794,8 +804,22 @@ impl AirDataFilter {
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / dt;
         let c_mid = (cbn + self.prev_cbn) * 0.5;
         let f_egi = c_mid * (a_ned - Vector3::new(0.0, 0.0, GRAVITY_MPS2));
-        let residual = [inp.accel_mps2[1] - f_egi.y, inp.accel_mps2[2] - f_egi.z];
-        for (mean, r) in self.kinematic.iter_mut().zip(residual) {
+        // How fast the specific force changes in body axes: by itself (the accelerometers'
+        // change over the step) and as the axes turn under the velocity change (ω × f).
+        let turning = Vector3::from(inp.gyro_rps).cross(f_cg);
+        for (i, mean) in (1..3).zip(self.kinematic.iter_mut()) {
+            let (Some(f), Some(e), Some(w), Some(a), Some(a_prev)) = (
+                f_cg.get(i),
+                f_egi.get(i),
+                turning.get(i),
+                inp.accel_mps2.get(i),
+                prev.accel_mps2.get(i),
+            ) else {
+                continue;
+            };
+            let band = KINEMATIC_TIMING_S * (libm::fabsf(*w) + libm::fabsf((a - a_prev) / dt));
+            let r = f - e;
+            let r = libm::copysignf(libm::fmaxf(libm::fabsf(r) - band, 0.0), r);
             if r.is_finite() {
                 running_mean(mean, r, dt, KINEMATIC_TAU_S);
             }
@@ -870,7 +894,13 @@ impl AirDataFilter {
     /// The measurement update; returns the NIS, or `None` when there was nothing to compare.
     /// `step_dt` is [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s), for the adaptive
     /// noise's running means.
-    fn update(&mut self, inp: &Input, prev: &Input, step_dt: f32) -> Option<f32> {
+    fn update(
+        &mut self,
+        inp: &Input,
+        prev: &Input,
+        f_cg: &Vector3<f32>,
+        step_dt: f32,
+    ) -> Option<f32> {
         let c = self.cfg;
         let dt = inp.dt_s;
         let back = if dt > 0.0 {
@@ -881,13 +911,12 @@ impl AirDataFilter {
         let u = inp.toward(prev, back);
         let (rho, a_sound) = isa(u.alt_m);
         let mass = c.mass_kg(inp.fuel_kg);
-        let f_cg = specific_force_cg(inp, prev, c.lever_arm_m);
 
         let cbn = c_bn(u.euler_rad);
         let vb = cbn * (Vector3::from(u.vel_ned_mps) - self.wind());
         // α̇ and the latch are inputs of the model here, not functions of the state.
         let unsteady = Unsteady {
-            alpha_dot_rps: alpha_rate(&vb, &cbn, u.vel_ned_mps, &f_cg, inp.gyro_rps),
+            alpha_dot_rps: alpha_rate(&vb, &cbn, u.vel_ned_mps, f_cg, inp.gyro_rps),
             stall_latched: self.stall_latched,
         };
         let f0 = model_force(
@@ -1097,17 +1126,18 @@ impl AirDataFilter {
         let prev = self.prev;
         // Without a previous input (the first step after a start, an outage or a restart) there
         // is no velocity change to fold, but the running mean's verdict stands.
-        let disagrees = match prev {
-            Some(prev) => self.kinematics_disagree(inp, &prev, &cbn, dt),
+        let prev = prev.map(|p| (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p));
+        let disagrees = match &prev {
+            Some((f_cg, prev)) => self.kinematics_disagree(inp, prev, f_cg, &cbn, dt),
             None => self.kinematics_beyond_gate(),
         };
-        let nis = match prev {
+        let nis = match &prev {
             _ if disagrees => {
                 self.gated_run = self.gated_run.saturating_add(1);
                 flags |= flags::DISAGREES;
                 None
             }
-            Some(prev) => self.update(inp, &prev, dt),
+            Some((f_cg, prev)) => self.update(inp, prev, f_cg, dt),
             None => None,
         };
         if let Some(n) = nis {

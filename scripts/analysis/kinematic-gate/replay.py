@@ -2,13 +2,12 @@
 """The air-data filter's kinematic check replayed on a dataset's channels (docs/filter.md): per
 flight, the largest 0.5-s running mean of the y and z accelerometer reading less the specific
 force the EGI's velocity change and gravity give in body axes (the mean of the step's two EGI
-attitude matrices, as the filter turns it), after the first 2 s. The EGI channels carry the IMU point's velocity, so the lever-arm terms the filter's
-CG velocity leaves in its own residual are not in this one.
+attitude matrices, as the filter turns it), each step's residual less the timing dead band as the
+filter takes it off, after the first 2 s; in brackets without the dead band. The EGI channels
+carry the IMU point's velocity and the accelerometers read the IMU's force, so there are no
+lever-arm terms here (the filter moves both to the CG).
 
-usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py [--mean-accel] DATA_DIR
-
---mean-accel compares the mean of the step's two accelerometer readings instead of the frame's
-(the filter reads the frame's).
+usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py DATA_DIR
 """
 import json
 import os
@@ -19,6 +18,7 @@ import numpy as np
 G = 9.80665
 DT = 0.05
 TAU_S = 0.5  # estimator_core::filter::KINEMATIC_TAU_S
+TIMING_S = 0.05  # estimator_core::filter::KINEMATIC_TIMING_S
 
 
 def body_from_ned(phi, theta, psi):
@@ -37,39 +37,58 @@ def body_from_ned(phi, theta, psi):
     return np.transpose(nb, (0, 2, 1))
 
 
-def largest(path, mean_accel):
+def largest(path):
+    """The flight's largest running mean of the y and z residual, with and without the dead band."""
     d = np.genfromtxt(path, delimiter=",", names=True)
     accel = np.stack([d["accel_x_mps2"], d["accel_y_mps2"], d["accel_z_mps2"]], 1)
+    gyro = np.stack([d["gyro_p_rps"], d["gyro_q_rps"], d["gyro_r_rps"]], 1)
     v = np.stack([d["egi_v_north_mps"], d["egi_v_east_mps"], d["egi_v_down_mps"]], 1)
     bn = body_from_ned(d["egi_roll_rad"], d["egi_pitch_rad"], d["egi_heading_rad"])
     a_ned = (v[1:] - v[:-1]) / DT - np.array([0.0, 0.0, G])
-    if mean_accel:
-        accel[1:] = 0.5 * (accel[1:] + accel[:-1])
     residual = accel[1:] - np.einsum("nij,nj->ni", 0.5 * (bn[1:] + bn[:-1]), a_ned)
+    band = TIMING_S * (np.abs(np.cross(gyro[1:], accel[1:])) + np.abs(accel[1:] - accel[:-1]) / DT)
+    banded = np.sign(residual) * np.maximum(np.abs(residual) - band, 0.0)
+    worst = [np.nanmax(np.abs(running_mean(r)[40:]), axis=0) for r in (banded, residual)]
+    return worst[0][1], worst[0][2], worst[1][1], worst[1][2]
+
+
+def running_mean(x, block=200):
+    """The filter's running mean (time constant TAU_S, one step DT) of each column of x; a
+    non-finite value is not folded in (the mean stands). Computed block by block in closed form,
+    y[j] = a^(j+1) (y0 + k Σ_{i≤j} a^-(i+1) x[i]) with a = 1 - k, where the values are finite."""
     k = DT / (TAU_S + DT)
-    mean = np.zeros(3)
-    worst = np.zeros(3)
-    for i, r in enumerate(residual):
-        ok = np.isfinite(r)
-        mean[ok] += k * (r[ok] - mean[ok])
-        if i >= 40:
-            worst = np.maximum(worst, np.abs(mean))
-    return worst[1], worst[2]
+    a = 1.0 - k
+    out = np.empty_like(x)
+    y0 = np.zeros(x.shape[1])
+    for start in range(0, len(x), block):
+        seg = x[start : start + block]
+        if np.isfinite(seg).all():
+            p = a ** np.arange(1, len(seg) + 1)[:, None]
+            out[start : start + len(seg)] = p * (y0 + k * np.cumsum(seg / p, axis=0))
+        else:
+            mean = y0.copy()
+            for i, r in enumerate(seg):
+                ok = np.isfinite(r)
+                mean[ok] += k * (r[ok] - mean[ok])
+                out[start + i] = mean
+        y0 = out[start + len(seg) - 1]
+    return out
 
 
 def main():
     args = sys.argv[1:]
-    mean_accel = args[:1] == ["--mean-accel"]
-    args = args[1:] if mean_accel else args
     if len(args) != 1 or not os.path.isfile(os.path.join(args[0], "manifest.json")):
-        sys.exit("usage: replay.py [--mean-accel] DATA_DIR (a hil-sim generate dataset)")
+        sys.exit("usage: replay.py DATA_DIR (a hil-sim generate dataset)")
     # The manifest's flights (a flight-test dataset also holds each flight's boom record).
     with open(os.path.join(args[0], "manifest.json")) as f:
         files = sorted(fl["file"] for fl in json.load(f)["flights"])
-    rows = [(name[:-4], *largest(os.path.join(args[0], name), mean_accel)) for name in files]
-    y = max(rows, key=lambda r: r[1])
-    z = max(rows, key=lambda r: r[2])
-    print(f"{len(rows)} flights; largest running mean y {y[1]:.2f} m/s² ({y[0]}), z {z[2]:.2f} m/s² ({z[0]})")
+    rows = [(name[:-4], *largest(os.path.join(args[0], name))) for name in files]
+    worst = [max(rows, key=lambda r: r[c]) for c in (1, 2, 3, 4)]
+    print(
+        f"{len(rows)} flights; largest running mean y {worst[0][1]:.2f} m/s² ({worst[0][0]}), "
+        f"z {worst[1][2]:.2f} m/s² ({worst[1][0]}); without the dead band y {worst[2][3]:.2f} "
+        f"({worst[2][0]}), z {worst[3][4]:.2f} ({worst[3][0]})"
+    )
 
 
 if __name__ == "__main__":
