@@ -154,7 +154,9 @@ pub const KINEMATIC_TAU_S: f32 = 0.5;
 /// held at 20 Hz), the accelerometers' reading lags by their anti-alias filter. The part of the
 /// residual that a specific force changing at this step's rate over that time can make is taken
 /// off each step's residual (a dead band as wide as that change), so that the gate can be set for
-/// a channel in error rather than for the timing of the hardest maneuvers (docs/filter.md).
+/// a steady channel error rather than for the timing of the hardest maneuvers. Equal to the frame
+/// period, the band takes the whole of a reading's change over a step: an error that changes by
+/// its own size every frame stays inside it (docs/filter.md).
 pub const KINEMATIC_TIMING_S: f32 = 0.05;
 
 /// The longest step the kinematic check folds into its running mean, s (two frames: one lost
@@ -723,8 +725,9 @@ impl AirDataFilter {
     }
 
     /// A fresh filter's state after a gap in the frames, keeping only the kinematic check's
-    /// running means (as [`AirDataFilter::restart`] does: they compare the sensors with each
-    /// other, not with the filter's state).
+    /// running means and, while they stand beyond the gate, the run of gated steps (as
+    /// [`AirDataFilter::restart`] does: they compare the sensors with each other, not with the
+    /// filter's state).
     pub fn start_again(&mut self) {
         let (kinematic, gated_run) = (self.kinematic, self.gated_run);
         *self = AirDataFilter::new(self.cfg);
@@ -819,8 +822,9 @@ impl AirDataFilter {
             };
             let band = KINEMATIC_TIMING_S * (libm::fabsf(*w) + libm::fabsf((a - a_prev) / dt));
             let r = f - e;
-            let r = libm::copysignf(libm::fmaxf(libm::fabsf(r) - band, 0.0), r);
-            if r.is_finite() {
+            // A step whose residual or band overflowed says nothing: the mean stands.
+            if r.is_finite() && band.is_finite() {
+                let r = libm::copysignf(libm::fmaxf(libm::fabsf(r) - band, 0.0), r);
                 running_mean(mean, r, dt, KINEMATIC_TAU_S);
             }
         }

@@ -330,7 +330,7 @@ fn gross_error(c: &Config) -> f32 {
 
 /// The step of a constant accelerometer error (0 its first) on which the kinematic check's running
 /// mean passes the gate. On its first step the reading jumps by the error, and the timing dead band
-/// ([`KINEMATIC_TIMING_S`]) takes that much of a change over a step off the residual.
+/// ([`KINEMATIC_TIMING_S`], one frame) takes that whole change off the residual.
 fn steps_to_pass(c: &Config, error: f32) -> u16 {
     let mut mean = 0.0;
     for k in 0..1000u16 {
@@ -363,9 +363,9 @@ fn an_accelerometer_that_disagrees_with_the_egi_is_kept_out_of_the_update() {
 fn a_lateral_accelerometer_bias_of_0_4_g_is_kept_out_of_the_update() {
     // Small enough for the side-force scale to learn it as the aircraft's own
     // (docs/results/dropout.md). The steps before its running mean passes the gate update the
-    // filter with it (the F-16's, gate 2 m/s², 8 steps: α or β up to 4° off by then), and the
-    // side-force scale keeps some of it: within 0.3° of the clean filter from 1 s after the check
-    // lets updates in again.
+    // filter with it (the F-16's, gate 2 m/s², 8 steps; it prints how far α and β moved), and
+    // the side-force scale keeps some of it: within 0.3° of the clean filter from 1 s after the
+    // check lets updates in again.
     kept_out(1, 0.4 * GRAVITY_MPS2, 0.3);
 }
 
@@ -381,8 +381,11 @@ fn kept_out(axis: usize, error: f32, settled_deg: f32) -> f32 {
     let first = f32::from(steps_to_pass(&c, error.abs()));
     let fault = |t: f32| (60.0..70.0).contains(&t);
     let mut disagreed = 0;
-    // After the error, the steps until the running mean is back under the gate.
-    let decay = KINEMATIC_TAU_S * libm::logf(error.abs() / c.kinematic_gate_mps2) + DT;
+    // After the error, the time until the running mean (each step the factor τ / (τ + Δt)) is
+    // back under the gate, and a step.
+    let decay = DT * libm::logf(error.abs() / c.kinematic_gate_mps2)
+        / libm::logf(1.0 + DT / KINEMATIC_TAU_S)
+        + DT;
     // The largest α or β difference to the clean filter, °: through the error and the second
     // after the check lets updates in again, and from then on.
     let settled = 70.0 + decay + 1.0;
@@ -415,6 +418,9 @@ fn kept_out(axis: usize, error: f32, settled_deg: f32) -> f32 {
         }
         if !(60.0..70.0 + decay).contains(&t) {
             assert!(!says, "t {t}: flagged without the error");
+        }
+        if (70.0..70.0 + decay - 2.0 * DT).contains(&t) {
+            assert!(says, "t {t}: the running mean is still beyond the gate");
         }
         let d = |x: f32, y: f32| libm::fabsf(x - y).to_degrees();
         let off = d(a.alpha_rad, b.alpha_rad).max(d(a.beta_rad, b.beta_rad));
@@ -1215,4 +1221,27 @@ fn the_kinematic_check_folds_no_step_over_a_gap() {
     let (inp, _) = turn.frame(t + DT, &c);
     f.step(&inp, true);
     assert!(f.kinematic[1].abs() < before[1].abs(), "{:?}", f.kinematic);
+}
+
+#[test]
+fn a_step_whose_kinematic_residual_overflows_leaves_the_running_mean_as_it_was() {
+    // Finite inputs can still overflow the lever-arm terms and the dead band: such a step says
+    // nothing about the accelerometers, and must not count as one that agrees.
+    let c = CONFIG;
+    let turn = steady_turn(&c);
+    let mut f = AirDataFilter::new(c);
+    // Half the gate on the lateral accelerometer, so that its running mean is not 0.
+    let error = 0.5 * c.kinematic_gate_mps2;
+    for i in 0..200u16 {
+        let (mut inp, _) = turn.frame(f32::from(i) * DT, &c);
+        inp.accel_mps2[1] += error;
+        f.step(&inp, true);
+    }
+    let before = f.kinematic;
+    assert!(before[0] > 0.4 * c.kinematic_gate_mps2, "{before:?}");
+    let (mut inp, _) = turn.frame(200.0 * DT, &c);
+    inp.accel_mps2[1] += error;
+    inp.gyro_rps = [1e20; 3];
+    f.step(&inp, true);
+    assert_eq!(f.kinematic, before);
 }

@@ -5,7 +5,9 @@ force the EGI's velocity change and gravity give in body axes (the mean of the s
 attitude matrices, as the filter turns it), each step's residual less the timing dead band as the
 filter takes it off, after the first 2 s; in brackets without the dead band. The EGI channels
 carry the IMU point's velocity and the accelerometers read the IMU's force, so there are no
-lever-arm terms here (the filter moves both to the CG).
+lever-arm terms here (the filter moves both to the CG, and its band's ω × f takes the CG's force
+where this one takes the IMU's). A step whose residual or band is not finite is not folded in, as
+in the filter; the frames are taken as 0.05 s apart (the filter folds no step over 0.1 s).
 
 usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py DATA_DIR
 """
@@ -48,6 +50,8 @@ def largest(path):
     residual = accel[1:] - np.einsum("nij,nj->ni", 0.5 * (bn[1:] + bn[:-1]), a_ned)
     band = TIMING_S * (np.abs(np.cross(gyro[1:], accel[1:])) + np.abs(accel[1:] - accel[:-1]) / DT)
     banded = np.sign(residual) * np.maximum(np.abs(residual) - band, 0.0)
+    if len(residual) <= 40:
+        return 0.0, 0.0, 0.0, 0.0
     worst = [np.nanmax(np.abs(running_mean(r)[40:]), axis=0) for r in (banded, residual)]
     return worst[0][1], worst[0][2], worst[1][1], worst[1][2]
 
