@@ -732,9 +732,9 @@ impl AirDataFilter {
         let (kinematic, gated_run) = (self.kinematic, self.gated_run);
         *self = AirDataFilter::new(self.cfg);
         self.kinematic = kinematic;
-        if self.kinematics_beyond_gate() {
-            self.gated_run = gated_run;
-        }
+        self.gated_run = gated_run;
+        // The restart's rule for the run, with the running means back.
+        self.restart();
     }
 
     /// Back to the initial state and covariance (wind unknown, lift scale 1).
@@ -780,8 +780,8 @@ impl AirDataFilter {
         self.r_adapt_age_s = 0.0;
     }
 
-    /// Folds this step's kinematic residual into its running mean and says whether the mean is
-    /// beyond [`Config::kinematic_gate_mps2`]. The residual is the y and z specific force at the
+    /// Folds this step's kinematic residual into its running mean (nothing with the check off;
+    /// [`AirDataFilter::kinematics_beyond_gate`] gives the verdict). The residual is the y and z specific force at the
     /// CG (`f_cg`, the accelerometers' less the lever-arm terms) less the one the EGI gives,
     /// `C_bn · (Δv / Δt − g)` with the input's CG velocity: the velocity change is the step's mean
     /// acceleration, so it is turned into body axes with the mean of the step's two attitude
@@ -789,20 +789,18 @@ impl AirDataFilter {
     /// which a rolling aircraft has turned away from it. What of it the two sources' timing can
     /// explain is taken off before it is folded in ([`KINEMATIC_TIMING_S`]). `dt` is
     /// [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s).
-    fn kinematics_disagree(
+    fn fold_kinematics(
         &mut self,
         inp: &Input,
         prev: &Input,
         f_cg: &Vector3<f32>,
         cbn: &Matrix3<f32>,
         dt: f32,
-    ) -> bool {
-        if self.cfg.kinematic_gate_mps2 <= 0.0 {
-            return false;
-        }
-        if dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
-            // No velocity change to compare, or one over a gap: the running mean stands as it is.
-            return self.kinematics_beyond_gate();
+    ) {
+        // With the check off there is nothing to keep; with no velocity change to compare, or one
+        // over a gap, the running mean stands as it is.
+        if self.cfg.kinematic_gate_mps2 <= 0.0 || dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
+            return;
         }
         let a_ned = (Vector3::from(inp.vel_ned_mps) - Vector3::from(prev.vel_ned_mps)) / dt;
         let c_mid = (cbn + self.prev_cbn) * 0.5;
@@ -810,25 +808,22 @@ impl AirDataFilter {
         // How fast the specific force changes in body axes: by itself (the accelerometers'
         // change over the step) and as the axes turn under the velocity change (ω × f).
         let turning = Vector3::from(inp.gyro_rps).cross(f_cg);
-        for (i, mean) in (1..3).zip(self.kinematic.iter_mut()) {
-            let (Some(f), Some(e), Some(w), Some(a), Some(a_prev)) = (
-                f_cg.get(i),
-                f_egi.get(i),
-                turning.get(i),
-                inp.accel_mps2.get(i),
-                prev.accel_mps2.get(i),
-            ) else {
-                continue;
-            };
-            let band = KINEMATIC_TIMING_S * (libm::fabsf(*w) + libm::fabsf((a - a_prev) / dt));
-            let r = f - e;
+        let change = (Vector3::from(inp.accel_mps2) - Vector3::from(prev.accel_mps2)) / dt;
+        let r = f_cg - f_egi;
+        let axes = [(r.y, turning.y, change.y), (r.z, turning.z, change.z)];
+        for (mean, (r, w, change)) in self.kinematic.iter_mut().zip(axes) {
+            let excess =
+                libm::fabsf(r) - KINEMATIC_TIMING_S * (libm::fabsf(w) + libm::fabsf(change));
             // A step whose residual or band overflowed says nothing: the mean stands.
-            if r.is_finite() && band.is_finite() {
-                let r = libm::copysignf(libm::fmaxf(libm::fabsf(r) - band, 0.0), r);
-                running_mean(mean, r, dt, KINEMATIC_TAU_S);
+            if excess.is_finite() {
+                running_mean(
+                    mean,
+                    libm::copysignf(libm::fmaxf(excess, 0.0), r),
+                    dt,
+                    KINEMATIC_TAU_S,
+                );
             }
         }
-        self.kinematics_beyond_gate()
     }
 
     /// Whether the kinematic check's running mean, as it stands, is beyond its gate (never with
@@ -1127,22 +1122,22 @@ impl AirDataFilter {
         }
         // The attitude of this frame: the kinematic check's and the outputs'.
         let cbn = c_bn(inp.euler_rad);
-        let prev = self.prev;
+        let prev = self
+            .prev
+            .map(|p| (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p));
         // Without a previous input (the first step after a start, an outage or a restart) there
         // is no velocity change to fold, but the running mean's verdict stands.
-        let prev = prev.map(|p| (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p));
-        let disagrees = match &prev {
-            Some((f_cg, prev)) => self.kinematics_disagree(inp, prev, f_cg, &cbn, dt),
-            None => self.kinematics_beyond_gate(),
-        };
-        let nis = match &prev {
-            _ if disagrees => {
-                self.gated_run = self.gated_run.saturating_add(1);
-                flags |= flags::DISAGREES;
-                None
-            }
-            Some((f_cg, prev)) => self.update(inp, prev, f_cg, dt),
-            None => None,
+        if let Some((f_cg, prev)) = &prev {
+            self.fold_kinematics(inp, prev, f_cg, &cbn, dt);
+        }
+        let nis = if self.kinematics_beyond_gate() {
+            self.gated_run = self.gated_run.saturating_add(1);
+            flags |= flags::DISAGREES;
+            None
+        } else if let Some((f_cg, prev)) = &prev {
+            self.update(inp, prev, f_cg, dt)
+        } else {
+            None
         };
         if let Some(n) = nis {
             // `update` returns finite values only; a gated one counts as the gate, so one wild

@@ -47,11 +47,11 @@ def largest(path):
     v = np.stack([d["egi_v_north_mps"], d["egi_v_east_mps"], d["egi_v_down_mps"]], 1)
     bn = body_from_ned(d["egi_roll_rad"], d["egi_pitch_rad"], d["egi_heading_rad"])
     a_ned = (v[1:] - v[:-1]) / DT - np.array([0.0, 0.0, G])
+    if len(a_ned) <= 40:
+        return 0.0, 0.0, 0.0, 0.0
     residual = accel[1:] - np.einsum("nij,nj->ni", 0.5 * (bn[1:] + bn[:-1]), a_ned)
     band = TIMING_S * (np.abs(np.cross(gyro[1:], accel[1:])) + np.abs(accel[1:] - accel[:-1]) / DT)
     banded = np.sign(residual) * np.maximum(np.abs(residual) - band, 0.0)
-    if len(residual) <= 40:
-        return 0.0, 0.0, 0.0, 0.0
     worst = [np.nanmax(np.abs(running_mean(r)[40:]), axis=0) for r in (banded, residual)]
     return worst[0][1], worst[0][2], worst[1][1], worst[1][2]
 
