@@ -17,6 +17,7 @@
 //! | the air-data filter's turbulence index above what the model trained on at the filter's airspeed | `TURBULENCE`, estimate computed |
 //! | the α network out of its envelope while the filter it reads is consistent ([`filter_alpha_fallback`]), where the aircraft's description allows it (`estimator.alpha_from_filter`) | α is the filter's: `OUT_OF_ENVELOPE` and `ALPHA_FROM_FILTER` |
 //! | the β network's answer and an unflagged filter's β more than 2° and 3σ apart ([`beta_disagrees_with_filter`]) | β computed (the network's), `BETA_DISAGREES` |
+//! | a gyro a model reads disagrees with the EGI's attitude change (the air-data filter's gyro check, `filter.gyro_gate_rps`: a bias or scale error) | estimate computed, `GYRO_DISAGREES` (a caution: it raises the 1σ); the filter takes the error off that gyro |
 //! | a computed angle's 1σ above [`UNCERTAIN_ALPHA_MDEG`] / [`UNCERTAIN_BETA_MDEG`], or above it within that angle's last [`UNCERTAIN_HOLD_FRAMES`] computed frames | estimate computed, `UNCERTAIN` |
 //! | a lag a model's delta features use lacks its exact lagged frame for some channel (first second, lost frames, time jump, a channel invalid back then) | delta rate-scaled from the nearest stored frame or 0 (see [`crate::features`]), estimate computed, `HISTORY_SHORT` |
 //!
@@ -96,6 +97,10 @@ impl Flags {
     /// a flight-control computer would act on (2° α, 1° β) is then a 4σ event or likelier. The
     /// estimate is computed; its 1σ says how far to trust it.
     pub const UNCERTAIN: u16 = 1 << 14;
+    /// A gyro a computed angle reads disagrees with the EGI's attitude change: its 1-s running
+    /// mean is off by more than the aircraft's `filter.gyro_gate_rps` (a bias, a scale error).
+    /// The networks read the gyro as it is; the air-data filter takes the running mean off it.
+    pub const GYRO_DISAGREES: u16 = 1 << 15;
 
     /// The flags that say an angle was computed from less than training saw and raise the 1σ's
     /// `Caution` term ([`crate::uncertainty::Term::Caution`]). `FILTER_DIVERGED`, also a caution,
@@ -103,11 +108,12 @@ impl Flags {
     pub const CAUTIONS: u16 = Self::HISTORY_SHORT
         | Self::GPS_SUBSTITUTED
         | Self::ALPHA_FROM_FILTER
-        | Self::BETA_DISAGREES;
+        | Self::BETA_DISAGREES
+        | Self::GYRO_DISAGREES;
 
     /// Every flag bit with its name, in bit order: the names of the estimates CSV's flag columns
     /// and of the summaries' flag counts.
-    pub const NAMED: [(u16, &'static str); 15] = [
+    pub const NAMED: [(u16, &'static str); 16] = [
         (Self::INVALID_INPUT, "invalid_input"),
         (Self::OUT_OF_ENVELOPE, "out_of_envelope"),
         (Self::STUCK_SENSOR, "stuck_sensor"),
@@ -123,6 +129,7 @@ impl Flags {
         (Self::ALPHA_FROM_FILTER, "alpha_from_filter"),
         (Self::BETA_DISAGREES, "beta_disagrees"),
         (Self::UNCERTAIN, "uncertain"),
+        (Self::GYRO_DISAGREES, "gyro_disagrees"),
     ];
 
     pub fn has(self, bit: u16) -> bool {
@@ -649,6 +656,9 @@ impl<'m> Estimator<'m> {
             if m.sources & values.substituted != 0 {
                 flags |= Flags::GPS_SUBSTITUTED;
             }
+            if m.sources & values.gyro_disagrees != 0 {
+                flags |= Flags::GYRO_DISAGREES;
+            }
             *last = Some((mid, out));
             (mid, out)
         };
@@ -907,6 +917,44 @@ mod tests {
             flagged += usize::from(filter_ok);
         }
         assert!(flagged > 600, "only {flagged} frames flagged");
+    }
+
+    #[test]
+    fn an_angle_whose_network_reads_a_gyro_in_error_is_flagged() {
+        // The consistent turn, its yaw gyro 0.2 rad/s off from frame 600 (30 s) to 800: β's
+        // network reads it (α's reads the filter, which reads the gyros too). The air-data
+        // filter's gyro check passes its gate a few frames into the error and keeps the flag up
+        // about a second after it.
+        let error = 0.2f32.max(2.0 * filter::CONFIG.gyro_gate_rps);
+        let frames: Vec<SensorFrame> = crate::filter::tests::consistent_frames(1200)
+            .map(|mut f| {
+                if (600..800).contains(&f.seq) {
+                    let lsb = Channel::GyroR.lsb() as f32;
+                    if let Some(r) = f.raw.get_mut(Channel::GyroR.index()) {
+                        *r += libm::roundf(error / lsb) as i32;
+                    }
+                }
+                f
+            })
+            .collect();
+        let alpha = filter_net(i32::MAX);
+        let beta = tiny_net(Feature::Sensor(Channel::GyroR), i32::MAX, (1, 0), (1, 0));
+        let mut e = Estimator::new(&alpha, &beta);
+        let mut flagged = 0;
+        for (k, f) in frames.iter().enumerate() {
+            let out = e.step(f);
+            let says = out.flags.has(Flags::GYRO_DISAGREES);
+            if !(600..830).contains(&k) {
+                assert!(!says, "frame {k}: no error");
+            }
+            if (620..800).contains(&k) {
+                assert!(says, "frame {k}: the yaw gyro is in error");
+                // A caution: the 1σ takes it.
+                assert!(out.flags.has(Flags::CAUTIONS & Flags::GYRO_DISAGREES));
+            }
+            flagged += usize::from(says);
+        }
+        assert!(flagged > 180, "flagged on {flagged} frames");
     }
 
     /// Where the aircraft's description allows it (`estimator.alpha_from_filter`); where it does

@@ -443,6 +443,9 @@ pub struct FeatureValues {
     pub health: crate::health::Status,
     /// The air-data filter's [`crate::filter::flags`] this step (0 without a filter).
     pub filter_flags: u8,
+    /// The gyro channels the air-data filter's gyro check finds in disagreement with the EGI
+    /// ([`crate::filter::Output::gyro_disagrees`]; 0 without a filter).
+    pub gyro_disagrees: u32,
     /// Channels [`FeatureState::next`] filled in from other sensors because the GPS had none
     /// ([`GPS_COAST_MAX_MS`]): GPS speed from the EGI velocity, GPS altitude coasted on it.
     pub substituted: u32,
@@ -615,6 +618,7 @@ impl FeatureState {
             let out = filter.step_frame(frame, dt_ms as f32 / 1000.0);
             values.set_filter(&out);
             values.filter_flags = out.flags;
+            values.gyro_disagrees = out.gyro_disagrees;
             if self
                 .frames
                 .is_multiple_of(u32::from(crate::health::STUCK_FRAMES))
@@ -889,6 +893,7 @@ impl FeatureValues {
             short_lags,
             health: crate::health::Status::default(),
             filter_flags: 0,
+            gyro_disagrees: 0,
             substituted: 0,
             usable: (frame.valid & crate::channels::ALL_VALID) | subsamples_usable(frame),
         }

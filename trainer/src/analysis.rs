@@ -212,6 +212,7 @@ mod tests {
                 short_lags: 0,
                 health: Default::default(),
                 filter_flags: 0,
+                gyro_disagrees: 0,
                 substituted: 0,
                 usable: 0,
             }

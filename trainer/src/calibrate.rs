@@ -2609,6 +2609,7 @@ mod tests {
             tef_deg: 0.0,
             speedbrake_deg: 0.0,
             fuel_kg: 2000.0,
+            gyro_halves_rps: None,
         };
         let (alpha, beta, tas) = (0.08, 0.03, 160.0);
         let (rho, a) = filter::isa(inp.alt_m);

@@ -799,7 +799,7 @@ fn cmd_eval(
         }
         for c in &e.flagged {
             println!(
-                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's, {} with the filter diverging or its measurement rejected, {} uncertain (1σ above its limit), {} with any flag, {} silent (no flag, error > 2° α or > 1° β)",
+                "  {}: {} frames not usable (held/no estimate), {} out of envelope, {} in turbulence beyond training, {} with α from the filter, {} with β disagreeing with the filter's, {} with the filter diverging or its measurement rejected, {} uncertain (1σ above its limit), {} with a gyro disagreeing with the EGI, {} with any flag, {} silent (no flag, error > 2° α or > 1° β)",
                 c.flight,
                 c.not_usable,
                 c.out_of_envelope,
@@ -808,6 +808,7 @@ fn cmd_eval(
                 c.beta_disagrees,
                 c.filter_diverged,
                 c.uncertain,
+                c.gyro_disagrees,
                 c.any_flag,
                 c.silent
             );

@@ -266,6 +266,7 @@ pub fn eval_shipped(ds: &Dataset, role: Role, suite: Suite, uncertain_hold: u8) 
             beta_disagrees: count(estimator_core::Flags::BETA_DISAGREES),
             filter_diverged: count(estimator_core::Flags::FILTER_DIVERGED),
             uncertain: count(estimator_core::Flags::UNCERTAIN),
+            gyro_disagrees: count(estimator_core::Flags::GYRO_DISAGREES),
             any_flag: ans.flags.iter().filter(|f| f.0 != 0).count(),
             silent,
         };
@@ -300,6 +301,8 @@ pub struct FlagCounts {
     pub filter_diverged: usize,
     /// A 1σ above its limit (`Flags::UNCERTAIN`).
     pub uncertain: usize,
+    /// A gyro the networks read disagrees with the EGI (`Flags::GYRO_DISAGREES`).
+    pub gyro_disagrees: usize,
     /// Any flag at all: the frames a user cannot take at face value.
     pub any_flag: usize,
     /// Silent frames: every flag clear and |α error| > 2° or |β error| > 1° (`crate::ood`).

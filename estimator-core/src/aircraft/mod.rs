@@ -113,6 +113,10 @@ pub struct FilterSettings {
     /// filter's update (`filter::Config::kinematic_gate_mps2`; at least twice the largest the
     /// airframe's generated flights reach, docs/filter.md).
     pub kinematic_gate_mps2: f32,
+    /// The gyro check's gate, rad/s: above it the running mean of a gyro's rate less the one the
+    /// EGI's attitude change gives says that gyro disagrees (`filter::Config::gyro_gate_rps`; at
+    /// least twice the largest the airframe's generated flights reach, docs/filter.md).
+    pub gyro_gate_rps: f32,
 }
 
 /// The estimator's choices that belong to the airframe, made on its own validation flights.

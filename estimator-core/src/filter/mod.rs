@@ -144,7 +144,20 @@ pub struct Config {
     /// beyond that is an accelerometer channel in error, which the update would otherwise take in
     /// as wind. 0 turns the check off.
     pub kinematic_gate_mps2: f32,
+    /// Largest running mean (over [`GYRO_TAU_S`]) of a gyro's rate less the body rate the EGI's
+    /// attitude change over the step gives, rad/s, above which that gyro disagrees
+    /// ([`Output::gyro_disagrees`]): the filter then takes the running mean off that gyro for its
+    /// model, and the estimator flags an angle whose networks read it. In flight the two differ by
+    /// the EGI's output timing and the sensors' errors (docs/filter.md); well beyond that is a
+    /// gyro in error. 0 turns the check off.
+    pub gyro_gate_rps: f32,
 }
+
+/// Time constant of the gyro check's running mean ([`Config::gyro_gate_rps`]), s: the EGI's
+/// attitude comes at 50 Hz (heading 25 Hz) with a phase of its own against the frames, so a
+/// step's attitude change spans a little more or less than the step; over a second that
+/// averages out to a few hundredths of a rad/s in the hardest maneuvers.
+pub const GYRO_TAU_S: f32 = 1.0;
 
 /// Time constant of the kinematic check's running mean ([`Config::kinematic_gate_mps2`]), s.
 pub const KINEMATIC_TAU_S: f32 = 0.5;
@@ -246,6 +259,7 @@ pub const CONFIG: Config = Config {
     r_adapt_range: [[1.0, 1.0], [1.0, 1.0]],
     subsamples: SubsampleUse::Off,
     kinematic_gate_mps2: AIRCRAFT.filter.kinematic_gate_mps2,
+    gyro_gate_rps: AIRCRAFT.filter.gyro_gate_rps,
 };
 
 /// One frame of what the filter reads, in SI units and radians.
@@ -272,6 +286,10 @@ pub struct Input {
     pub speedbrake_deg: f32,
     /// Fuel quantity, kg.
     pub fuel_kg: f32,
+    /// The gyros' mean p, q, r over the older and the newer half of the frame period, rad/s, from
+    /// the frame's 120 Hz sub-samples when it carries all of them (the gyro check's); `None`: the
+    /// 20 Hz gyro stands for both halves.
+    pub gyro_halves_rps: Option<[[f32; 3]; 2]>,
 }
 
 /// The channels [`Input::from_frame`] reads, as a bit mask: the `egi` suite less GPS speed (the
@@ -283,6 +301,11 @@ pub const NEEDED_MASK: u32 = Suite::Egi.channels()
 /// The sub-sampled channels among [`NEEDED_MASK`], as a mask of [`Subsamples::valid`] bits: the
 /// IMU and every surface but the LEF actuator. All of them valid, or the 20 Hz channels.
 const SUBSAMPLES_NEEDED: u16 = Subsamples::mask_of(NEEDED_MASK);
+
+/// The gyros' sub-samples, as a mask of [`Subsamples::valid`] bits: the gyro check reads them
+/// whenever a frame carries all three, whatever [`Config::subsamples`] says.
+const GYRO_SUBSAMPLES: u16 =
+    Subsamples::mask_of(Channel::GyroP.bit() | Channel::GyroQ.bit() | Channel::GyroR.bit());
 
 impl Input {
     /// The filter's input from a sensor frame: integer channels to SI (f32), and the EGI velocity,
@@ -323,6 +346,19 @@ impl Input {
         };
         let euler = [si(Channel::Roll), si(Channel::Pitch), si(Channel::Heading)];
         let gyro = [si(Channel::GyroP), si(Channel::GyroQ), si(Channel::GyroR)];
+        let gyro_halves_rps = (f.sub.valid & GYRO_SUBSAMPLES == GYRO_SUBSAMPLES).then(|| {
+            // Three sub-samples a half, oldest first (exact sums in i64, as above).
+            const HALF: usize = SUBSAMPLES / 2;
+            let half = |c: Channel, skip: usize| {
+                let i = Subsamples::position(c).unwrap_or(0);
+                let sum: i64 = (f.sub.raw.iter().skip(skip).take(HALF))
+                    .map(|s| i64::from(s.get(i).copied().unwrap_or(0)))
+                    .sum();
+                sum as f32 / HALF as f32 * c.lsb() as f32
+            };
+            [0, HALF]
+                .map(|skip| [Channel::GyroP, Channel::GyroQ, Channel::GyroR].map(|c| half(c, skip)))
+        });
         let w = Vector3::from(gyro);
         let lever = w.cross(&Vector3::from(lever_arm_m));
         let v_imu = Vector3::new(
@@ -349,7 +385,15 @@ impl Input {
             tef_deg: si(Channel::Tef),
             speedbrake_deg: si(Channel::Speedbrake),
             fuel_kg: si(Channel::Fuel),
+            gyro_halves_rps,
         })
+    }
+
+    /// The gyros over the older and the newer half of the frame period ([`Input::gyro_halves_rps`]).
+    fn gyro_halves(&self) -> [Vector3<f32>; 2] {
+        self.gyro_halves_rps
+            .unwrap_or([self.gyro_rps; 2])
+            .map(Vector3::from)
     }
 
     fn is_finite(&self) -> bool {
@@ -370,6 +414,7 @@ impl Input {
             .chain(&self.vel_ned_mps)
             .chain(&self.gyro_rps)
             .chain(&self.accel_mps2)
+            .chain(self.gyro_halves_rps.iter().flatten().flatten())
             .all(|v| v.is_finite())
     }
 
@@ -424,6 +469,10 @@ pub struct Output {
     pub turbulence_rad: f32,
     /// [`flags`].
     pub flags: u8,
+    /// The gyros that disagree with the EGI ([`Config::gyro_gate_rps`]) as they stand after this
+    /// step, as channel bits ([`Channel::bit`] of `GyroP`, `GyroQ`, `GyroR`): the check's running
+    /// mean outlasts an outage, a restart and a start again, as the kinematic check's does.
+    pub gyro_disagrees: u32,
 }
 
 /// The filter.
@@ -458,6 +507,8 @@ pub struct AirDataFilter {
     stall_latched: bool,
     /// Running mean of the y and z kinematic residual, m/s² ([`Config::kinematic_gate_mps2`]).
     kinematic: [f32; 2],
+    /// Running mean of each gyro's rate less the EGI's, rad/s ([`Config::gyro_gate_rps`]).
+    gyro: [f32; 3],
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -719,19 +770,21 @@ impl AirDataFilter {
             r_adapt_age_s: 0.0,
             stall_latched: false,
             kinematic: [0.0; 2],
+            gyro: [0.0; 3],
         };
         f.restart();
         f
     }
 
-    /// A fresh filter's state after a gap in the frames, keeping only the kinematic check's
-    /// running means and, while they stand beyond the gate, the run of gated steps (as
-    /// [`AirDataFilter::restart`] does: they compare the sensors with each other, not with the
-    /// filter's state).
+    /// A fresh filter's state after a gap in the frames, keeping only the running means of the
+    /// kinematic and the gyro check and, while the kinematic means stand beyond the gate, the run
+    /// of gated steps (as [`AirDataFilter::restart`] does: they compare the sensors with each
+    /// other, not with the filter's state).
     pub fn start_again(&mut self) {
-        let (kinematic, gated_run) = (self.kinematic, self.gated_run);
+        let (kinematic, gyro, gated_run) = (self.kinematic, self.gyro, self.gated_run);
         *self = AirDataFilter::new(self.cfg);
         self.kinematic = kinematic;
+        self.gyro = gyro;
         self.gated_run = gated_run;
         // The restart's rule for the run, with the running means back.
         self.restart();
@@ -831,6 +884,59 @@ impl AirDataFilter {
     fn kinematics_beyond_gate(&self) -> bool {
         let gate = self.cfg.kinematic_gate_mps2;
         gate > 0.0 && self.kinematic.iter().any(|m| libm::fabsf(*m) > gate)
+    }
+
+    /// Folds this step's gyro residual into its running means (nothing with the check off;
+    /// [`AirDataFilter::gyros_beyond_gate`] gives the verdict): each gyro's mean over the step,
+    /// the newer half of the previous frame period and the older half of this one, less the body
+    /// rate that turns the previous frame's EGI attitude (`prev_cbn`) into this one's (`cbn`).
+    /// The EGI's attitude is 0.02–0.04 s old at a frame, so the half-period shift lines the two up
+    /// where the frames carry the gyros' sub-samples; without them the mean of the two frames'
+    /// 20 Hz gyros, whose anti-alias filter delays them about as much. `dt` is
+    /// [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s); over a gap longer than
+    /// [`KINEMATIC_MAX_DT_S`] the means stand, as the kinematic check's do.
+    fn fold_gyros(&mut self, inp: &Input, prev: &Input, cbn: &Matrix3<f32>, dt: f32) {
+        if self.cfg.gyro_gate_rps <= 0.0 || dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
+            return;
+        }
+        // C_k · C_{k-1}ᵀ ≈ I − [ω×]·Δt: its skew part is sin θ along the turn's axis; to the
+        // angle θ to second order (the F-16's fastest roll turns 0.26 rad in a step: 1 % more).
+        let m = cbn * self.prev_cbn.transpose();
+        let s = Vector3::new(m.m23 - m.m32, m.m31 - m.m13, m.m12 - m.m21) * 0.5;
+        let egi = s * ((1.0 + s.norm_squared() / 6.0) / dt);
+        let ([_, newer], [older, _]) = (prev.gyro_halves(), inp.gyro_halves());
+        let r = (newer + older) * 0.5 - egi;
+        for (mean, r) in self.gyro.iter_mut().zip(r.iter()) {
+            // A step whose residual overflowed says nothing: the mean stands.
+            if r.is_finite() {
+                running_mean(mean, *r, dt, GYRO_TAU_S);
+            }
+        }
+    }
+
+    /// The gyros whose running mean, as it stands, is beyond the gate, as channel bits (none with
+    /// the check off).
+    fn gyros_beyond_gate(&self) -> u32 {
+        let gate = self.cfg.gyro_gate_rps;
+        let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
+        self.gyro
+            .iter()
+            .zip(channels)
+            .filter(|(m, _)| gate > 0.0 && libm::fabsf(**m) > gate)
+            .fold(0, |bits, (_, c)| bits | c.bit())
+    }
+
+    /// `inp` with the gyro check's running mean taken off each gyro that disagrees: what the model
+    /// and the lever-arm terms read.
+    fn without_gyro_error(&self, inp: &Input, disagrees: u32) -> Input {
+        let mut out = *inp;
+        let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
+        for ((rate, mean), c) in out.gyro_rps.iter_mut().zip(self.gyro).zip(channels) {
+            if disagrees & c.bit() != 0 {
+                *rate -= mean;
+            }
+        }
+        out
     }
 
     /// Folds this step's wind change into the turbulence index; returns the index, rad.
@@ -1117,14 +1223,23 @@ impl AirDataFilter {
             let mut out = self.last;
             out.flags = flags | flags::NO_INPUT | flags::LOW_CONFIDENCE;
             out.nis = 0.0;
+            out.gyro_disagrees = self.gyros_beyond_gate();
             self.last = out;
             return out;
         }
-        // The attitude of this frame: the kinematic check's and the outputs'.
+        // The attitude of this frame: the checks' and the outputs'.
         let cbn = c_bn(inp.euler_rad);
-        let prev = self
-            .prev
-            .map(|p| (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p));
+        let raw = *inp;
+        if let Some(prev) = self.prev {
+            self.fold_gyros(&raw, &prev, &cbn, dt);
+        }
+        // From here on the gyros are those the model reads: a gyro that disagrees less its error.
+        let gyro_disagrees = self.gyros_beyond_gate();
+        let inp = &self.without_gyro_error(&raw, gyro_disagrees);
+        let prev = self.prev.map(|p| {
+            let p = self.without_gyro_error(&p, gyro_disagrees);
+            (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p)
+        });
         // Without a previous input (the first step after a start, an outage or a restart) there
         // is no velocity change to fold, but the running mean's verdict stands.
         if let Some((f_cg, prev)) = &prev {
@@ -1148,11 +1263,12 @@ impl AirDataFilter {
             flags |= flags::PREDICTED;
         }
         let nis = nis.unwrap_or(0.0);
-        self.prev = Some(*inp);
+        // The gyro check compares the gyros as they read.
+        self.prev = Some(raw);
         self.prev_cbn = cbn;
         if !self.healthy() {
             self.restart();
-            self.prev = Some(*inp);
+            self.prev = Some(raw);
             flags |= flags::RESTARTED;
         }
         if self.gated_run >= self.cfg.gate_run {
@@ -1172,6 +1288,7 @@ impl AirDataFilter {
                     self.turbulence(Vector3::from(out.wind_ned_mps), out.airspeed_mps, dt);
                 self.stall_latched = MODEL.stall_latch(self.stall_latched, out.alpha_rad);
                 out.flags = flags;
+                out.gyro_disagrees = gyro_disagrees;
                 self.last = out;
                 out
             }
@@ -1179,6 +1296,7 @@ impl AirDataFilter {
                 self.restart();
                 let mut out = self.last;
                 out.flags = flags | flags::RESTARTED | flags::LOW_CONFIDENCE;
+                out.gyro_disagrees = gyro_disagrees;
                 self.last = out;
                 out
             }
@@ -1221,6 +1339,7 @@ impl AirDataFilter {
             nis_mean: self.nis_mean,
             turbulence_rad: 0.0,
             flags: 0,
+            gyro_disagrees: 0,
         };
         let finite = [
             out.alpha_rad,

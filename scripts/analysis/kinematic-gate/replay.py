@@ -9,6 +9,11 @@ lever-arm terms here (the filter moves both to the CG, and its band's ω × f ta
 where this one takes the IMU's). A step whose residual or band is not finite is not folded in, as
 in the filter; the frames are taken as 0.05 s apart (the filter folds no step over 0.1 s).
 
+The gyro check too: per flight, the largest 1-s running mean of each gyro (p, q, r) less the body
+rate that turns one frame's EGI attitude into the next one's, the gyro taken over the newer half
+of the previous frame period and the older half of this one (the 120 Hz sub-samples), as the
+filter takes it, after the first 2 s.
+
 usage: .venv/bin/python scripts/analysis/kinematic-gate/replay.py DATA_DIR
 """
 import json
@@ -21,6 +26,7 @@ G = 9.80665
 DT = 0.05
 TAU_S = 0.5  # estimator_core::filter::KINEMATIC_TAU_S
 TIMING_S = 0.05  # estimator_core::filter::KINEMATIC_TIMING_S
+GYRO_TAU_S = 1.0  # estimator_core::filter::GYRO_TAU_S
 
 
 def body_from_ned(phi, theta, psi):
@@ -40,7 +46,8 @@ def body_from_ned(phi, theta, psi):
 
 
 def largest(path):
-    """The flight's largest running mean of the y and z residual, with and without the dead band."""
+    """The flight's largest running mean of the y and z residual, with and without the dead band,
+    and of the p, q and r gyro residual."""
     d = np.genfromtxt(path, delimiter=",", names=True)
     accel = np.stack([d["accel_x_mps2"], d["accel_y_mps2"], d["accel_z_mps2"]], 1)
     gyro = np.stack([d["gyro_p_rps"], d["gyro_q_rps"], d["gyro_r_rps"]], 1)
@@ -48,19 +55,31 @@ def largest(path):
     bn = body_from_ned(d["egi_roll_rad"], d["egi_pitch_rad"], d["egi_heading_rad"])
     a_ned = (v[1:] - v[:-1]) / DT - np.array([0.0, 0.0, G])
     if len(a_ned) <= 40:
-        return 0.0, 0.0, 0.0, 0.0
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    gyro_means = np.nanmax(np.abs(running_mean(gyro_residual(d, bn), GYRO_TAU_S)[40:]), axis=0)
     residual = accel[1:] - np.einsum("nij,nj->ni", 0.5 * (bn[1:] + bn[:-1]), a_ned)
     band = TIMING_S * (np.abs(np.cross(gyro[1:], accel[1:])) + np.abs(accel[1:] - accel[:-1]) / DT)
     banded = np.sign(residual) * np.maximum(np.abs(residual) - band, 0.0)
     worst = [np.nanmax(np.abs(running_mean(r)[40:]), axis=0) for r in (banded, residual)]
-    return worst[0][1], worst[0][2], worst[1][1], worst[1][2]
+    return worst[0][1], worst[0][2], worst[1][1], worst[1][2], *gyro_means
 
 
-def running_mean(x, block=200):
-    """The filter's running mean (time constant TAU_S, one step DT) of each column of x; a
+def gyro_residual(d, bn):
+    """Per step, each gyro's mean over the newer half of the previous frame period and the older
+    half of this one, less the body rate from the step's EGI attitude change (the skew part of
+    C_k C_(k-1)^T, sin θ along the axis, taken to θ to second order)."""
+    sub = np.stack([np.stack([d[f"gyro_{a}_rps_sub{k}"] for a in "pqr"], 1) for k in range(6)], 1)
+    gyro = 0.5 * (sub[:-1, 3:].mean(1) + sub[1:, :3].mean(1))
+    m = np.einsum("nij,nkj->nik", bn[1:], bn[:-1])
+    s = 0.5 * np.stack([m[:, 1, 2] - m[:, 2, 1], m[:, 2, 0] - m[:, 0, 2], m[:, 0, 1] - m[:, 1, 0]], 1)
+    return gyro - s * (1.0 + (s * s).sum(1, keepdims=True) / 6.0) / DT
+
+
+def running_mean(x, tau_s=TAU_S, block=200):
+    """The filter's running mean (time constant tau_s, one step DT) of each column of x; a
     non-finite value is not folded in (the mean stands). Computed block by block in closed form,
     y[j] = a^(j+1) (y0 + k Σ_{i≤j} a^-(i+1) x[i]) with a = 1 - k, where the values are finite."""
-    k = DT / (TAU_S + DT)
+    k = DT / (tau_s + DT)
     a = 1.0 - k
     out = np.empty_like(x)
     y0 = np.zeros(x.shape[1])
@@ -87,11 +106,15 @@ def main():
     with open(os.path.join(args[0], "manifest.json")) as f:
         files = sorted(fl["file"] for fl in json.load(f)["flights"])
     rows = [(name[:-4], *largest(os.path.join(args[0], name))) for name in files]
-    worst = [max(rows, key=lambda r: r[c]) for c in (1, 2, 3, 4)]
+    worst = [max(rows, key=lambda r: r[c]) for c in (1, 2, 3, 4, 5, 6, 7)]
     print(
         f"{len(rows)} flights; largest running mean y {worst[0][1]:.2f} m/s² ({worst[0][0]}), "
         f"z {worst[1][2]:.2f} m/s² ({worst[1][0]}); without the dead band y {worst[2][3]:.2f} "
         f"({worst[2][0]}), z {worst[3][4]:.2f} ({worst[3][0]})"
+    )
+    print(
+        "gyro check, largest running mean: "
+        + ", ".join(f"{a} {w[c]:.4f} rad/s ({w[0]})" for a, c, w in zip("pqr", (5, 6, 7), worst[4:]))
     )
 
 
