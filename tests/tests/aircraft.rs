@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 24] = [
+    let cases: [(&str, &str, &str); 26] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -147,6 +147,12 @@ fn descriptions_are_validated_key_by_key() {
             "kinematic_gate_mps2 = 2.0\n",
             "kinematic_gate_mps2 = -1.0\n",
             "filter.kinematic_gate_mps2 must be at least 0 (0 turns the kinematic check off), not -1.0",
+        ),
+        ("gyro_gate_rps = 0.06\n", "", "filter: missing gyro_gate_rps"),
+        (
+            "gyro_gate_rps = 0.06\n",
+            "gyro_gate_rps = -0.1\n",
+            "filter.gyro_gate_rps must be at least 0 (0 turns the gyro check off), not -0.1",
         ),
     ];
     for (from, to, says) in cases {
