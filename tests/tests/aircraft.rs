@@ -148,7 +148,11 @@ fn descriptions_are_validated_key_by_key() {
             "kinematic_gate_mps2 = -1.0\n",
             "filter.kinematic_gate_mps2 must be at least 0 (0 turns the kinematic check off), not -1.0",
         ),
-        ("gyro_gate_rps = 0.06\n", "", "filter: missing gyro_gate_rps"),
+        (
+            "gyro_gate_rps = 0.06\n",
+            "",
+            "filter: missing gyro_gate_rps",
+        ),
         (
             "gyro_gate_rps = 0.06\n",
             "gyro_gate_rps = -0.1\n",

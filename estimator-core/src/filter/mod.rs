@@ -159,6 +159,13 @@ pub struct Config {
 /// averages out to a few hundredths of a rad/s in the hardest maneuvers.
 pub const GYRO_TAU_S: f32 = 1.0;
 
+/// The gyro check's share of this frame's 20 Hz gyro in a step's rate where a frame lacks the
+/// gyros' sub-samples (the previous frame's takes the rest): the 6 Hz anti-alias filter delays a
+/// 20 Hz reading about 0.0375 s, and the EGI's attitude change over a step is centred about
+/// 0.05 s before the frame, a quarter of the way from this reading's instant to the previous
+/// one's.
+pub const GYRO_20HZ_SHARE: f32 = 0.75;
+
 /// Time constant of the kinematic check's running mean ([`Config::kinematic_gate_mps2`]), s.
 pub const KINEMATIC_TAU_S: f32 = 0.5;
 
@@ -287,8 +294,8 @@ pub struct Input {
     /// Fuel quantity, kg.
     pub fuel_kg: f32,
     /// The gyros' mean p, q, r over the older and the newer half of the frame period, rad/s, from
-    /// the frame's 120 Hz sub-samples when it carries all of them (the gyro check's); `None`: the
-    /// 20 Hz gyro stands for both halves.
+    /// the frame's 120 Hz sub-samples when it carries all of them (the gyro check's); `None`
+    /// without them.
     pub gyro_halves_rps: Option<[[f32; 3]; 2]>,
 }
 
@@ -387,13 +394,6 @@ impl Input {
             fuel_kg: si(Channel::Fuel),
             gyro_halves_rps,
         })
-    }
-
-    /// The gyros over the older and the newer half of the frame period ([`Input::gyro_halves_rps`]).
-    fn gyro_halves(&self) -> [Vector3<f32>; 2] {
-        self.gyro_halves_rps
-            .unwrap_or([self.gyro_rps; 2])
-            .map(Vector3::from)
     }
 
     fn is_finite(&self) -> bool {
@@ -890,11 +890,11 @@ impl AirDataFilter {
     /// [`AirDataFilter::gyros_beyond_gate`] gives the verdict): each gyro's mean over the step,
     /// the newer half of the previous frame period and the older half of this one, less the body
     /// rate that turns the previous frame's EGI attitude (`prev_cbn`) into this one's (`cbn`).
-    /// The EGI's attitude is 0.02–0.04 s old at a frame, so the half-period shift lines the two up
-    /// where the frames carry the gyros' sub-samples; without them the mean of the two frames'
-    /// 20 Hz gyros, whose anti-alias filter delays them about as much. `dt` is
-    /// [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s); over a gap longer than
-    /// [`KINEMATIC_MAX_DT_S`] the means stand, as the kinematic check's do.
+    /// The EGI's attitude is 0.02 s plus up to one output period old at a frame (0.02 s, heading
+    /// 0.04 s), so the half-period shift lines the two up where both frames carry the gyros'
+    /// sub-samples; otherwise the two frames' 20 Hz gyros, weighted to the same instant
+    /// ([`GYRO_20HZ_SHARE`]). `dt` is [`AirDataFilter::step`]'s sanitised step (finite, 0–1 s);
+    /// over a gap longer than [`KINEMATIC_MAX_DT_S`] the means stand, as the kinematic check's do.
     fn fold_gyros(&mut self, inp: &Input, prev: &Input, cbn: &Matrix3<f32>, dt: f32) {
         if self.cfg.gyro_gate_rps <= 0.0 || dt <= 0.0 || dt > KINEMATIC_MAX_DT_S {
             return;
@@ -904,8 +904,16 @@ impl AirDataFilter {
         let m = cbn * self.prev_cbn.transpose();
         let s = Vector3::new(m.m23 - m.m32, m.m31 - m.m13, m.m12 - m.m21) * 0.5;
         let egi = s * ((1.0 + s.norm_squared() / 6.0) / dt);
-        let ([_, newer], [older, _]) = (prev.gyro_halves(), inp.gyro_halves());
-        let r = (newer + older) * 0.5 - egi;
+        let gyro = match (prev.gyro_halves_rps, inp.gyro_halves_rps) {
+            (Some([_, newer]), Some([older, _])) => {
+                (Vector3::from(newer) + Vector3::from(older)) * 0.5
+            }
+            _ => {
+                Vector3::from(inp.gyro_rps) * GYRO_20HZ_SHARE
+                    + Vector3::from(prev.gyro_rps) * (1.0 - GYRO_20HZ_SHARE)
+            }
+        };
+        let r = gyro - egi;
         for (mean, r) in self.gyro.iter_mut().zip(r.iter()) {
             // A step whose residual overflowed says nothing: the mean stands.
             if r.is_finite() {

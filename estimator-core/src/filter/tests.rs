@@ -1251,12 +1251,13 @@ fn a_step_whose_kinematic_residual_overflows_leaves_the_running_mean_as_it_was()
 }
 
 /// The step of a constant gyro `error` (0 its first) on which the gyro check's running mean passes
-/// the gate: the 20 Hz path's step mean takes half of the error on its first step (the previous
-/// frame's gyro was right), all of it from the second.
-fn gyro_steps_to_pass(c: &Config, error: f32) -> u16 {
+/// the gate: a step's rate takes `first_share` of the error on its first step (the previous
+/// frame's gyro was right: a half with the sub-samples, [`GYRO_20HZ_SHARE`] without), all of it
+/// from the second.
+fn gyro_steps_to_pass(c: &Config, error: f32, first_share: f32) -> u16 {
     let mut mean = 0.0;
     for k in 0..1000u16 {
-        let r = if k == 0 { 0.5 * error } else { error };
+        let r = if k == 0 { first_share * error } else { error };
         running_mean(&mut mean, r, DT, GYRO_TAU_S);
         if mean > c.gyro_gate_rps {
             return k;
@@ -1268,16 +1269,41 @@ fn gyro_steps_to_pass(c: &Config, error: f32) -> u16 {
     )
 }
 
+/// `inp` with its gyros' sub-samples, a steady rate's: both halves the 20 Hz gyro.
+fn subsampled(inp: Input) -> Input {
+    Input {
+        gyro_halves_rps: Some([inp.gyro_rps; 2]),
+        ..inp
+    }
+}
+
+/// `inp` with `error` rad/s on gyro `axis`, in its 20 Hz value and in its sub-samples.
+fn gyro_error(mut inp: Input, axis: usize, error: f32) -> Input {
+    let halves = inp.gyro_halves_rps.iter_mut().flatten();
+    for rate in core::iter::once(&mut inp.gyro_rps).chain(halves) {
+        if let Some(r) = rate.get_mut(axis) {
+            *r += error;
+        }
+    }
+    inp
+}
+
 #[test]
 fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
     // 0.2 rad/s (11.5 °/s) on one gyro from 60 s for 10 s, in the steady turn whose gyros read
-    // its body rates and whose EGI attitude turns as they say; each axis in turn.
+    // its body rates and whose EGI attitude turns as they say; each axis in turn, from the 20 Hz
+    // gyros and from their sub-samples.
     let c = CONFIG;
     let turn = steady_turn(&c);
     let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
-    let first = f32::from(gyro_steps_to_pass(&c, error));
     let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
-    for (axis, channel) in channels.into_iter().enumerate() {
+    for ((axis, channel), subs) in channels
+        .into_iter()
+        .enumerate()
+        .flat_map(|a| [(a, false), (a, true)])
+    {
+        let share = if subs { 0.5 } else { GYRO_20HZ_SHARE };
+        let first = f32::from(gyro_steps_to_pass(&c, error, share));
         let mut clean = AirDataFilter::new(c);
         let mut faulted = AirDataFilter::new(c);
         // The same gyro error with the check off: what the model would read without it.
@@ -1291,13 +1317,17 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
         let mut flagged_after = None;
         for i in 0..1800u16 {
             let t = f32::from(i) * DT;
-            let (inp, _) = turn.frame(t, &c);
-            let a = clean.step(&inp, true);
-            let mut bad = inp;
-            let fault = (60.0 - 0.5 * DT..70.0 - 0.5 * DT).contains(&t);
-            if fault {
-                bad.gyro_rps[axis] += error;
+            let (mut inp, _) = turn.frame(t, &c);
+            if subs {
+                inp = subsampled(inp);
             }
+            let a = clean.step(&inp, true);
+            let fault = (60.0 - 0.5 * DT..70.0 - 0.5 * DT).contains(&t);
+            let bad = if fault {
+                gyro_error(inp, axis, error)
+            } else {
+                inp
+            };
             let b = faulted.step(&bad, true);
             let n = blind.step(&bad, true);
             assert_eq!(a.gyro_disagrees, 0, "t {t}: the turn's own gyros");
@@ -1325,20 +1355,23 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
             }
         }
         // After the error the mean decays under the gate as the running mean's arithmetic says
-        // (each step the factor τ / (τ + Δt), the first step after it from error / 2).
+        // (each step the factor τ / (τ + Δt); the first step after it keeps part of the error).
         let decay = DT * libm::logf(error / c.gyro_gate_rps) / libm::logf(1.0 + DT / GYRO_TAU_S);
         let back = flagged_after.unwrap_or(f32::INFINITY);
         assert!(
             (back - decay).abs() < 3.0 * DT,
-            "{channel:?}: back after {back} s, not {decay}"
+            "{channel:?}, sub-samples {subs}: back after {back} s, not {decay}"
         );
         std::println!(
-            "{channel:?}: α/β off the clean filter's by at most {worst}° with the check, {worst_blind}° without"
+            "{channel:?}, sub-samples {subs}: α/β off the clean filter's by at most {worst}° with the check, {worst_blind}° without"
         );
         // What the model read of the error before the mean passed the gate, and while the mean
         // was still short of the error, the wind states keep a little of (the F-16's pitch gyro:
         // 0.05° with the check, 0.7° without).
-        assert!(worst < 0.1, "{channel:?}: {worst}° off the clean filter's");
+        assert!(
+            worst < 0.1,
+            "{channel:?}, sub-samples {subs}: {worst}° off the clean filter's"
+        );
     }
 }
 
@@ -1348,11 +1381,7 @@ fn the_gyro_check_outlasts_an_outage_and_a_start_again() {
     let turn = steady_turn(&c);
     let mut f = AirDataFilter::new(c);
     let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
-    let bad = |t: f32| {
-        let (mut inp, _) = turn.frame(t, &c);
-        inp.gyro_rps[2] += error;
-        inp
-    };
+    let bad = |t: f32| gyro_error(turn.frame(t, &c).0, 2, error);
     for i in 0..100u16 {
         f.step(&bad(f32::from(i) * DT), true);
     }
@@ -1367,4 +1396,57 @@ fn the_gyro_check_outlasts_an_outage_and_a_start_again() {
     f.start_again();
     let out = f.step(&bad(5.1), true);
     assert_eq!((f.gyro, out.gyro_disagrees), (before, Channel::GyroR.bit()));
+}
+
+#[test]
+fn the_gyro_check_folds_no_step_over_a_gap() {
+    let c = CONFIG;
+    let turn = steady_turn(&c);
+    let mut f = AirDataFilter::new(c);
+    let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
+    for i in 0..100u16 {
+        f.step(
+            &gyro_error(turn.frame(f32::from(i) * DT, &c).0, 2, error),
+            true,
+        );
+    }
+    let before = f.gyro;
+    assert!(before[2] > c.gyro_gate_rps, "{before:?}");
+    // The next frame 0.5 s on, its gyro right again: the step spans a gap, so the running means
+    // and their verdict stand; the step after it is folded.
+    let t = 99.0 * DT + 0.5;
+    let (mut inp, _) = turn.frame(t, &c);
+    inp.dt_s = 0.5;
+    let out = f.step(&inp, true);
+    assert_eq!((f.gyro, out.gyro_disagrees), (before, Channel::GyroR.bit()));
+    f.step(&turn.frame(t + DT, &c).0, true);
+    assert!(f.gyro[2] < before[2], "{:?}", f.gyro);
+}
+
+#[test]
+fn a_frame_gives_the_gyros_mean_over_each_half_of_its_period() {
+    // A frame whose roll gyro's sub-samples ramp 1, 2, … 6 LSB (oldest first) and pitch gyro's
+    // are -3 LSB throughout: halves 2 and 5 LSB, and -3 and -3.
+    let mut f = SensorFrame {
+        valid: NEEDED_MASK,
+        ..SensorFrame::default()
+    };
+    let (p, q) = (
+        Subsamples::position(Channel::GyroP).unwrap(),
+        Subsamples::position(Channel::GyroQ).unwrap(),
+    );
+    for (k, row) in f.sub.raw.iter_mut().enumerate() {
+        row[p] = i32::try_from(k).unwrap() + 1;
+        row[q] = -3;
+    }
+    let lsb = |c: Channel| c.lsb() as f32;
+    let off = Input::from_frame(&f, DT, [0.0; 3], SubsampleUse::Off).unwrap();
+    assert_eq!(off.gyro_halves_rps, None, "no sub-samples marked valid");
+    f.sub.valid = GYRO_SUBSAMPLES;
+    let inp = Input::from_frame(&f, DT, [0.0; 3], SubsampleUse::Off).unwrap();
+    let [older, newer] = inp.gyro_halves_rps.unwrap();
+    assert_eq!(older[0], 2.0 * lsb(Channel::GyroP));
+    assert_eq!(newer[0], 5.0 * lsb(Channel::GyroP));
+    assert_eq!([older[1], newer[1]], [-3.0 * lsb(Channel::GyroQ); 2]);
+    assert_eq!([older[2], newer[2]], [0.0; 2]);
 }
