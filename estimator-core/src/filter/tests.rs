@@ -1375,18 +1375,25 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
     }
 }
 
-#[test]
-fn the_gyro_check_outlasts_an_outage_and_a_start_again() {
-    let c = CONFIG;
-    let turn = steady_turn(&c);
-    let mut f = AirDataFilter::new(c);
+/// The steady turn with 0.2 rad/s (or twice the gate) on the yaw gyro at `t` s, and a filter that
+/// flew its first 5 s (100 steps): the check's running mean of r stands beyond the gate.
+fn yaw_gyro_in_error(c: &Config) -> (impl Fn(f32) -> Input, AirDataFilter) {
+    let turn = steady_turn(c);
     let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
-    let bad = |t: f32| gyro_error(turn.frame(t, &c).0, 2, error);
+    let cfg = *c;
+    let bad = move |t: f32| gyro_error(turn.frame(t, &cfg).0, 2, error);
+    let mut f = AirDataFilter::new(*c);
     for i in 0..100u16 {
         f.step(&bad(f32::from(i) * DT), true);
     }
+    assert!(f.gyro[2] > c.gyro_gate_rps, "{:?}", f.gyro);
+    (bad, f)
+}
+
+#[test]
+fn the_gyro_check_outlasts_an_outage_and_a_start_again() {
+    let (bad, mut f) = yaw_gyro_in_error(&CONFIG);
     let before = f.gyro;
-    assert!(before[2] > c.gyro_gate_rps, "{before:?}");
     // A step without inputs holds the mean and says so; so does the first step after it (no
     // previous input to compare with) and the first after a start again.
     let out = f.step(&Input::default(), false);
@@ -1402,16 +1409,8 @@ fn the_gyro_check_outlasts_an_outage_and_a_start_again() {
 fn the_gyro_check_folds_no_step_over_a_gap() {
     let c = CONFIG;
     let turn = steady_turn(&c);
-    let mut f = AirDataFilter::new(c);
-    let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
-    for i in 0..100u16 {
-        f.step(
-            &gyro_error(turn.frame(f32::from(i) * DT, &c).0, 2, error),
-            true,
-        );
-    }
+    let (_, mut f) = yaw_gyro_in_error(&c);
     let before = f.gyro;
-    assert!(before[2] > c.gyro_gate_rps, "{before:?}");
     // The next frame 0.5 s on, its gyro right again: the step spans a gap, so the running means
     // and their verdict stand; the step after it is folded.
     let t = 99.0 * DT + 0.5;
