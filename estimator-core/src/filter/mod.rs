@@ -309,6 +309,9 @@ pub const NEEDED_MASK: u32 = Suite::Egi.channels()
 /// IMU and every surface but the LEF actuator. All of them valid, or the 20 Hz channels.
 const SUBSAMPLES_NEEDED: u16 = Subsamples::mask_of(NEEDED_MASK);
 
+/// The gyros, p, q, r: the order of [`Input::gyro_rps`] and of the gyro check's running means.
+const GYROS: [Channel; 3] = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
+
 /// The gyros' sub-samples, as a mask of [`Subsamples::valid`] bits: the gyro check reads them
 /// whenever a frame carries all three, whatever [`Config::subsamples`] says.
 const GYRO_SUBSAMPLES: u16 =
@@ -352,7 +355,7 @@ impl Input {
             raw * c.lsb() as f32
         };
         let euler = [si(Channel::Roll), si(Channel::Pitch), si(Channel::Heading)];
-        let gyro = [si(Channel::GyroP), si(Channel::GyroQ), si(Channel::GyroR)];
+        let gyro = GYROS.map(si);
         let gyro_halves_rps = (f.sub.valid & GYRO_SUBSAMPLES == GYRO_SUBSAMPLES).then(|| {
             // Three sub-samples a half, oldest first (exact sums in i64, as above).
             const HALF: usize = SUBSAMPLES / 2;
@@ -363,8 +366,7 @@ impl Input {
                     .sum();
                 sum as f32 / HALF as f32 * c.lsb() as f32
             };
-            [0, HALF]
-                .map(|skip| [Channel::GyroP, Channel::GyroQ, Channel::GyroR].map(|c| half(c, skip)))
+            [0, HALF].map(|skip| GYROS.map(|c| half(c, skip)))
         });
         let w = Vector3::from(gyro);
         let lever = w.cross(&Vector3::from(lever_arm_m));
@@ -926,10 +928,9 @@ impl AirDataFilter {
     /// the check off).
     fn gyros_beyond_gate(&self) -> u32 {
         let gate = self.cfg.gyro_gate_rps;
-        let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
         self.gyro
             .iter()
-            .zip(channels)
+            .zip(GYROS)
             .filter(|(m, _)| gate > 0.0 && libm::fabsf(**m) > gate)
             .fold(0, |bits, (_, c)| bits | c.bit())
     }
@@ -938,8 +939,7 @@ impl AirDataFilter {
     /// and the lever-arm terms read.
     fn without_gyro_error(&self, inp: &Input, disagrees: u32) -> Input {
         let mut out = *inp;
-        let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
-        for ((rate, mean), c) in out.gyro_rps.iter_mut().zip(self.gyro).zip(channels) {
+        for ((rate, mean), c) in out.gyro_rps.iter_mut().zip(self.gyro).zip(GYROS) {
             if disagrees & c.bit() != 0 {
                 *rate -= mean;
             }
@@ -1237,15 +1237,26 @@ impl AirDataFilter {
         }
         // The attitude of this frame: the checks' and the outputs'.
         let cbn = c_bn(inp.euler_rad);
-        let raw = *inp;
+        let raw = inp;
         if let Some(prev) = self.prev {
-            self.fold_gyros(&raw, &prev, &cbn, dt);
+            self.fold_gyros(raw, &prev, &cbn, dt);
         }
-        // From here on the gyros are those the model reads: a gyro that disagrees less its error.
+        // From here on the gyros are those the model reads: a gyro that disagrees less its error
+        // (copies of the inputs only then).
         let gyro_disagrees = self.gyros_beyond_gate();
-        let inp = &self.without_gyro_error(&raw, gyro_disagrees);
+        let fixed;
+        let inp = if gyro_disagrees == 0 {
+            raw
+        } else {
+            fixed = self.without_gyro_error(raw, gyro_disagrees);
+            &fixed
+        };
         let prev = self.prev.map(|p| {
-            let p = self.without_gyro_error(&p, gyro_disagrees);
+            let p = if gyro_disagrees == 0 {
+                p
+            } else {
+                self.without_gyro_error(&p, gyro_disagrees)
+            };
             (specific_force_cg(inp, &p, self.cfg.lever_arm_m), p)
         });
         // Without a previous input (the first step after a start, an outage or a restart) there
@@ -1272,11 +1283,11 @@ impl AirDataFilter {
         }
         let nis = nis.unwrap_or(0.0);
         // The gyro check compares the gyros as they read.
-        self.prev = Some(raw);
+        self.prev = Some(*raw);
         self.prev_cbn = cbn;
         if !self.healthy() {
             self.restart();
-            self.prev = Some(raw);
+            self.prev = Some(*raw);
             flags |= flags::RESTARTED;
         }
         if self.gated_run >= self.cfg.gate_run {

@@ -1296,8 +1296,7 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
     let c = CONFIG;
     let turn = steady_turn(&c);
     let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
-    let channels = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
-    for ((axis, channel), subs) in channels
+    for ((axis, channel), subs) in GYROS
         .into_iter()
         .enumerate()
         .flat_map(|a| [(a, false), (a, true)])
