@@ -473,8 +473,9 @@ enum Cmd {
         /// estimator-core/src/model/NAME/sigma.rs].
         #[arg(long, value_name = "FILE")]
         out: Option<PathBuf>,
-        /// Also write every row (dataset, angle, the terms, the 1σ of the weights compiled in, the
-        /// error; millidegrees) as CSV, to study which terms follow the error.
+        /// Also write every row (dataset, flight, the frame's row in the flight's CSV, angle, the
+        /// terms, the 1σ of the weights compiled in, the error; millidegrees) as CSV, to study
+        /// which terms follow the error (scripts/analysis/sigma-spread).
         #[arg(long, value_name = "CSV")]
         rows: Option<PathBuf>,
         /// Print exactly one JSON object.
@@ -893,16 +894,21 @@ fn cmd_fit_sigma(
     hil_sim::progress::log_when_not_a_terminal(&bar, "flights");
     let mut rows: [Rows; 2] = Default::default();
     let mut per_dataset: Vec<[Rows; 2]> = Vec::new();
+    let mut flight_names: Vec<Vec<String>> = Vec::new();
     for ds in &datasets {
         let mut mine: [Rows; 2] = Default::default();
+        let mut names = Vec::new();
         for fl in Role::ALL.into_iter().flat_map(|r| ds.flights(r)) {
             let ans = trainer::pipeline::shipped_answers(fl, suite);
+            let index = u32::try_from(names.len()).unwrap_or(u32::MAX);
+            names.push(fl.name.clone());
             let [a, b] = trainer::pipeline::sigma_rows(
                 &ans,
                 [
                     fl.truth(trainer::data::Target::AlphaDeg),
                     fl.truth(trainer::data::Target::BetaDeg),
                 ],
+                index,
             );
             mine[0].extend(a);
             mine[1].extend(b);
@@ -911,12 +917,13 @@ fn cmd_fit_sigma(
         rows[0].extend(mine[0].clone());
         rows[1].extend(mine[1].clone());
         per_dataset.push(mine);
+        flight_names.push(names);
     }
     bar.finish_and_clear();
     let (alpha, beta) = (fit(&rows[0].every(every))?, fit(&rows[1].every(every))?);
     let names: Vec<String> = data.iter().map(|d| d.display().to_string()).collect();
     if let Some(path) = rows_csv {
-        trainer::uncertainty::write_rows(path, &names, &per_dataset)
+        trainer::uncertainty::write_rows(path, &names, &flight_names, &per_dataset)
             .with_context(|| format!("writing {}", path.display()))?;
     }
     // Each dataset's coverage under the fitted weights: the fit pools them, a user flies one.

@@ -346,13 +346,19 @@ fn answers_of(mut est: Estimator, fl: &Flight, suite: Suite) -> FlightAnswers {
 }
 
 /// The 1σ rows of one flight's answers ([`crate::uncertainty::Rows`], α then β): every frame
-/// whose angle was computed and has a truth, with its error against `truth` (degrees).
-pub fn sigma_rows(ans: &FlightAnswers, truth: [&[f64]; 2]) -> [crate::uncertainty::Rows; 2] {
+/// whose angle was computed and has a truth, with its error against `truth` (degrees); `flight`
+/// is the flight's index in its dataset.
+pub fn sigma_rows(
+    ans: &FlightAnswers,
+    truth: [&[f64]; 2],
+    flight: u32,
+) -> [crate::uncertainty::Rows; 2] {
     [0, 1].map(|k| {
         let mut rows = crate::uncertainty::Rows::default();
         for (i, sigma, err) in sigma_errors(ans, k, truth[k]) {
             if let Some(terms) = ans.sigma_terms.get(i) {
-                rows.push(terms[k], sigma, err);
+                let frame = u32::try_from(i).unwrap_or(u32::MAX);
+                rows.push(terms[k], sigma, err, (flight, frame));
             }
         }
         rows

@@ -14,25 +14,29 @@ use estimator_core::uncertainty::{self, Coefficients, TERMS, Term};
 use serde::Serialize;
 
 /// The rows of one angle: its terms, the 1σ the estimator reported (millidegrees) and its error
-/// (millidegrees) on each frame where it was computed.
+/// (millidegrees) on each frame where it was computed, and where that frame is (the flight's
+/// index in its dataset, the frame's in its flight).
 #[derive(Default, Clone)]
 pub struct Rows {
     pub terms: Vec<[u32; TERMS]>,
     pub sigma_mdeg: Vec<u16>,
     pub err_mdeg: Vec<f64>,
+    pub at: Vec<(u32, u32)>,
 }
 
 impl Rows {
-    pub fn push(&mut self, terms: [u32; TERMS], sigma_mdeg: u16, err_mdeg: f64) {
+    pub fn push(&mut self, terms: [u32; TERMS], sigma_mdeg: u16, err_mdeg: f64, at: (u32, u32)) {
         self.terms.push(terms);
         self.sigma_mdeg.push(sigma_mdeg);
         self.err_mdeg.push(err_mdeg);
+        self.at.push(at);
     }
 
     pub fn extend(&mut self, other: Rows) {
         self.terms.extend(other.terms);
         self.sigma_mdeg.extend(other.sigma_mdeg);
         self.err_mdeg.extend(other.err_mdeg);
+        self.at.extend(other.at);
     }
 
     pub fn len(&self) -> usize {
@@ -50,6 +54,7 @@ impl Rows {
             terms: self.terms.iter().step_by(n).copied().collect(),
             sigma_mdeg: self.sigma_mdeg.iter().step_by(n).copied().collect(),
             err_mdeg: self.err_mdeg.iter().step_by(n).copied().collect(),
+            at: self.at.iter().step_by(n).copied().collect(),
         }
     }
 }
@@ -222,21 +227,25 @@ pub fn rust_file(alpha: &AngleFit, beta: &AngleFit, provenance: &str, model: &st
     )
 }
 
-/// Every row as CSV: dataset, angle, the terms (named), the 1σ and the error, millidegrees.
+/// Every row as CSV: dataset, flight (`flights[dataset][flight index]`), the frame's index in
+/// its flight (a row of the flight's CSV), angle, the terms (named), the 1σ and the error,
+/// millidegrees.
 pub fn write_rows(
     path: &std::path::Path,
     names: &[String],
+    flights: &[Vec<String>],
     per_dataset: &[[Rows; 2]],
 ) -> std::io::Result<()> {
     use std::io::Write;
     let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
     let head: Vec<&str> = Term::ALL.iter().map(|t| t.name()).collect();
-    writeln!(w, "dataset,angle,{},sigma_mdeg,err_mdeg", head.join(","))?;
-    for (name, rows) in names.iter().zip(per_dataset) {
+    writeln!(w, "dataset,flight,frame,angle,{},sigma_mdeg,err_mdeg", head.join(","))?;
+    for ((name, fl), rows) in names.iter().zip(flights).zip(per_dataset) {
         for (angle, r) in ["alpha", "beta"].iter().zip(rows) {
-            for ((t, s), e) in r.terms.iter().zip(&r.sigma_mdeg).zip(&r.err_mdeg) {
+            for (((t, s), e), (f, i)) in r.terms.iter().zip(&r.sigma_mdeg).zip(&r.err_mdeg).zip(&r.at) {
                 let t: Vec<String> = t.iter().map(u32::to_string).collect();
-                writeln!(w, "{name},{angle},{},{s},{e:.1}", t.join(","))?;
+                let flight = fl.get(*f as usize).map_or("?", String::as_str);
+                writeln!(w, "{name},{flight},{i},{angle},{},{s},{e:.1}", t.join(","))?;
             }
         }
     }
