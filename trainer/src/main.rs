@@ -897,11 +897,11 @@ fn cmd_fit_sigma(
     let mut flight_names: Vec<Vec<String>> = Vec::new();
     for ds in &datasets {
         let mut mine: [Rows; 2] = Default::default();
-        let mut names = Vec::new();
+        let mut flights_here = Vec::new();
         for fl in Role::ALL.into_iter().flat_map(|r| ds.flights(r)) {
             let ans = trainer::pipeline::shipped_answers(fl, suite);
-            let index = u32::try_from(names.len()).unwrap_or(u32::MAX);
-            names.push(fl.name.clone());
+            let index = u32::try_from(flights_here.len()).unwrap_or(u32::MAX);
+            flights_here.push(fl.name.clone());
             let [a, b] = trainer::pipeline::sigma_rows(
                 &ans,
                 [
@@ -917,7 +917,7 @@ fn cmd_fit_sigma(
         rows[0].extend(mine[0].clone());
         rows[1].extend(mine[1].clone());
         per_dataset.push(mine);
-        flight_names.push(names);
+        flight_names.push(flights_here);
     }
     bar.finish_and_clear();
     let (alpha, beta) = (fit(&rows[0].every(every))?, fit(&rows[1].every(every))?);

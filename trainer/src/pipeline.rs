@@ -347,7 +347,7 @@ fn answers_of(mut est: Estimator, fl: &Flight, suite: Suite) -> FlightAnswers {
 
 /// The 1σ rows of one flight's answers ([`crate::uncertainty::Rows`], α then β): every frame
 /// whose angle was computed and has a truth, with its error against `truth` (degrees); `flight`
-/// is the flight's index in its dataset.
+/// is the flight's position in the caller's list of flight names (`write_rows`).
 pub fn sigma_rows(
     ans: &FlightAnswers,
     truth: [&[f64]; 2],

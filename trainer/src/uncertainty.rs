@@ -14,8 +14,9 @@ use estimator_core::uncertainty::{self, Coefficients, TERMS, Term};
 use serde::Serialize;
 
 /// The rows of one angle: its terms, the 1σ the estimator reported (millidegrees) and its error
-/// (millidegrees) on each frame where it was computed, and where that frame is (the flight's
-/// index in its dataset, the frame's in its flight).
+/// (millidegrees) on each frame where it was computed, and where that frame is: the flight's
+/// position in the list of flight names given to [`write_rows`] and the frame's 0-based index in
+/// its flight (its data row in the flight's CSV).
 #[derive(Default, Clone)]
 pub struct Rows {
     pub terms: Vec<[u32; TERMS]>,
@@ -227,9 +228,10 @@ pub fn rust_file(alpha: &AngleFit, beta: &AngleFit, provenance: &str, model: &st
     )
 }
 
-/// Every row as CSV: dataset, flight (`flights[dataset][flight index]`), the frame's index in
-/// its flight (a row of the flight's CSV), angle, the terms (named), the 1σ and the error,
-/// millidegrees.
+/// Every row as CSV: dataset, flight (`flights[dataset][flight position]`: the manifest's flight
+/// name; `hil-sim` writes its CSV as `NAME.csv`), the frame's 0-based index in its flight (CSV
+/// line = frame + 2), angle, the terms (named), the 1σ and the error, millidegrees (the error to
+/// 0.001).
 pub fn write_rows(
     path: &std::path::Path,
     names: &[String],
@@ -245,7 +247,7 @@ pub fn write_rows(
             for (((t, s), e), (f, i)) in r.terms.iter().zip(&r.sigma_mdeg).zip(&r.err_mdeg).zip(&r.at) {
                 let t: Vec<String> = t.iter().map(u32::to_string).collect();
                 let flight = fl.get(*f as usize).map_or("?", String::as_str);
-                writeln!(w, "{name},{flight},{i},{angle},{},{s},{e:.1}", t.join(","))?;
+                writeln!(w, "{name},{flight},{i},{angle},{},{s},{e:.3}", t.join(","))?;
             }
         }
     }

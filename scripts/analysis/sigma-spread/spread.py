@@ -1,13 +1,19 @@
 """Each dataset's share of errors within 2σ under one common factor on an angle's weights:
-spread.py FIT_ROWS TEST_ROWS DEST (run.sh). The rows are `trainer fit-sigma --rows` CSVs."""
+spread.py AIRCRAFT FIT_ROWS TEST_ROWS PAGE BARS_JSON COMMAND (run.sh). The rows are `trainer
+fit-sigma --rows` CSVs; PAGE is the markdown written, BARS_JSON the `trainer bars` spec of its
+plot (sigma-spread.png beside the page), COMMAND the line the page says made it."""
+import array
 import collections
 import datetime
 import json
 import os
 import platform
 import sys
+import tomllib
 
 import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 FACTORS = [0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5]
 ANGLES = ("alpha", "beta")
@@ -16,7 +22,7 @@ SYMBOL = {"alpha": "α", "beta": "β"}
 
 def rows(path):
     """{(dataset, angle): (|error|, 1σ)} in millidegrees."""
-    acc = collections.defaultdict(lambda: ([], []))
+    acc = collections.defaultdict(lambda: (array.array("d"), array.array("d")))
     with open(path) as f:
         head = f.readline().rstrip("\n").split(",")
         if head[:4] != ["dataset", "flight", "frame", "angle"] or head[-2:] != ["sigma_mdeg", "err_mdeg"]:
@@ -27,7 +33,7 @@ def rows(path):
             a = acc[(ds, angle)]
             a[0].append(abs(float(e)))
             a[1].append(float(s))
-    return {k: (np.array(e), np.array(s)) for k, (e, s) in acc.items()}
+    return {k: (np.frombuffer(e), np.frombuffer(s)) for k, (e, s) in acc.items()}
 
 
 def within(data, f):
@@ -43,36 +49,47 @@ def minimax(fit, angle):
     return float(grid[int(np.argmin(dev))])
 
 
-def name(ds):
+def label(ds, title):
     base = os.path.basename(ds)
-    return "JSBSim's F-16" if base == "stock" else base
+    return (f"the model, {title}" if title else "the model") if base == "stock" else base
 
 
 def main():
-    fit_path, test_path, dest = sys.argv[1:4]
+    if len(sys.argv) != 7:
+        sys.exit(__doc__)
+    aircraft, fit_path, test_path, page, bars, command = sys.argv[1:7]
     fit, test = rows(fit_path), rows(test_path)
+    for path, data in ((fit_path, fit), (test_path, test)):
+        missing = [a for a in ANGLES if not any(ang == a for _, ang in data)]
+        if missing:
+            sys.exit(f"spread.py: {path} holds no {' or '.join(missing)} rows (remake it: delete it and rerun run.sh)")
+    with open(os.path.join(ROOT, "aircraft", f"{aircraft}.toml"), "rb") as f:
+        title = tomllib.load(f).get("title", aircraft)
+    name = lambda ds: label(ds, title)  # noqa: E731
+    fitting = sorted({ds for ds, _ in fit})
+    tested = list(dict.fromkeys(ds for ds, _ in test))
     pct = lambda x: f"{100 * x:.1f}"  # noqa: E731
     best = {a: minimax(fit, a) for a in ANGLES}
     md = ["# The 1σ airframe by airframe", "",
-          "Command: `scripts/analysis/sigma-spread/run.sh docs/results`  ",
+          f"Command: `{command}`  ",
           f"Machine: {platform.machine()}, {os.cpu_count()} cores, {datetime.date.today()}.", "",
-          "The shipped F-16 estimator's 1σ is fitted on 25 datasets pooled ([uncertainty.md](uncertainty.md)):",
+          f"The shipped estimator of the {title} has its 1σ fitted on {len(fitting)} datasets pooled (the `--data` of",
+          f"its fit's command, `estimator-core/src/model/{aircraft}/sigma.rs`):",
           "one common factor per angle puts 95 % of all their frames within 2σ. A user flies one airframe.",
           "Here each dataset on its own, with every weight of an angle multiplied by a factor (1: as",
           "shipped), in % of its frames within 2σ; the target is 95 ± 3 % on every airframe. The 1σ is",
-          "each frame's as the estimator reports it, times the factor; the error as the rows file gives",
-          "it (0.1 millidegree).", "",
+          "each frame's as the estimator reports it (millidegrees), times the factor.", "",
           "![% of frames outside 2σ, as shipped and with the minimax factor](sigma-spread.png)", ""]
     for a in ANGLES:
         sym = SYMBOL[a]
-        md += [f"## {sym}", "", f"The four test flights of the `paper` preset (seed 1) on each aircraft:", "",
+        md += [f"## {sym}", "", "The test flights (" + ", ".join(f"`{ds}`" for ds in tested) + "):", "",
                "| aircraft flown | " + " | ".join(f"× {f:g}" for f in FACTORS) + " |",
                "|---|" + "---|" * len(FACTORS)]
         for (ds, ang), v in test.items():
             if ang == a:
                 md.append(f"| {name(ds)} | " + " | ".join(pct(within(v, f)) for f in FACTORS) + " |")
         sets = {ds: v for (ds, ang), v in fit.items() if ang == a}
-        md += ["", f"The {len(sets)} fitting datasets (`out/sigma/stock`, `out/dr/data/K`, `out/dr9/data/K`):", "",
+        md += ["", f"The {len(sets)} fitting datasets:", "",
                "| | " + " | ".join(f"× {f:g}" for f in FACTORS) + " |", "|---|" + "---|" * len(FACTORS)]
         cov = {f: sorted(within(v, f) for v in sets.values()) for f in FACTORS}
         md.append("| lowest | " + " | ".join(pct(cov[f][0]) for f in FACTORS) + " |")
@@ -88,18 +105,18 @@ def main():
                f"{pct(max(within(v, best[a]) for v in sets.values()))} %); the lowest as shipped is `{lo}`. "
                + (f"Factors that put every fitting dataset within 92–98 %: × {banded[0]:.2f}–{banded[-1]:.2f}."
                   if banded else "No factor from × 0.80 to × 2.00 puts every fitting dataset within 92–98 %."), ""]
-    with open(os.path.join(dest, "sigma-spread.md"), "w") as f:
+    with open(page, "w") as f:
         f.write("\n".join(md) + "\n")
     panels = []
     for a in ANGLES:
         sets = [v for (ds, ang), v in fit.items() if ang == a]
         out = lambda v, f: 100 * (1 - within(v, f))  # noqa: E731
-        r = [[name(ds), [out(v, 1.0), out(v, best[a])]] for (ds, ang), v in test.items() if ang == a]
+        r = [[label(ds, ""), [out(v, 1.0), out(v, best[a])]] for (ds, ang), v in test.items() if ang == a]
         r.append(["fitting dataset, most", [max(out(v, 1.0) for v in sets), max(out(v, best[a]) for v in sets)]])
         r.append(["fitting dataset, fewest", [min(out(v, 1.0) for v in sets), min(out(v, best[a]) for v in sets)]])
         panels.append({"title": f"{SYMBOL[a]}: % of frames outside 2σ (target 5 ± 3)", "xlabel": "% of frames", "rows": r})
     spec = {"series": ["as shipped (× 1)", f"× the minimax factor (α {best['alpha']:.2f}, β {best['beta']:.2f})"], "panels": panels}
-    with open(os.path.join(os.path.dirname(fit_path), "bars.json"), "w") as f:
+    with open(bars, "w") as f:
         json.dump(spec, f)
 
 
