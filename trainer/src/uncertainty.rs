@@ -241,10 +241,20 @@ pub fn write_rows(
     use std::io::Write;
     let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
     let head: Vec<&str> = Term::ALL.iter().map(|t| t.name()).collect();
-    writeln!(w, "dataset,flight,frame,angle,{},sigma_mdeg,err_mdeg", head.join(","))?;
+    writeln!(
+        w,
+        "dataset,flight,frame,angle,{},sigma_mdeg,err_mdeg",
+        head.join(",")
+    )?;
     for ((name, fl), rows) in names.iter().zip(flights).zip(per_dataset) {
         for (angle, r) in ["alpha", "beta"].iter().zip(rows) {
-            for (((t, s), e), (f, i)) in r.terms.iter().zip(&r.sigma_mdeg).zip(&r.err_mdeg).zip(&r.at) {
+            for (((t, s), e), (f, i)) in r
+                .terms
+                .iter()
+                .zip(&r.sigma_mdeg)
+                .zip(&r.err_mdeg)
+                .zip(&r.at)
+            {
                 let t: Vec<String> = t.iter().map(u32::to_string).collect();
                 let flight = fl.get(*f as usize).map_or("?", String::as_str);
                 writeln!(w, "{name},{flight},{i},{angle},{},{s},{e:.3}", t.join(","))?;
