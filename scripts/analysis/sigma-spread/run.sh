@@ -26,15 +26,22 @@ dest=""
 tests=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --aircraft) name="${2:?--aircraft needs a NAME}"; shift 2 ;;
-    --out) dest="${2:?--out needs a DIR}"; shift 2 ;;
+    --aircraft|--out)
+      [ $# -ge 2 ] || { echo "sigma-spread: $1 needs a value (see the header of $0)" >&2; exit 2; }
+      if [ "$1" = --aircraft ]; then name="$2"; else dest="$2"; fi
+      shift 2 ;;
     -*) echo "sigma-spread: unknown option $1 (see the header of $0)" >&2; exit 2 ;;
     *) tests+=("$1"); shift ;;
   esac
 done
 aircraft_target "$name"
 trainer="$target/release/trainer"
-[ -x "$trainer" ] || { echo "sigma-spread: no $trainer: build $name's release build first (trainer)" >&2; exit 2; }
+if [ ! -x "$trainer" ]; then
+  if [ "$name" = "$default_aircraft" ]; then build="cargo build --release -p trainer"
+  else build="ESTIMATOR_AIRCRAFT=$name CARGO_TARGET_DIR=target/$name cargo build --release -p trainer"; fi
+  echo "sigma-spread: no $trainer: build it first ($build)" >&2
+  exit 2
+fi
 sigma="estimator-core/src/model/$name/sigma.rs"
 [ -f "$sigma" ] || { echo "sigma-spread: no $sigma: $name has no 1σ fit" >&2; exit 2; }
 mapfile -t fitting < <(grep -o 'SIGMA_PROVENANCE: &str = "command: [^\\]*' "$sigma" | grep -o -- '--data [^ ]*' | cut -d' ' -f2)
@@ -54,7 +61,8 @@ done
 work="out/sigma-spread/$name"
 dest="${dest:-$work}"
 mkdir -p "$work" "$dest"
-rows() {  # rows OUT DATASET...: the rows file, redone when the trainer or a dataset is newer
+rows() {  # rows OUT DATASET...: the rows file, redone when the trainer or a dataset is newer or
+  # the datasets asked for are not those it was made of ($work/OUT.data)
   local out="$1" data=() d fresh=1
   shift
   [ "$work/$out.csv" -nt "$trainer" ] || fresh=0
@@ -62,10 +70,12 @@ rows() {  # rows OUT DATASET...: the rows file, redone when the trainer or a dat
     data+=(--data "$d")
     [ "$work/$out.csv" -nt "$d/manifest.json" ] || fresh=0
   done
+  [ "$(cat "$work/$out.data" 2>/dev/null)" = "$(printf '%s\n' "$@")" ] || fresh=0
   if [ "$fresh" = 0 ]; then
     "$trainer" fit-sigma --aircraft "$name" "${data[@]}" --rows "$work/$out.csv.new" \
       --out "$work/$out.rs" --json > "$work/$out.json"
     mv "$work/$out.csv.new" "$work/$out.csv"
+    printf '%s\n' "$@" > "$work/$out.data"
   fi
 }
 rows fit "${fitting[@]}"
@@ -74,6 +84,8 @@ rows test "${tests[@]}"
 .venv/bin/python scripts/analysis/sigma-spread/spread.py "$name" "$work/fit.csv" "$work/test.csv" \
   "$work/sigma-spread.md" "$work/bars.json" "$command"
 "$trainer" bars --spec "$work/bars.json" --out "$work/sigma-spread.png"
-mv "$work/sigma-spread.png" "$dest/sigma-spread.png"
-mv "$work/sigma-spread.md" "$dest/sigma-spread.md"
+if ! [ "$dest" -ef "$work" ]; then
+  mv "$work/sigma-spread.png" "$dest/sigma-spread.png"
+  mv "$work/sigma-spread.md" "$dest/sigma-spread.md"
+fi
 echo "wrote $dest/sigma-spread.md and .png" >&2
