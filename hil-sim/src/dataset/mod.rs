@@ -777,8 +777,16 @@ pub fn git_rev() -> String {
     }
 }
 
-/// "AMD EPYC, 2 cores available, x86_64 linux, release build": where a figure was measured.
+/// "AMD EPYC, 2 cores available, x86_64 linux, release build, 2026-12-02 UTC": where and when a
+/// figure was measured (the date from `date -u`, or `date unknown`).
 pub fn machine() -> String {
+    let date = std::process::Command::new("date")
+        .args(["-u", "+%F"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| format!("{} UTC", String::from_utf8_lossy(&o.stdout).trim()))
+        .unwrap_or_else(|| "date unknown".into());
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -792,7 +800,7 @@ pub fn machine() -> String {
         .map(|n| n.get())
         .unwrap_or(1);
     format!(
-        "{cpu}, {cores} cores available, {} {}, {} build",
+        "{cpu}, {cores} cores available, {} {}, {} build, {date}",
         std::env::consts::ARCH,
         std::env::consts::OS,
         if cfg!(debug_assertions) {
