@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 26] = [
+    let cases: [(&str, &str, &str); 28] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -128,6 +128,16 @@ fn descriptions_are_validated_key_by_key() {
             "pilot_pointmass must be an index",
         ),
         ("learn_scales = true\n", "", "filter: missing learn_scales"),
+        (
+            "config = \"medium-wide-beta\"\n",
+            "",
+            "estimator: missing config",
+        ),
+        (
+            "config = \"medium-wide-beta\"\n",
+            "config = \"medium wide\"\n",
+            "estimator.config = 'medium wide' may hold only letters, digits, '_' and '-'",
+        ),
         (
             "learn_scales = true\n",
             "learn_scales = 1\n",

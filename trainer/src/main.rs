@@ -114,8 +114,10 @@ struct TrainArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Network configuration: small (CI), medium, large (the largest that fits the target
-    /// budget), medium-wide-beta (α as medium, β as large: the shipped configuration), or paper.
-    #[arg(long, default_value = "medium-wide-beta")]
+    /// budget), medium-wide-beta (α as medium, β as large), medium-wider-beta (α as medium, β
+    /// 128-64-32), or paper. Default: the shipped sizes of the build's aircraft (its description's
+    /// `estimator.config`).
+    #[arg(long, default_value = estimator_core::aircraft::AIRCRAFT.estimator.config)]
     config: String,
     /// Epochs (default: 40 small, 30 medium, large and paper).
     #[arg(long, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
@@ -272,6 +274,26 @@ enum Cmd {
         weights_out: Option<PathBuf>,
         /// Where --export writes the bit-exactness test vectors [default:
         /// estimator-core/tests/vectors/NAME.txt].
+        #[arg(long, value_name = "FILE")]
+        vectors_out: Option<PathBuf>,
+    },
+    /// Export a model `trainer train` saved (its `model.json`) into the source tree, as
+    /// `train --export` would have: the same weights.rs (its provenance the training's) and test
+    /// vectors, without training again. Choose a model on its `trainer eval --model` figures, then
+    /// ship it with this.
+    Export {
+        /// The directory `trainer train --out` wrote (model.json).
+        #[arg(long, value_name = "DIR")]
+        model: PathBuf,
+        /// The dataset the model was trained with (`--data` of its training): the test vectors are
+        /// frames of its test flights.
+        #[arg(long, value_name = "DIR")]
+        data: PathBuf,
+        /// Where the weights go [default: the build's aircraft's
+        /// estimator-core/src/model/NAME/weights.rs].
+        #[arg(long, value_name = "FILE")]
+        weights_out: Option<PathBuf>,
+        /// Where the test vectors go [default: estimator-core/tests/vectors/NAME.txt].
         #[arg(long, value_name = "FILE")]
         vectors_out: Option<PathBuf>,
     },
@@ -515,8 +537,9 @@ enum Cmd {
 
 impl TrainArgs {
     fn size(&self) -> Result<Size> {
-        Size::parse(&self.config)
-            .context("--config must be small, medium, large, medium-wide-beta or paper")
+        Size::parse(&self.config).context(
+            "--config must be small, medium, large, medium-wide-beta, medium-wider-beta or paper",
+        )
     }
 
     fn epochs(&self, size: Size) -> usize {
@@ -660,7 +683,7 @@ fn cmd_train(
         out.display()
     );
     if export {
-        let hash = write_model(&ds, &alpha, &beta, &prov, weights_out, vectors_out)?;
+        let hash = write_model(&ds, &alpha.q, &beta.q, &prov, weights_out, vectors_out)?;
         println!(
             "wrote {} (sha256 {hash}) and {}",
             weights_out.display(),
@@ -815,6 +838,29 @@ fn cmd_eval(
             );
         }
     }
+    Ok(())
+}
+
+/// `trainer export`: a saved model into the source tree, its test vectors from `data`'s test flights.
+fn cmd_export(model: &Path, data: &Path, weights_out: &Path, vectors_out: &Path) -> Result<()> {
+    let (qa, qb, model_suite, prov) = trainer::saved::SavedModel::read(model)?;
+    let suite = parse_suite(&model_suite)?;
+    let ds = Dataset::load_any(data, 0.15)
+        .with_context(|| format!("cannot load the dataset {}", data.display()))?;
+    ds.require(suite)?;
+    if ds.flights(Role::Test).next().is_none() {
+        bail!(
+            "{} has no test flights: give the --data the model was trained with (its provenance: {})",
+            data.display(),
+            prov.lines().next().unwrap_or("none")
+        );
+    }
+    let hash = write_model(&ds, &qa, &qb, &prov, weights_out, vectors_out)?;
+    println!(
+        "wrote {} (sha256 {hash}) and {}",
+        weights_out.display(),
+        vectors_out.display()
+    );
     Ok(())
 }
 
@@ -1102,7 +1148,9 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     use trainer::sweep::{Grid, JobResult, Scores, merge, write_result};
     for c in &g.sizes {
         Size::parse(c).with_context(|| {
-            format!("--config `{c}`: small, medium, large, medium-wide-beta or paper")
+            format!(
+                "--config `{c}`: small, medium, large, medium-wide-beta, medium-wider-beta or paper"
+            )
         })?;
     }
     let grid = Grid {
@@ -1151,7 +1199,7 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     let run = || -> Result<Scores> {
         let size = Size::parse(&job.size).with_context(|| {
             format!(
-                "size `{}`: small, medium, large, medium-wide-beta or paper",
+                "size `{}`: small, medium, large, medium-wide-beta, medium-wider-beta or paper",
                 job.size
             )
         })?;
@@ -1806,6 +1854,17 @@ fn run() -> Result<()> {
             &committed(weights_out, "src/model/{}/weights.rs"),
             &committed(vectors_out, "tests/vectors/{}.txt"),
             *export,
+        ),
+        Cmd::Export {
+            model,
+            data,
+            weights_out,
+            vectors_out,
+        } => cmd_export(
+            model,
+            data,
+            &committed(weights_out, "src/model/{}/weights.rs"),
+            &committed(vectors_out, "tests/vectors/{}.txt"),
         ),
         Cmd::Eval {
             model: Some(_),

@@ -19,6 +19,9 @@ pub enum Size {
     /// α as `Medium`, β as `Large` (α 64-32-16, β 64-32-16 per part): the shipped sizes, each
     /// angle's the better on the validation flights over three seeds (`docs/results/hybrid.md`).
     MediumWideBeta,
+    /// α as `Medium`, β 128-64-32 per part: a wider β for an aircraft whose sideslip is carried by
+    /// a weak side force in strong gusts (the step budget holds it: `docs/results/wcet.md`).
+    MediumWiderBeta,
     /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
     Paper,
 }
@@ -30,6 +33,7 @@ impl Size {
             "medium" => Some(Size::Medium),
             "large" => Some(Size::Large),
             "medium-wide-beta" => Some(Size::MediumWideBeta),
+            "medium-wider-beta" => Some(Size::MediumWiderBeta),
             "paper" => Some(Size::Paper),
             _ => None,
         }
@@ -40,23 +44,31 @@ impl Size {
             Size::Medium => "medium",
             Size::Large => "large",
             Size::MediumWideBeta => "medium-wide-beta",
+            Size::MediumWiderBeta => "medium-wider-beta",
             Size::Paper => "paper",
         }
     }
     pub fn default_epochs(self) -> usize {
         match self {
             Size::Small => 40,
-            Size::Medium | Size::Large | Size::MediumWideBeta | Size::Paper => 30,
+            Size::Medium
+            | Size::Large
+            | Size::MediumWideBeta
+            | Size::MediumWiderBeta
+            | Size::Paper => 30,
         }
     }
     pub fn hidden(self, a: Angle) -> &'static [usize] {
         match (self, a) {
             (Size::Small, Angle::Alpha) => &[32, 16],
             (Size::Small, Angle::Beta) => &[16, 8],
-            (Size::Medium | Size::MediumWideBeta, Angle::Alpha) => &[64, 32, 16],
+            (Size::Medium | Size::MediumWideBeta | Size::MediumWiderBeta, Angle::Alpha) => {
+                &[64, 32, 16]
+            }
             (Size::Medium, Angle::Beta) => &[32, 16],
             (Size::Large, Angle::Alpha) => &[128, 64, 32],
             (Size::Large | Size::MediumWideBeta, Angle::Beta) => &[64, 32, 16],
+            (Size::MediumWiderBeta, Angle::Beta) => &[128, 64, 32],
             (Size::Paper, Angle::Alpha) => &[512, 256, 128, 64, 32],
             (Size::Paper, Angle::Beta) => &[32, 16, 8, 4, 2],
         }
@@ -392,4 +404,30 @@ fn sigma_errors<'a>(
 /// own answer, `Estimator::suite`).
 pub fn shipped_suite() -> Option<Suite> {
     Estimator::shipped().suite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_sizes_of_the_builds_aircraft_are_a_known_configuration() {
+        let name = estimator_core::aircraft::AIRCRAFT.estimator.config;
+        let size = Size::parse(name).unwrap();
+        assert_eq!(size.name(), name);
+        assert_ne!(size, Size::Paper);
+    }
+
+    #[test]
+    fn the_wider_beta_keeps_alpha_at_the_medium_sizes() {
+        assert_eq!(
+            Size::MediumWiderBeta.hidden(Angle::Alpha),
+            Size::Medium.hidden(Angle::Alpha)
+        );
+        assert_eq!(Size::MediumWiderBeta.hidden(Angle::Beta), &[128, 64, 32]);
+        assert_eq!(
+            Size::parse("medium-wider-beta"),
+            Some(Size::MediumWiderBeta)
+        );
+    }
 }

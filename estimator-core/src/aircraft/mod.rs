@@ -129,6 +129,9 @@ pub struct EstimatorSettings {
     /// The named feature set (trainer/src/features.rs) the shipped networks read: `trainer
     /// train`'s default `--features`, chosen on the aircraft's validation flights.
     pub features: &'static str,
+    /// The named network sizes (trainer/src/pipeline.rs, `Size`) of the shipped networks: `trainer
+    /// train`'s default `--config`, chosen on the aircraft's validation flights.
+    pub config: &'static str,
 }
 
 impl Mass {
