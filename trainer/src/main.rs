@@ -1839,6 +1839,18 @@ fn committed(path: &Option<PathBuf>, pattern: &str) -> PathBuf {
     })
 }
 
+/// Where an export writes the weights and the test vectors: the given files, else the build's
+/// aircraft's committed ones.
+fn export_paths(
+    weights_out: &Option<PathBuf>,
+    vectors_out: &Option<PathBuf>,
+) -> (PathBuf, PathBuf) {
+    (
+        committed(weights_out, "src/model/{}/weights.rs"),
+        committed(vectors_out, "tests/vectors/{}.txt"),
+    )
+}
+
 fn run() -> Result<()> {
     let cli = Cli::parse();
     match &cli.cmd {
@@ -1848,24 +1860,19 @@ fn run() -> Result<()> {
             weights_out,
             vectors_out,
             export,
-        } => cmd_train(
-            args,
-            out,
-            &committed(weights_out, "src/model/{}/weights.rs"),
-            &committed(vectors_out, "tests/vectors/{}.txt"),
-            *export,
-        ),
+        } => {
+            let (w, v) = export_paths(weights_out, vectors_out);
+            cmd_train(args, out, &w, &v, *export)
+        }
         Cmd::Export {
             model,
             data,
             weights_out,
             vectors_out,
-        } => cmd_export(
-            model,
-            data,
-            &committed(weights_out, "src/model/{}/weights.rs"),
-            &committed(vectors_out, "tests/vectors/{}.txt"),
-        ),
+        } => {
+            let (w, v) = export_paths(weights_out, vectors_out);
+            cmd_export(model, data, &w, &v)
+        }
         Cmd::Eval {
             model: Some(_),
             uncertain_hold: Some(_),
