@@ -288,3 +288,37 @@ fn every_aircraft_ships_networks_of_its_descriptions_feature_set() {
         );
     }
 }
+
+#[test]
+fn every_aircraft_ships_networks_of_its_descriptions_sizes() {
+    use trainer::pipeline::Size;
+    use trainer::prep::Angle;
+    for name in estimator_core::aircraft::descriptions() {
+        let toml = std::fs::read_to_string(root().join(format!("aircraft/{name}.toml"))).unwrap();
+        let config = toml
+            .lines()
+            .find_map(|l| l.strip_prefix("config = \""))
+            .and_then(|l| l.strip_suffix('"'))
+            .unwrap_or_else(|| panic!("aircraft/{name}.toml has no estimator.config"));
+        let size = Size::parse(config).unwrap_or_else(|| {
+            panic!("aircraft/{name}.toml: estimator.config {config:?} is no size")
+        });
+        let weights = root().join(format!("estimator-core/src/model/{name}/weights.rs"));
+        let Ok(code) = std::fs::read_to_string(&weights) else {
+            continue; // an aircraft without shipped networks yet
+        };
+        for (angle, symbol) in [(Angle::Alpha, "α"), (Angle::Beta, "β")] {
+            let widths: Vec<String> = size.hidden(angle).iter().map(|w| w.to_string()).collect();
+            let want = format!("hidden {} per part", widths.join("-"));
+            let line = code
+                .lines()
+                .find(|l| l.starts_with(&format!("/// {symbol} cascade:")))
+                .unwrap_or_else(|| panic!("{} has no {symbol} cascade line", weights.display()));
+            assert!(
+                line.contains(&want),
+                "{}: {line:?} is not {name}'s estimator.config {config:?} ({want})",
+                weights.display()
+            );
+        }
+    }
+}

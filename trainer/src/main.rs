@@ -119,7 +119,7 @@ struct TrainArgs {
     /// `estimator.config`).
     #[arg(long, default_value = estimator_core::aircraft::AIRCRAFT.estimator.config)]
     config: String,
-    /// Epochs (default: 40 small, 30 medium, large and paper).
+    /// Epochs (default: 40 small, 30 every other configuration).
     #[arg(long, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
     epochs: Option<usize>,
     /// Mini-batch size, rows.
@@ -189,7 +189,7 @@ struct ReportArgs {
     #[arg(long)]
     json: bool,
     /// Also the rows of what ships: the shipped configuration (the hybrid: the aircraft's
-    /// `estimator.features` on the `egi120` suite, `medium-wide-beta` networks trained with
+    /// `estimator.features` on the `egi120` suite, networks of its `estimator.config` trained with
     /// `--loss l1`, the report's seeds and epochs) and the model-based filter alone. Needs a dataset that carries the `egi120` suite (format 5).
     #[arg(long)]
     shipped_rows: bool,
@@ -256,8 +256,9 @@ struct SweepAction {
 #[derive(Subcommand)]
 enum Cmd {
     /// Train both cascades and quantize them; writes plots, summary.json and model.json (the
-    /// int8 model, for `trainer eval --model`) into --out. With --export it also writes the
-    /// weights the estimator compiles in and their test vectors into the source tree.
+    /// int8 model, for `trainer eval --model` and `trainer export`) into --out. With --export it
+    /// also writes the weights the estimator compiles in and their test vectors into the source
+    /// tree.
     Train {
         #[command(flatten)]
         args: TrainArgs,
@@ -279,14 +280,16 @@ enum Cmd {
     },
     /// Export a model `trainer train` saved (its `model.json`) into the source tree, as
     /// `train --export` would have: the same weights.rs (its provenance the training's) and test
-    /// vectors, without training again. Choose a model on its `trainer eval --model` figures, then
+    /// vectors (frames of --data's own test flights, as a training without --test-data takes
+    /// them), without training again. Choose a model on its `trainer eval --model` figures, then
     /// ship it with this.
     Export {
         /// The directory `trainer train --out` wrote (model.json).
         #[arg(long, value_name = "DIR")]
         model: PathBuf,
-        /// The dataset the model was trained with (`--data` of its training): the test vectors are
-        /// frames of its test flights.
+        /// The dataset the model was trained with (`--data` of its training; refused if its manifest
+        /// is not the one the model's provenance names): the test vectors are frames of its test
+        /// flights.
         #[arg(long, value_name = "DIR")]
         data: PathBuf,
         /// Where the weights go [default: the build's aircraft's
@@ -848,6 +851,19 @@ fn cmd_export(model: &Path, data: &Path, weights_out: &Path, vectors_out: &Path)
     let ds = Dataset::load_any(data, 0.15)
         .with_context(|| format!("cannot load the dataset {}", data.display()))?;
     ds.require(suite)?;
+    if !prov
+        .lines()
+        .next()
+        .is_some_and(|l| l.contains(&format!("manifest sha256 {}", ds.manifest_sha256)))
+    {
+        bail!(
+            "{} (manifest sha256 {}) is not the dataset the model in {} was trained with: its provenance begins `{}`; give that --data",
+            data.display(),
+            ds.manifest_sha256,
+            model.display(),
+            prov.lines().next().unwrap_or("")
+        );
+    }
     if ds.flights(Role::Test).next().is_none() {
         bail!(
             "{} has no test flights: give the --data the model was trained with (its provenance: {})",
@@ -1476,7 +1492,9 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
             // The configuration the shipped weights were trained with (their PROVENANCE).
             let hybrid = FeatureSet::parse(SHIPPED_FEATURES)?;
             hybrid.check_suite(Suite::Egi120)?;
-            Some((hybrid, Size::MediumWideBeta, Loss::L1))
+            let size = Size::parse(estimator_core::aircraft::AIRCRAFT.estimator.config)
+                .context("the aircraft's estimator.config is no network size")?;
+            Some((hybrid, size, Loss::L1))
         } else {
             None
         },

@@ -19,8 +19,9 @@ pub enum Size {
     /// α as `Medium`, β as `Large` (α 64-32-16, β 64-32-16 per part): the shipped sizes, each
     /// angle's the better on the validation flights over three seeds (`docs/results/hybrid.md`).
     MediumWideBeta,
-    /// α as `Medium`, β 128-64-32 per part: a wider β for an aircraft whose sideslip is carried by
-    /// a weak side force in strong gusts (the step budget holds it: `docs/results/wcet.md`).
+    /// α as `Medium`, β 128-64-32 per part: a wider β (on the c172p's image 210,000 instructions
+    /// at the worst step and 209,656 B of flash, inside the target's limits:
+    /// `docs/results/c172p.md`).
     MediumWiderBeta,
     /// Paper Table/Section VI: α 512-256-128-64-32, β 32-16-8-4-2 per part.
     Paper,

@@ -130,7 +130,8 @@ pub struct EstimatorSettings {
     /// train`'s default `--features`, chosen on the aircraft's validation flights.
     pub features: &'static str,
     /// The named network sizes (trainer/src/pipeline.rs, `Size`) of the shipped networks: `trainer
-    /// train`'s default `--config`, chosen on the aircraft's validation flights.
+    /// train`'s default `--config` and the report's shipped rows (docs/aircraft.md says where each
+    /// aircraft's was chosen).
     pub config: &'static str,
 }
 
