@@ -263,22 +263,32 @@ fn every_description_has_the_tag_the_docs_give() {
     }
 }
 
+/// The `[estimator]` string `key` of aircraft/NAME.toml, the aircraft's weights.rs path and its
+/// text (None for an aircraft without shipped networks yet).
+fn estimator_setting_and_weights(name: &str, key: &str) -> (String, PathBuf, Option<String>) {
+    let toml = std::fs::read_to_string(root().join(format!("aircraft/{name}.toml"))).unwrap();
+    let prefix = format!("{key} = \"");
+    let value = toml
+        .lines()
+        .find_map(|l| l.strip_prefix(prefix.as_str()))
+        .and_then(|l| l.strip_suffix('"'))
+        .unwrap_or_else(|| panic!("aircraft/{name}.toml has no estimator.{key}"))
+        .to_string();
+    let weights = root().join(format!("estimator-core/src/model/{name}/weights.rs"));
+    let code = std::fs::read_to_string(&weights).ok();
+    (value, weights, code)
+}
+
 /// Each aircraft's committed networks were trained with the feature set its description ships
 /// (`estimator.features`, `trainer train`'s default in its build): the export's PROVENANCE names
 /// the set, and the set is one the trainer knows.
 #[test]
 fn every_aircraft_ships_networks_of_its_descriptions_feature_set() {
     for name in estimator_core::aircraft::descriptions() {
-        let toml = std::fs::read_to_string(root().join(format!("aircraft/{name}.toml"))).unwrap();
-        let set = toml
-            .lines()
-            .find_map(|l| l.strip_prefix("features = \""))
-            .and_then(|l| l.strip_suffix('"'))
-            .unwrap_or_else(|| panic!("aircraft/{name}.toml has no estimator.features"));
-        trainer::features::FeatureSet::parse(set)
+        let (set, weights, code) = estimator_setting_and_weights(name, "features");
+        trainer::features::FeatureSet::parse(&set)
             .unwrap_or_else(|e| panic!("aircraft/{name}.toml: estimator.features {set:?}: {e}"));
-        let weights = root().join(format!("estimator-core/src/model/{name}/weights.rs"));
-        let Ok(code) = std::fs::read_to_string(&weights) else {
+        let Some(code) = code else {
             continue; // an aircraft without shipped networks yet
         };
         assert!(
@@ -294,17 +304,11 @@ fn every_aircraft_ships_networks_of_its_descriptions_sizes() {
     use trainer::pipeline::Size;
     use trainer::prep::Angle;
     for name in estimator_core::aircraft::descriptions() {
-        let toml = std::fs::read_to_string(root().join(format!("aircraft/{name}.toml"))).unwrap();
-        let config = toml
-            .lines()
-            .find_map(|l| l.strip_prefix("config = \""))
-            .and_then(|l| l.strip_suffix('"'))
-            .unwrap_or_else(|| panic!("aircraft/{name}.toml has no estimator.config"));
-        let size = Size::parse(config).unwrap_or_else(|| {
+        let (config, weights, code) = estimator_setting_and_weights(name, "config");
+        let size = Size::parse(&config).unwrap_or_else(|| {
             panic!("aircraft/{name}.toml: estimator.config {config:?} is no size")
         });
-        let weights = root().join(format!("estimator-core/src/model/{name}/weights.rs"));
-        let Ok(code) = std::fs::read_to_string(&weights) else {
+        let Some(code) = code else {
             continue; // an aircraft without shipped networks yet
         };
         for (angle, symbol) in [(Angle::Alpha, "α"), (Angle::Beta, "β")] {
