@@ -77,8 +77,12 @@ aircraft_build() {
   fi
 }
 
-# aircraft_model NAME: prints the JSBSim model of aircraft/NAME.toml (its `[jsbsim] model`: the
-# aircraft directory's MODEL/MODEL.xml), as scripts/airframe_spec.py reads it.
-aircraft_model() {
-  PYTHONPATH="$root/scripts" python3 -c 'import sys; from airframe_spec import aircraft_model; print(aircraft_model(sys.argv[1]))' "$1"
+# description_value NAME SECTION KEY: prints `[SECTION] KEY` of aircraft/NAME.toml, as
+# scripts/airframe_spec.py reads the description (it refuses an undescribed NAME).
+description_value() {
+  PYTHONPATH="$root/scripts" python3 -c 'import sys; from airframe_spec import description; print(description(sys.argv[1])[sys.argv[2]][sys.argv[3]])' "$1" "$2" "$3"
 }
+
+# aircraft_model NAME: prints the JSBSim model of aircraft/NAME.toml (its `[jsbsim] model`: the
+# aircraft directory's MODEL/MODEL.xml).
+aircraft_model() { description_value "$1" jsbsim model; }

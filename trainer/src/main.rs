@@ -540,9 +540,7 @@ enum Cmd {
 
 impl TrainArgs {
     fn size(&self) -> Result<Size> {
-        Size::parse(&self.config).context(
-            "--config must be small, medium, large, medium-wide-beta, medium-wider-beta or paper",
-        )
+        Size::parse(&self.config).with_context(|| format!("--config must be {}", Size::choices()))
     }
 
     fn epochs(&self, size: Size) -> usize {
@@ -686,12 +684,7 @@ fn cmd_train(
         out.display()
     );
     if export {
-        let hash = write_model(&ds, &alpha.q, &beta.q, &prov, weights_out, vectors_out)?;
-        println!(
-            "wrote {} (sha256 {hash}) and {}",
-            weights_out.display(),
-            vectors_out.display()
-        );
+        export_model(&ds, &alpha.q, &beta.q, &prov, weights_out, vectors_out)?;
     }
     Ok(())
 }
@@ -851,27 +844,35 @@ fn cmd_export(model: &Path, data: &Path, weights_out: &Path, vectors_out: &Path)
     let ds = Dataset::load_any(data, 0.15)
         .with_context(|| format!("cannot load the dataset {}", data.display()))?;
     ds.require(suite)?;
-    if !prov
-        .lines()
-        .next()
-        .is_some_and(|l| l.contains(&format!("manifest sha256 {}", ds.manifest_sha256)))
-    {
+    // The provenance's first line names the training dataset and its manifest.
+    let trained_on = prov.lines().next().unwrap_or("none");
+    if !trained_on.contains(&format!("manifest sha256 {}", ds.manifest_sha256)) {
         bail!(
-            "{} (manifest sha256 {}) is not the dataset the model in {} was trained with: its provenance begins `{}`; give that --data",
+            "{} (manifest sha256 {}) is not the dataset the model in {} was trained with: its provenance begins `{trained_on}`; give that --data",
             data.display(),
             ds.manifest_sha256,
             model.display(),
-            prov.lines().next().unwrap_or("")
         );
     }
     if ds.flights(Role::Test).next().is_none() {
         bail!(
-            "{} has no test flights: give the --data the model was trained with (its provenance: {})",
+            "{} has no test flights: give the --data the model was trained with (its provenance: {trained_on})",
             data.display(),
-            prov.lines().next().unwrap_or("none")
         );
     }
-    let hash = write_model(&ds, &qa, &qb, &prov, weights_out, vectors_out)?;
+    export_model(&ds, &qa, &qb, &prov, weights_out, vectors_out)
+}
+
+/// Writes the weights and their test vectors (`write_model`) and says where.
+fn export_model(
+    ds: &Dataset,
+    alpha: &trainer::quant::QCascade,
+    beta: &trainer::quant::QCascade,
+    prov: &str,
+    weights_out: &Path,
+    vectors_out: &Path,
+) -> Result<()> {
+    let hash = write_model(ds, alpha, beta, prov, weights_out, vectors_out)?;
     println!(
         "wrote {} (sha256 {hash}) and {}",
         weights_out.display(),
@@ -1163,11 +1164,7 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
 fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     use trainer::sweep::{Grid, JobResult, Scores, merge, write_result};
     for c in &g.sizes {
-        Size::parse(c).with_context(|| {
-            format!(
-                "--config `{c}`: small, medium, large, medium-wide-beta, medium-wider-beta or paper"
-            )
-        })?;
+        Size::parse(c).with_context(|| format!("--config `{c}`: {}", Size::choices()))?;
     }
     let grid = Grid {
         sizes: g.sizes.clone(),
@@ -1213,12 +1210,8 @@ fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
         .with_context(|| format!("--job {k}: the grid has jobs 0..{}", jobs.len()))?;
     let t0 = std::time::Instant::now();
     let run = || -> Result<Scores> {
-        let size = Size::parse(&job.size).with_context(|| {
-            format!(
-                "size `{}`: small, medium, large, medium-wide-beta, medium-wider-beta or paper",
-                job.size
-            )
-        })?;
+        let size = Size::parse(&job.size)
+            .with_context(|| format!("size `{}`: {}", job.size, Size::choices()))?;
         let suite = parse_suite(&job.suite)?;
         let fs = FeatureSet::parse(&job.features)?;
         fs.check_suite(suite)?;

@@ -28,15 +28,26 @@ pub enum Size {
 }
 
 impl Size {
+    /// Every size, in the order `--config`'s messages list them.
+    pub const ALL: [Size; 6] = [
+        Size::Small,
+        Size::Medium,
+        Size::Large,
+        Size::MediumWideBeta,
+        Size::MediumWiderBeta,
+        Size::Paper,
+    ];
+
     pub fn parse(s: &str) -> Option<Size> {
-        match s {
-            "small" => Some(Size::Small),
-            "medium" => Some(Size::Medium),
-            "large" => Some(Size::Large),
-            "medium-wide-beta" => Some(Size::MediumWideBeta),
-            "medium-wider-beta" => Some(Size::MediumWiderBeta),
-            "paper" => Some(Size::Paper),
-            _ => None,
+        Size::ALL.into_iter().find(|z| z.name() == s)
+    }
+
+    /// "small, medium, …, medium-wider-beta or paper": the names a `--config` may take.
+    pub fn choices() -> String {
+        let names: Vec<&str> = Size::ALL.iter().map(|z| z.name()).collect();
+        match names.split_last() {
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
         }
     }
     pub fn name(self) -> &'static str {
@@ -417,6 +428,18 @@ mod tests {
         let size = Size::parse(name).unwrap();
         assert_eq!(size.name(), name);
         assert_ne!(size, Size::Paper);
+    }
+
+    #[test]
+    fn every_size_parses_from_its_name_and_the_choices_list_them_all() {
+        for z in Size::ALL {
+            assert_eq!(Size::parse(z.name()), Some(z));
+        }
+        assert_eq!(
+            Size::choices(),
+            "small, medium, large, medium-wide-beta, medium-wider-beta or paper"
+        );
+        assert_eq!(Size::parse("huge"), None);
     }
 
     #[test]

@@ -9,13 +9,16 @@ import json
 import os
 import platform
 import sys
-import tomllib
 
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from airframe_spec import description  # noqa: E402
 
 FACTORS = [0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5]
+# The factors searched for the minimax and for a band that holds every fitting dataset.
+GRID = np.round(np.arange(0.80, 2.001, 0.01), 2)
 ANGLES = ("alpha", "beta")
 SYMBOL = {"alpha": "α", "beta": "β"}
 
@@ -44,9 +47,8 @@ def within(data, f):
 def minimax(fit, angle):
     """The factor whose worst fitting dataset is nearest to 95 % within 2σ."""
     sets = [v for (ds, a), v in fit.items() if a == angle]
-    grid = np.round(np.arange(0.80, 2.001, 0.01), 2)
-    dev = [max(abs(within(v, f) - 0.95) for v in sets) for f in grid]
-    return float(grid[int(np.argmin(dev))])
+    dev = [max(abs(within(v, f) - 0.95) for v in sets) for f in GRID]
+    return float(GRID[int(np.argmin(dev))])
 
 
 def label(ds, title):
@@ -63,8 +65,7 @@ def main():
         missing = [a for a in ANGLES if not any(ang == a for _, ang in data)]
         if missing:
             sys.exit(f"spread.py: {path} holds no {' or '.join(missing)} rows (remake it: delete it and rerun run.sh)")
-    with open(os.path.join(ROOT, "aircraft", f"{aircraft}.toml"), "rb") as f:
-        title = tomllib.load(f).get("title", aircraft)
+    title = description(aircraft).get("title", aircraft)
     name = lambda ds: label(ds, title)  # noqa: E731
     fitting = sorted({ds for ds, _ in fit})
     tested = list(dict.fromkeys(ds for ds, _ in test))
@@ -98,8 +99,7 @@ def main():
         md.append("| below 92 / above 98 | " + " | ".join(
             f"{sum(c < 0.92 for c in cov[f])} / {sum(c > 0.98 for c in cov[f])}" for f in FACTORS) + " |")
         lo = min(sets, key=lambda d: within(sets[d], 1.0))
-        grid = np.round(np.arange(0.80, 2.001, 0.01), 2)
-        banded = [f for f in grid if all(0.92 <= within(v, f) <= 0.98 for v in sets.values())]
+        banded = [f for f in GRID if all(0.92 <= within(v, f) <= 0.98 for v in sets.values())]
         md += ["", f"The factor that brings the fitting dataset farthest from 95 % nearest to it: **× {best[a]:.2f}** "
                f"(its lowest {pct(min(within(v, best[a]) for v in sets.values()))} %, highest "
                f"{pct(max(within(v, best[a]) for v in sets.values()))} %); the lowest as shipped is `{lo}`. "
