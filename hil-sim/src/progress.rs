@@ -19,7 +19,8 @@ pub fn bar(len: u64, unit: &str) -> ProgressBar {
     pb
 }
 
-/// The common style: `{prefix} {elapsed} [bar] pos/len unit, ETA {eta} {msg}`.
+/// The common style: `{prefix} {elapsed} [bar] pos/len unit, ETA {eta} {msg}`, the ETA from the
+/// mean rate so far ([`eta`]).
 pub fn style(pb: &ProgressBar, unit: &str) {
     let template = format!(
         "{{prefix}} {{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}"
@@ -27,8 +28,24 @@ pub fn style(pb: &ProgressBar, unit: &str) {
     pb.set_style(
         ProgressStyle::with_template(&template)
             .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .with_key(
+                "eta",
+                |s: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = w.write_str(&eta(s.pos(), s.len().unwrap_or(0), s.elapsed()));
+                },
+            )
             .progress_chars("=> "),
     );
+}
+
+/// The time left at the mean rate so far: `elapsed` · (`len` − `pos`) / `pos` (`-` before the
+/// first item and after the last). indicatif's own estimate weights the recent rate, which decays
+/// while no item ends: for items a minute long (training epochs) it read hours between two ticks.
+pub fn eta(pos: u64, len: u64, elapsed: Duration) -> String {
+    if pos == 0 || pos >= len {
+        return "-".to_string();
+    }
+    duration(elapsed.mul_f64((len - pos) as f64 / pos as f64))
 }
 
 /// When stderr is not a terminal (indicatif then draws nothing), prints the bar's state as one
@@ -55,11 +72,7 @@ pub fn log_when_not_a_terminal(pb: &ProgressBar, unit: &str) {
 pub fn line(pb: &ProgressBar, unit: &str) -> String {
     let len = pb.length().unwrap_or(0);
     let pos = pb.position();
-    let eta = if pos == 0 || pos >= len {
-        "-".to_string()
-    } else {
-        duration(pb.eta())
-    };
+    let eta = eta(pos, len, pb.elapsed());
     let prefix = pb.prefix();
     let msg = pb.message();
     format!(
@@ -97,6 +110,13 @@ mod tests {
         assert_eq!(duration(Duration::from_millis(999)), "0s");
         assert_eq!(duration(Duration::from_secs(65)), "1m 05s");
         assert_eq!(duration(Duration::from_secs(3723)), "1h 02m 03s");
+    }
+
+    #[test]
+    fn the_eta_is_the_mean_rate_so_far() {
+        assert_eq!(eta(4, 30, Duration::from_secs(160)), "17m 20s");
+        assert_eq!(eta(0, 30, Duration::from_secs(160)), "-");
+        assert_eq!(eta(30, 30, Duration::from_secs(160)), "-");
     }
 
     #[test]
