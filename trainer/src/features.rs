@@ -164,6 +164,18 @@ fn subsamples(channels: &[Channel]) -> Vec<Feature> {
         .collect()
 }
 
+/// Whether a feature carries the axial force balance (thrust less drag): the longitudinal
+/// accelerometer, the throttle, F_x / ρV², and their changes and sub-samples.
+fn reads_axial_balance(f: &Feature) -> bool {
+    match f {
+        Feature::FxOverRhoV2 => true,
+        Feature::Sensor(c) | Feature::Delta(c, _) | Feature::Sub(c, _) => {
+            matches!(c, Channel::AccelX | Channel::Throttle)
+        }
+        _ => false,
+    }
+}
+
 fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = Feature> + 'a {
     channels
         .iter()
@@ -341,6 +353,17 @@ impl FeatureSet {
             "egi120-gyro-p" => {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &subsamples(&[Channel::GyroP]))
             }
+            // egi120-gyro-p with α blind to the axial force balance: without the longitudinal
+            // accelerometer, the throttle, F_x / ρV² and their changes, which let the α network
+            // read α from the drag polar (docs/results/c172p/airframe-sensitivity.md: the c172p's
+            // α moves with its drag). Measured on the c172p, not shipped: α much worse on the
+            // model, little better on the variants (docs/results/c172p.md).
+            "egi120-gyro-p-no-axial" => {
+                let mut s = FeatureSet::parse("egi120-gyro-p")?;
+                s.name = spec.into();
+                s.alpha.retain(|f| !reads_axial_balance(f));
+                Ok(s)
+            }
             // egi-hybrid-fast-d2 plus the force scales the filter learns in flight: what tells an
             // airframe unlike the model. Measured, not shipped: it loses on the 20-minute test
             // flight (docs/airframes.md).
@@ -362,7 +385,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi120-side-scale, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi120-side-scale, egi120-gyro-p, egi120-gyro-p-no-axial, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -446,6 +469,26 @@ mod tests {
     fn the_shipped_set_of_the_builds_aircraft_is_a_known_egi120_set() {
         let s = FeatureSet::parse(SHIPPED).unwrap();
         assert_eq!(s.suite(), Suite::Egi120);
+    }
+
+    #[test]
+    fn the_no_axial_set_is_gyro_p_with_alpha_blind_to_thrust_and_drag() {
+        let full = FeatureSet::parse("egi120-gyro-p").unwrap();
+        let s = FeatureSet::parse("egi120-gyro-p-no-axial").unwrap();
+        assert_eq!(s.name, "egi120-gyro-p-no-axial");
+        assert_eq!(s.beta, full.beta);
+        let dropped: Vec<Feature> = full
+            .alpha
+            .iter()
+            .copied()
+            .filter(|f| !s.alpha.contains(f))
+            .collect();
+        // AccelX and Throttle, each with its four lagged changes, and F_x / ρV².
+        assert_eq!(dropped.len(), 11, "{dropped:?}");
+        assert!(dropped.contains(&Feature::FxOverRhoV2));
+        assert!(dropped.contains(&Feature::Sensor(Channel::Throttle)));
+        assert!(s.alpha.contains(&Feature::Sensor(Channel::AccelZ)));
+        assert!(s.alpha.iter().all(|f| full.alpha.contains(f)));
     }
 
     #[test]

@@ -144,7 +144,8 @@ struct TrainArgs {
     /// egi120-beta (egi-hybrid-fast-d2 + the 120 Hz sub-samples of Ay, rudder, aileron and r for
     /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α),
     /// egi120-side-scale (egi120 + the filter's side-force scale for β), egi120-gyro-p
-    /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi-hybrid-scales
+    /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi120-gyro-p-no-axial (egi120-gyro-p
+    /// without Ax, throttle, Fx/ρV² and their changes for α), egi-hybrid-scales
     /// (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
     /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
     /// "alpha=a,b,...;beta=c,d,..." with feature names (trainer/src/features.rs lists them).
