@@ -936,14 +936,24 @@ impl AirDataFilter {
     }
 
     /// `inp` with the gyro check's running mean taken off each gyro that disagrees: what the model
-    /// and the lever-arm terms read.
+    /// and the lever-arm terms read. The EGI velocity, which [`Input::from_frame`] moved to the CG
+    /// with the raw gyros (`v_cg = v_imu − C_nb (ω × r)`), is moved again with the rates less
+    /// that mean: `+ C_nb (e × r)` for the error `e` taken off.
     fn without_gyro_error(&self, inp: &Input, disagrees: u32) -> Input {
         let mut out = *inp;
-        for ((rate, mean), c) in out.gyro_rps.iter_mut().zip(self.gyro).zip(GYROS) {
+        let mut taken = [0.0f32; 3];
+        for (((rate, mean), e), c) in (out.gyro_rps.iter_mut().zip(self.gyro))
+            .zip(taken.iter_mut())
+            .zip(GYROS)
+        {
             if disagrees & c.bit() != 0 {
                 *rate -= mean;
+                *e = mean;
             }
         }
+        let lever = Vector3::from(taken).cross(&Vector3::from(self.cfg.lever_arm_m));
+        let v = Vector3::from(out.vel_ned_mps) + c_bn(out.euler_rad).transpose() * lever;
+        out.vel_ned_mps = [v.x, v.y, v.z];
         out
     }
 

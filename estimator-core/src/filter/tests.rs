@@ -1277,15 +1277,69 @@ fn subsampled(inp: Input) -> Input {
     }
 }
 
-/// `inp` with `error` rad/s on gyro `axis`, in its 20 Hz value and in its sub-samples.
-fn gyro_error(mut inp: Input, axis: usize, error: f32) -> Input {
+/// `inp` with `error` rad/s on gyro `axis`, in its 20 Hz value and in its sub-samples, and its EGI
+/// velocity moved to the CG with that gyro, as [`Input::from_frame`] moves it (`lever_arm_m`).
+fn gyro_error(mut inp: Input, axis: usize, error: f32, lever_arm_m: [f32; 3]) -> Input {
     let halves = inp.gyro_halves_rps.iter_mut().flatten();
     for rate in core::iter::once(&mut inp.gyro_rps).chain(halves) {
         if let Some(r) = rate.get_mut(axis) {
             *r += error;
         }
     }
+    let mut e = Vector3::zeros();
+    e[axis] = error;
+    let v = Vector3::from(inp.vel_ned_mps)
+        - c_bn(inp.euler_rad).transpose() * e.cross(&Vector3::from(lever_arm_m));
+    inp.vel_ned_mps = [v.x, v.y, v.z];
     inp
+}
+
+#[test]
+fn the_egi_velocity_is_moved_to_the_cg_with_the_gyros_less_their_error() {
+    // A frame at 20° roll, 10° pitch, 70° heading, turning at 0.1 / 0.05 / 0.2 rad/s, flown once
+    // as measured and once with 0.2 rad/s more on the pitch gyro; the filter's check holds that
+    // 0.2 rad/s as the pitch gyro's running mean. With the mean taken off, the faulted frame's
+    // gyros and CG velocity are the clean frame's (to f32 rounding; before, the
+    // lever arm moved it by 0.2 rad/s × the arm).
+    let lever = CONFIG.lever_arm_m;
+    let frame = |q_extra: f32| {
+        let mut f = SensorFrame {
+            valid: NEEDED_MASK,
+            ..SensorFrame::default()
+        };
+        let mut set = |c: Channel, v: f64| {
+            if let Some(r) = f.raw.get_mut(c.index()) {
+                *r = libm::round(v / c.lsb()) as i32;
+            }
+        };
+        for (c, v) in [
+            (Channel::Roll, 20f64.to_radians()),
+            (Channel::Pitch, 10f64.to_radians()),
+            (Channel::Heading, 70f64.to_radians()),
+            (Channel::VelNorth, 60.0),
+            (Channel::VelEast, -20.0),
+            (Channel::VelDown, 3.0),
+            (Channel::GyroP, 0.1),
+            (Channel::GyroQ, 0.05 + f64::from(q_extra)),
+            (Channel::GyroR, 0.2),
+        ] {
+            set(c, v);
+        }
+        Input::from_frame(&f, DT, lever, SubsampleUse::Off).unwrap()
+    };
+    let (clean, faulted) = (frame(0.0), frame(0.2));
+    let mut filter = AirDataFilter::new(CONFIG);
+    filter.gyro = [0.0, faulted.gyro_rps[1] - clean.gyro_rps[1], 0.0];
+    let fixed = filter.without_gyro_error(&faulted, Channel::GyroQ.bit());
+    let rates = (Vector3::from(fixed.gyro_rps) - Vector3::from(clean.gyro_rps)).norm();
+    assert!(rates < 1e-6, "{rates} rad/s off the clean frame's gyros");
+    let moved = (Vector3::from(faulted.vel_ned_mps) - Vector3::from(clean.vel_ned_mps)).norm();
+    let off = (Vector3::from(fixed.vel_ned_mps) - Vector3::from(clean.vel_ned_mps)).norm();
+    assert!(
+        moved > 0.1 * Vector3::from(lever).norm(),
+        "the raw gyro moved the velocity by {moved} m/s"
+    );
+    assert!(off < 1e-4, "{off} m/s off the clean frame's CG velocity");
 }
 
 #[test]
@@ -1323,7 +1377,7 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
             let a = clean.step(&inp, true);
             let fault = (60.0 - 0.5 * DT..70.0 - 0.5 * DT).contains(&t);
             let bad = if fault {
-                gyro_error(inp, axis, error)
+                gyro_error(inp, axis, error, c.lever_arm_m)
             } else {
                 inp
             };
@@ -1380,7 +1434,7 @@ fn yaw_gyro_in_error(c: &Config) -> (impl Fn(f32) -> Input, AirDataFilter) {
     let turn = steady_turn(c);
     let error = 0.2f32.max(2.0 * c.gyro_gate_rps);
     let cfg = *c;
-    let bad = move |t: f32| gyro_error(turn.frame(t, &cfg).0, 2, error);
+    let bad = move |t: f32| gyro_error(turn.frame(t, &cfg).0, 2, error, cfg.lever_arm_m);
     let mut f = AirDataFilter::new(*c);
     for i in 0..100u16 {
         f.step(&bad(f32::from(i) * DT), true);
