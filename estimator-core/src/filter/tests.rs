@@ -1330,7 +1330,8 @@ fn the_egi_velocity_is_moved_to_the_cg_with_the_gyros_less_their_error() {
     let (clean, faulted) = (frame(0.0), frame(0.2));
     let mut filter = AirDataFilter::new(CONFIG);
     filter.gyro = [0.0, faulted.gyro_rps[1] - clean.gyro_rps[1], 0.0];
-    let fixed = filter.without_gyro_error(&faulted, Channel::GyroQ.bit());
+    let cbn = c_bn(faulted.euler_rad);
+    let fixed = filter.without_gyro_error(&faulted, Channel::GyroQ.bit(), &cbn);
     let rates = (Vector3::from(fixed.gyro_rps) - Vector3::from(clean.gyro_rps)).norm();
     assert!(rates < 1e-6, "{rates} rad/s off the clean frame's gyros");
     let moved = (Vector3::from(faulted.vel_ned_mps) - Vector3::from(clean.vel_ned_mps)).norm();
