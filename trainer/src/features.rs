@@ -164,7 +164,7 @@ fn subsamples(channels: &[Channel]) -> Vec<Feature> {
         .collect()
 }
 
-/// Whether a feature carries the axial force balance (thrust less drag): the longitudinal
+/// Whether a feature reads the axial force directly (thrust less drag): the longitudinal
 /// accelerometer, the throttle, F_x / ρV², and their changes and sub-samples.
 fn reads_axial_balance(f: &Feature) -> bool {
     match f {
@@ -353,11 +353,12 @@ impl FeatureSet {
             "egi120-gyro-p" => {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &subsamples(&[Channel::GyroP]))
             }
-            // egi120-gyro-p with α blind to the axial force balance: without the longitudinal
-            // accelerometer, the throttle, F_x / ρV² and their changes, which let the α network
-            // read α from the drag polar (docs/results/c172p/airframe-sensitivity.md: the c172p's
-            // α moves with its drag). Measured on the c172p, not shipped: α much worse on the
-            // model, little better on the variants (docs/results/c172p.md).
+            // egi120-gyro-p without α's inputs that read the axial force directly: the
+            // longitudinal accelerometer, the throttle, F_x / ρV² and their changes (the GPS
+            // speed's and altitude's changes stay). With them the c172p's α moves with its drag
+            // (docs/results/c172p/airframe-sensitivity.md); without them it barely does. Measured
+            // on the c172p, not shipped: α much worse on the model, little better on the
+            // variants (docs/results/c172p.md).
             "egi120-gyro-p-no-axial" => {
                 let mut s = FeatureSet::parse("egi120-gyro-p")?;
                 s.name = spec.into();
@@ -472,7 +473,7 @@ mod tests {
     }
 
     #[test]
-    fn the_no_axial_set_is_gyro_p_with_alpha_blind_to_thrust_and_drag() {
+    fn the_no_axial_set_is_gyro_p_without_the_direct_axial_inputs_of_alpha() {
         let full = FeatureSet::parse("egi120-gyro-p").unwrap();
         let s = FeatureSet::parse("egi120-gyro-p-no-axial").unwrap();
         assert_eq!(s.name, "egi120-gyro-p-no-axial");
