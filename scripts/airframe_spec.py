@@ -13,6 +13,27 @@ import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
+# The aircraft whose build is target/'s (scripts/lib/aircraft.sh's default_aircraft); another
+# aircraft builds in target/NAME with ESTIMATOR_AIRCRAFT=NAME.
+DEFAULT_AIRCRAFT = "f16"
+
+
+def release_dir(name):
+    """Aircraft NAME's release build, where its hil-sim and trainer are."""
+    own = () if name == DEFAULT_AIRCRAFT else (name,)
+    return os.path.join(ROOT, "target", *own, "release")
+
+
+def aircraft_args(name):
+    """What an aircraft's own hil-sim and trainer are told: `--aircraft NAME` but for the default."""
+    return [] if name == DEFAULT_AIRCRAFT else ["--aircraft", name]
+
+
+def build_env(name):
+    """The environment a cargo command for aircraft NAME's build starts with ('' for the default)."""
+    return "" if name == DEFAULT_AIRCRAFT else f"ESTIMATOR_AIRCRAFT={name} CARGO_TARGET_DIR=target/{name} "
+
+
 # `scripts/airframe-randomise --terms`: each term times a factor uniform in 1 ± width·spread, drawn in
 # this order (a seed's draws depend on it); SPREAD is its default spread.
 SPREAD = 0.1

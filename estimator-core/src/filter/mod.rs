@@ -368,14 +368,12 @@ impl Input {
             };
             [0, HALF].map(|skip| GYROS.map(|c| half(c, skip)))
         });
-        let w = Vector3::from(gyro);
-        let lever = w.cross(&Vector3::from(lever_arm_m));
         let v_imu = Vector3::new(
             si(Channel::VelNorth),
             si(Channel::VelEast),
             si(Channel::VelDown),
         );
-        let v_cg = v_imu - c_bn(euler).transpose() * lever;
+        let v_cg = v_imu - arm_velocity_ned(&c_bn(euler), gyro, lever_arm_m);
         Some(Input {
             dt_s,
             euler_rad: euler,
@@ -546,6 +544,13 @@ fn wrap_pi(a: f32) -> f32 {
 }
 
 /// NED → body direction-cosine matrix from roll, pitch, heading.
+/// The velocity, NED, that the body's rotation `w` (rad/s) adds at a point `r` (body axes, m from
+/// the CG): `C_nb (ω × r)`, `cbn` being the NED → body matrix. The EGI velocity is the IMU point's;
+/// less this (the gyros' rates, `r` the lever arm) it is the CG's.
+fn arm_velocity_ned(cbn: &Matrix3<f32>, w: [f32; 3], r: [f32; 3]) -> Vector3<f32> {
+    cbn.transpose() * Vector3::from(w).cross(&Vector3::from(r))
+}
+
 fn c_bn(euler: [f32; 3]) -> Matrix3<f32> {
     let (sf, cf) = (libm::sinf(euler[0]), libm::cosf(euler[0]));
     let (st, ct) = (libm::sinf(euler[1]), libm::cosf(euler[1]));
@@ -953,8 +958,7 @@ impl AirDataFilter {
                 *e = mean;
             }
         }
-        let lever = Vector3::from(taken).cross(&Vector3::from(self.cfg.lever_arm_m));
-        let v = Vector3::from(out.vel_ned_mps) + cbn.transpose() * lever;
+        let v = Vector3::from(out.vel_ned_mps) + arm_velocity_ned(cbn, taken, self.cfg.lever_arm_m);
         out.vel_ned_mps = [v.x, v.y, v.z];
         out
     }

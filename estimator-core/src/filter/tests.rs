@@ -482,8 +482,8 @@ pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
         };
         let [roll, pitch, heading] = inp.euler_rad;
         // The EGI channels carry the IMU point's velocity; the filter's input is the CG's.
-        let lever = Vector3::from(inp.gyro_rps).cross(&Vector3::from(CONFIG.lever_arm_m));
-        let v_imu = Vector3::from(inp.vel_ned_mps) + c_bn(inp.euler_rad).transpose() * lever;
+        let v_imu = Vector3::from(inp.vel_ned_mps)
+            + arm_velocity_ned(&c_bn(inp.euler_rad), inp.gyro_rps, CONFIG.lever_arm_m);
         let [vn, ve, vd] = [v_imu.x, v_imu.y, v_imu.z];
         let [ax, ay, az] = inp.accel_mps2;
         let [p, q, r] = inp.gyro_rps;
@@ -1052,24 +1052,34 @@ proptest! {
 
 /// A frame of level flight at 200 m/s north, 3000 m, in integer channel units: enough for the
 /// filter to run (what it estimates does not matter here).
-fn level_frame(k: u32, alt_valid: bool) -> SensorFrame {
+/// A frame whose `valid` channels read `values` (SI, each rounded to its channel's LSB), the others 0.
+fn si_frame(valid: u32, values: &[(Channel, f64)]) -> SensorFrame {
     let mut f = SensorFrame {
-        seq: k as u16,
-        time_ms: k * 50,
-        valid: crate::channels::ALL_VALID,
+        valid,
         ..SensorFrame::default()
     };
-    let mut set = |c: Channel, si: f64| {
+    for &(c, si) in values {
         f.raw[c.index()] = (si / c.lsb()).round() as i32;
-    };
-    set(Channel::VelNorth, 200.0);
-    set(Channel::VelDown, -5.0);
-    set(Channel::GpsAlt, 3000.0);
-    set(Channel::GpsSpeed, 200.0);
-    set(Channel::AccelZ, -9.81);
-    set(Channel::Pitch, 0.05);
-    set(Channel::Elevator, -2.0);
-    set(Channel::Fuel, 2000.0);
+    }
+    f
+}
+
+fn level_frame(k: u32, alt_valid: bool) -> SensorFrame {
+    let mut f = si_frame(
+        crate::channels::ALL_VALID,
+        &[
+            (Channel::VelNorth, 200.0),
+            (Channel::VelDown, -5.0),
+            (Channel::GpsAlt, 3000.0),
+            (Channel::GpsSpeed, 200.0),
+            (Channel::AccelZ, -9.81),
+            (Channel::Pitch, 0.05),
+            (Channel::Elevator, -2.0),
+            (Channel::Fuel, 2000.0),
+        ],
+    );
+    f.seq = k as u16;
+    f.time_ms = k * 50;
     if !alt_valid {
         f.valid &= !Channel::GpsAlt.bit();
     }
@@ -1286,10 +1296,11 @@ fn gyro_error(mut inp: Input, axis: usize, error: f32, lever_arm_m: [f32; 3]) ->
             *r += error;
         }
     }
-    let mut e = Vector3::zeros();
-    e[axis] = error;
-    let v = Vector3::from(inp.vel_ned_mps)
-        - c_bn(inp.euler_rad).transpose() * e.cross(&Vector3::from(lever_arm_m));
+    let mut e = [0.0; 3];
+    if let Some(x) = e.get_mut(axis) {
+        *x = error;
+    }
+    let v = Vector3::from(inp.vel_ned_mps) - arm_velocity_ned(&c_bn(inp.euler_rad), e, lever_arm_m);
     inp.vel_ned_mps = [v.x, v.y, v.z];
     inp
 }
@@ -1303,28 +1314,20 @@ fn the_egi_velocity_is_moved_to_the_cg_with_the_gyros_less_their_error() {
     // lever arm moved it by 0.2 rad/s × the arm).
     let lever = CONFIG.lever_arm_m;
     let frame = |q_extra: f32| {
-        let mut f = SensorFrame {
-            valid: NEEDED_MASK,
-            ..SensorFrame::default()
-        };
-        let mut set = |c: Channel, v: f64| {
-            if let Some(r) = f.raw.get_mut(c.index()) {
-                *r = libm::round(v / c.lsb()) as i32;
-            }
-        };
-        for (c, v) in [
-            (Channel::Roll, 20f64.to_radians()),
-            (Channel::Pitch, 10f64.to_radians()),
-            (Channel::Heading, 70f64.to_radians()),
-            (Channel::VelNorth, 60.0),
-            (Channel::VelEast, -20.0),
-            (Channel::VelDown, 3.0),
-            (Channel::GyroP, 0.1),
-            (Channel::GyroQ, 0.05 + f64::from(q_extra)),
-            (Channel::GyroR, 0.2),
-        ] {
-            set(c, v);
-        }
+        let f = si_frame(
+            NEEDED_MASK,
+            &[
+                (Channel::Roll, 20f64.to_radians()),
+                (Channel::Pitch, 10f64.to_radians()),
+                (Channel::Heading, 70f64.to_radians()),
+                (Channel::VelNorth, 60.0),
+                (Channel::VelEast, -20.0),
+                (Channel::VelDown, 3.0),
+                (Channel::GyroP, 0.1),
+                (Channel::GyroQ, 0.05 + f64::from(q_extra)),
+                (Channel::GyroR, 0.2),
+            ],
+        );
         Input::from_frame(&f, DT, lever, SubsampleUse::Off).unwrap()
     };
     let (clean, faulted) = (frame(0.0), frame(0.2));
