@@ -516,9 +516,10 @@ enum Cmd {
         #[arg(long, value_name = "DIR")]
         data: PathBuf,
         /// A `trainer train --out` directory: evaluate its int8 networks (model.json; the
-        /// networks alone, without the compiled-in estimator's flags and fallbacks).
+        /// networks alone, without the compiled-in estimator's flags and fallbacks). Given more
+        /// than once, the models' mean (an ensemble: each frame's angle is the mean of theirs).
         #[arg(long, value_name = "DIR")]
-        model: Option<PathBuf>,
+        model: Vec<PathBuf>,
         /// Which flights: `test` (the manifest's test flights), `train` or `val` (to see how the
         /// shipped estimator behaves in distribution, e.g. how often its flags fire).
         #[arg(long, default_value = "test")]
@@ -886,30 +887,46 @@ fn export_model(
 /// the estimator's kernels) on a split's flights.
 fn cmd_eval_model(
     data: &Path,
-    model: &Path,
+    models: &[PathBuf],
     split: &str,
     suite: Option<&str>,
     json: bool,
 ) -> Result<()> {
     let role = parse_split(split)?;
-    let (qa, qb, model_suite, prov) = trainer::saved::SavedModel::read(model)?;
-    let model_suite = parse_suite(&model_suite)?;
-    let suite = match suite {
-        Some(s) => parse_suite(s)?,
-        None => model_suite,
+    let (mut qa, mut qb, mut provs) = (Vec::new(), Vec::new(), Vec::new());
+    let mut suites = Vec::new();
+    for model in models {
+        let (a, b, model_suite, prov) = trainer::saved::SavedModel::read(model)?;
+        suites.push((model, parse_suite(&model_suite)?));
+        qa.push(a);
+        qb.push(b);
+        provs.push(prov);
+    }
+    let suite = match (suite, suites.first()) {
+        (Some(s), _) => parse_suite(s)?,
+        (None, Some((_, s))) => *s,
+        (None, None) => bail!("give at least one --model DIR"),
     };
-    require_suite(
-        &format!("the model in {}", model.display()),
-        model_suite,
-        suite,
-    )?;
+    for (model, model_suite) in &suites {
+        require_suite(
+            &format!("the model in {}", model.display()),
+            *model_suite,
+            suite,
+        )?;
+    }
     let ds = load_split(data, role)?;
     ds.require(suite)?;
-    let alpha = trainer::pipeline::int8_metrics(&qa, &ds, role);
-    let beta = trainer::pipeline::int8_metrics(&qb, &ds, role);
+    let alpha = trainer::pipeline::int8_mean_metrics(&qa, &ds, role);
+    let beta = trainer::pipeline::int8_mean_metrics(&qb, &ds, role);
+    let prov = provs.join("\n");
+    let model = models
+        .iter()
+        .map(|m| m.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ");
     if json {
         let v = serde_json::json!({
-            "model": model.display().to_string(),
+            "model": model,
             "suite": suite.name(),
             "split": split,
             "dataset": data.display().to_string(),
@@ -919,10 +936,7 @@ fn cmd_eval_model(
         });
         println!("{}", serde_json::to_string(&v)?);
     } else {
-        println!(
-            "model {} (int8 networks, no flags or fallbacks):\n{prov}",
-            model.display()
-        );
+        println!("model {model} (int8 networks, no flags or fallbacks):\n{prov}");
         println!("flights: {split}; sensor suite: {}", suite.name());
         println!("α (deg):");
         print_metrics("int8", &alpha);
@@ -1886,23 +1900,23 @@ fn run() -> Result<()> {
             cmd_export(model, data, &w, &v)
         }
         Cmd::Eval {
-            model: Some(_),
+            model,
             uncertain_hold: Some(_),
             ..
-        } => bail!(
+        } if !model.is_empty() => bail!(
             "--uncertain-hold sets a flag of the compiled-in estimator; --model scores networks alone, which carry no flags: drop one of the two"
         ),
         Cmd::Eval {
             data,
-            model: Some(model),
+            model,
             split,
             suite,
             uncertain_hold: None,
             json,
-        } => cmd_eval_model(data, model, split, suite.as_deref(), *json),
+        } if !model.is_empty() => cmd_eval_model(data, model, split, suite.as_deref(), *json),
         Cmd::Eval {
             data,
-            model: None,
+            model: _,
             split,
             suite,
             uncertain_hold,

@@ -187,15 +187,42 @@ fn int8_answers(q: &QCascade, fl: &Flight) -> Vec<f64> {
 
 /// Integer-reference metrics of a cascade on the flights of `role` (no float pass).
 pub fn int8_metrics(q: &QCascade, ds: &Dataset, role: Role) -> FlightMetrics {
-    let target = q.prep.angle.target();
+    int8_mean_metrics(std::slice::from_ref(q), ds, role)
+}
+
+/// Integer-reference metrics of the mean of several cascades of one angle (an ensemble: each
+/// frame's answer is the mean of theirs in millidegrees, rounded half away from zero) on the
+/// flights of `role`. One cascade gives its own metrics. `qs` must not be empty.
+pub fn int8_mean_metrics(qs: &[QCascade], ds: &Dataset, role: Role) -> FlightMetrics {
+    let Some(first) = qs.first() else {
+        return FlightMetrics::default();
+    };
+    let target = first.prep.angle.target();
     let per_flight: Vec<_> = ds
         .flights(role)
         .map(|fl| {
-            let truth = fl.truth(target).to_vec();
-            (fl.name.clone(), int8_answers(q, fl), truth)
+            let answers = fl
+                .features
+                .iter()
+                .map(|v| {
+                    let sum: i64 = qs.iter().map(|q| i64::from(q.reference(v).angle)).sum();
+                    mean_rounded(sum, qs.len() as i64) as f64 / 1000.0
+                })
+                .collect();
+            (fl.name.clone(), answers, fl.truth(target).to_vec())
         })
         .collect();
-    FlightMetrics::of_banded(&per_flight, q.prep.angle.bands())
+    FlightMetrics::of_banded(&per_flight, first.prep.angle.bands())
+}
+
+/// `sum / n` rounded half away from zero (`n` > 0).
+fn mean_rounded(sum: i64, n: i64) -> i64 {
+    let half = n / 2;
+    if sum >= 0 {
+        (sum + half) / n
+    } else {
+        (sum - half) / n
+    }
 }
 
 /// A trained cascade's float and int8 (integer reference) answers on `flights`, degrees.
@@ -421,6 +448,17 @@ pub fn shipped_suite() -> Option<Suite> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_ensembles_mean_rounds_half_away_from_zero() {
+        assert_eq!(mean_rounded(3, 2), 2);
+        assert_eq!(mean_rounded(-3, 2), -2);
+        assert_eq!(mean_rounded(2, 2), 1);
+        assert_eq!(mean_rounded(4, 3), 1);
+        assert_eq!(mean_rounded(5, 3), 2);
+        assert_eq!(mean_rounded(-5, 3), -2);
+        assert_eq!(mean_rounded(-7, 1), -7);
+    }
 
     #[test]
     fn the_shipped_sizes_of_the_builds_aircraft_are_a_known_configuration() {
