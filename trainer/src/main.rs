@@ -526,7 +526,8 @@ enum Cmd {
         split: String,
         /// Sensor suite of the frames the model is stepped with (table1, egi or egi120): as a
         /// sender of that suite delivers them. A model that reads a channel the suite lacks is
-        /// refused. Default: the suite the compiled-in model reads.
+        /// refused. Default: the suite the compiled-in model reads; with --model, the first
+        /// model's (every other model must read within it).
         #[arg(long)]
         suite: Option<String>,
         /// Frames for which `UNCERTAIN` stays raised after a 1σ was last above its limit (0–255),

@@ -192,7 +192,7 @@ pub fn int8_metrics(q: &QCascade, ds: &Dataset, role: Role) -> FlightMetrics {
 
 /// Integer-reference metrics of the mean of several cascades of one angle (an ensemble: each
 /// frame's answer is the mean of theirs in millidegrees, rounded half away from zero) on the
-/// flights of `role`. One cascade gives its own metrics. `qs` must not be empty.
+/// flights of `role`. One cascade gives its own metrics; no cascade gives empty metrics.
 pub fn int8_mean_metrics(qs: &[QCascade], ds: &Dataset, role: Role) -> FlightMetrics {
     let Some(first) = qs.first() else {
         return FlightMetrics::default();
