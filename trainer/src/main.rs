@@ -894,24 +894,23 @@ fn cmd_eval_model(
     json: bool,
 ) -> Result<()> {
     let role = parse_split(split)?;
-    let (mut qa, mut qb, mut provs) = (Vec::new(), Vec::new(), Vec::new());
-    let mut suites = Vec::new();
+    let (mut qa, mut qb, mut provs, mut suites) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for model in models {
         let (a, b, model_suite, prov) = trainer::saved::SavedModel::read(model)?;
-        suites.push((model, parse_suite(&model_suite)?));
+        suites.push(parse_suite(&model_suite)?);
         qa.push(a);
         qb.push(b);
         provs.push(prov);
     }
     let suite = match (suite, suites.first()) {
         (Some(s), _) => parse_suite(s)?,
-        (None, Some((_, s))) => *s,
+        (None, Some(s)) => *s,
         (None, None) => bail!("give at least one --model DIR"),
     };
-    for (model, model_suite) in &suites {
+    for (model, model_suite) in models.iter().zip(suites) {
         require_suite(
             &format!("the model in {}", model.display()),
-            *model_suite,
+            model_suite,
             suite,
         )?;
     }

@@ -179,9 +179,19 @@ fn flight_answers(model: &Cascade, q: &QCascade, fl: &Flight) -> (Vec<f64>, Vec<
 
 /// A cascade's int8 (integer reference) answers on one flight, degrees.
 fn int8_answers(q: &QCascade, fl: &Flight) -> Vec<f64> {
+    int8_mean_answers(std::slice::from_ref(q), fl)
+}
+
+/// The mean of several cascades' int8 answers on one flight, degrees: each frame's in
+/// millidegrees, rounded half away from zero (one cascade: its own answers).
+fn int8_mean_answers(qs: &[QCascade], fl: &Flight) -> Vec<f64> {
+    let n = qs.len().max(1) as i64;
     fl.features
         .iter()
-        .map(|v| q.reference(v).angle as f64 / 1000.0)
+        .map(|v| {
+            let sum: i64 = qs.iter().map(|q| i64::from(q.reference(v).angle)).sum();
+            mean_rounded(sum, n) as f64 / 1000.0
+        })
         .collect()
 }
 
@@ -201,15 +211,8 @@ pub fn int8_mean_metrics(qs: &[QCascade], ds: &Dataset, role: Role) -> FlightMet
     let per_flight: Vec<_> = ds
         .flights(role)
         .map(|fl| {
-            let answers = fl
-                .features
-                .iter()
-                .map(|v| {
-                    let sum: i64 = qs.iter().map(|q| i64::from(q.reference(v).angle)).sum();
-                    mean_rounded(sum, qs.len() as i64) as f64 / 1000.0
-                })
-                .collect();
-            (fl.name.clone(), answers, fl.truth(target).to_vec())
+            let truth = fl.truth(target).to_vec();
+            (fl.name.clone(), int8_mean_answers(qs, fl), truth)
         })
         .collect();
     FlightMetrics::of_banded(&per_flight, first.prep.angle.bands())

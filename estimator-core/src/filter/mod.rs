@@ -543,7 +543,6 @@ fn wrap_pi(a: f32) -> f32 {
     a - two_pi * libm::floorf((a + core::f32::consts::PI) / two_pi)
 }
 
-/// NED → body direction-cosine matrix from roll, pitch, heading.
 /// The velocity, NED, that the body's rotation `w` (rad/s) adds at a point `r` (body axes, m from
 /// the CG): `C_nb (ω × r)`, `cbn` being the NED → body matrix. The EGI velocity is the IMU point's;
 /// less this (the gyros' rates, `r` the lever arm) it is the CG's.
@@ -551,6 +550,7 @@ fn arm_velocity_ned(cbn: &Matrix3<f32>, w: [f32; 3], r: [f32; 3]) -> Vector3<f32
     cbn.transpose() * Vector3::from(w).cross(&Vector3::from(r))
 }
 
+/// NED → body direction-cosine matrix from roll, pitch, heading.
 fn c_bn(euler: [f32; 3]) -> Matrix3<f32> {
     let (sf, cf) = (libm::sinf(euler[0]), libm::cosf(euler[0]));
     let (st, ct) = (libm::sinf(euler[1]), libm::cosf(euler[1]));
@@ -943,9 +943,8 @@ impl AirDataFilter {
     /// `inp` with the gyro check's running mean taken off each gyro that disagrees: what the model
     /// and the lever-arm terms read. The EGI velocity, which [`Input::from_frame`] moved to the CG
     /// with the raw gyros (`v_cg = v_imu − C_nb (ω × r)`), is moved again with the rates less that
-    /// mean: `+ C_nb (e × r)` for the error `e` taken off, `cbn` being `inp`'s attitude matrix
-    /// (the step's own: with a second `c_bn` here every QEMU step of the F-16's test flight was 282
-    /// instructions longer, though no gyro disagreed on it; where the compiler put them is not known).
+    /// mean: `+ C_nb (e × r)` for the error `e` taken off, `cbn` being `inp`'s attitude matrix,
+    /// which the step has already computed.
     fn without_gyro_error(&self, inp: &Input, disagrees: u32, cbn: &Matrix3<f32>) -> Input {
         let mut out = *inp;
         let mut taken = [0.0f32; 3];
