@@ -793,22 +793,68 @@ pub struct Structure {
 
 /// Runs the identification on the flights of a flight-test dataset, with the fits' `structure`
 /// (`None`: decided from these flights, [`Structure`]).
-pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration> {
+/// A flight test's frames, read: every frame with the filter's inputs and the boom, by flight.
+struct FlightTest {
+    /// The dataset's sensor seed ([`sensor_seed`]).
+    sensor_seed: Option<u64>,
+    names: Vec<String>,
+    rows: Vec<Row>,
+    /// The boom's arm ahead of the CG, m, as the dataset recorded it.
+    arm_m: f64,
+}
+
+/// Reads the flight test in `dir` (refused when it flew another aircraft than this build's or
+/// has no boom record).
+fn read_flight_test(dir: &Path) -> Result<FlightTest> {
     let m = hil_sim::dataset::Manifest::read(dir)?;
     // The identification evaluates this build's aircraft model: a flight test (or model card) of
     // another aircraft is refused, with how to build for it.
     if let Some(why) = m.other_aircraft() {
         return Err(Error::Split(dir.to_path_buf(), why));
     }
-    // The boom's arm as the dataset recorded it (`config.boom`).
-    let arm_m = m
-        .config
-        .get("boom")
-        .and_then(|b| b.get("arm_m"))
-        .and_then(serde_json::Value::as_f64)
-        .unwrap_or(hil_sim::boom::BoomConfig::default().arm_m);
     let mut all = Vec::new();
     let mut names = Vec::new();
+    for (e, csv, boom) in boom_flights(dir, &m)? {
+        let frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
+        let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
+        all.extend(rows(names.len(), &frames, &times, &boom));
+        names.push(e.name.clone());
+    }
+    if all.is_empty() {
+        return Err(Error::Split(
+            dir.to_path_buf(),
+            "no flight with a nose-boom record (NAME.boom.csv): generate one with `hil-sim generate --preset flight-test`".into(),
+        ));
+    }
+    Ok(FlightTest {
+        sensor_seed: sensor_seed(&m),
+        names,
+        rows: all,
+        arm_m: boom_setting(&m, &["arm_m"]).unwrap_or(hil_sim::boom::BoomConfig::default().arm_m),
+    })
+}
+
+/// A number of how the dataset's boom measures, at `path` in its manifest's `config.boom`
+/// (`None`: not recorded).
+pub fn boom_setting(m: &hil_sim::dataset::Manifest, path: &[&str]) -> Option<f64> {
+    path.iter()
+        .try_fold(m.config.get("boom")?, |v, k| v.get(k))?
+        .as_f64()
+}
+
+/// The flights of `m` (in `dir`) that carry a boom record: entry, CSV and boom samples, one per
+/// sample.
+pub fn boom_flights<'m>(
+    dir: &Path,
+    m: &'m hil_sim::dataset::Manifest,
+) -> Result<
+    Vec<(
+        &'m hil_sim::dataset::FlightEntry,
+        hil_sim::dataset::Flight,
+        Vec<hil_sim::boom::BoomSample>,
+    )>,
+> {
+    let mut out = Vec::new();
     for e in &m.flights {
         let Some(b) = &e.boom else { continue };
         let csv = hil_sim::dataset::Flight::read_log(&dir.join(&e.file))?;
@@ -825,25 +871,50 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
                 ),
             ));
         }
-        let frames: Vec<SensorFrame> = hil_sim::frames::flight_frames(&csv).collect();
-        let times: Vec<f64> = csv.samples.iter().map(|s| s.time_s).collect();
-        all.extend(rows(names.len(), &frames, &times, &boom));
-        names.push(e.name.clone());
+        out.push((e, csv, boom));
     }
-    if all.is_empty() {
-        return Err(Error::Split(
-            dir.to_path_buf(),
-            "no flight with a nose-boom record (NAME.boom.csv): generate one with `hil-sim generate --preset flight-test`".into(),
-        ));
+    Ok(out)
+}
+
+/// The data-compatibility check's corrections of the boom (step 1): the vanes' gains and
+/// per-flight offsets and the airspeed's scale and bias, fitted against the inertial data.
+#[derive(Clone, Debug)]
+pub struct BoomCorrection {
+    /// The boom's arm ahead of the CG, m.
+    pub arm_m: f64,
+    /// Boom α: `kinematic = gain·boom + offset_deg_k` (deg; one offset per flight k).
+    pub alpha: Fit,
+    pub beta: Fit,
+    /// Boom airspeed against the inertial speed (m/s): `boom = scale·v + bias_mps`.
+    pub tas: Fit,
+}
+
+impl BoomCorrection {
+    /// The corrected boom's α and β (deg) and airspeed (m/s) of a frame of flight `k`: the boom's
+    /// readings, the body pitch and yaw rates `q`, `r` (rad/s) and the airspeed `v` (m/s) the
+    /// rotation-induced flow at the boom is divided by.
+    pub fn air(&self, k: usize, boom: [f64; 3], q: f64, r: f64, v: f64) -> [f64; 3] {
+        let offset = |fit: &Fit| fit.get(&format!("offset_deg_{k}"));
+        let arm = |rate: f64| (rate * self.arm_m / v).to_degrees();
+        [
+            self.alpha.get("gain") * (boom[0] + arm(q)) + offset(&self.alpha),
+            self.beta.get("gain") * (boom[1] - arm(r)) + offset(&self.beta),
+            (boom[2] - self.tas.get("bias_mps")) / self.tas.get("scale"),
+        ]
     }
+}
+
+/// Step 1 on the quasi-steady frames of a read flight test.
+fn compatibility(ft: &FlightTest) -> Result<BoomCorrection> {
+    let (all, names, arm_m) = (&ft.rows, &ft.names, ft.arm_m);
     let fit = |names: &[&str], x: Vec<Vec<f64>>, y: Vec<f64>, what: &str| {
         least_squares(names, &x, &y).ok_or_else(|| {
             Error::Numeric(format!("{what}: the flight-test data do not determine it (too few frames, or no excitation)"))
         })
     };
-    // 1. Data compatibility: the boom's rotation-induced flow removed, then scale and zero shift,
-    // on the quasi-steady frames (the vane lag against the EGI is noise in the regressor there
-    // otherwise, and would pull the scale toward 0).
+    // The boom's rotation-induced flow removed, then scale and zero shift, on the quasi-steady
+    // frames (the vane lag against the EGI is noise in the regressor there otherwise, and would
+    // pull the scale toward 0).
     let arm_a = |r: &Row| (f64::from(r.inp.gyro_rps[1]) * arm_m / r.tas_kin).to_degrees();
     let arm_b = |r: &Row| (f64::from(r.inp.gyro_rps[2]) * arm_m / r.tas_kin).to_degrees();
     // The kinematic angles carry the EGI's slow attitude and heading errors (0.03°, 0.08° rms,
@@ -868,44 +939,61 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         .collect();
     let mut angle_names = vec!["gain"];
     angle_names.extend(offset_names.iter().map(String::as_str));
-    let boom_alpha = fit(
+    let alpha = fit(
         &angle_names,
         per_flight(&|r| r.boom_alpha + arm_a(r)),
         steady.iter().map(|r| r.alpha_kin).collect(),
         "boom α",
     )?;
-    let boom_beta = fit(
+    let beta = fit(
         &angle_names,
         per_flight(&|r| r.boom_beta - arm_b(r)),
         steady.iter().map(|r| r.beta_kin).collect(),
         "boom β",
     )?;
     let ones = vec![1.0; steady.len()];
-    let boom_tas = fit(
+    let tas = fit(
         &["scale", "bias_mps"],
         vec![steady.iter().map(|r| r.tas_kin).collect(), ones],
         steady.iter().map(|r| r.boom_tas).collect(),
         "boom airspeed",
     )?;
+    Ok(BoomCorrection {
+        arm_m,
+        alpha,
+        beta,
+        tas,
+    })
+}
+
+/// The data-compatibility check of the flight test in `dir` alone (step 1 of [`calibrate`]).
+pub fn boom_correction(dir: &Path) -> Result<BoomCorrection> {
+    compatibility(&read_flight_test(dir)?)
+}
+
+pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration> {
+    let ft = read_flight_test(dir)?;
+    // 1. Data compatibility.
+    let corr = compatibility(&ft)?;
+    let FlightTest {
+        sensor_seed,
+        names,
+        rows: all,
+        ..
+    } = ft;
     // 2. Equation error at the corrected boom's air data.
-    let (ga, gb) = (boom_alpha.get("gain"), boom_beta.get("gain"));
-    let (sv, bv) = (boom_tas.get("scale"), boom_tas.get("bias_mps"));
     let mut eq = Vec::new();
-    let offsets = |fit: &Fit| -> Vec<f64> {
-        (0..names.len())
-            .map(|k| fit.get(&format!("offset_deg_{k}")))
-            .collect()
-    };
-    let (off_a, off_b) = (offsets(&boom_alpha), offsets(&boom_beta));
     // The corrected boom's α, β (rad), airspeed (m/s), density and speed of sound of a row.
     let air = |r: &Row| {
-        let oa = off_a.get(r.flight).copied().unwrap_or(0.0);
-        let ob = off_b.get(r.flight).copied().unwrap_or(0.0);
-        let alpha = (ga * (r.boom_alpha + arm_a(r)) + oa).to_radians();
-        let beta = (gb * (r.boom_beta - arm_b(r)) + ob).to_radians();
-        let tas = (r.boom_tas - bv) / sv;
+        let [alpha, beta, tas] = corr.air(
+            r.flight,
+            [r.boom_alpha, r.boom_beta, r.boom_tas],
+            f64::from(r.inp.gyro_rps[1]),
+            f64::from(r.inp.gyro_rps[2]),
+            r.tas_kin,
+        );
         let (rho, a_sound) = filter::isa(r.inp.alt_m);
-        (alpha, beta, tas, rho, a_sound)
+        (alpha.to_radians(), beta.to_radians(), tas, rho, a_sound)
     };
     for r in &all {
         let (alpha, beta, tas, rho, a_sound) = air(r);
@@ -1138,12 +1226,12 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         sideslip_share: share,
         flap_share,
         structure,
-        sensor_seed: sensor_seed(&m),
+        sensor_seed,
         stall_drag_share: core::array::from_fn(|j| drag_share(&all_eq, j + 1)),
         flights: names,
-        boom_alpha,
-        boom_beta,
-        boom_tas,
+        boom_alpha: corr.alpha.clone(),
+        boom_beta: corr.beta.clone(),
+        boom_tas: corr.tas.clone(),
         side,
         lift,
         axial: drag,

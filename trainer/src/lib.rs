@@ -12,6 +12,7 @@ pub mod error;
 pub mod export;
 pub mod features;
 pub mod filter_eval;
+pub mod finetune;
 pub mod metrics;
 pub mod model;
 pub mod ood;

@@ -482,6 +482,40 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
+    /// Fine-tune a trained model's networks on a flight test: their targets the nose boom's air
+    /// data (its lag undone, corrected by the data-compatibility check), never the simulator's
+    /// truth. Every 5th block of 30 s is held out; the epoch of the lowest held-out loss is kept
+    /// where it beats the model as it was. Writes model.json (float and int8, for `trainer eval
+    /// --model` and `trainer export`) and summary.json into --out.
+    Finetune {
+        /// The directory `trainer train --out` wrote (its model.json, with the float weights).
+        #[arg(long, value_name = "DIR")]
+        model: PathBuf,
+        /// The flight-test dataset (`hil-sim generate --preset flight-test`).
+        #[arg(long, value_name = "DIR")]
+        flight_test: PathBuf,
+        /// Output directory (refused if it holds a model.json already).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Epochs.
+        #[arg(long, default_value_t = 10, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
+        epochs: usize,
+        /// Adam learning rate (cosine-decayed over the epochs).
+        #[arg(long, default_value_t = 1e-4, value_parser = learning_rate, allow_hyphen_values = true)]
+        lr: f64,
+        /// Mini-batch size, rows.
+        #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
+        batch: usize,
+        /// Seed of the batch order.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Loss of both heads, as `trainer train --loss`.
+        #[arg(long, default_value = "l1", value_parser = parse_loss)]
+        loss: Loss,
+        /// Print exactly one JSON object (summary.json) on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Fit the weights of the estimate's 1σ (estimator-core's `uncertainty`) for the compiled-in
     /// estimator, on flights none of its networks trained on: writes the generated sigma.rs the
     /// estimator compiles in, and prints the coverage on those flights.
@@ -679,8 +713,13 @@ fn cmd_train(
         out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
+    let float = [
+        (alpha.part1.as_slice(), alpha.part2.as_slice()),
+        (beta.part1.as_slice(), beta.part2.as_slice()),
+    ];
     let model =
-        trainer::saved::SavedModel::new(&alpha.q, &beta.q, suite.name(), &prov).write(out)?;
+        trainer::saved::SavedModel::new(&alpha.q, &beta.q, Some(float), suite.name(), &prov)
+            .write(out)?;
     println!(
         "wrote {} (score it with `trainer eval --model {}`)",
         model.display(),
@@ -1053,6 +1092,122 @@ fn cmd_fit_sigma(
         }
         println!(
             "wrote {}: rebuild (cargo build --release) for the estimator to carry it",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// `trainer finetune`: the model in `model` trained further on the flight test in `ft`.
+fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: bool) -> Result<()> {
+    if out.join("model.json").exists() {
+        bail!(
+            "{} holds a model.json already: choose another --out, or delete it",
+            out.display()
+        );
+    }
+    let ([fa, fb], model_suite, prov) = trainer::saved::SavedModel::read_float(model)
+        .with_context(|| format!("reading the model in {}", model.display()))?;
+    let needs = parse_suite(&model_suite)?;
+    let manifest = hil_sim::dataset::Manifest::read(ft)
+        .with_context(|| format!("reading the flight test {}", ft.display()))?;
+    let delivers = manifest
+        .suites
+        .iter()
+        .filter_map(|s| estimator_core::Suite::from_name(s))
+        .any(|s| s.delivers(needs));
+    if !delivers {
+        bail!(
+            "{} records the sensor suites {:?}; the model reads `{}`: regenerate it with this build's `hil-sim generate --preset flight-test`",
+            ft.display(),
+            manifest.suites,
+            needs.name()
+        );
+    }
+    let data = trainer::finetune::boom_targets(ft)
+        .with_context(|| format!("reading the boom's air data of {}", ft.display()))?;
+    let rows = |fl: &[trainer::data::Flight]| fl.iter().map(|f| f.len()).sum::<usize>();
+    eprintln!(
+        "flight test {}: {} training frames, {} held out (blocks of {} s), {} left out",
+        ft.display(),
+        rows(&data.train),
+        rows(&data.val),
+        trainer::finetune::BLOCK_S,
+        data.skipped
+    );
+    let bars = indicatif::MultiProgress::new();
+    let cfg_of = |a: Angle| TrainConfig {
+        label: a.name().into(),
+        bars: Some(bars.clone()),
+        ..cfg.clone()
+    };
+    let (alpha, beta) = std::thread::scope(|s| {
+        let beta = s.spawn(|| trainer::finetune::finetune(&fb, &data, &cfg_of(Angle::Beta)));
+        let alpha = trainer::finetune::finetune(&fa, &data, &cfg_of(Angle::Alpha));
+        (alpha, beta.join())
+    });
+    let beta = beta
+        .map_err(|_| anyhow::anyhow!("the β fine-tuning thread panicked; see the message above"))?;
+    let command = command_line();
+    let angle_json = |t: &trainer::finetune::Tuned| {
+        serde_json::json!({
+            "improved": t.improved,
+            "val_loss_before": t.val_before,
+            "best_epoch": t.curves.best_epoch + 1,
+            "val_boom_mae_deg_before": t.val_mae_deg[0],
+            "val_boom_mae_deg_after": t.val_mae_deg[1],
+            "curves": t.curves,
+        })
+    };
+    let summary = serde_json::json!({
+        "model": model.display().to_string(),
+        "flight_test": ft.display().to_string(),
+        "epochs": cfg.epochs, "lr": cfg.lr, "batch": cfg.batch, "seed": cfg.seed, "loss": cfg.loss.name(),
+        "train_frames": rows(&data.train), "val_frames": rows(&data.val), "skipped_frames": data.skipped,
+        "alpha": angle_json(&alpha), "beta": angle_json(&beta),
+        "command": command,
+    });
+    let prov = format!(
+        "{prov}fine-tuned on the flight test {} (manifest sha256 {}; the boom's air data, {} frames, {} held out), epochs {}, lr {}, seed {}\ncommand: {command}\n",
+        ft.display(),
+        hil_sim::dataset::sha256_file(&ft.join("manifest.json"))
+            .with_context(|| format!("hashing {}/manifest.json", ft.display()))?,
+        rows(&data.train),
+        rows(&data.val),
+        cfg.epochs,
+        cfg.lr,
+        cfg.seed
+    );
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::write(
+        out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    let float = [
+        (alpha.part1.as_slice(), alpha.part2.as_slice()),
+        (beta.part1.as_slice(), beta.part2.as_slice()),
+    ];
+    let path = trainer::saved::SavedModel::new(&alpha.q, &beta.q, Some(float), &model_suite, &prov)
+        .write(out)?;
+    if json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        for (a, t) in [(Angle::Alpha, &alpha), (Angle::Beta, &beta)] {
+            println!(
+                "{}: held-out int8 MAE against the boom {:.3}° → {:.3}° ({})",
+                a.symbol(),
+                t.val_mae_deg[0],
+                t.val_mae_deg[1],
+                if t.improved {
+                    format!("epoch {} kept", t.curves.best_epoch + 1)
+                } else {
+                    "no epoch beat the model: kept as it was".into()
+                }
+            );
+        }
+        println!(
+            "wrote {} (score it with `trainer eval --model {}`)",
+            path.display(),
             out.display()
         );
     }
@@ -1953,6 +2108,33 @@ fn run() -> Result<()> {
             out,
             json,
         } => cmd_calibrate(flight_test, model_flight_test, out, *json),
+        Cmd::Finetune {
+            model,
+            flight_test,
+            out,
+            epochs,
+            lr,
+            batch,
+            seed,
+            loss,
+            json,
+        } => cmd_finetune(
+            model,
+            flight_test,
+            out,
+            TrainConfig {
+                epochs: *epochs,
+                batch: *batch,
+                lr: *lr,
+                seed: *seed,
+                label: String::new(),
+                progress: !*json,
+                loss: *loss,
+                replicas: None,
+                bars: None,
+            },
+            *json,
+        ),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Bars { spec, out } => cmd_bars(spec, out),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),

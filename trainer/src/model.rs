@@ -1,7 +1,7 @@
 //! The networks in burn (flex backend: pure Rust, bit-deterministic): a plain MLP and the cascade of
 //! Fig. 7 (part 1 → intermediate; part 2 on the features plus the intermediate), trained jointly on
 //! MSE(intermediate) + MSE(angle) with Adam.
-use burn::module::Module;
+use burn::module::{Module, Param};
 use burn::nn::{Linear, LinearConfig};
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::activation::relu;
@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 
 /// A float dense layer as exported from burn: `weights[o][i]`, `bias[o]`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FloatLayer {
     pub weights: Vec<Vec<f32>>,
     pub bias: Vec<f32>,
@@ -81,6 +81,30 @@ impl Mlp {
         x
     }
 
+    /// An MLP holding exported layers ([`Mlp::export`] gives them back bit for bit), on `device`;
+    /// its parameters train from there.
+    pub fn from_layers(layers: &[FloatLayer], device: &Device) -> Mlp {
+        Mlp {
+            layers: layers
+                .iter()
+                .map(|l| {
+                    let (n_in, n_out) = (l.n_in(), l.n_out());
+                    // `Linear` stores `[in, out]`: element (i, o) at i·n_out + o.
+                    let w: Vec<f32> = (0..n_in)
+                        .flat_map(|i| l.weights.iter().map(move |row| row[i]))
+                        .collect();
+                    Linear {
+                        weight: Param::from_data(TensorData::new(w, [n_in, n_out]), device),
+                        bias: Some(Param::from_data(
+                            TensorData::new(l.bias.clone(), [n_out]),
+                            device,
+                        )),
+                    }
+                })
+                .collect(),
+        }
+    }
+
     /// Weights out of burn (`Linear` stores `[in, out]`, y = xW + b) into `[out][in]` rows.
     pub fn export(&self) -> Vec<FloatLayer> {
         self.layers
@@ -127,6 +151,14 @@ impl Cascade {
         Cascade {
             part1: Mlp::new(&dims(n_in), device),
             part2: Mlp::new(&dims(n_in + 1), device),
+        }
+    }
+
+    /// A cascade holding exported parts (a saved model's float layers), to train further.
+    pub fn from_layers(part1: &[FloatLayer], part2: &[FloatLayer], device: &Device) -> Cascade {
+        Cascade {
+            part1: Mlp::from_layers(part1, device),
+            part2: Mlp::from_layers(part2, device),
         }
     }
 
@@ -313,7 +345,8 @@ pub fn predict_all<M: Net>(model: &M, x: &[f32], n_in: usize) -> (Vec<f32>, Vec<
     (pm, po)
 }
 
-fn val_losses<M: Net>(model: &M, val: &Matrix, loss: Loss) -> [f64; 2] {
+/// Mean loss per head `[intermediate, angle]` of `model` on the rows of `val`.
+pub fn val_losses<M: Net>(model: &M, val: &Matrix, loss: Loss) -> [f64; 2] {
     let (pm, po) = predict_all(model, &val.x, val.n_in);
     let n = val.rows().max(1) as f64;
     let m = pm
@@ -635,6 +668,33 @@ fn train_here<M: Net>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A trained cascade's exported layers, loaded back, are the same model: the same layers bit
+    /// for bit and the same answers (`trainer finetune` starts from them).
+    #[test]
+    fn exported_layers_load_back_bit_for_bit() {
+        let m = init_model(|d| Cascade::new(5, &[7, 3], d), 3);
+        let (p1, p2) = (m.part1.export(), m.part2.export());
+        let back = Cascade::from_layers(&p1, &p2, &Device::flex().autodiff());
+        assert_eq!(back.part1.export(), p1);
+        assert_eq!(back.part2.export(), p2);
+        let x: Vec<f32> = (0..20).map(|k| (k as f32 * 0.37).sin()).collect();
+        assert_eq!(predict_all(&m, &x, 5), predict_all(&back, &x, 5));
+        // model.json keeps them as JSON numbers: they read back bit for bit.
+        let text = serde_json::to_string(&p1).unwrap();
+        assert_eq!(serde_json::from_str::<Vec<FloatLayer>>(&text).unwrap(), p1);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let many: Vec<f32> = (0..100_000)
+            .map(|_| f32::from_bits(rand::Rng::random::<u32>(&mut rng) & 0xbfff_ffff))
+            .filter(|v| v.is_finite())
+            .collect();
+        let back: Vec<f32> = serde_json::from_str(&serde_json::to_string(&many).unwrap()).unwrap();
+        assert!(
+            many.iter()
+                .zip(&back)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
 
     /// Rows whose angle target is 0 four times in five and 5 otherwise, from inputs that cannot
     /// tell them apart: the best constant answer is the mean (1) under MSE and the median (0)

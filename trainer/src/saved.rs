@@ -3,6 +3,7 @@
 //! source tree and rebuilding. The compiled-in form stays `weights.rs` (crate::quant::generate).
 use crate::error::{Error, Result};
 use crate::features::parse_feature;
+use crate::model::FloatLayer;
 use crate::prep::{Angle, Prep};
 use crate::quant::{QCascade, QLayer};
 use estimator_core::normalize::{Envelope, Norm, TURBULENCE_BANDS, TurbulenceEnvelope};
@@ -37,6 +38,24 @@ struct Cascade {
     lift_scale: (i32, i32),
     part1: Vec<Layer>,
     part2: Vec<Layer>,
+    /// The float parts the int8 ones were quantized from (what `trainer finetune` trains further);
+    /// absent from a model.json written before they were saved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    float: Option<FloatParts>,
+}
+
+/// A cascade's float parts, `[part1, part2]`.
+#[derive(Serialize, Deserialize, Clone)]
+struct FloatParts {
+    part1: Vec<FloatLayer>,
+    part2: Vec<FloatLayer>,
+}
+
+/// The float parts of a saved cascade and its int8 form (whose scaling they keep).
+pub struct FloatCascade {
+    pub part1: Vec<FloatLayer>,
+    pub part2: Vec<FloatLayer>,
+    pub q: QCascade,
 }
 
 /// The saved model: both cascades, the sensor suite they read and the training provenance.
@@ -84,7 +103,7 @@ fn unlayers(ls: Vec<Layer>) -> Vec<QLayer> {
 }
 
 impl Cascade {
-    fn of(q: &QCascade) -> Cascade {
+    fn of(q: &QCascade, float: Option<(&[FloatLayer], &[FloatLayer])>) -> Cascade {
         let p = &q.prep;
         Cascade {
             angle: p.angle,
@@ -101,6 +120,10 @@ impl Cascade {
             lift_scale: (p.lift_scale.lo, p.lift_scale.hi),
             part1: layers(&q.part1),
             part2: layers(&q.part2),
+            float: float.map(|(part1, part2)| FloatParts {
+                part1: part1.to_vec(),
+                part2: part2.to_vec(),
+            }),
         }
     }
 
@@ -189,14 +212,59 @@ impl Cascade {
     }
 }
 
+/// The float parts of a cascade in `path`, checked to have the shapes of its int8 parts.
+fn float_parts(c: &Cascade, path: &Path) -> Result<FloatParts> {
+    let bad = |msg: String| Error::Model {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let f = c.float.clone().ok_or_else(|| {
+        bad(format!(
+            "the {} cascade has no float weights (the model was saved before they were): retrain it with this build's `trainer train`",
+            c.angle.name()
+        ))
+    })?;
+    for (float, int) in [(&f.part1, &c.part1), (&f.part2, &c.part2)] {
+        let same = float.len() == int.len()
+            && float.iter().zip(int).all(|(fl, il)| {
+                fl.bias.len() == il.bias.len()
+                    && fl.weights.len() == il.weights.len()
+                    && fl
+                        .weights
+                        .iter()
+                        .zip(&il.weights)
+                        .all(|(a, b)| a.len() == b.len())
+            });
+        if !same {
+            return Err(bad(format!(
+                "the {} cascade's float weights do not have its int8 layers' shapes",
+                c.angle.name()
+            )));
+        }
+    }
+    Ok(f)
+}
+
 impl SavedModel {
-    pub fn new(alpha: &QCascade, beta: &QCascade, suite: &str, provenance: &str) -> SavedModel {
+    /// The saved form of two quantized cascades (α, β), with the float parts they were quantized
+    /// from where given (`[α, β]`, each `(part1, part2)`).
+    pub fn new(
+        alpha: &QCascade,
+        beta: &QCascade,
+        float: Option<[(&[FloatLayer], &[FloatLayer]); 2]>,
+        suite: &str,
+        provenance: &str,
+    ) -> SavedModel {
+        let [fa, fb] = match float {
+            Some([a, b]) => [Some(a), Some(b)],
+            None => [None, None],
+        };
         SavedModel {
             format: FORMAT,
             suite: suite.to_string(),
             provenance: provenance.to_string(),
-            alpha: Cascade::of(alpha),
-            beta: Cascade::of(beta),
+            alpha: Cascade::of(alpha, fa),
+            beta: Cascade::of(beta, fb),
         }
     }
 
@@ -216,6 +284,34 @@ impl SavedModel {
 
     /// Reads `dir/model.json` into the two cascades (α, β), the suite name and the provenance.
     pub fn read(dir: &Path) -> Result<(QCascade, QCascade, String, String)> {
+        let (m, path) = SavedModel::parse(dir)?;
+        let alpha = m.alpha.into_q(&path)?;
+        let beta = m.beta.into_q(&path)?;
+        Ok((alpha, beta, m.suite, m.provenance))
+    }
+
+    /// Reads `dir/model.json` with its float parts (refused where it has none): `[α, β]`, the
+    /// suite name and the provenance.
+    pub fn read_float(dir: &Path) -> Result<([FloatCascade; 2], String, String)> {
+        let (m, path) = SavedModel::parse(dir)?;
+        let (fa, fb) = (float_parts(&m.alpha, &path)?, float_parts(&m.beta, &path)?);
+        let cascade = |f: FloatParts, q: QCascade| FloatCascade {
+            part1: f.part1,
+            part2: f.part2,
+            q,
+        };
+        Ok((
+            [
+                cascade(fa, m.alpha.into_q(&path)?),
+                cascade(fb, m.beta.into_q(&path)?),
+            ],
+            m.suite,
+            m.provenance,
+        ))
+    }
+
+    /// `dir/model.json`, its format and the order of its cascades checked.
+    fn parse(dir: &Path) -> Result<(SavedModel, std::path::PathBuf)> {
         let path = dir.join("model.json");
         let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
             path: path.clone(),
@@ -234,14 +330,12 @@ impl SavedModel {
                 ),
             });
         }
-        let alpha = m.alpha.into_q(&path)?;
-        let beta = m.beta.into_q(&path)?;
-        if alpha.prep.angle != Angle::Alpha || beta.prep.angle != Angle::Beta {
+        if m.alpha.angle != Angle::Alpha || m.beta.angle != Angle::Beta {
             return Err(Error::Model {
                 path,
                 msg: "the cascades are not α then β".into(),
             });
         }
-        Ok((alpha, beta, m.suite, m.provenance))
+        Ok((m, path))
     }
 }
