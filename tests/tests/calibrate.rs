@@ -122,31 +122,7 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
 
     // The same dataset with every truth column deleted from every flight CSV.
     let stripped = dir.join("ft-no-truth");
-    std::fs::create_dir_all(&stripped).unwrap();
-    for e in std::fs::read_dir(&ft).unwrap().flatten() {
-        let p = e.path();
-        let name = e.file_name().to_string_lossy().into_owned();
-        let is_flight = name.ends_with(".csv") && !name.ends_with(".boom.csv");
-        if !is_flight {
-            std::fs::copy(&p, stripped.join(&name)).unwrap();
-            continue;
-        }
-        let text = std::fs::read_to_string(&p).unwrap();
-        let mut lines = text.lines();
-        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let keep: Vec<usize> = (0..header.len())
-            .filter(|&i| !hil_sim::flight::TRUTH_COLUMNS.contains(&header[i]))
-            .collect();
-        assert!(keep.len() < header.len(), "{name} had truth columns");
-        let mut out = String::new();
-        for l in std::iter::once(header.join(",")).chain(lines.map(str::to_string)) {
-            let cells: Vec<&str> = l.split(',').collect();
-            let row: Vec<&str> = keep.iter().map(|&i| cells[i]).collect();
-            out.push_str(&row.join(","));
-            out.push('\n');
-        }
-        std::fs::write(stripped.join(&name), out).unwrap();
-    }
+    strip_truth(&ft, &stripped);
     let without = calibration(&stripped, &models, &dir.join("cal-no-truth"));
     assert_eq!(with_truth, without, "the calibration read a truth column");
 
@@ -274,6 +250,156 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     assert!(
         se < 0.15 && (k - 1.0).abs() <= 2.0 * se,
         "pitch scale {k} ± {se}, truth 1"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A copy of the dataset `from` in `to` with every truth column deleted from every flight CSV.
+fn strip_truth(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let p = e.path();
+        let name = e.file_name().to_string_lossy().into_owned();
+        let is_flight = name.ends_with(".csv") && !name.ends_with(".boom.csv");
+        if !is_flight {
+            std::fs::copy(&p, to.join(&name)).unwrap();
+            continue;
+        }
+        let text = std::fs::read_to_string(&p).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let keep: Vec<usize> = (0..header.len())
+            .filter(|&i| !hil_sim::flight::TRUTH_COLUMNS.contains(&header[i]))
+            .collect();
+        assert!(keep.len() < header.len(), "{name} had truth columns");
+        let mut out = String::new();
+        for l in std::iter::once(header.join(",")).chain(lines.map(str::to_string)) {
+            let cells: Vec<&str> = l.split(',').collect();
+            let row: Vec<&str> = keep.iter().map(|&i| cells[i]).collect();
+            out.push_str(&row.join(","));
+            out.push('\n');
+        }
+        std::fs::write(to.join(&name), out).unwrap();
+    }
+}
+
+/// `trainer finetune` trains on the boom's air data, never on the truth: a small network
+/// fine-tuned on variant C's flight test with and without its truth columns comes out the same,
+/// bit for bit. A model saved without its float weights, and an --out that holds a model already,
+/// are refused.
+#[test]
+fn finetune_reads_no_truth() {
+    let air = estimator_core::aircraft::AIRCRAFT;
+    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "finetune");
+    let aircraft = dir.join("c");
+    ok(Command::new(root().join("scripts/airframe-variant"))
+        .arg(root().join(format!(
+            "airframes/{}-variants/c-pure-scales.toml",
+            air.name
+        )))
+        .args(["--model", air.jsbsim_model, "--out"])
+        .arg(&aircraft));
+    let ft = dir.join("ft");
+    let ci = dir.join("ci");
+    ok(Command::new(bin("hil-sim"))
+        .args([
+            "generate",
+            "--preset",
+            "flight-test",
+            "--seed",
+            "1",
+            "--aircraft",
+            air.name,
+        ])
+        .arg("--aircraft-dir")
+        .arg(&aircraft)
+        .arg("--out")
+        .arg(&ft));
+    ok(Command::new(bin("hil-sim"))
+        .args([
+            "generate",
+            "--preset",
+            "ci",
+            "--aircraft",
+            air.name,
+            "--out",
+        ])
+        .arg(&ci));
+    let model = dir.join("model");
+    ok(Command::new(bin("trainer"))
+        .args(["train", "--config", "small", "--epochs", "1", "--data"])
+        .arg(&ci)
+        .arg("--out")
+        .arg(&model));
+    let stripped = dir.join("ft-no-truth");
+    strip_truth(&ft, &stripped);
+    let finetune = |from: &Path, out: &Path| {
+        let mut cmd = Command::new(bin("trainer"));
+        cmd.args(["finetune", "--epochs", "2", "--model"])
+            .arg(&model)
+            .arg("--flight-test")
+            .arg(from)
+            .arg("--out")
+            .arg(out);
+        cmd
+    };
+    // What a fine-tuning wrote, but for the paths and command line its provenance names.
+    let tuned = |from: &Path, out: &Path| {
+        ok(&mut finetune(from, out));
+        let mut m: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("model.json")).unwrap()).unwrap();
+        m["provenance"] = serde_json::Value::Null;
+        let mut s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        for k in ["flight_test", "command"] {
+            s[k] = serde_json::Value::Null;
+        }
+        for a in ["alpha", "beta"] {
+            s[a]["curves"]["epoch_s"] = serde_json::Value::Null;
+        }
+        (m, s)
+    };
+    let (with_truth, summary) = tuned(&ft, &dir.join("tuned"));
+    assert!(
+        summary["train_frames"].as_u64().unwrap() > 20_000,
+        "{summary}"
+    );
+    assert_eq!(
+        (with_truth, summary),
+        tuned(&stripped, &dir.join("tuned-no-truth")),
+        "the fine-tuning read a truth column"
+    );
+    // Refused, with what to do, and nothing written.
+    let o = finetune(&ft, &dir.join("tuned")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("holds a model.json already"),
+        "{err}"
+    );
+    let old = dir.join("model-without-float");
+    std::fs::create_dir_all(&old).unwrap();
+    let mut m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(model.join("model.json")).unwrap()).unwrap();
+    for a in ["alpha", "beta"] {
+        m[a].as_object_mut().unwrap().remove("float");
+    }
+    std::fs::write(old.join("model.json"), m.to_string()).unwrap();
+    let out = dir.join("tuned-refused");
+    let o = Command::new(bin("trainer"))
+        .args(["finetune", "--model"])
+        .arg(&old)
+        .arg("--flight-test")
+        .arg(&ft)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("retrain it"), "{err}");
+    assert!(
+        !out.exists(),
+        "a refused fine-tuning wrote {}",
+        out.display()
     );
     std::fs::remove_dir_all(&dir).ok();
 }
