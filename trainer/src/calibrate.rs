@@ -791,8 +791,6 @@ pub struct Structure {
     pub flap_apart: bool,
 }
 
-/// Runs the identification on the flights of a flight-test dataset, with the fits' `structure`
-/// (`None`: decided from these flights, [`Structure`]).
 /// A flight test's frames, read: every frame with the filter's inputs and the boom, by flight.
 struct FlightTest {
     /// The dataset's sensor seed ([`sensor_seed`]).
@@ -882,8 +880,10 @@ pub fn boom_flights<'m>(
 pub struct BoomCorrection {
     /// The boom's arm ahead of the CG, m.
     pub arm_m: f64,
-    /// Boom α: `kinematic = gain·boom + offset_deg_k` (deg; one offset per flight k).
+    /// Boom α: `kinematic = gain·(boom + q·x/V) + offset_deg_k` (deg; one offset per flight k,
+    /// x the arm).
     pub alpha: Fit,
+    /// Boom β: `kinematic = gain·(boom − r·x/V) + offset_deg_k`.
     pub beta: Fit,
     /// Boom airspeed against the inertial speed (m/s): `boom = scale·v + bias_mps`.
     pub tas: Fit,
@@ -971,6 +971,8 @@ pub fn boom_correction(dir: &Path) -> Result<BoomCorrection> {
     compatibility(&read_flight_test(dir)?)
 }
 
+/// Runs the identification on the flights of a flight-test dataset, with the fits' `structure`
+/// (`None`: decided from these flights, [`Structure`]).
 pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration> {
     let ft = read_flight_test(dir)?;
     // 1. Data compatibility.

@@ -7,7 +7,7 @@
 //!    known time constant (the instrument's, recorded in the dataset's `config.boom`), applied at
 //!    the 20 Hz samples: `y_k = a·y_{k−1} + (1 − a)·x_k` with `a = exp(−Δt/τ)`, so
 //!    `x_k = (y_k − a·y_{k−1}) / (1 − a)` exactly, at the price of the noise growing by
-//!    `√(1 + a²)/(1 − a)` (1.7 for the vanes' 0.05 s).
+//!    `√(1 + a²)/(1 − a)` (1.7 for the vanes' 0.05 s, 3.0 for the probe's 0.1 s).
 //! 2. **The data-compatibility check's corrections** (`calibrate::boom_correction`): the
 //!    rotation-induced flow at the boom removed, the vanes' gains and per-flight offsets and the
 //!    airspeed's scale and bias applied.
@@ -104,13 +104,15 @@ pub fn boom_targets(dir: &Path) -> Result<BoomFlights> {
                 .then(|| Input::from_frame(frame, dt as f32, CONFIG.lever_arm_m, CONFIG.subsamples))
                 .flatten()
                 .and_then(|inp| {
-                    let tas = v.get(i).copied()?;
+                    let boom = [a.get(i).copied()?, b.get(i).copied()?, v.get(i).copied()?];
+                    // The rotation-induced flow is divided by the corrected airspeed.
+                    let v_arm = correction.air(k, boom, 0.0, 0.0, 1.0)[2].max(1.0);
                     let [alpha, beta, tas] = correction.air(
                         k,
-                        [a.get(i).copied()?, b.get(i).copied()?, tas],
+                        boom,
                         f64::from(inp.gyro_rps[1]),
                         f64::from(inp.gyro_rps[2]),
-                        tas.max(1.0),
+                        v_arm,
                     );
                     (tas >= MIN_TAS_MPS && alpha.is_finite() && beta.is_finite()).then_some((
                         alpha,
@@ -137,6 +139,8 @@ pub fn boom_targets(dir: &Path) -> Result<BoomFlights> {
                 truth: Default::default(),
                 qbar_pa: Vec::new(),
             });
+            // `truth` holds the targets, here the corrected boom's air data (and `qbar_pa` the
+            // dynamic pressure at it and the ISA density), not the simulator's.
             let (ar, br) = (alpha.to_radians(), beta.to_radians());
             let targets = [
                 (Target::AlphaDeg, alpha),
@@ -163,7 +167,8 @@ pub fn boom_targets(dir: &Path) -> Result<BoomFlights> {
         return Err(Error::Split(
             dir.to_path_buf(),
             format!(
-                "the flight test has too few frames with boom air data above {MIN_TAS_MPS} m/s to train on and hold out blocks of {BLOCK_S} s"
+                "too few frames with boom air data above {MIN_TAS_MPS} m/s: every {VAL_EVERY}th block of {BLOCK_S} s is held out, so a flight needs more than {} s above that speed; fly the card of `hil-sim generate --preset flight-test`",
+                BLOCK_S * (VAL_EVERY / 2 + 1) as f64
             ),
         ));
     }
@@ -202,18 +207,69 @@ fn boom_mae(q: &QCascade, flights: &[&Flight]) -> f64 {
     sum / n.max(1) as f64
 }
 
+/// What a fine-tuning trains, and on what besides the flight test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tune {
+    /// Every parameter.
+    All,
+    /// Part 2's output layer alone.
+    Output,
+}
+
+/// Rows of `flights` (simulated training flights, their truth the targets) evenly spread, at most
+/// `rows` of them, in `prep`'s scaling.
+fn replay_matrix(prep: &crate::prep::Prep, flights: &[&Flight], rows: usize) -> Matrix {
+    let (mut x, mut ym, mut yo) = (Vec::new(), Vec::new(), Vec::new());
+    for (fl, i) in crate::data::spread_rows(flights, rows) {
+        let (Some(m), Some(o)) = (
+            fl.truth(prep.angle.intermediate()).get(i),
+            fl.truth(prep.angle.target()).get(i),
+        ) else {
+            continue;
+        };
+        prep.input(&fl.features[i], &mut x);
+        ym.push(prep.mid_z(*m));
+        yo.push(prep.out_z(*o));
+    }
+    Matrix {
+        x,
+        ym,
+        yo,
+        n_in: prep.n_inputs(),
+    }
+}
+
 /// Trains `f` further on the training blocks of `data` (`cfg`: epochs, learning rate, batch,
-/// seed, loss), keeps the epoch of the lowest held-out loss if it beats the model as it was, and
-/// quantizes it with the model's own scaling.
-pub fn finetune(f: &FloatCascade, data: &BoomFlights, cfg: &TrainConfig) -> Tuned {
+/// seed, loss) and, with `replay`, as many rows of those simulated flights again, so that what
+/// the flight test does not fly is not forgotten; keeps the epoch of the lowest held-out loss if
+/// it beats the model as it was, and quantizes it with the model's normalisation.
+pub fn finetune(
+    f: &FloatCascade,
+    data: &BoomFlights,
+    replay: &[&Flight],
+    tune: Tune,
+    cfg: &TrainConfig,
+) -> Tuned {
     let prep = &f.q.prep;
     let tr: Vec<&Flight> = data.train.iter().collect();
     let va: Vec<&Flight> = data.val.iter().collect();
-    let (train_m, val_m): (Matrix, Matrix) = (prep.matrix(&tr), prep.matrix(&va));
+    let (mut train_m, val_m): (Matrix, Matrix) = (prep.matrix(&tr), prep.matrix(&va));
+    if !replay.is_empty() {
+        let r = replay_matrix(prep, replay, train_m.rows());
+        train_m.x.extend(r.x);
+        train_m.ym.extend(r.ym);
+        train_m.yo.extend(r.yo);
+    }
     let before = Cascade::from_layers(&f.part1, &f.part2, &Device::flex());
     let val_before = val_losses(&before, &val_m, cfg.loss);
     let (model, curves) = train(
-        |d| Cascade::from_layers(&f.part1, &f.part2, d),
+        |d| {
+            let c = Cascade::from_layers(&f.part1, &f.part2, d);
+            match tune {
+                Tune::All => c,
+                Tune::Output => c.output_layer_only(),
+            }
+        },
         cfg,
         &train_m,
         &val_m,
@@ -223,13 +279,16 @@ pub fn finetune(f: &FloatCascade, data: &BoomFlights, cfg: &TrainConfig) -> Tune
         .get(curves.best_epoch)
         .map_or(f64::INFINITY, |v| v[0] + v[1]);
     let improved = best < val_before[0] + val_before[1];
-    let (part1, part2) = if improved {
-        (model.part1.export(), model.part2.export())
+    let (part1, part2, q) = if improved {
+        let (part1, part2) = (model.part1.export(), model.part2.export());
+        // The activation scales from the flight test's frames and the replayed ones.
+        let mut calib = crate::pipeline::calibration(prep, &tr, 20_000);
+        calib.extend(crate::pipeline::calibration(prep, replay, 20_000));
+        let q = quantize_cascade(prep, &part1, &part2, &calib);
+        (part1, part2, q)
     } else {
-        (f.part1.clone(), f.part2.clone())
+        (f.part1.clone(), f.part2.clone(), f.q.clone())
     };
-    let calib = crate::pipeline::calibration(prep, &tr, 20_000);
-    let q = quantize_cascade(prep, &part1, &part2, &calib);
     let val_mae_deg = [boom_mae(&f.q, &va), boom_mae(&q, &va)];
     Tuned {
         part1,

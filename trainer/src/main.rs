@@ -512,6 +512,14 @@ enum Cmd {
         /// Loss of both heads, as `trainer train --loss`.
         #[arg(long, default_value = "l1", value_parser = parse_loss)]
         loss: Loss,
+        /// A simulated dataset (the model's `--data`, e.g. out/data/large) whose training flights'
+        /// rows are trained on beside the flight test's, as many again, so that what the card
+        /// does not fly (turbulence, other speeds) is not forgotten.
+        #[arg(long, value_name = "DIR")]
+        replay: Option<PathBuf>,
+        /// What trains: `all` (every parameter) or `output` (part 2's output layer alone).
+        #[arg(long, default_value = "all", value_parser = parse_tune)]
+        tune: trainer::finetune::Tune,
         /// Print exactly one JSON object (summary.json) on stdout.
         #[arg(long)]
         json: bool,
@@ -1099,7 +1107,23 @@ fn cmd_fit_sigma(
 }
 
 /// `trainer finetune`: the model in `model` trained further on the flight test in `ft`.
-fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: bool) -> Result<()> {
+fn parse_tune(s: &str) -> std::result::Result<trainer::finetune::Tune, String> {
+    match s {
+        "all" => Ok(trainer::finetune::Tune::All),
+        "output" => Ok(trainer::finetune::Tune::Output),
+        _ => Err(format!("`{s}`: choose all or output")),
+    }
+}
+
+fn cmd_finetune(
+    model: &Path,
+    ft: &Path,
+    out: &Path,
+    replay: Option<&Path>,
+    tune: trainer::finetune::Tune,
+    cfg: TrainConfig,
+    json: bool,
+) -> Result<()> {
     if out.join("model.json").exists() {
         bail!(
             "{} holds a model.json already: choose another --out, or delete it",
@@ -1108,7 +1132,8 @@ fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: boo
     }
     let ([fa, fb], model_suite, prov) = trainer::saved::SavedModel::read_float(model)
         .with_context(|| format!("reading the model in {}", model.display()))?;
-    let needs = parse_suite(&model_suite)?;
+    let needs = parse_suite(&model_suite)
+        .with_context(|| format!("the sensor suite of the model in {}", model.display()))?;
     let manifest = hil_sim::dataset::Manifest::read(ft)
         .with_context(|| format!("reading the flight test {}", ft.display()))?;
     let delivers = manifest
@@ -1126,6 +1151,20 @@ fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: boo
     }
     let data = trainer::finetune::boom_targets(ft)
         .with_context(|| format!("reading the boom's air data of {}", ft.display()))?;
+    let replay_ds = replay.map(|d| load(d, 0.15)).transpose()?;
+    if let Some(ds) = &replay_ds
+        && !ds.suites.iter().any(|s| s.delivers(needs))
+    {
+        bail!(
+            "--replay {} does not carry the `{}` suite the model reads: give the dataset the model trained on",
+            ds.dir.display(),
+            needs.name()
+        );
+    }
+    let replay_flights: Vec<&trainer::data::Flight> = replay_ds
+        .as_ref()
+        .map(|ds| ds.flights(trainer::data::Role::Train).collect())
+        .unwrap_or_default();
     let rows = |fl: &[trainer::data::Flight]| fl.iter().map(|f| f.len()).sum::<usize>();
     eprintln!(
         "flight test {}: {} training frames, {} held out (blocks of {} s), {} left out",
@@ -1142,8 +1181,11 @@ fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: boo
         ..cfg.clone()
     };
     let (alpha, beta) = std::thread::scope(|s| {
-        let beta = s.spawn(|| trainer::finetune::finetune(&fb, &data, &cfg_of(Angle::Beta)));
-        let alpha = trainer::finetune::finetune(&fa, &data, &cfg_of(Angle::Alpha));
+        let beta = s.spawn(|| {
+            trainer::finetune::finetune(&fb, &data, &replay_flights, tune, &cfg_of(Angle::Beta))
+        });
+        let alpha =
+            trainer::finetune::finetune(&fa, &data, &replay_flights, tune, &cfg_of(Angle::Alpha));
         (alpha, beta.join())
     });
     let beta = beta
@@ -1163,12 +1205,14 @@ fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: boo
         "model": model.display().to_string(),
         "flight_test": ft.display().to_string(),
         "epochs": cfg.epochs, "lr": cfg.lr, "batch": cfg.batch, "seed": cfg.seed, "loss": cfg.loss.name(),
+        "tune": format!("{tune:?}").to_lowercase(),
+        "replay": replay.map(|d| d.display().to_string()),
         "train_frames": rows(&data.train), "val_frames": rows(&data.val), "skipped_frames": data.skipped,
         "alpha": angle_json(&alpha), "beta": angle_json(&beta),
         "command": command,
     });
     let prov = format!(
-        "{prov}fine-tuned on the flight test {} (manifest sha256 {}; the boom's air data, {} frames, {} held out), epochs {}, lr {}, seed {}\ncommand: {command}\n",
+        "{prov}fine-tuned on the flight test {} (manifest sha256 {}; the boom's air data, {} frames, {} held out), epochs {}, lr {}, seed {}, {tune:?} parameters{}\ncommand: {command}\n",
         ft.display(),
         hil_sim::dataset::sha256_file(&ft.join("manifest.json"))
             .with_context(|| format!("hashing {}/manifest.json", ft.display()))?,
@@ -1176,19 +1220,41 @@ fn cmd_finetune(model: &Path, ft: &Path, out: &Path, cfg: TrainConfig, json: boo
         rows(&data.val),
         cfg.epochs,
         cfg.lr,
-        cfg.seed
+        cfg.seed,
+        replay_ds.as_ref().map_or(String::new(), |d| format!(
+            ", replaying the training flights of {} (manifest sha256 {})",
+            d.dir.display(),
+            d.manifest_sha256
+        ))
     );
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    std::fs::write(
-        out.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?,
-    )?;
     let float = [
         (alpha.part1.as_slice(), alpha.part2.as_slice()),
         (beta.part1.as_slice(), beta.part2.as_slice()),
     ];
-    let path = trainer::saved::SavedModel::new(&alpha.q, &beta.q, Some(float), &model_suite, &prov)
-        .write(out)?;
+    let saved =
+        trainer::saved::SavedModel::new(&alpha.q, &beta.q, Some(float), &model_suite, &prov);
+    // Both files are written into a scratch directory inside --out and moved into place: a failure
+    // leaves no partial output.
+    let created = !out.exists();
+    let scratch = out.join(".finetune-partial");
+    let written = (|| -> Result<()> {
+        std::fs::create_dir_all(&scratch)?;
+        std::fs::write(
+            scratch.join("summary.json"),
+            serde_json::to_string_pretty(&summary)?,
+        )?;
+        saved.write(&scratch)?;
+        for f in ["summary.json", "model.json"] {
+            std::fs::rename(scratch.join(f), out.join(f))?;
+        }
+        std::fs::remove_dir(&scratch)?;
+        Ok(())
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_dir_all(if created { out } else { &scratch });
+        return Err(e.context(format!("writing {}", out.display())));
+    }
+    let path = out.join("model.json");
     if json {
         println!("{}", serde_json::to_string(&summary)?);
     } else {
@@ -2117,11 +2183,15 @@ fn run() -> Result<()> {
             batch,
             seed,
             loss,
+            replay,
+            tune,
             json,
         } => cmd_finetune(
             model,
             flight_test,
             out,
+            replay.as_deref(),
+            *tune,
             TrainConfig {
                 epochs: *epochs,
                 batch: *batch,

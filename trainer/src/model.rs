@@ -162,6 +162,24 @@ impl Cascade {
         }
     }
 
+    /// The same cascade with every parameter but those of part 2's output layer frozen (no
+    /// gradient, so the optimizer leaves them).
+    pub fn output_layer_only(self) -> Cascade {
+        let n = self.part2.layers.len();
+        Cascade {
+            part1: self.part1.no_grad(),
+            part2: Mlp {
+                layers: self
+                    .part2
+                    .layers
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, l)| if k + 1 == n { l } else { l.no_grad() })
+                    .collect(),
+            },
+        }
+    }
+
     /// (intermediate, angle), both normalised.
     pub fn forward(&self, x: Tensor<2>) -> (Tensor<2>, Tensor<2>) {
         let mid = self.part1.forward(x.clone());
