@@ -45,10 +45,10 @@ fn calibration(ft: &Path, models: &[PathBuf], out: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(out.join("calibration.json")).unwrap()).unwrap()
 }
 
-#[test]
-fn calibration_reads_no_truth_and_finds_the_variants_scales() {
+/// Writes the build's aircraft's variant C (`airframes/NAME-variants/c-pure-scales.toml`) into
+/// `dir/c`.
+fn variant_c(dir: &Path) -> PathBuf {
     let air = estimator_core::aircraft::AIRCRAFT;
-    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "calibrate");
     let aircraft = dir.join("c");
     ok(Command::new(root().join("scripts/airframe-variant"))
         .arg(root().join(format!(
@@ -57,25 +57,34 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         )))
         .args(["--model", air.jsbsim_model, "--out"])
         .arg(&aircraft));
-    // The flight-test card on sensor seed `seed`, flown on the variant or (None) the model.
-    let card = |seed: u32, out: &Path, variant: Option<&Path>| {
-        let mut cmd = Command::new(bin("hil-sim"));
-        cmd.args([
-            "generate",
-            "--preset",
-            "flight-test",
-            "--aircraft",
-            air.name,
-        ])
-        .arg("--seed")
-        .arg(seed.to_string())
-        .arg("--out")
-        .arg(out);
-        if let Some(v) = variant {
-            cmd.arg("--aircraft-dir").arg(v);
-        }
-        ok(&mut cmd);
-    };
+    aircraft
+}
+
+/// The flight-test card on sensor seed `seed` into `out`, flown on the variant in `variant` or
+/// (None) on the model.
+fn card(seed: u32, out: &Path, variant: Option<&Path>) {
+    let mut cmd = Command::new(bin("hil-sim"));
+    cmd.args([
+        "generate",
+        "--preset",
+        "flight-test",
+        "--aircraft",
+        estimator_core::aircraft::AIRCRAFT.name,
+    ])
+    .arg("--seed")
+    .arg(seed.to_string())
+    .arg("--out")
+    .arg(out);
+    if let Some(v) = variant {
+        cmd.arg("--aircraft-dir").arg(v);
+    }
+    ok(&mut cmd);
+}
+
+#[test]
+fn calibration_reads_no_truth_and_finds_the_variants_scales() {
+    let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "calibrate");
+    let aircraft = variant_c(&dir);
     let ft = dir.join("ft");
     card(1, &ft, Some(&aircraft));
     let models: Vec<PathBuf> = (2..=5)
@@ -291,30 +300,10 @@ fn strip_truth(from: &Path, to: &Path) {
 fn finetune_reads_no_truth() {
     let air = estimator_core::aircraft::AIRCRAFT;
     let dir = tests::scratch(env!("CARGO_TARGET_TMPDIR"), "finetune");
-    let aircraft = dir.join("c");
-    ok(Command::new(root().join("scripts/airframe-variant"))
-        .arg(root().join(format!(
-            "airframes/{}-variants/c-pure-scales.toml",
-            air.name
-        )))
-        .args(["--model", air.jsbsim_model, "--out"])
-        .arg(&aircraft));
+    let aircraft = variant_c(&dir);
     let ft = dir.join("ft");
     let ci = dir.join("ci");
-    ok(Command::new(bin("hil-sim"))
-        .args([
-            "generate",
-            "--preset",
-            "flight-test",
-            "--seed",
-            "1",
-            "--aircraft",
-            air.name,
-        ])
-        .arg("--aircraft-dir")
-        .arg(&aircraft)
-        .arg("--out")
-        .arg(&ft));
+    card(1, &ft, Some(&aircraft));
     ok(Command::new(bin("hil-sim"))
         .args([
             "generate",
