@@ -466,6 +466,9 @@ pub struct Output {
     /// the estimated wind over the airspeed (the angle the air mass turned the relative wind by
     /// between two 20 Hz frames), see [`AirDataFilter::step`]. 0 after a start or restart; held,
     /// not updated, for [`TURBULENCE_SETTLE_STEPS`] after one and after a step without inputs.
+    /// Until the running mean has seen [`TURBULENCE_TAU_S`] of changes it is their mean so far,
+    /// not a mean that starts from calm air: the index does not read low in the seconds after a
+    /// start or a restart in turbulence.
     pub turbulence_rad: f32,
     /// [`flags`].
     pub flags: u8,
@@ -491,8 +494,13 @@ pub struct AirDataFilter {
     last: Output,
     /// Altitude of the last step (GPS or coasted), m, and seconds coasted since the last GPS one.
     alt: Option<(f32, f32)>,
-    /// The turbulence index's running mean square, rad² (the previous wind is `last`'s).
+    /// The turbulence index's running mean square, rad² (the previous wind is `last`'s), started
+    /// at 0 ...
     turb_ms: f32,
+    /// ... and the running mean of 1 over the same steps, started at 0 as well: `turb_ms /
+    /// turb_weight` is the mean of the squares seen since the start or restart, weighted as the
+    /// running mean weighs them (the startup bias of a running mean started at 0, divided out).
+    turb_weight: f32,
     /// Steps with inputs still to pass before the index takes wind changes in again, after a start,
     /// a restart or a step without inputs ([`TURBULENCE_SETTLE_STEPS`]).
     turb_settle: u16,
@@ -771,6 +779,7 @@ impl AirDataFilter {
             alt: None,
             last: Output::default(),
             turb_ms: 0.0,
+            turb_weight: 0.0,
             turb_settle: TURBULENCE_SETTLE_STEPS,
             nis_mean: cfg.gate,
             nu_ms: [0.0; 2],
@@ -822,6 +831,7 @@ impl AirDataFilter {
             self.gated_run = 0;
         }
         self.turb_ms = 0.0;
+        self.turb_weight = 0.0;
         self.last.turbulence_rad = 0.0;
         self.stall_latched = false;
         self.nu_ms = c.accel_sigma.map(sq);
@@ -981,9 +991,17 @@ impl AirDataFilter {
             let d2 = d * d * (TURBULENCE_FRAME_S / dt);
             if d2.is_finite() {
                 running_mean(&mut self.turb_ms, d2, dt, TURBULENCE_TAU_S);
+                running_mean(&mut self.turb_weight, 1.0, dt, TURBULENCE_TAU_S);
             }
         }
-        libm::sqrtf(self.turb_ms.max(0.0))
+        // The weight is 0 until the first change is taken in (then turb_ms is 0 as well), and at
+        // most 1; a weight of 0 reads as calm air, as before the first change.
+        let ms = if self.turb_weight > 0.0 {
+            self.turb_ms / self.turb_weight
+        } else {
+            0.0
+        };
+        libm::sqrtf(ms.max(0.0))
     }
 
     pub fn wind(&self) -> Vector3<f32> {

@@ -592,6 +592,47 @@ fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
 }
 
 #[test]
+fn the_turbulence_index_does_not_read_calm_air_in_the_seconds_after_a_restart_in_turbulence() {
+    let world = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.0,
+    };
+    let c = cfg();
+    let mut f = AirDataFilter::new(c);
+    let mut t = 0.0;
+    // A minute in heavy turbulence: the index over its last 10 s is the level to read.
+    let mut level = 0.0;
+    while t < 60.0 {
+        let (inp, _) = world.gusty(t, 4.0).frame(t, &c);
+        let out = f.step(&inp, true);
+        if t >= 50.0 {
+            level += out.turbulence_rad / 200.0;
+        }
+        t += DT;
+    }
+    f.restart();
+    // The settle steps hold 0; the next TURBULENCE_TAU_S of steps average what they have seen,
+    // rather than climb from 0 toward the level (a running mean started at 0 averages about 0.6
+    // of it over these steps). The filter is still re-converging then, and its wind moves more
+    // than the air does: the index reads above the level for a few seconds, never below it.
+    let steps = (TURBULENCE_TAU_S / DT) as usize;
+    let mut sum = 0.0;
+    for k in 0..usize::from(TURBULENCE_SETTLE_STEPS) + steps {
+        let (inp, _) = world.gusty(t, 4.0).frame(t, &c);
+        let out = f.step(&inp, true);
+        if k >= usize::from(TURBULENCE_SETTLE_STEPS) {
+            sum += out.turbulence_rad;
+        }
+        t += DT;
+    }
+    let after = sum / steps as f32;
+    assert!(
+        after > 0.9 * level && after < 1.5 * level,
+        "level {level}, after {after}"
+    );
+}
+
+#[test]
 fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model_does_not_fit() {
     let calm = World {
         wind: Vector3::new(12.0, -7.0, 0.5),
