@@ -13,7 +13,7 @@
 
 use crate::clock::{Clock, elapsed};
 use estimator_core::wire::estimate::{EstimateFrame, Health};
-use estimator_core::wire::{Accumulator, MAX_FRAME};
+use estimator_core::wire::{self, Accumulator, MAX_FRAME};
 use estimator_core::{Estimator, SensorFrame};
 
 /// Board-dependent settings.
@@ -45,13 +45,95 @@ pub struct Stats {
     pub max_step_ticks: u32,
 }
 
-/// The application: owns the frame accumulator, the estimator and the counters.
-pub struct App<'m, C: Clock> {
+/// Where an accepted frame's seq stands against the last accepted one (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeqEvent {
+    /// The first frame, or the next one in order.
+    InOrder,
+    /// This many frames were lost on the way; the frame is stepped.
+    Gap(u32),
+    /// The last frame's seq again: not stepped, not answered.
+    Duplicate,
+    /// The sender went backwards (restarted its flight) from seq `was`: a new sequence.
+    Restart { was: u16 },
+}
+
+impl SeqEvent {
+    /// Whether [`App`] steps (and answers) a frame with this event.
+    pub const fn stepped(self) -> bool {
+        !matches!(self, SeqEvent::Duplicate)
+    }
+}
+
+/// The receiving half of the firmware: bytes in, decoded sensor frames out, then each one's place
+/// in the sequence. [`App`] steps what it gives; a sender can run its own copy over the bytes it
+/// puts on the line to know, byte for byte, which frames the firmware will answer (hil-sim does,
+/// to never send while a step is under way).
+pub struct Intake {
     acc: Accumulator<MAX_FRAME>,
+    last_seq: Option<u16>,
+}
+
+impl Default for Intake {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Intake {
+    pub const fn new() -> Self {
+        Intake {
+            acc: Accumulator::new(),
+            last_seq: None,
+        }
+    }
+
+    /// Feeds one received byte: `None` until it completes a frame (a delimiter), then the sensor
+    /// frame or why it was refused. A frame that comes out goes to [`Intake::sequence`] next.
+    #[inline(always)]
+    pub fn push(&mut self, byte: u8) -> Option<Result<SensorFrame, wire::Error>> {
+        match self.acc.push(byte)? {
+            Ok(body) => Some(SensorFrame::parse(body)),
+            Err(e) => Some(Err(e)),
+        }
+    }
+
+    /// Both halves for a sender: the seq of the frame this byte completes if the firmware steps
+    /// (and answers) it.
+    pub fn stepped(&mut self, byte: u8) -> Option<u16> {
+        let seq = self.push(byte)?.ok()?.seq;
+        self.sequence(seq).stepped().then_some(seq)
+    }
+
+    /// Where a decoded frame's `seq` stands; makes it the last one unless it repeats it.
+    #[inline(always)]
+    pub fn sequence(&mut self, seq: u16) -> SeqEvent {
+        let Some(last) = self.last_seq else {
+            self.last_seq = Some(seq);
+            return SeqEvent::InOrder;
+        };
+        let d = seq.wrapping_sub(last);
+        if d == 0 {
+            return SeqEvent::Duplicate;
+        }
+        self.last_seq = Some(seq);
+        if d >= 0x8000 {
+            SeqEvent::Restart { was: last }
+        } else if d == 1 {
+            SeqEvent::InOrder
+        } else {
+            // 1 < d < 2^15 here, so `d - 1` cannot wrap.
+            SeqEvent::Gap(u32::from(d.wrapping_sub(1)))
+        }
+    }
+}
+
+/// The application: owns the frame intake, the estimator and the counters.
+pub struct App<'m, C: Clock> {
+    intake: Intake,
     estimator: Estimator<'m>,
     clock: C,
     config: Config,
-    last_seq: Option<u16>,
     health: Health,
     stats: Stats,
 }
@@ -63,11 +145,10 @@ impl<'m, C: Clock> App<'m, C> {
             ..Health::default()
         };
         App {
-            acc: Accumulator::new(),
+            intake: Intake::new(),
             estimator,
             clock,
             config,
-            last_seq: None,
             health,
             stats: Stats::default(),
         }
@@ -95,11 +176,7 @@ impl<'m, C: Clock> App<'m, C> {
     /// frame (COBS, CRC, delimiter) to `out`, returning its length.
     pub fn push(&mut self, byte: u8, out: &mut [u8; MAX_FRAME]) -> Option<usize> {
         let start = self.clock.now();
-        let frame = match self.acc.push(byte)? {
-            Ok(body) => SensorFrame::parse(body),
-            Err(e) => Err(e),
-        };
-        let frame = match frame {
+        let frame = match self.intake.push(byte)? {
             Ok(f) => f,
             Err(e) => {
                 self.health.rx_corrupt = self.health.rx_corrupt.saturating_add(1);
@@ -107,8 +184,20 @@ impl<'m, C: Clock> App<'m, C> {
                 return None;
             }
         };
-        if !self.accept_seq(frame.seq) {
-            return None;
+        match self.intake.sequence(frame.seq) {
+            SeqEvent::InOrder => {}
+            SeqEvent::Gap(lost) => {
+                self.health.rx_lost = self.health.rx_lost.saturating_add(lost);
+            }
+            SeqEvent::Duplicate => {
+                self.stats.duplicates = self.stats.duplicates.saturating_add(1);
+                return None;
+            }
+            SeqEvent::Restart { was } => {
+                self.stats.restarts = self.stats.restarts.saturating_add(1);
+                info!("sequence restarted at {} (was {})", frame.seq, was);
+                self.estimator.reset();
+            }
         }
         let estimate = self.estimator.step(&frame);
         let ticks = elapsed(start, self.clock.now());
@@ -125,30 +214,6 @@ impl<'m, C: Clock> App<'m, C> {
         };
         // An estimate frame always fits MAX_FRAME (it is shorter than a sensor frame).
         reply.encode(out).ok()
-    }
-
-    /// Updates the sequence bookkeeping; false: do not step this frame.
-    fn accept_seq(&mut self, seq: u16) -> bool {
-        let Some(last) = self.last_seq else {
-            self.last_seq = Some(seq);
-            return true;
-        };
-        let d = seq.wrapping_sub(last);
-        if d == 0 {
-            self.stats.duplicates = self.stats.duplicates.saturating_add(1);
-            return false;
-        }
-        if d >= 0x8000 {
-            self.stats.restarts = self.stats.restarts.saturating_add(1);
-            info!("sequence restarted at {} (was {})", seq, last);
-            self.estimator.reset();
-        } else {
-            // 0 < d < 2^15 here, so `d - 1` cannot wrap.
-            let lost = u32::from(d.wrapping_sub(1));
-            self.health.rx_lost = self.health.rx_lost.saturating_add(lost);
-        }
-        self.last_seq = Some(seq);
-        true
     }
 }
 
@@ -366,6 +431,66 @@ mod tests {
         assert_eq!(r.iter().map(|e| e.estimate.seq).collect::<Vec<_>>(), [3, 7]);
         assert_eq!(r[1].health.rx_corrupt, 4);
         assert_eq!(r[1].health.rx_lost, 3);
+    }
+
+    #[test]
+    fn an_intake_beside_the_app_knows_which_bytes_it_answers() {
+        // Frames in order, a gap, a duplicate, a restart, a flipped bit, a lost delimiter and
+        // random bytes: after every byte, the intake says a frame will be answered exactly when
+        // the app answers one, and names its seq.
+        let mut flipped = wire(13);
+        flipped[5] ^= 0x10;
+        let mut merged = wire(14);
+        merged.pop(); // its delimiter lost: 15 is glued to it and refused with it
+        let mut bytes = [
+            wire(10),
+            wire(11),
+            wire(11),
+            wire(12),
+            flipped,
+            merged,
+            wire(15),
+            wire(16),
+            wire(20),
+            wire(3),
+            wire(4),
+        ]
+        .concat();
+        let mut x = 0x9e37_79b9u32;
+        for seq in 5..40u16 {
+            for _ in 0..(x % 30) {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                bytes.push((x >> 24) as u8);
+            }
+            bytes.extend(wire(seq));
+        }
+        let mut a = app(1, 1000);
+        let mut intake = Intake::new();
+        let mut out = [0u8; MAX_FRAME];
+        let mut answered = Vec::new();
+        for b in &bytes {
+            let predicted = intake.stepped(*b);
+            let reply = a.push(*b, &mut out).map(|n| {
+                let mut acc = Accumulator::<MAX_FRAME>::new();
+                let mut seq = None;
+                for b in &out[..n] {
+                    if let Some(body) = acc.push(*b) {
+                        seq = Some(EstimateFrame::parse(body.unwrap()).unwrap().estimate.seq);
+                    }
+                }
+                seq.unwrap()
+            });
+            assert_eq!(predicted, reply);
+            answered.extend(predicted);
+        }
+        // Random bytes without a zero glue onto the frame after them, which is refused with them.
+        assert_eq!(answered[..7], [10, 11, 12, 16, 20, 3, 4]);
+        assert!(answered.len() > 20, "{answered:?}");
+        assert_eq!(a.stats().stepped as usize, answered.len());
+        assert_eq!(a.stats().duplicates, 1);
+        assert_eq!(a.stats().restarts, 1);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 #![allow(unsafe_code)]
 
 use core::ptr::{read_volatile, write_volatile};
+use core::sync::atomic::{AtomicBool, Ordering};
 
 use cortex_m::interrupt;
 use cortex_m_rt::{entry, exception};
@@ -15,7 +16,7 @@ use firmware::{App, ByteQueue, Clock, Config, Transport};
 use panic_probe as _;
 
 const BAUD: u32 = 115_200;
-/// Room for three sensor frames of the largest kind (kind 4, 323 bytes on the wire) while a step
+/// Room for three sensor frames of the largest kind (kind 4, 326 bytes on the wire) while a step
 /// runs: at 115 200 Bd about 12 bytes arrive during a 1-ms step.
 const RX_CAPACITY: usize = 1024;
 
@@ -78,6 +79,9 @@ impl Mmio for Registers {
 /// Received bytes: the USART1 interrupt is its only producer, the main loop its only consumer (the
 /// queue is lock-free, see `firmware::queue`).
 static RX: ByteQueue<RX_CAPACITY> = ByteQueue::new();
+/// Set by the USART1 interrupt when it found `RX` full and masked itself, leaving the byte in the
+/// UART; the main loop unmasks it once it has made room.
+static RX_PAUSED: AtomicBool = AtomicBool::new(false);
 
 #[derive(Clone, Copy)]
 struct Usart1Irq;
@@ -259,6 +263,10 @@ fn serve_usart(mut app: App<'_, BoardClock>, pclk2_hz: u32) -> ! {
             .iter_mut()
             .map_while(|slot| RX.pop().map(|b| *slot = b))
             .count();
+        if n > 0 && RX_PAUSED.swap(false, Ordering::AcqRel) {
+            // SAFETY: as above; the bytes just taken made room for the one waiting in the UART.
+            unsafe { cortex_m::peripheral::NVIC::unmask(Usart1Irq) };
+        }
         if n == 0 {
             // Sleep with interrupts masked: a byte arriving after the check still wakes the core
             // (its interrupt stays pending through WFI and runs when the mask is lifted).
@@ -287,12 +295,21 @@ unsafe fn DefaultHandler(irqn: i16) {
         if sr & (reg::SR_RXNE | reg::SR_ORE) == 0 {
             break;
         }
+        if RX.is_full() {
+            // No room: leave the byte in DR and mask this interrupt until the main loop has taken
+            // some (it unmasks, and the interrupt, still pending, runs again). QEMU's USART then
+            // holds the next byte back, so a host that sends faster than the firmware reads loses
+            // nothing; on a board the UART overruns (ORE, counted when the interrupt runs again).
+            cortex_m::peripheral::NVIC::mask(Usart1Irq);
+            RX_PAUSED.store(true, Ordering::Release);
+            break;
+        }
         let byte = rd(reg::USART1_DR) as u8;
         if sr & reg::SR_ORE != 0 {
             RX.count_overrun();
         }
         if sr & reg::SR_RXNE != 0 {
-            // A full queue counts the byte as an overrun itself.
+            // Not full (above), and only the main loop changes that: the push cannot be refused.
             let _ = RX.push(byte);
         }
     }

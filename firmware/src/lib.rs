@@ -31,7 +31,7 @@ pub mod queue;
 pub mod rcc;
 pub mod transport;
 
-pub use app::{App, Config, Stats};
+pub use app::{App, Config, Intake, SeqEvent, Stats};
 pub use clock::{Clock, NoClock};
 pub use queue::ByteQueue;
 pub use transport::Transport;

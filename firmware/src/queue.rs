@@ -117,6 +117,12 @@ impl<const N: usize> ByteQueue<N> {
         self.len() == 0
     }
 
+    /// Whether a push now would be refused. Only the consumer makes room, so a producer that sees
+    /// `false` can push.
+    pub fn is_full(&self) -> bool {
+        self.len() >= N
+    }
+
     pub const fn capacity(&self) -> usize {
         N
     }

@@ -128,7 +128,7 @@ pub struct RunArgs {
     /// it a log must be 20 Hz with increasing times.
     #[arg(long)]
     pub any_time_base: bool,
-    /// Fast mode: how long to wait for the reply to a frame the link left intact, ms.
+    /// Fast mode: how long to wait for the reply to a frame the firmware steps, ms.
     #[arg(long, default_value_t = 10_000)]
     pub reply_timeout_ms: u64,
 }

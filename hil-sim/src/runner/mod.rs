@@ -3,13 +3,13 @@
 //!
 //! One sensor frame per 50 ms of flight time. Real-time pacing sends each byte when the link model
 //! says it arrives; `fast` (the default) sends each frame as soon as the previous one is answered.
-//! In fast mode the runner waits for the firmware's reply before the next frame: long when the frame
-//! (and the one before, whose delimiter it relies on) went through untouched, briefly when only the
-//! one before was altered, not at all when the link altered the frame itself (the firmware drops
-//! it). The wait is pacing only: replies are matched by seq whenever they arrive, and frames never
-//! answered count as lost, never scored. The firmware sees the same bytes in the same order either
-//! way; waiting for every frame it steps keeps the next frame's bytes (and their receive
-//! interrupts) out of that step's instruction count.
+//! In fast mode the runner feeds the bytes it puts on the line (after the link's faults) to its own
+//! copy of the firmware's receiving half ([`firmware::Intake`]), so it knows which frames the
+//! firmware will step: it waits for the reply to each of those and sends the next frame at once
+//! after one the firmware refuses. No byte reaches the firmware while a step is under way, so
+//! neither its receive interrupts nor a full receive queue depend on how fast the host machine
+//! is: a seeded run loses the same frames and counts the same instructions every time. Replies
+//! are matched by seq whenever they arrive; frames never answered count as lost, never scored.
 
 pub mod cli;
 pub mod target;
@@ -76,12 +76,11 @@ pub struct RunConfig {
     /// Send as fast as the firmware answers; `false` paces every byte at the link's baud and one
     /// frame per 50 ms of wall time (a real board on a serial port).
     pub fast: bool,
-    /// Fast mode: how long to wait for the reply to an untouched frame.
+    /// Fast mode: how long to wait for the reply to a frame the firmware steps (a firmware that
+    /// does not answer in time loses the frame, and the run goes on).
     pub reply_timeout: Duration,
-    /// Fast mode: how long to wait for the reply to an intact frame right after an altered one (it
-    /// is lost with it when the altered frame lost its delimiter); also how long to wait for late
-    /// replies after the last frame.
-    pub altered_grace: Duration,
+    /// How long to wait for late replies after the last frame.
+    pub late_grace: Duration,
     /// The sensor suite sent (default: the shipped estimator's), i.e. the frame kind: as `Table1` the frames carry the paper's inputs
     /// only (the EGI channels are not sent, so the byte stream, and what the link does to it, is
     /// the same as before the EGI suite existed).
@@ -95,7 +94,7 @@ impl Default for RunConfig {
             seed: 1,
             fast: true,
             reply_timeout: Duration::from_secs(10),
-            altered_grace: Duration::from_millis(50),
+            late_grace: Duration::from_millis(50),
             suite: shipped_suite(),
         }
     }
@@ -284,7 +283,8 @@ pub fn run_with_progress(
         };
     let start = Instant::now();
     let sync = target.synchronous();
-    let mut prev_altered = false;
+    // The firmware's receiving half, fed what the line delivers: which frames it will step.
+    let mut intake = firmware::Intake::new();
     let mut buf = Vec::new();
     let mut wire = [0u8; MAX_FRAME];
 
@@ -307,19 +307,17 @@ pub fn run_with_progress(
             }
             target.send(d.bytes.get(from..).unwrap_or(&[]))?;
         }
-        let expect = !d.altered && !prev_altered;
-        prev_altered = d.altered;
+        // The seq of the last frame among these bytes that the firmware steps and answers.
+        let stepped = d.bytes.iter().filter_map(|b| intake.stepped(*b)).last();
         let deadline = if !cfg.fast {
             start + Duration::from_secs_f64((i + 1) as f64 * PERIOD_S)
-        } else if sync || d.altered {
-            // An altered frame fails its CRC and is not answered: nothing to wait for.
+        } else if sync || stepped.is_none() {
+            // Nothing to wait for: the firmware refuses these bytes (or has answered already).
             Instant::now()
-        } else if expect {
-            Instant::now() + cfg.reply_timeout
         } else {
-            Instant::now() + cfg.altered_grace
+            Instant::now() + cfg.reply_timeout
         };
-        let want = cfg.fast.then_some(s.frame.seq);
+        let want = if cfg.fast { stepped } else { None };
         down.pump(target, &mut link, t, deadline, want, &mut buf)?;
         file_replies(&mut down, &mut records, &mut running);
         on_frame(&running.progress(i + 1, samples.len()));
@@ -327,7 +325,7 @@ pub fn run_with_progress(
     // Late replies.
     if !sync {
         let t = samples.len() as f64 * PERIOD_S;
-        let until = Instant::now() + cfg.altered_grace;
+        let until = Instant::now() + cfg.late_grace;
         down.pump(target, &mut link, t, until, None, &mut buf)?;
         file_replies(&mut down, &mut records, &mut running);
         on_frame(&running.progress(samples.len(), samples.len()));

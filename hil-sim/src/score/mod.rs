@@ -125,6 +125,9 @@ pub struct Summary {
     pub frames_corrupt_rejected: u64,
     pub firmware_rx_corrupt: u64,
     pub firmware_rx_lost: u64,
+    /// Bytes the firmware's receiver dropped before decoding (its queue full, or a UART overrun):
+    /// the host sent faster than the firmware read.
+    pub firmware_rx_overruns: u64,
     pub host_rx_corrupt: u64,
     pub unmatched_replies: u64,
     pub deadline_misses: u64,
@@ -252,6 +255,7 @@ pub fn summarize(o: &RunOutcome) -> Summary {
         frames_corrupt_rejected: fw_corrupt + u64::from(o.downlink_rejected),
         firmware_rx_corrupt: fw_corrupt,
         firmware_rx_lost: counter(|h| h.rx_lost),
+        firmware_rx_overruns: counter(|h| h.rx_overruns),
         host_rx_corrupt: u64::from(o.downlink_rejected),
         unmatched_replies: u64::from(o.unmatched_replies),
         deadline_misses: counter(|h| h.deadline_misses),
