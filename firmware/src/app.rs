@@ -163,10 +163,10 @@ impl<'m, C: Clock> App<'m, C> {
         self.stats
     }
 
-    /// The receiver's overrun count so far (bytes its queue or UART dropped before they reached
-    /// [`App::push`], e.g. [`crate::ByteQueue::overruns`]): sent as `rx_overruns` with the next
-    /// estimate. The board layer owns the receiver, so it reports the count; the in-process
-    /// firmware has no receiver queue and leaves it at 0.
+    /// The receiver's overrun count so far (overruns of its queue or UART before bytes reached
+    /// [`App::push`], each losing at least one byte, e.g. [`crate::ByteQueue::overruns`]): sent as
+    /// `rx_overruns` with the next estimate. The board layer owns the receiver, so it reports the
+    /// count; the in-process firmware has no receiver queue and leaves it at 0.
     pub fn set_rx_overruns(&mut self, total: u32) {
         self.health.rx_overruns = total;
     }

@@ -5,8 +5,10 @@
 //! * USART1 receive interrupt → [`ByteQueue`] (lock-free, single producer and consumer) → main loop →
 //!   [`App::push`] → estimate frame → USART1, transmitted by polling TXE. Receiving in the interrupt is
 //!   what keeps the link whole on silicon: a step can take milliseconds, during which a 115 200 Bd line
-//!   delivers tens of bytes that a polling loop would lose to overruns. Bytes dropped anyway (queue
-//!   full, UART overrun) are counted and reported as `rx_overruns` in every estimate frame.
+//!   delivers tens of bytes that a polling loop would lose to overruns. A full queue masks the
+//!   interrupt until the main loop has taken bytes (QEMU's USART then holds the line back; a board's
+//!   UART overruns); each UART overrun is counted and reported as `rx_overruns` in every estimate
+//!   frame.
 //!   Transmission is a 53-byte burst once per frame and may block.
 //! * Clocks: SYSCLK 168 MHz from the HSE crystal through the PLL (`firmware::rcc`, every wait
 //!   bounded); where the clock tree does not respond (QEMU does not model RCC) the firmware stays on

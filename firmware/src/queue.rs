@@ -156,9 +156,11 @@ mod tests {
     fn full_queue_hands_the_byte_back_and_counts_it() {
         let q = ByteQueue::<3>::new();
         for b in 1..=3 {
+            assert!(!q.is_full());
             q.push(b).unwrap();
         }
         assert_eq!(q.len(), 3);
+        assert!(q.is_full());
         assert_eq!(q.push(9), Err(9));
         assert_eq!(q.push(10), Err(10));
         assert_eq!(q.overruns(), 2);
@@ -166,6 +168,7 @@ mod tests {
             (q.pop(), q.pop(), q.pop(), q.pop()),
             (Some(1), Some(2), Some(3), None)
         );
+        assert!(!q.is_full());
         q.push(4).unwrap();
         assert_eq!(q.pop(), Some(4));
         q.count_overrun();

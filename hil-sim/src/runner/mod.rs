@@ -8,8 +8,11 @@
 //! firmware will step: it waits for the reply to each of those and sends the next frame at once
 //! after one the firmware refuses. No byte reaches the firmware while a step is under way, so
 //! neither its receive interrupts nor a full receive queue depend on how fast the host machine
-//! is: a seeded run loses the same frames and counts the same instructions every time. Replies
-//! are matched by seq whenever they arrive; frames never answered count as lost, never scored.
+//! is: a seeded run loses the same frames and counts the same instructions every time. The copy
+//! starts empty, as a freshly started firmware does; a board that has already received bytes (on
+//! `--port` without `--realtime`) may disagree about the first frame, which then costs one
+//! `--reply-timeout-ms` before both are in step again. Replies are matched by seq whenever they
+//! arrive; frames never answered count as lost, never scored.
 
 pub mod cli;
 pub mod target;
@@ -307,8 +310,14 @@ pub fn run_with_progress(
             }
             target.send(d.bytes.get(from..).unwrap_or(&[]))?;
         }
-        // The seq of the last frame among these bytes that the firmware steps and answers.
-        let stepped = d.bytes.iter().filter_map(|b| intake.stepped(*b)).last();
+        // The seq of the last frame among these bytes that the firmware steps and answers (every
+        // byte goes through the mirror, so it stays in step with the firmware's receiver).
+        let mut stepped = None;
+        for b in &d.bytes {
+            if let Some(seq) = intake.stepped(*b) {
+                stepped = Some(seq);
+            }
+        }
         let deadline = if !cfg.fast {
             start + Duration::from_secs_f64((i + 1) as f64 * PERIOD_S)
         } else if sync || stepped.is_none() {

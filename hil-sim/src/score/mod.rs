@@ -125,8 +125,9 @@ pub struct Summary {
     pub frames_corrupt_rejected: u64,
     pub firmware_rx_corrupt: u64,
     pub firmware_rx_lost: u64,
-    /// Bytes the firmware's receiver dropped before decoding (its queue full, or a UART overrun):
-    /// the host sent faster than the firmware read.
+    /// Receive overruns the firmware reported (each loses at least one byte before decoding: the
+    /// host sent faster than the firmware read). 0 under QEMU, whose USART holds bytes back while
+    /// the firmware's queue is full.
     pub firmware_rx_overruns: u64,
     pub host_rx_corrupt: u64,
     pub unmatched_replies: u64,
