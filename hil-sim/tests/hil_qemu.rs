@@ -3,6 +3,7 @@
 //! before the tests). Without them it fails with the command to run, never skips.
 
 use estimator_core::{CHANNELS, Channel, SensorFrame};
+use hil_sim::link::LinkConfig;
 use hil_sim::runner::target::default_elf;
 use hil_sim::runner::{self, InProcess, Qemu, QemuLink, RunConfig, Sample};
 
@@ -59,4 +60,50 @@ fn qemu_estimates_equal_host_bit_for_bit_on_both_links() {
         );
     }
     assert_eq!(ticks[0], ticks[1], "the two links' health fields differ");
+}
+
+/// Over a noisy line (garbage bursts, bit flips, lost bytes, both directions) the USART path, with
+/// its receive interrupt and queue, loses exactly the frames the semihosting path loses and answers
+/// the rest with the same bytes, health and instruction counts: the host sends nothing while a step
+/// runs, and a full receive queue holds the line back instead of dropping bytes (no overruns).
+/// Every answer equals the in-process firmware's estimate for that frame.
+#[test]
+fn a_noisy_line_loses_the_same_frames_and_no_bytes_on_both_qemu_links() {
+    let s = samples(300);
+    let cfg = RunConfig {
+        link: LinkConfig {
+            // About one fault in four frames of ~330 bytes, most of them 32-byte garbage bursts.
+            byte_loss: 2e-4,
+            bit_flip: 2e-5,
+            burst_rate: 5e-4,
+            burst_len: 32,
+            ..LinkConfig::default()
+        },
+        seed: 3,
+        ..RunConfig::default()
+    };
+    let host = runner::run(&mut InProcess::new(), &s, &cfg).unwrap();
+    let mut runs = Vec::new();
+    for link in [QemuLink::Semihost, QemuLink::Usart] {
+        let mut q = Qemu::start("qemu-system-arm", &default_elf(), link).unwrap();
+        let qemu = runner::run(&mut q, &s, &cfg).unwrap();
+        assert_eq!(host.records.len(), qemu.records.len());
+        for (h, q) in host.records.iter().zip(&qemu.records) {
+            if let (Some(h), Some(q)) = (h.reply, q.reply) {
+                assert_eq!(h.estimate, q.estimate, "{link:?}: seq {}", h.estimate.seq);
+            }
+        }
+        let replies: Vec<_> = qemu.records.iter().map(|r| r.reply).collect();
+        let last = replies.iter().flatten().last().map(|f| f.health).unwrap();
+        assert_eq!(last.rx_overruns, 0, "{link:?}");
+        assert!(last.rx_corrupt > 0, "{link:?}: the line was not noisy");
+        runs.push(replies);
+    }
+    let lost = runs[0].iter().filter(|r| r.is_none()).count();
+    assert!(
+        (1..s.len() / 2).contains(&lost),
+        "{lost} of {} frames lost",
+        s.len()
+    );
+    assert_eq!(runs[0], runs[1], "the two links answered differently");
 }
