@@ -7,7 +7,7 @@ use estimator_core::wire::estimate::EstimateFrame;
 use estimator_core::wire::{Accumulator, MAX_FRAME};
 use estimator_core::{CHANNELS, Channel, Estimator, SensorFrame};
 use hil_sim::link::{Direction, LinkConfig};
-use hil_sim::runner::{self, InProcess, RunConfig, Sample};
+use hil_sim::runner::{self, InProcess, RunConfig, Sample, Target};
 use hil_sim::score;
 
 /// A smooth, plausible cruise: every channel moves so nothing reads as stuck.
@@ -277,11 +277,14 @@ fn realtime_paces_every_byte_at_the_link_baud() {
     let started = std::time::Instant::now();
     let o = runner::run(&mut t, &samples, &cfg).unwrap();
     assert!(o.records.iter().all(|r| r.reply.is_some()));
-    assert_eq!(t.writes.iter().map(|w| w.1).sum::<usize>(), due.len());
+    // The run's lone delimiter first, at once; then the frames' bytes.
+    let (first, writes) = t.writes.split_first().unwrap();
+    assert_eq!(first.1, 1);
+    assert_eq!(writes.iter().map(|w| w.1).sum::<usize>(), due.len());
     // No byte leaves more than the runner's 1 ms of slack before it is due (plus 0.1 ms for rounding;
     // `started` is a few microseconds before the run's own clock starts, which is lenient by as much).
     let mut sent = 0;
-    for &(at, n) in &t.writes {
+    for &(at, n) in writes {
         sent += n;
         let at_s = at.duration_since(started).as_secs_f64();
         assert!(
@@ -292,13 +295,42 @@ fn realtime_paces_every_byte_at_the_link_baud() {
     }
     // And the line is really paced: the bytes trickle out in small writes, and the last one goes no
     // earlier than it is due.
-    assert!(t.writes.len() > due.len() / 4, "{} writes", t.writes.len());
-    let last = t
-        .writes
+    assert!(writes.len() > due.len() / 4, "{} writes", writes.len());
+    let last = writes
         .last()
         .unwrap()
         .0
         .duration_since(started)
         .as_secs_f64();
     assert!(last >= due[due.len() - 1] - 1e-3, "last write at {last}");
+}
+
+/// A firmware that has already received part of a frame (a board left running on its serial
+/// port) answers a run's first frame: the run starts with a lone delimiter that ends the partial
+/// frame (rejected, counted as corrupt), so the first frame does not join it. A fresh firmware
+/// skips that empty frame and counts nothing.
+#[test]
+fn a_run_ends_a_partial_frame_the_firmware_still_holds() {
+    let samples: Vec<Sample> = (0..20u16)
+        .map(|s| Sample {
+            frame: frame(s),
+            time_s: f64::from(s) * 0.05,
+            alpha_true_deg: 2.0,
+            beta_true_deg: 0.0,
+        })
+        .collect();
+    let cfg = RunConfig::default();
+    let fresh = runner::run(&mut InProcess::new(), &samples, &cfg).unwrap();
+    let mut stale = InProcess::new();
+    let half = encode(&frame(900));
+    stale.send(&half[..half.len() / 2]).unwrap();
+    let run = runner::run(&mut stale, &samples, &cfg).unwrap();
+    for o in [&fresh, &run] {
+        assert!(o.records.iter().all(|r| r.reply.is_some()));
+    }
+    let last = |o: &runner::RunOutcome| o.records.last().unwrap().reply.unwrap().health.rx_corrupt;
+    assert_eq!((last(&fresh), last(&run)), (0, 1));
+    for (a, b) in fresh.records.iter().zip(&run.records) {
+        assert_eq!(a.reply.unwrap().estimate, b.reply.unwrap().estimate);
+    }
 }

@@ -8,11 +8,12 @@
 //! firmware will step: it waits for the reply to each of those and sends the next frame at once
 //! after one the firmware refuses. No byte reaches the firmware while a step is under way, so
 //! neither its receive interrupts nor a full receive queue depend on how fast the host machine
-//! is: a seeded run loses the same frames and counts the same instructions every time. The copy
-//! starts empty, as a freshly started firmware does; a board that has already received bytes (on
-//! `--port` without `--realtime`) may disagree about the first frame, which then costs one
-//! `--reply-timeout-ms` before both are in step again. Replies are matched by seq whenever they
-//! arrive; frames never answered count as lost, never scored.
+//! is: a seeded run loses the same frames and counts the same instructions every time. A run
+//! starts with a lone delimiter, which ends any partial frame a board on `--port` still holds, so
+//! the copy and the firmware start from the same empty frame; only a board whose last frame had
+//! the first frame's seq would take that one for a duplicate, which costs one `--reply-timeout-ms`.
+//! Replies are matched by seq whenever they arrive; frames never answered count as lost, never
+//! scored.
 
 pub mod cli;
 pub mod target;
@@ -22,7 +23,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use estimator_core::wire::estimate::EstimateFrame;
-use estimator_core::wire::{Accumulator, MAX_FRAME};
+use estimator_core::wire::{Accumulator, DELIMITER, MAX_FRAME};
 use estimator_core::{SensorFrame, Suite};
 
 use crate::link::{Link, LinkConfig};
@@ -288,6 +289,11 @@ pub fn run_with_progress(
     let sync = target.synchronous();
     // The firmware's receiving half, fed what the line delivers: which frames it will step.
     let mut intake = firmware::Intake::new();
+    // A lone delimiter first, past the link model: it ends any partial frame a firmware that has
+    // already received bytes holds (a board on a serial port), so its receiver and the copy start
+    // from the same empty frame. A fresh firmware skips the empty frame it makes.
+    target.send(&[DELIMITER])?;
+    let _ = intake.push(DELIMITER);
     let mut buf = Vec::new();
     let mut wire = [0u8; MAX_FRAME];
 
