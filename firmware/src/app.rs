@@ -272,6 +272,23 @@ mod tests {
         wire_of(Estimator::shipped().suite().unwrap_or(Suite::Table1), seq)
     }
 
+    /// Frames `seqs` in order, each after up to `max_gap - 1` pseudo-random bytes (xorshift32 from
+    /// `seed`).
+    fn frames_in_garbage(seed: u32, seqs: core::ops::Range<u16>, max_gap: u32) -> Vec<u8> {
+        let mut x = seed;
+        let mut bytes = Vec::new();
+        for seq in seqs {
+            for _ in 0..(x % max_gap) {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                bytes.push((x >> 24) as u8);
+            }
+            bytes.extend(wire(seq));
+        }
+        bytes
+    }
+
     fn wire_of(suite: Suite, seq: u16) -> Vec<u8> {
         let mut out = [0u8; MAX_FRAME];
         let n = frame(seq).encode(suite, &mut out).unwrap();
@@ -456,16 +473,7 @@ mod tests {
             wire(4),
         ]
         .concat();
-        let mut x = 0x9e37_79b9u32;
-        for seq in 5..40u16 {
-            for _ in 0..(x % 30) {
-                x ^= x << 13;
-                x ^= x >> 17;
-                x ^= x << 5;
-                bytes.push((x >> 24) as u8);
-            }
-            bytes.extend(wire(seq));
-        }
+        bytes.extend(frames_in_garbage(0x9e37_79b9, 5..40, 30));
         let mut a = app(1, 1000);
         let mut intake = Intake::new();
         let mut out = [0u8; MAX_FRAME];
@@ -522,17 +530,7 @@ mod tests {
     fn arbitrary_bytes_never_panic_and_every_reply_decodes() {
         let mut a = app(3, 1000);
         // A deterministic pseudo-random stream with frames mixed in.
-        let mut x = 0x1234_5678u32;
-        let mut bytes = Vec::new();
-        for seq in 0..200u16 {
-            for _ in 0..(x % 40) {
-                x ^= x << 13;
-                x ^= x >> 17;
-                x ^= x << 5;
-                bytes.push((x >> 24) as u8);
-            }
-            bytes.extend(wire(seq));
-        }
+        let bytes = frames_in_garbage(0x1234_5678, 0..200, 40);
         let r = feed(&mut a, &bytes);
         assert!(!r.is_empty());
         assert!(r.windows(2).all(|w| w[1].estimate.seq > w[0].estimate.seq));

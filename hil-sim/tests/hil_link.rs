@@ -30,6 +30,18 @@ fn frame(seq: u16) -> SensorFrame {
     SensorFrame::from_si(seq, u32::from(seq) * 50, &si)
 }
 
+/// The first `n` frames of [`frame`]'s cruise as a flight, at α 2°, β 0.
+fn cruise(n: u16) -> Vec<Sample> {
+    (0..n)
+        .map(|s| Sample {
+            frame: frame(s),
+            time_s: f64::from(s) * 0.05,
+            alpha_true_deg: 2.0,
+            beta_true_deg: 0.0,
+        })
+        .collect()
+}
+
 fn encode(f: &SensorFrame) -> Vec<u8> {
     let mut out = [0u8; MAX_FRAME];
     let n = f.encode(estimator_core::Suite::Egi, &mut out).unwrap();
@@ -148,14 +160,7 @@ fn resynchronises_within_one_frame_after_garbage() {
 
 #[test]
 fn lost_frames_are_counted_not_scored() {
-    let samples: Vec<Sample> = (0..1500u16)
-        .map(|s| Sample {
-            frame: frame(s),
-            time_s: f64::from(s) * 0.05,
-            alpha_true_deg: 2.0,
-            beta_true_deg: 0.0,
-        })
-        .collect();
+    let samples = cruise(1500);
     let cfg = RunConfig {
         link: LinkConfig {
             byte_loss: 1e-3,
@@ -251,15 +256,7 @@ fn realtime_paces_every_byte_at_the_link_baud() {
             (0..encode(f).len()).map(move |k| i as f64 * 0.05 + (k + 1) as f64 * byte_s)
         })
         .collect();
-    let samples: Vec<Sample> = frames
-        .iter()
-        .map(|f| Sample {
-            frame: *f,
-            time_s: f64::from(f.seq) * 0.05,
-            alpha_true_deg: 2.0,
-            beta_true_deg: 0.0,
-        })
-        .collect();
+    let samples = cruise(6);
     let mut t = Recording {
         fw: InProcess::new(),
         writes: Vec::new(),
@@ -311,14 +308,7 @@ fn realtime_paces_every_byte_at_the_link_baud() {
 /// skips that empty frame and counts nothing.
 #[test]
 fn a_run_ends_a_partial_frame_the_firmware_still_holds() {
-    let samples: Vec<Sample> = (0..20u16)
-        .map(|s| Sample {
-            frame: frame(s),
-            time_s: f64::from(s) * 0.05,
-            alpha_true_deg: 2.0,
-            beta_true_deg: 0.0,
-        })
-        .collect();
+    let samples = cruise(20);
     let cfg = RunConfig::default();
     let fresh = runner::run(&mut InProcess::new(), &samples, &cfg).unwrap();
     let mut stale = InProcess::new();
