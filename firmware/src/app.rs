@@ -163,8 +163,8 @@ impl<'m, C: Clock> App<'m, C> {
         self.stats
     }
 
-    /// The receiver's overrun count so far (overruns of its queue or UART before bytes reached
-    /// [`App::push`], each losing at least one byte, e.g. [`crate::ByteQueue::overruns`]): sent as
+    /// The receiver's overrun count so far (each lost at least one byte before it reached
+    /// [`App::push`]; the board's is [`crate::ByteQueue::overruns`]): sent as
     /// `rx_overruns` with the next estimate. The board layer owns the receiver, so it reports the
     /// count; the in-process firmware has no receiver queue and leaves it at 0.
     pub fn set_rx_overruns(&mut self, total: u32) {

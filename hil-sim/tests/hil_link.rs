@@ -248,15 +248,14 @@ fn realtime_paces_every_byte_at_the_link_baud() {
     // its period and byte k of frame i is due at 50 ms · i + (k + 1) byte times.
     const BAUD: u32 = 19_200;
     let byte_s = 10.0 / f64::from(BAUD);
-    let frames: Vec<SensorFrame> = (0..6u16).map(frame).collect();
-    let due: Vec<f64> = frames
+    let samples = cruise(6);
+    let due: Vec<f64> = samples
         .iter()
         .enumerate()
-        .flat_map(|(i, f)| {
-            (0..encode(f).len()).map(move |k| i as f64 * 0.05 + (k + 1) as f64 * byte_s)
+        .flat_map(|(i, s)| {
+            (0..encode(&s.frame).len()).map(move |k| i as f64 * 0.05 + (k + 1) as f64 * byte_s)
         })
         .collect();
-    let samples = cruise(6);
     let mut t = Recording {
         fw: InProcess::new(),
         writes: Vec::new(),

@@ -34,6 +34,17 @@ fn samples(n: u16) -> Vec<Sample> {
         .collect()
 }
 
+/// The flight run on the image in QEMU over each link (semihosting, then USART1).
+fn on_both_links(s: &[Sample], cfg: &RunConfig) -> Vec<(QemuLink, runner::RunOutcome)> {
+    [QemuLink::Semihost, QemuLink::Usart]
+        .into_iter()
+        .map(|link| {
+            let mut q = Qemu::start("qemu-system-arm", &default_elf(), link).unwrap();
+            (link, runner::run(&mut q, s, cfg).unwrap())
+        })
+        .collect()
+}
+
 /// Both QEMU links (semihosting, the fast default; USART1, the board's path) against the host, and
 /// against each other including the per-step instruction counts: same image, same bytes.
 #[test]
@@ -42,9 +53,7 @@ fn qemu_estimates_equal_host_bit_for_bit_on_both_links() {
     let cfg = RunConfig::default();
     let host = runner::run(&mut InProcess::new(), &s, &cfg).unwrap();
     let mut ticks = Vec::new();
-    for link in [QemuLink::Semihost, QemuLink::Usart] {
-        let mut q = Qemu::start("qemu-system-arm", &default_elf(), link).unwrap();
-        let qemu = runner::run(&mut q, &s, &cfg).unwrap();
+    for (link, qemu) in on_both_links(&s, &cfg) {
         assert_eq!(host.records.len(), qemu.records.len());
         for (h, q) in host.records.iter().zip(&qemu.records) {
             let (h, q) = (h.reply.unwrap(), q.reply.unwrap());
@@ -84,9 +93,7 @@ fn a_noisy_line_loses_the_same_frames_and_no_bytes_on_both_qemu_links() {
     };
     let host = runner::run(&mut InProcess::new(), &s, &cfg).unwrap();
     let mut runs = Vec::new();
-    for link in [QemuLink::Semihost, QemuLink::Usart] {
-        let mut q = Qemu::start("qemu-system-arm", &default_elf(), link).unwrap();
-        let qemu = runner::run(&mut q, &s, &cfg).unwrap();
+    for (link, qemu) in on_both_links(&s, &cfg) {
         assert_eq!(host.records.len(), qemu.records.len());
         for (h, q) in host.records.iter().zip(&qemu.records) {
             if let (Some(h), Some(q)) = (h.reply, q.reply) {

@@ -12,8 +12,8 @@
 //! 23              rx_corrupt         u32    frames the receiver rejected so far (COBS, CRC, length, version)
 //! 27              rx_lost            u32    sensor frames never received (sequence gaps) so far
 //! 31              deadline_misses    u32    steps that overran their 50 ms period so far
-//! 35              rx_overruns        u32    receive overruns before the frame decoder (each loses at
-//!                                           least one byte: UART overrun, full queue) so far [version 2]
+//! 35              rx_overruns        u32    receiver overruns before the frame decoder (a UART
+//!                                           overrun, each losing at least one byte) so far [version 2]
 //! 39              sigma_alpha        u16    1σ of alpha, millidegrees; 65535: none (held)  [version 4]
 //! 41              sigma_beta         u16    1σ of beta, millidegrees; 65535: none (held)   [version 4]
 //! ```

@@ -11,7 +11,8 @@
 //! is: a seeded run loses the same frames and counts the same instructions every time. A run
 //! starts with a lone delimiter, which ends any partial frame a board on `--port` still holds, so
 //! the copy and the firmware start from the same empty frame; only a board whose last frame had
-//! the first frame's seq would take that one for a duplicate, which costs one `--reply-timeout-ms`.
+//! the seq of the first frame it now receives intact takes that one for a duplicate, which costs
+//! one `--reply-timeout-ms`.
 //! Replies are matched by seq whenever they arrive; frames never answered count as lost, never
 //! scored.
 
@@ -290,10 +291,9 @@ pub fn run_with_progress(
     // The firmware's receiving half, fed what the line delivers: which frames it will step.
     let mut intake = firmware::Intake::new();
     // A lone delimiter first, past the link model: it ends any partial frame a firmware that has
-    // already received bytes holds (a board on a serial port), so its receiver and the copy start
-    // from the same empty frame. A fresh firmware skips the empty frame it makes.
+    // already received bytes holds (a board on a serial port), so its receiver starts from an empty
+    // frame as the copy does. A fresh firmware skips the empty frame it makes.
     target.send(&[DELIMITER])?;
-    let _ = intake.push(DELIMITER);
     let mut buf = Vec::new();
     let mut wire = [0u8; MAX_FRAME];
 
