@@ -12,6 +12,7 @@ use estimator_core::wire::MAX_FRAME;
 use estimator_core::wire::estimate::TickSource;
 use firmware::rcc::{self, Mmio, Outcome};
 use firmware::transport::MAILBOX_WORDS;
+use firmware::usart::Serviced;
 use firmware::{App, ByteQueue, Clock, Config, Transport};
 use panic_probe as _;
 
@@ -28,13 +29,11 @@ mod reg {
     pub const GPIOA: usize = 0x4002_0000;
     pub const GPIOA_MODER: usize = GPIOA;
     pub const GPIOA_AFRH: usize = GPIOA + 0x24;
-    pub const USART1: usize = 0x4001_1000;
+    pub const USART1: usize = firmware::usart::USART1_SR as usize;
     pub const USART1_SR: usize = USART1;
-    pub const USART1_DR: usize = USART1 + 0x04;
+    pub const USART1_DR: usize = firmware::usart::USART1_DR as usize;
     pub const USART1_BRR: usize = USART1 + 0x08;
     pub const USART1_CR1: usize = USART1 + 0x0C;
-    pub const SR_ORE: u32 = 1 << 3;
-    pub const SR_RXNE: u32 = 1 << 5;
     pub const SR_TXE: u32 = 1 << 7;
     pub const CR1_UE: u32 = 1 << 13;
     pub const CR1_RXNEIE: u32 = 1 << 5;
@@ -287,30 +286,12 @@ unsafe fn DefaultHandler(irqn: i16) {
     if irqn != reg::USART1_IRQ {
         return;
     }
-    // The only producer of `RX`. Reading SR then DR clears RXNE and an overrun (ORE: a byte arrived
-    // while RXNE was still set and was lost; DR still holds the one before it). ORE also raises this
-    // interrupt, so it is cleared even without RXNE, or the interrupt would fire forever.
-    loop {
-        let sr = rd(reg::USART1_SR);
-        if sr & (reg::SR_RXNE | reg::SR_ORE) == 0 {
-            break;
-        }
-        if RX.is_full() {
-            // No room: leave the byte in DR and mask this interrupt until the main loop has taken
-            // some (it unmasks, and the interrupt, still pending, runs again). QEMU's USART then
-            // holds the next byte back, so a host that sends faster than the firmware reads loses
-            // nothing; on a board the UART overruns (ORE, counted when the interrupt runs again).
-            cortex_m::peripheral::NVIC::mask(Usart1Irq);
-            RX_PAUSED.store(true, Ordering::Release);
-            break;
-        }
-        let byte = rd(reg::USART1_DR) as u8;
-        if sr & reg::SR_ORE != 0 {
-            RX.count_overrun();
-        }
-        if sr & reg::SR_RXNE != 0 {
-            // Not full (above), and only the main loop changes that: the push cannot be refused.
-            let _ = RX.push(byte);
-        }
+    // The only producer of `RX`. A full queue leaves the byte in the UART: mask this interrupt
+    // until the main loop has taken some (it unmasks, and the interrupt, still pending, runs again).
+    // QEMU's USART then holds the next byte back, so a host that sends faster than the firmware
+    // reads loses nothing; on a board the UART overruns (ORE, counted when the interrupt runs again).
+    if firmware::usart::service_rx(&mut Registers, &RX) == Serviced::QueueFull {
+        cortex_m::peripheral::NVIC::mask(Usart1Irq);
+        RX_PAUSED.store(true, Ordering::Release);
     }
 }

@@ -30,6 +30,7 @@ pub mod clock;
 pub mod queue;
 pub mod rcc;
 pub mod transport;
+pub mod usart;
 
 pub use app::{App, Config, Intake, SeqEvent, Stats};
 pub use clock::{Clock, NoClock};
