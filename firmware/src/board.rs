@@ -29,8 +29,8 @@ mod reg {
     pub const GPIOA: usize = 0x4002_0000;
     pub const GPIOA_MODER: usize = GPIOA;
     pub const GPIOA_AFRH: usize = GPIOA + 0x24;
-    pub const USART1: usize = firmware::usart::USART1_SR as usize;
-    pub const USART1_SR: usize = USART1;
+    pub const USART1: usize = firmware::usart::USART1 as usize;
+    pub const USART1_SR: usize = firmware::usart::USART1_SR as usize;
     pub const USART1_DR: usize = firmware::usart::USART1_DR as usize;
     pub const USART1_BRR: usize = USART1 + 0x08;
     pub const USART1_CR1: usize = USART1 + 0x0C;

@@ -5,9 +5,10 @@
 use crate::queue::ByteQueue;
 use crate::rcc::Mmio;
 
-/// USART1's status register (RM0090 §30.6.1) and data register.
-pub const USART1_SR: u32 = 0x4001_1000;
-pub const USART1_DR: u32 = USART1_SR + 0x04;
+/// USART1's base address, its status register (RM0090 §30.6.1) and its data register.
+pub const USART1: u32 = 0x4001_1000;
+pub const USART1_SR: u32 = USART1;
+pub const USART1_DR: u32 = USART1 + 0x04;
 /// Overrun: a byte arrived while the previous one was still in DR and was lost.
 pub const SR_ORE: u32 = 1 << 3;
 /// A received byte waits in DR.
