@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Where the shipped estimator's α error near the stall comes from (docs/filter.md, "The 1σ of each
+# estimate"): the 32 test flights of the `paper` preset with seeds 11-18 (none trained or fitted
+# any shipped estimator; made by scripts/analysis/beta-by-gust/run.sh, or here if missing), each
+# flown through the estimator (`hil-sim run --firmware host`), then table.py: the α error by band
+# of true α beside the wind's vertical part, which no kinematic input sees.
+#
+#   scripts/analysis/alpha-wind/run.sh [--aircraft NAME] [--out DIR]
+#   scripts/analysis/alpha-wind/run.sh --out docs/results    # the page and its plot
+#
+# Needs the aircraft's release build (target/ or target/NAME) and the project's .venv
+# (scripts/bootstrap). Scratch in out/alpha-wind/NAME/; about 2 min for the F-16 on 2 cores.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+cd "$root"
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target
+command="scripts/analysis/alpha-wind/run.sh${*:+ $*}"
+name="$default_aircraft"
+dest=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --aircraft|--out)
+      [ $# -ge 2 ] || { echo "alpha-wind: $1 needs a value (see the header of $0)" >&2; exit 2; }
+      if [ "$1" = --aircraft ]; then name="$2"; else dest="$2"; fi
+      shift 2 ;;
+    *) echo "alpha-wind: unknown argument $1 (see the header of $0)" >&2; exit 2 ;;
+  esac
+done
+aircraft_target "$name"
+bin="$target/release"
+for b in hil-sim trainer; do
+  [ -x "$bin/$b" ] || { echo "alpha-wind: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
+done
+[ -z "$dest" ] || [ -d "$dest" ] || { echo "alpha-wind: --out $dest is not a directory" >&2; exit 2; }
+work="out/alpha-wind/$name"
+mkdir -p "$work"
+dirs=()
+for seed in 11 12 13 14 15 16 17 18; do
+  d="out/turb/$name-$seed"
+  [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate --aircraft "$name" --preset paper --test-only --seed "$seed" --out "$d" >&2
+  for csv in "$d"/test_*.csv; do
+    flight="$(basename "$csv" .csv)"
+    run="$work/$name-$seed/$flight"
+    if [ ! "$run/estimates.csv" -nt "$bin/hil-sim" ]; then
+      rm -rf "$run.tmp"
+      mkdir -p "$run.tmp"
+      "$bin/hil-sim" run --aircraft "$name" --dataset "$csv" --firmware host --out "$run.tmp" > "$run.tmp/log.txt"
+      rm -rf "$run"
+      mv "$run.tmp" "$run"
+    fi
+  done
+  dirs+=("$d")
+  echo "alpha-wind: $d flown" >&2
+done
+.venv/bin/python scripts/analysis/alpha-wind/table.py "$name" "$work" "$command" "${dirs[@]}"
+"$bin/trainer" bars --spec "$work/bars.json" --out "$work/alpha-wind.png"
+if [ -n "$dest" ]; then
+  mv "$work/alpha-wind.md" "$dest/alpha-wind.md"
+  mv "$work/alpha-wind.png" "$dest/alpha-wind.png"
+  echo "wrote $dest/alpha-wind.md and .png" >&2
+fi
