@@ -80,9 +80,20 @@ def severity(script):
     return found[0] if found else "–"
 
 
-def stats(e, g):
+def cells(d, m):
+    """The table cells every row shares, over the frames `m` of the frames `d`: count, α MAE, the
+    median 1σ, the silent frames, the gust angle's RMS, the correlation and slope of the error on
+    it and the MAE with that share taken out; and the MAE with and without the share, for a bar."""
+    e, g = d["err"][m], d["gust"][m]
     slope = float(np.polyfit(g, e, 1)[0])
-    return (float(np.corrcoef(g, e)[0, 1]), slope, float(np.abs(e - slope * g).mean()))
+    corr = float(np.corrcoef(g, e)[0, 1])
+    left = float(np.abs(e - slope * g).mean())
+    silent = int(((np.abs(e) > SILENT_DEG) & d["clear"][m]).sum())
+    mae = float(np.abs(e).mean())
+    head = f"{m.sum():,} | {mae:.3f}"
+    tail = (f"{np.median(d['sigma'][m]):.2f} | {silent} | {math.sqrt((g ** 2).mean()):.2f}° | "
+            f"{corr:+.2f} | {slope:+.2f} | {left:.3f} |")
+    return head, tail, [mae, left]
 
 
 def main():
@@ -123,14 +134,11 @@ def main():
         m = (cat["truth"] >= lo) & (cat["truth"] < hi)
         if m.sum() < 20:
             continue
-        e, g = cat["err"][m], cat["gust"][m]
-        corr, slope, left = stats(e, g)
-        silent = int(((np.abs(e) > SILENT_DEG) & cat["clear"][m]).sum())
-        lines.append(f"| {label} | {m.sum():,} | {np.abs(e).mean():.3f} | {np.abs(e).sum() / total:.0%} | "
-                     f"{np.median(cat['sigma'][m]):.2f} | {silent} | {math.sqrt((g ** 2).mean()):.2f}° | "
-                     f"{corr:+.2f} | {slope:+.2f} | {left:.3f} |")
+        head, tail, bar = cells(cat, m)
+        share = np.abs(cat["err"][m]).sum() / total
+        lines.append(f"| {label} | {head} | {share:.0%} | {tail}")
         if m.sum() >= PLOT_MIN_FRAMES:
-            bars.append([label, [float(np.abs(e).mean()), left]])
+            bars.append([label, bar])
     lines += ["", f"Flight by flight, the frames above {HIGH_ALPHA_DEG:.0f}° of true α (flights with at least "
               "200 such frames; *severity*: the Milspec severity its script sets):", "",
               "| flight | severity | frames | α MAE | median 1σ | silent frames | gust angle, RMS | correlation | share | MAE without that share |",
@@ -139,12 +147,8 @@ def main():
         m = f["truth"] > HIGH_ALPHA_DEG
         if m.sum() < 200:
             continue
-        e, g = f["err"][m], f["gust"][m]
-        corr, slope, left = stats(e, g)
-        silent = int(((np.abs(e) > SILENT_DEG) & f["clear"][m]).sum())
-        lines.append(f"| {f['name']} | {f['sev']} | {m.sum():,} | {np.abs(e).mean():.3f} | "
-                     f"{np.median(f['sigma'][m]):.2f} | {silent} | {math.sqrt((g ** 2).mean()):.2f}° | "
-                     f"{corr:+.2f} | {slope:+.2f} | {left:.3f} |")
+        head, tail, _ = cells(f, m)
+        lines.append(f"| {f['name']} | {f['sev']} | {head} | {tail}")
     lines.append("")
     page = "\n".join(lines)
     with open(os.path.join(out, "alpha-wind.md"), "w") as f:
