@@ -14,9 +14,11 @@ usage: .venv/bin/python scripts/analysis/alpha-wind/table.py NAME OUT COMMAND DI
 (NAME: the aircraft, for the plot's title)
 """
 import csv
+import datetime
 import json
 import math
 import os
+import platform
 import re
 import sys
 
@@ -120,7 +122,9 @@ def main():
     cat = {k: np.concatenate([f[k] for f in flights]) for k in ("err", "truth", "sigma", "clear", "gust")}
     total = np.abs(cat["err"]).sum()
     lines = ["# α error and the gusts' vertical part, by α", "",
-             f"Command: `{command}`", "",
+             f"Command: `{command}`  ",
+             f"Machine: {platform.machine()}, {os.cpu_count()} cores, {datetime.date.today()}; the shipped "
+             "estimator of this build, each flight stepped through it on the host by run.sh.", "",
              f"{len(flights)} flights, {len(cat['err']):,} frames. *Gust angle*: the true α less the α of the "
              "velocity over the ground less the wind's 30-s centred mean, in the body's x-z plane: the part "
              "of α that the EGI's velocity and attitude do not give even with the steady wind known; only "
