@@ -1,6 +1,6 @@
 # Sourced by scripts/hil, scripts/wcet, scripts/e2e-small, scripts/test, scripts/build-estimator,
 # scripts/calibrate and scripts/analysis: which build flies aircraft NAME
-# (aircraft/NAME.toml). The default aircraft (DEFAULT_AIRCRAFT in estimator-core/aircraft_name.rs)
+# (aircraft/NAME.toml), and the analyses' independent test flights of it. The default aircraft (DEFAULT_AIRCRAFT in estimator-core/aircraft_name.rs)
 # is the tree's own build in target/; another keeps its own, target/NAME, so the default's stays as
 # it is (setting ESTIMATOR_AIRCRAFT for it would rebuild the tree). Expects `root` (the checkout).
 default_aircraft=f16
@@ -86,3 +86,18 @@ description_value() {
 # aircraft_model NAME: prints the JSBSim model of aircraft/NAME.toml (its `[jsbsim] model`: the
 # aircraft directory's MODEL/MODEL.xml).
 aircraft_model() { description_value "$1" jsbsim model; }
+
+# paper_test_flights NAME: the `paper` preset's test flights with seeds 11-18 of aircraft NAME,
+# which no shipped estimator trained or fitted on (the analyses' independent flights, one directory
+# per seed under out/turb/; expects the working directory `root`), in `flight_dirs`. A missing one is
+# flown with the build's hil-sim (aircraft_target NAME first).
+paper_test_flights() {
+  flight_dirs=()
+  local seed d
+  mkdir -p out/turb
+  for seed in 11 12 13 14 15 16 17 18; do
+    d="out/turb/$1-$seed"
+    [ -f "$d/manifest.json" ] || "$target/release/hil-sim" generate --aircraft "$1" --preset paper --test-only --seed "$seed" --out "$d" >&2
+    flight_dirs+=("$d")
+  done
+}

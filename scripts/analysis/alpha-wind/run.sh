@@ -14,7 +14,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target
+. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights
 command="scripts/analysis/alpha-wind/run.sh${*:+ $*}"
 name="$default_aircraft"
 dest=""
@@ -35,13 +35,11 @@ done
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "alpha-wind: --out $dest is not a directory" >&2; exit 2; }
 work="out/alpha-wind/$name"
 mkdir -p "$work"
-dirs=()
-for seed in 11 12 13 14 15 16 17 18; do
-  d="out/turb/$name-$seed"
-  [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate --aircraft "$name" --preset paper --test-only --seed "$seed" --out "$d" >&2
+paper_test_flights "$name"
+for d in "${flight_dirs[@]}"; do
   for csv in "$d"/test_*.csv; do
     flight="$(basename "$csv" .csv)"
-    run="$work/$name-$seed/$flight"
+    run="$work/$(basename "$d")/$flight"
     if [ ! "$run/estimates.csv" -nt "$bin/hil-sim" ]; then
       rm -rf "$run.tmp"
       mkdir -p "$run.tmp"
@@ -50,10 +48,9 @@ for seed in 11 12 13 14 15 16 17 18; do
       mv "$run.tmp" "$run"
     fi
   done
-  dirs+=("$d")
   echo "alpha-wind: $d flown" >&2
 done
-.venv/bin/python scripts/analysis/alpha-wind/table.py "$name" "$work" "$command" "${dirs[@]}"
+.venv/bin/python scripts/analysis/alpha-wind/table.py "$name" "$work" "$command" "${flight_dirs[@]}"
 "$bin/trainer" bars --spec "$work/bars.json" --out "$work/alpha-wind.png"
 if [ -n "$dest" ]; then
   mv "$work/alpha-wind.md" "$dest/alpha-wind.md"

@@ -24,6 +24,11 @@ import sys
 
 import numpy as np
 
+# The NED → body direction-cosine matrix per frame, as the filter's c_bn (one definition for the
+# analysis scripts: scripts/analysis/kinematic-gate/replay.py).
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "kinematic-gate"))
+from replay import body_from_ned  # noqa: E402
+
 BANDS = [(-90.0, 5.0, "below 5°"), (5.0, 15.0, "5–15°"), (15.0, 20.0, "15–20°"),
          (20.0, 25.0, "20–25°"), (25.0, 90.0, "above 25°")]
 HIGH_ALPHA_DEG = 15.0
@@ -35,25 +40,26 @@ PLOT_MIN_FRAMES = 1000
 MEAN_WIND_FRAMES = 600
 
 
-def columns(path, names):
+def read(path):
+    """A CSV's header and its rows (strings), read once."""
     with open(path, newline="") as f:
         rows = csv.reader(f)
         head = next(rows)
-        idx = [head.index(n) for n in names]
-        out = [[] for _ in names]
-        for r in rows:
-            for k, i in enumerate(idx):
-                out[k].append(r[i])
-    return out
+        return head, list(rows)
 
 
-def flags_clear(path):
+def columns(table, names):
+    """The named columns of `read`'s (header, rows), each a list of strings."""
+    head, rows = table
+    idx = [head.index(n) for n in names]
+    return [[r[i] for r in rows] for i in idx]
+
+
+def flags_clear(table):
     """True where every flag of the frame is clear (the estimate's flag_* columns)."""
-    with open(path, newline="") as f:
-        rows = csv.reader(f)
-        head = next(rows)
-        idx = [i for i, n in enumerate(head) if n.startswith("flag_")]
-        return np.array([all(r[i] == "0" for i in idx) for r in rows])
+    head, rows = table
+    idx = [i for i, n in enumerate(head) if n.startswith("flag_")]
+    return np.array([all(r[i] == "0" for i in idx) for r in rows])
 
 
 def moving_mean(x, frames):
@@ -65,15 +71,10 @@ def gust_alpha_deg(flight_csv):
     names = ["phi_deg", "theta_deg", "psi_deg", "v_north_mps", "v_east_mps", "v_down_mps",
              "wind_north_mps", "wind_east_mps", "wind_down_mps", "alpha_deg"]
     phi, th, psi, vn, ve, vd, wn, we, wd, alpha = (
-        np.array(c, dtype=float) for c in columns(flight_csv, names))
-    vn, ve, vd = (v - moving_mean(w, MEAN_WIND_FRAMES) for v, w in ((vn, wn), (ve, we), (vd, wd)))
-    phi, th, psi = np.radians(phi), np.radians(th), np.radians(psi)
-    xn, xe, xd = np.cos(th) * np.cos(psi), np.cos(th) * np.sin(psi), -np.sin(th)
-    zn = np.cos(phi) * np.sin(th) * np.cos(psi) + np.sin(phi) * np.sin(psi)
-    ze = np.cos(phi) * np.sin(th) * np.sin(psi) - np.sin(phi) * np.cos(psi)
-    zd = np.cos(phi) * np.cos(th)
-    u = vn * xn + ve * xe + vd * xd
-    w = vn * zn + ve * ze + vd * zd
+        np.array(c, dtype=float) for c in columns(read(flight_csv), names))
+    v = np.stack([v - moving_mean(w, MEAN_WIND_FRAMES) for v, w in ((vn, wn), (ve, we), (vd, wd))], 1)
+    c_bn = body_from_ned(np.radians(phi), np.radians(th), np.radians(psi))
+    u, _, w = np.einsum("kij,kj->ik", c_bn, v)
     return alpha - np.degrees(np.arctan2(w, u))
 
 
@@ -108,8 +109,9 @@ def main():
                 continue
             flight = csv_name[:-4]
             est = os.path.join(out, name, flight, "estimates.csv")
+            table = read(est)
             a_true, a_est, s_a, received = columns(
-                est, ["alpha_true_deg", "alpha_deg", "sigma_alpha_deg", "received"])
+                table, ["alpha_true_deg", "alpha_deg", "sigma_alpha_deg", "received"])
             g = gust_alpha_deg(os.path.join(d, csv_name))
             n = min(len(g), len(a_true))
             a_est = np.array([x if x else "nan" for x in a_est[:n]], dtype=float)
@@ -118,7 +120,7 @@ def main():
             flights.append(dict(
                 name=f"{name}/{flight}", sev=severity(os.path.join(d, flight + ".xml")),
                 err=(a_est - t)[ok], truth=t[ok], sigma=np.array(s_a[:n], dtype=float)[ok],
-                clear=flags_clear(est)[:n][ok], gust=g[:n][ok]))
+                clear=flags_clear(table)[:n][ok], gust=g[:n][ok]))
     cat = {k: np.concatenate([f[k] for f in flights]) for k in ("err", "truth", "sigma", "clear", "gust")}
     total = np.abs(cat["err"]).sum()
     lines = ["# α error and the gusts' vertical part, by α", "",

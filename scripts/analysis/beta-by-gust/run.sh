@@ -15,10 +15,8 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target
+. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights
 [ $# -gt 0 ] || set -- "$default_aircraft" c172p
-out=out/turb
-mkdir -p "$out"
 args=()
 for name in "$@"; do
   aircraft_target "$name"
@@ -26,16 +24,13 @@ for name in "$@"; do
   for b in hil-sim trainer; do
     [ -x "$bin/$b" ] || { echo "beta-by-gust: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
   done
-  dirs=()
-  for seed in 11 12 13 14 15 16 17 18; do
-    d="$out/$name-$seed"
-    [ -f "$d/manifest.json" ] || "$bin/hil-sim" generate --aircraft "$name" --preset paper --test-only --seed "$seed" --out "$d" >&2
+  paper_test_flights "$name"
+  for d in "${flight_dirs[@]}"; do
     if [ ! "$d.eval.json" -nt "$bin/trainer" ]; then
       "$bin/trainer" eval --aircraft "$name" --data "$d" --json > "$d.eval.json.new"
       mv "$d.eval.json.new" "$d.eval.json"
     fi
-    dirs+=("$d")
   done
-  args+=("$name=$(IFS=,; echo "${dirs[*]}")")
+  args+=("$name=$(IFS=,; echo "${flight_dirs[*]}")")
 done
 .venv/bin/python scripts/analysis/beta-by-gust/table.py "${args[@]}"
