@@ -121,7 +121,33 @@ pub struct Dataset {
     pub test_from: Vec<ExtraData>,
     /// An `ood` dataset's cases: name and what it flies (manifest `config.ood_cases`).
     pub ood_cases: Vec<(String, String)>,
+    /// The gyro-bias twins among the training flights ([`Dataset::add_gyro_bias_twins`]).
+    pub gyro_bias_twins: Option<GyroBiasTwins>,
 }
+
+/// Training windows with a gyro bias ([`Dataset::add_gyro_bias_twins`]): how many, from which seed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GyroBiasTwins {
+    pub flights: usize,
+    pub seed: u64,
+}
+
+/// A gyro-bias twin's bias, rad/s: its size is drawn log-uniform between these (either sign).
+/// Below the filter's gyro check (0.05-0.06 rad/s) the bias stays unflagged for as long as it
+/// lasts; above it, the check flags it after about a second, and the networks read the raw gyro
+/// all the while.
+pub const TWIN_BIAS_RPS: [f64; 2] = [0.005, 0.3];
+/// Biases per twin, each in a slot of its own along the flight (fewer in a short flight): every
+/// bias is two steps (on, off), where an estimator that reads a gyro's change errs most.
+pub const TWIN_BIASES: usize = 4;
+/// A twin's bias lasts between these, s.
+pub const TWIN_BIAS_S: [f64; 2] = [3.0, 15.0];
+/// A twin's rows: from this long before its bias starts to [`TWIN_TAIL_S`] after it ends, s.
+pub const TWIN_LEAD_S: f64 = 5.0;
+/// See [`TWIN_LEAD_S`].
+pub const TWIN_TAIL_S: f64 = 15.0;
+/// A twin's bias starts at least this far into its flight (the filter has settled), s.
+pub const TWIN_SETTLED_S: f64 = 30.0;
 
 /// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
 #[derive(Debug, Clone)]
@@ -217,6 +243,7 @@ impl Dataset {
             flights,
             extra: Vec::new(),
             test_from: Vec::new(),
+            gyro_bias_twins: None,
             aircraft: manifest.aircraft.clone(),
             ood_cases: manifest
                 .config
@@ -290,6 +317,85 @@ impl Dataset {
         });
         self.flights.extend(added);
         Ok(())
+    }
+
+    /// Adds a gyro-bias twin of every training flight (validation and test flights stay as
+    /// flown): the flight's frames with [`TWIN_BIASES`] gyro biases, each switched on and off
+    /// again (a bias shift, `hil_sim::faults`), the estimator's features computed over the whole
+    /// flight as in flight, and only the rows around each bias kept ([`TWIN_LEAD_S`],
+    /// [`TWIN_TAIL_S`]). Each bias's gyro (p, q or r), size ([`TWIN_BIAS_RPS`], log-uniform, either
+    /// sign), start (in its slot, the first at least [`TWIN_SETTLED_S`] in) and length
+    /// ([`TWIN_BIAS_S`]) are drawn from `seed`, flight by flight in order; a flight too short for
+    /// one slot gets no twin. The truth is the flight's:
+    /// the networks learn that a gyro that steps without the forces that would turn the aircraft
+    /// has not moved the air data. Returns how many twins were added.
+    pub fn add_gyro_bias_twins(&mut self, seed: u64) -> usize {
+        use estimator_core::Channel;
+        use hil_sim::faults::FaultKind;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut twins = Vec::new();
+        // Each bias has a slot of its own: its lead, its longest length and its tail.
+        let slot_s = TWIN_LEAD_S + TWIN_BIAS_S[1] + TWIN_TAIL_S;
+        for f in self.flights.iter().filter(|f| f.role == Role::Train) {
+            let (Some(&t0), Some(&t1)) = (f.time_s.first(), f.time_s.last()) else {
+                continue;
+            };
+            let span = t1 - t0 - TWIN_SETTLED_S;
+            let n = TWIN_BIASES.min((span / slot_s).floor().max(0.0) as usize);
+            if n == 0 {
+                continue;
+            }
+            let slot_s = span / n as f64;
+            let faults: Vec<Fault> = (0..n)
+                .map(|k| {
+                    let channel =
+                        [Channel::GyroP, Channel::GyroQ, Channel::GyroR][rng.random_range(0..3)];
+                    let size =
+                        (rng.random_range(TWIN_BIAS_RPS[0].ln()..TWIN_BIAS_RPS[1].ln())).exp();
+                    let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                    let slot = t0 + TWIN_SETTLED_S + k as f64 * slot_s;
+                    let duration_s = rng.random_range(TWIN_BIAS_S[0]..TWIN_BIAS_S[1]);
+                    // Its window, lead to tail at the longest length, stays in the slot.
+                    let start_s = rng.random_range(
+                        slot + TWIN_LEAD_S..=slot + slot_s - TWIN_BIAS_S[1] - TWIN_TAIL_S,
+                    );
+                    Fault {
+                        kind: FaultKind::Bias(
+                            channel,
+                            (sign * size / channel.lsb()).round() as i32,
+                        ),
+                        start_s,
+                        duration_s,
+                    }
+                })
+                .collect();
+            let mut frames = f.frames.clone();
+            hil_sim::faults::apply(&faults, &mut frames, &f.time_s);
+            let mut state = FeatureState::new(true);
+            let features: Vec<FeatureValues> = frames.iter().map(|fr| state.next(fr)).collect();
+            let keep = |t: f64| {
+                faults.iter().any(|b| {
+                    t >= b.start_s - TWIN_LEAD_S && t < b.start_s + b.duration_s + TWIN_TAIL_S
+                })
+            };
+            let rows: Vec<usize> = (0..f.len()).filter(|&i| keep(f.time_s[i])).collect();
+            let pick = |v: &[f64]| rows.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+            let named: String = faults.iter().map(|b| format!("~{b}")).collect();
+            twins.push(Flight {
+                name: format!("{}{named}", f.name),
+                role: Role::Train,
+                time_s: pick(&f.time_s),
+                frames: rows.iter().map(|&i| frames[i]).collect(),
+                features: rows.iter().map(|&i| features[i]).collect(),
+                truth: std::array::from_fn(|k| pick(&f.truth[k])),
+                qbar_pa: pick(&f.qbar_pa),
+            });
+        }
+        let n = twins.len();
+        self.flights.extend(twins);
+        self.gyro_bias_twins = Some(GyroBiasTwins { flights: n, seed });
+        n
     }
 
     /// Scores on the test flights of the dataset at `dir` instead of this one's: the flights of the
@@ -459,6 +565,120 @@ pub fn feature_si(v: &FeatureValues, f: estimator_core::Feature) -> f64 {
 mod tests {
     use super::*;
     use estimator_core::{CHANNELS, Channel};
+
+    /// A flight of `seconds` at 20 Hz, every frame the default one, its truth α the time.
+    fn still_flight(name: &str, role: Role, seconds: usize) -> Flight {
+        let n = seconds * 20;
+        let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.05).collect();
+        let frames = vec![SensorFrame::default(); n];
+        let mut state = FeatureState::new(true);
+        Flight {
+            name: name.to_string(),
+            role,
+            features: frames.iter().map(|f| state.next(f)).collect(),
+            frames,
+            truth: std::array::from_fn(|_| time_s.clone()),
+            qbar_pa: vec![1.0; n],
+            time_s,
+        }
+    }
+
+    #[test]
+    fn gyro_bias_twins_bias_the_gyros_in_windows_of_each_training_flight() {
+        use estimator_core::Channel;
+        let ds = |flights| Dataset {
+            dir: PathBuf::from("x"),
+            manifest_sha256: String::new(),
+            preset: "test".into(),
+            suites: Vec::new(),
+            flights,
+            extra: Vec::new(),
+            aircraft: None,
+            test_from: Vec::new(),
+            ood_cases: Vec::new(),
+            gyro_bias_twins: None,
+        };
+        let flights = || {
+            vec![
+                still_flight("a", Role::Train, 300),
+                still_flight("b", Role::Train, 300),
+                still_flight("short", Role::Train, 50),
+                still_flight("v", Role::Val, 300),
+                still_flight("t", Role::Test, 300),
+            ]
+        };
+        let (mut one, mut two) = (ds(flights()), ds(flights()));
+        assert_eq!(one.add_gyro_bias_twins(7), 2);
+        two.add_gyro_bias_twins(7);
+        assert_eq!(
+            one.gyro_bias_twins,
+            Some(GyroBiasTwins {
+                flights: 2,
+                seed: 7
+            })
+        );
+        let names = |d: &Dataset| d.flights.iter().map(|f| f.name.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&one), names(&two), "the draw is the seed's");
+        assert_eq!(one.flights.len(), 7);
+        for twin in &one.flights[5..] {
+            assert_eq!(twin.role, Role::Train);
+            assert!(twin.name.starts_with("a~bias:gyro_") || twin.name.starts_with("b~bias:gyro_"));
+            let faults: Vec<Fault> = twin
+                .name
+                .split('~')
+                .skip(1)
+                .map(|b| b.parse().unwrap())
+                .collect();
+            // 300 s hold TWIN_BIASES slots of 35 s after the first 30 s.
+            assert_eq!(faults.len(), TWIN_BIASES, "{}", twin.name);
+            for (b, next) in faults.iter().zip(faults.iter().skip(1)) {
+                assert!(b.start_s + b.duration_s + TWIN_TAIL_S <= next.start_s - TWIN_LEAD_S);
+            }
+            let gyros = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
+            for b in &faults {
+                let hil_sim::faults::FaultKind::Bias(c, raw) = b.kind else {
+                    panic!("{}", twin.name)
+                };
+                assert!(gyros.contains(&c));
+                let size = (raw as f64 * c.lsb()).abs();
+                assert!((TWIN_BIAS_RPS[0] - 1e-6..=TWIN_BIAS_RPS[1] + 1e-6).contains(&size));
+                assert!(b.start_s >= TWIN_SETTLED_S + TWIN_LEAD_S);
+                assert!((TWIN_BIAS_S[0]..=TWIN_BIAS_S[1]).contains(&b.duration_s));
+            }
+            let kept = |t: f64| {
+                faults.iter().any(|b| {
+                    t >= b.start_s - TWIN_LEAD_S && t < b.start_s + b.duration_s + TWIN_TAIL_S
+                })
+            };
+            assert!(twin.time_s.iter().all(|&t| kept(t)));
+            assert_eq!(
+                twin.len(),
+                (0..6000).filter(|&k| kept(k as f64 * 0.05)).count()
+            );
+            assert_eq!(
+                twin.truth(Target::AlphaDeg),
+                &twin.time_s[..],
+                "the flight's truth"
+            );
+            assert_eq!(
+                (twin.features.len(), twin.frames.len()),
+                (twin.len(), twin.time_s.len())
+            );
+            for (f, &t) in twin.frames.iter().zip(&twin.time_s) {
+                for c in gyros {
+                    let want: i32 = faults
+                        .iter()
+                        .filter(|b| b.active(t))
+                        .map(|b| match b.kind {
+                            hil_sim::faults::FaultKind::Bias(bc, raw) if bc == c => raw,
+                            _ => 0,
+                        })
+                        .sum();
+                    assert_eq!(f.get(c), want, "{} at {t} s", twin.name);
+                }
+            }
+        }
+    }
 
     #[test]
     fn validation_is_held_out_by_flight_and_never_everything() {

@@ -60,6 +60,13 @@ pub fn provenance(
             e.describe()
         );
     }
+    if let Some(t) = ds.gyro_bias_twins {
+        let _ = writeln!(
+            s,
+            "plus {} gyro-bias twins of the training flights (seed {})",
+            t.flights, t.seed
+        );
+    }
     let rows = ds.training_rows();
     if preset == "ci" || rows < PAPER_TRAIN_ROWS {
         let _ = writeln!(

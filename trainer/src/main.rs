@@ -109,6 +109,12 @@ struct TrainArgs {
     /// it was calibrated for. Repeatable: the test flights of every one.
     #[arg(long, value_name = "DIR")]
     test_data: Vec<PathBuf>,
+    /// Add a gyro-bias twin of every training flight, drawn from this seed: a window of the
+    /// flight with one gyro (p, q or r) biased by 0.02-0.3 rad/s for 3-15 s, its truth the
+    /// flight's (trainer::data::Dataset::add_gyro_bias_twins). The networks learn not to read a
+    /// gyro's step as a change of the air data. Validation and test flights stay as flown.
+    #[arg(long, value_name = "SEED")]
+    gyro_bias_twins: Option<u64>,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the
     /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
@@ -621,6 +627,9 @@ impl TrainArgs {
         for dir in &self.extra_data {
             ds.add_training(dir, self.mixed_aircraft)
                 .with_context(|| format!("adding the training flights of {}", dir.display()))?;
+        }
+        if let Some(seed) = self.gyro_bias_twins {
+            ds.add_gyro_bias_twins(seed);
         }
         for dir in &self.test_data {
             ds.test_on(dir)

@@ -46,11 +46,15 @@ pub struct Fcs {
     pub flaperon_mix: Option<FlaperonMix>,
 }
 
-/// The leading-edge flap as the FCS schedules it in flight: the deflection of the first α step
-/// whose α is exceeded, else the Mach step's above its Mach, else 0. Radians.
+/// The leading-edge flap as the FCS schedules it in flight: with the gear up, the deflection of
+/// the first of `gear_up_alpha_steps` whose α is exceeded; else that of the first of
+/// `alpha_steps`; else the Mach step's above its Mach; else 0. Radians.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LefSchedule {
-    /// (α above, rad; deflection, rad), in the order they are tried.
+    /// (α above, rad; deflection, rad), tried first, in order, only with the gear up (the F-16's
+    /// 25° above 15° α: f16.xml's switch tests `gear/gear-pos-norm eq 0`).
+    pub gear_up_alpha_steps: &'static [(f32, f32)],
+    /// (α above, rad; deflection, rad), in the order they are tried, gear up or down.
     pub alpha_steps: &'static [(f32, f32)],
     pub mach_above: f32,
     pub mach_lef_rad: f32,

@@ -599,14 +599,24 @@ pub fn isa(alt_m: f32) -> (f32, f32) {
 }
 
 /// The leading-edge flap the aero model reads (`fcs/lef-pos-rad`), scheduled by the aircraft's
-/// flight-control system from α and Mach in flight (its description's `[fcs.lef_schedule]`; the
-/// F-16's: 25° above 15° α, 15° above 5° α, −2° above Mach 0.9, else 0). In degrees; 0 for an
-/// aircraft without one.
-fn lef_schedule_deg(alpha_rad: f32, mach: f32) -> f32 {
+/// flight-control system from α, Mach and the gear in flight (its description's
+/// `[fcs.lef_schedule]`; the F-16's: 25° above 15° α with the gear up, 15° above 5° α, −2° above
+/// Mach 0.9, else 0). The gear is up only at `gear_norm` 0, as f16.xml's switch tests it. In
+/// degrees; 0 for an aircraft without one.
+fn lef_schedule_deg(alpha_rad: f32, mach: f32, gear_norm: f32) -> f32 {
     let Some(s) = AIRCRAFT.fcs.lef_schedule else {
         return 0.0;
     };
-    let rad = match s.alpha_steps.iter().find(|(above, _)| alpha_rad > *above) {
+    let gear_up: &[(f32, f32)] = if gear_norm <= 0.0 {
+        s.gear_up_alpha_steps
+    } else {
+        &[]
+    };
+    let step = gear_up
+        .iter()
+        .chain(s.alpha_steps.iter())
+        .find(|(above, _)| alpha_rad > *above);
+    let rad = match step {
         Some(&(_, lef)) => lef,
         None if mach > s.mach_above => s.mach_lef_rad,
         None => 0.0,
@@ -642,7 +652,7 @@ pub fn surfaces(inp: &Input, alpha_rad: f32, mach: f32, gear_norm: f32) -> Surfa
         elevator_deg: inp.elevator_deg,
         aileron_deg: inp.aileron_deg,
         rudder_deg: inp.rudder_deg,
-        lef_deg: lef_schedule_deg(alpha_rad, mach),
+        lef_deg: lef_schedule_deg(alpha_rad, mach, gear_norm),
         flaperon_left_deg: inp.flaperon_left_deg,
         flaperon_right_deg: flaperon_right_deg(inp, mach),
         speedbrake_deg: inp.speedbrake_deg,

@@ -1581,3 +1581,40 @@ fn a_frame_gives_the_gyros_mean_over_each_half_of_its_period() {
     assert_eq!([older[1], newer[1]], [-3.0 * lsb(Channel::GyroQ); 2]);
     assert_eq!([older[2], newer[2]], [0.0; 2]);
 }
+
+/// The leading-edge flap as the description schedules it: the gear-up steps only with the gear up
+/// (the F-16's 25° above 15° α: f16.xml's switch tests `gear/gear-pos-norm eq 0`; with the gear
+/// down, as the plant flies, its flap stops at 15°), and none for an aircraft without a schedule.
+#[test]
+fn the_leading_edge_flap_takes_its_gear_up_steps_only_with_the_gear_up() {
+    let inp = Input::default();
+    let Some(s) = AIRCRAFT.fcs.lef_schedule else {
+        for alpha_deg in [-10.0f32, 0.0, 10.0, 20.0, 30.0] {
+            for gear in [0.0, 1.0] {
+                let lef = surfaces(&inp, alpha_deg.to_radians(), 0.5, gear).lef_deg;
+                assert_eq!(lef, 0.0);
+            }
+        }
+        return;
+    };
+    let deg = |rad: f32| rad * (180.0 / core::f32::consts::PI);
+    for &(above, lef_up) in s.gear_up_alpha_steps {
+        let alpha = above + 0.01;
+        let down_step = s.alpha_steps.iter().find(|(a, _)| alpha > *a);
+        let lef_down = down_step.map_or(0.0, |&(_, lef)| lef);
+        assert_eq!(surfaces(&inp, alpha, 0.5, 0.0).lef_deg, deg(lef_up));
+        assert_eq!(surfaces(&inp, alpha, 0.5, 1.0).lef_deg, deg(lef_down));
+        assert_eq!(surfaces(&inp, alpha, 0.5, 0.5).lef_deg, deg(lef_down));
+        assert_ne!(lef_up, lef_down);
+    }
+    for &(above, lef) in s.alpha_steps {
+        let below_every_gear_up_step = s
+            .gear_up_alpha_steps
+            .iter()
+            .all(|(a, _)| above + 0.01 <= *a);
+        if below_every_gear_up_step {
+            assert_eq!(surfaces(&inp, above + 0.01, 0.5, 0.0).lef_deg, deg(lef));
+        }
+        assert_eq!(surfaces(&inp, above + 0.01, 0.5, 1.0).lef_deg, deg(lef));
+    }
+}

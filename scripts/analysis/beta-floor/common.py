@@ -343,8 +343,9 @@ def side_parts(alpha_rad, mach, aileron_rad, rudder_rad, p_rps, r_rps, tas_mps):
 
 
 def lef_schedule_rad(alpha_rad, mach):
-    return np.where(alpha_rad > 0.2618, 0.436, np.where(alpha_rad > 0.0873, 0.262,
-                    np.where(mach > 0.9, -0.0349, 0.0)))
+    """f16.xml's leading-edge flap in flight with the gear down, as the plant flies: its 25° above
+    15° α needs the gear up, so 15° above 5° α, −2° above Mach 0.9, else 0."""
+    return np.where(alpha_rad > 0.0873, 0.262, np.where(mach > 0.9, -0.0349, 0.0))
 
 
 def drag_coef(alpha_rad, mach, elevator_rad, lef_rad, speedbrake_rad, flap_mix_rad, q_rps, tas_mps):
