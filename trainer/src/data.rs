@@ -146,7 +146,8 @@ pub const TWIN_BIAS_S: [f64; 2] = [3.0, 15.0];
 pub const TWIN_LEAD_S: f64 = 5.0;
 /// See [`TWIN_LEAD_S`].
 pub const TWIN_TAIL_S: f64 = 15.0;
-/// A twin's bias starts at least this far into its flight (the filter has settled), s.
+/// A twin's first window starts at least this far into its flight (the filter has settled), so
+/// its first bias at least [`TWIN_LEAD_S`] later, s.
 pub const TWIN_SETTLED_S: f64 = 30.0;
 
 /// Another dataset whose training flights joined this one's ([`Dataset::add_training`]).
@@ -357,9 +358,10 @@ impl Dataset {
                     let slot = t0 + TWIN_SETTLED_S + k as f64 * slot_s;
                     let duration_s = rng.random_range(TWIN_BIAS_S[0]..TWIN_BIAS_S[1]);
                     // Its window, lead to tail at the longest length, stays in the slot.
-                    let start_s = rng.random_range(
-                        slot + TWIN_LEAD_S..=slot + slot_s - TWIN_BIAS_S[1] - TWIN_TAIL_S,
-                    );
+                    // (`max`: a slot of exactly the minimum length may round one ulp short.)
+                    let latest =
+                        (slot + slot_s - TWIN_BIAS_S[1] - TWIN_TAIL_S).max(slot + TWIN_LEAD_S);
+                    let start_s = rng.random_range(slot + TWIN_LEAD_S..=latest);
                     Fault {
                         kind: FaultKind::Bias(
                             channel,
@@ -570,7 +572,11 @@ mod tests {
     fn still_flight(name: &str, role: Role, seconds: usize) -> Flight {
         let n = seconds * 20;
         let time_s: Vec<f64> = (0..n).map(|k| k as f64 * 0.05).collect();
-        let frames = vec![SensorFrame::default(); n];
+        let frame = SensorFrame {
+            valid: estimator_core::channels::ALL_VALID,
+            ..SensorFrame::default()
+        };
+        let frames = vec![frame; n];
         let mut state = FeatureState::new(true);
         Flight {
             name: name.to_string(),
@@ -603,38 +609,49 @@ mod tests {
                 still_flight("a", Role::Train, 300),
                 still_flight("b", Role::Train, 300),
                 still_flight("short", Role::Train, 50),
+                still_flight("c", Role::Train, 100),
                 still_flight("v", Role::Val, 300),
                 still_flight("t", Role::Test, 300),
             ]
         };
         let (mut one, mut two) = (ds(flights()), ds(flights()));
-        assert_eq!(one.add_gyro_bias_twins(7), 2);
+        assert_eq!(one.add_gyro_bias_twins(7), 3);
         two.add_gyro_bias_twins(7);
         assert_eq!(
             one.gyro_bias_twins,
             Some(GyroBiasTwins {
-                flights: 2,
+                flights: 3,
                 seed: 7
             })
         );
         let names = |d: &Dataset| d.flights.iter().map(|f| f.name.clone()).collect::<Vec<_>>();
         assert_eq!(names(&one), names(&two), "the draw is the seed's");
-        assert_eq!(one.flights.len(), 7);
-        for twin in &one.flights[5..] {
+        assert_eq!(one.flights.len(), 9);
+        for (kept, given) in one.flights.iter().zip(flights()) {
+            assert_eq!((&kept.name, &kept.features), (&given.name, &given.features));
+        }
+        let gyros = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
+        for twin in &one.flights[6..] {
             assert_eq!(twin.role, Role::Train);
-            assert!(twin.name.starts_with("a~bias:gyro_") || twin.name.starts_with("b~bias:gyro_"));
-            let faults: Vec<Fault> = twin
-                .name
-                .split('~')
-                .skip(1)
-                .map(|b| b.parse().unwrap())
-                .collect();
-            // 300 s hold TWIN_BIASES slots of 35 s after the first 30 s.
-            assert_eq!(faults.len(), TWIN_BIASES, "{}", twin.name);
+            let (of, named) = twin.name.split_once('~').unwrap();
+            let faults: Vec<Fault> = named.split('~').map(|b| b.parse().unwrap()).collect();
+            // A 300-s flight holds TWIN_BIASES slots of at least 35 s after its first 30 s; the
+            // 100-s one holds one.
+            let (want, frames_n) = match of {
+                "a" | "b" => (TWIN_BIASES, 6000),
+                "c" => (1, 2000),
+                _ => panic!(
+                    "{}: a twin of a flight too short or not a training flight",
+                    twin.name
+                ),
+            };
+            assert_eq!(faults.len(), want, "{}", twin.name);
+            let end_s = (frames_n - 1) as f64 * 0.05;
+            let last = faults.last().unwrap();
+            assert!(last.start_s + last.duration_s + TWIN_TAIL_S <= end_s + 1e-9);
             for (b, next) in faults.iter().zip(faults.iter().skip(1)) {
                 assert!(b.start_s + b.duration_s + TWIN_TAIL_S <= next.start_s - TWIN_LEAD_S);
             }
-            let gyros = [Channel::GyroP, Channel::GyroQ, Channel::GyroR];
             for b in &faults {
                 let hil_sim::faults::FaultKind::Bias(c, raw) = b.kind else {
                     panic!("{}", twin.name)
@@ -653,7 +670,7 @@ mod tests {
             assert!(twin.time_s.iter().all(|&t| kept(t)));
             assert_eq!(
                 twin.len(),
-                (0..6000).filter(|&k| kept(k as f64 * 0.05)).count()
+                (0..frames_n).filter(|&k| kept(k as f64 * 0.05)).count()
             );
             assert_eq!(
                 twin.truth(Target::AlphaDeg),
@@ -664,6 +681,27 @@ mod tests {
                 (twin.features.len(), twin.frames.len()),
                 (twin.len(), twin.time_s.len())
             );
+            // Its features are those of the whole faulted flight, computed as in flight, at its
+            // rows; while a bias is on they are not the clean flight's.
+            let source = one.flights.iter().find(|f| f.name == of).unwrap();
+            let mut frames = source.frames.clone();
+            hil_sim::faults::apply(&faults, &mut frames, &source.time_s);
+            let mut state = FeatureState::new(true);
+            let whole: Vec<FeatureValues> = frames.iter().map(|f| state.next(f)).collect();
+            let mut biased_rows = 0;
+            for (f, &t) in twin.features.iter().zip(&twin.time_s) {
+                let row = (t / 0.05).round() as usize;
+                assert_eq!(f, &whole[row], "{} at {t} s", twin.name);
+                if faults.iter().any(|b| b.active(t)) {
+                    biased_rows += 1;
+                    assert_ne!(
+                        f, &source.features[row],
+                        "{} at {t} s: not biased",
+                        twin.name
+                    );
+                }
+            }
+            assert!(biased_rows > 0);
             for (f, &t) in twin.frames.iter().zip(&twin.time_s) {
                 for c in gyros {
                     let want: i32 = faults

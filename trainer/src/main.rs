@@ -109,10 +109,11 @@ struct TrainArgs {
     /// it was calibrated for. Repeatable: the test flights of every one.
     #[arg(long, value_name = "DIR")]
     test_data: Vec<PathBuf>,
-    /// Add a gyro-bias twin of every training flight, drawn from this seed: a window of the
-    /// flight with one gyro (p, q or r) biased by 0.02-0.3 rad/s for 3-15 s, its truth the
-    /// flight's (trainer::data::Dataset::add_gyro_bias_twins). The networks learn not to read a
-    /// gyro's step as a change of the air data. Validation and test flights stay as flown.
+    /// Add a gyro-bias twin of every training flight, drawn from this seed: up to four windows
+    /// of the flight, each with one gyro (p, q or r) biased by 0.005-0.3 rad/s (log-uniform,
+    /// either sign) for 3-15 s, its truth the flight's
+    /// (trainer::data::Dataset::add_gyro_bias_twins). The networks learn not to read a gyro's
+    /// step as a change of the air data. Validation and test flights stay as flown.
     #[arg(long, value_name = "SEED")]
     gyro_bias_twins: Option<u64>,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the

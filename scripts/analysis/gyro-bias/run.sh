@@ -4,16 +4,18 @@
 # estimator; made by scripts/analysis/beta-by-gust/run.sh, or here if missing) flown through the
 # estimator
 # (`hil-sim run --firmware host`) once per gyro and bias size, with the bias switched on for 10 s
-# every 25 s from 25 s into the flight; then table.py: per gyro and size, over every onset, the
+# every 25 s from 25 s into the flight, each with 15 s of the flight after it; then table.py: per gyro and size, over every onset, the
 # largest departure from the fault-free run of an estimate that carries no flag, and the onsets
 # whose unflagged departure passes the silent-error sizes (2° α, 1° β).
 #
 #   scripts/analysis/gyro-bias/run.sh [--aircraft NAME] [--bin DIR] [--out DIR]
 #   scripts/analysis/gyro-bias/run.sh --out docs/results    # the page
 #
-# --bin DIR takes hil-sim from another build's release directory (to compare two estimators).
+# --bin DIR takes hil-sim from another build's release directory (to compare two estimators; a
+# relative DIR, like --out, is taken from the checkout's root). The flights of seeds 11-18 are made
+# if missing (all eight, as the other analyses use them).
 # Needs the aircraft's release build (target/ or target/NAME) and the project's .venv
-# (scripts/bootstrap). Scratch in out/gyro-bias/NAME/; about 10 min on 2 cores.
+# (scripts/bootstrap). Scratch in out/gyro-bias/NAME/BUILD/; about 1 min on 2 cores.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
@@ -33,12 +35,13 @@ while [ $# -gt 0 ]; do
   esac
 done
 aircraft_target "$name"
+build="${bin:-default}"
 bin="${bin:-$target/release}"
 [ -x "$bin/hil-sim" ] || { echo "gyro-bias: no $bin/hil-sim: build $name's release build first (header)" >&2; exit 2; }
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "gyro-bias: --out $dest is not a directory" >&2; exit 2; }
 paper_test_flights "$name"
-flights=("${flight_dirs[0]}"/test_*.csv "${flight_dirs[1]}"/test_*.csv)
-work="out/gyro-bias/$name/$(echo "$bin" | tr '/' '_')"
+flights=("out/turb/$name-11"/test_*.csv "out/turb/$name-12"/test_*.csv)
+work="out/gyro-bias/$name/$(echo "$build" | tr '/' '_')"
 mkdir -p "$work"
 for csv in "${flights[@]}"; do
   flight="$(basename "$(dirname "$csv")")/$(basename "$csv" .csv)"
@@ -46,7 +49,7 @@ for csv in "${flights[@]}"; do
   for gyro in p q r; do
     for size in 0.03 0.06 0.1 0.2; do
       faults=()
-      for ((t = 25; t + 10 < ${last%.*}; t += 25)); do
+      for ((t = 25; t + 25 <= ${last%.*}; t += 25)); do
         faults+=(--fault "bias:gyro_${gyro}_rps=${size}@${t}+10")
       done
       run="$work/$flight/$gyro-$size"
