@@ -374,8 +374,7 @@ impl Dataset {
                 .collect();
             let mut frames = f.frames.clone();
             hil_sim::faults::apply(&faults, &mut frames, &f.time_s);
-            let mut state = FeatureState::new(true);
-            let features: Vec<FeatureValues> = frames.iter().map(|fr| state.next(fr)).collect();
+            let features = features_in_flight(&frames);
             let keep = |t: f64| {
                 faults.iter().any(|b| {
                     t >= b.start_s - TWIN_LEAD_S && t < b.start_s + b.duration_s + TWIN_TAIL_S
@@ -538,16 +537,11 @@ fn flight_of(
         role,
         time_s: Vec::with_capacity(csv.samples.len()),
         frames: Vec::with_capacity(csv.samples.len()),
-        features: Vec::with_capacity(csv.samples.len()),
+        features: features_in_flight(&frames),
         truth: Default::default(),
         qbar_pa: Vec::with_capacity(csv.samples.len()),
     };
-    // The estimator's own feature state: features at frame i see frames 0..i, as in flight, and the
-    // air-data filter runs over the flight in order (its outputs are candidate features; on a
-    // table1 flight it has no input and they stay 0).
-    let mut state = FeatureState::new(true);
     for (frame, sample) in frames.into_iter().zip(&csv.samples) {
-        fl.features.push(state.next(&frame));
         fl.frames.push(frame);
         fl.time_s.push(sample.time_s);
         fl.qbar_pa.push(sample.truth.qbar_pa);
@@ -556,6 +550,14 @@ fn flight_of(
         }
     }
     Ok(fl)
+}
+
+/// The estimator's features of a flight's frames through its own feature state: the features at
+/// frame i see frames 0..i, as in flight, and the air-data filter runs over the flight in order
+/// (its outputs are candidate features; on a table1 flight it has no input and they stay 0).
+pub fn features_in_flight(frames: &[SensorFrame]) -> Vec<FeatureValues> {
+    let mut state = FeatureState::new(true);
+    frames.iter().map(|f| state.next(f)).collect()
 }
 
 /// The float value of a feature the model is trained on: the quantized raw value times its LSB.
@@ -577,11 +579,10 @@ mod tests {
             ..SensorFrame::default()
         };
         let frames = vec![frame; n];
-        let mut state = FeatureState::new(true);
         Flight {
             name: name.to_string(),
             role,
-            features: frames.iter().map(|f| state.next(f)).collect(),
+            features: features_in_flight(&frames),
             frames,
             truth: std::array::from_fn(|_| time_s.clone()),
             qbar_pa: vec![1.0; n],
@@ -686,8 +687,7 @@ mod tests {
             let source = one.flights.iter().find(|f| f.name == of).unwrap();
             let mut frames = source.frames.clone();
             hil_sim::faults::apply(&faults, &mut frames, &source.time_s);
-            let mut state = FeatureState::new(true);
-            let whole: Vec<FeatureValues> = frames.iter().map(|f| state.next(f)).collect();
+            let whole = features_in_flight(&frames);
             let mut biased_rows = 0;
             for (f, &t) in twin.features.iter().zip(&twin.time_s) {
                 let row = (t / 0.05).round() as usize;

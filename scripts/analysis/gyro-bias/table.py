@@ -12,18 +12,6 @@ import sys
 SILENT_DEG = (2.0, 1.0)  # α, β: the sizes a flight-control computer acts on
 
 
-def cpu_model():
-    """The host's processor as /proc/cpuinfo names it ("unknown" elsewhere)."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
-
-
 def main():
     name, work, command = sys.argv[1:4]
     rows = {}
@@ -48,7 +36,7 @@ def main():
     flights = max(len(c["flights"]) for c in rows.values())
     print(f"# A gyro's bias shift: {name}\n")
     print(f"Command: `{command}`  ")
-    print(f"Machine: {platform.machine()} ({cpu_model()}), {os.cpu_count()} cores, "
+    print(f"Machine: {platform.machine()}, {os.cpu_count()} cores, "
           f"{datetime.date.today().isoformat()}\n")
     print(f"The {flights} test flights of the `paper` preset with seeds 11 and 12, each flown once per "
           "gyro and bias size with the bias on for 10 s every 25 s, 15 s of flight after each. *Unflagged departure*: the "
