@@ -33,7 +33,6 @@ pub const AIRCRAFT: Aircraft = Aircraft {
         alpha_from_filter: true,
         features: "egi120",
         config: "medium-wide-beta",
-        gyro_bias_twins: true,
     },
     installation: Installation {
         imu_lever_arm_m: [0.5, 0.0, 0.2],

@@ -137,10 +137,6 @@ pub struct EstimatorSettings {
     /// train`'s default `--config` and the report's shipped rows (docs/aircraft.md says where each
     /// aircraft's was chosen).
     pub config: &'static str,
-    /// Whether the shipped networks train on a gyro-bias twin of each training flight (`trainer
-    /// train --gyro-bias-twins SEED`, the networks' seed): `scripts/build-estimator`, and with it
-    /// the flight-test calibration loop, trains so.
-    pub gyro_bias_twins: bool,
 }
 
 impl Mass {
