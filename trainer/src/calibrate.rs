@@ -9,8 +9,8 @@
 //!    the EGI ground velocity, turned into body axes by the EGI attitude, is the air velocity, so
 //!    `kinematic = g·boom + o_flight` per angle (after removing the rotation-induced flow at the
 //!    boom, q·x/V and r·x/V; the boom, the more precise, is the regressor) gives each vane's gain
-//!    and per-flight offset, and `boom = (1 + s)·v + b` the airspeed's; the boom is corrected with
-//!    them.
+//!    and per-flight offset, and `boom = (1 + s)·v + b_flight` the airspeed's (its scale, and its
+//!    misalignment bias per flight as the vanes' offsets); the boom is corrected with them.
 //! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
 //!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
 //!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + f_y,drag + b_y` and
@@ -21,9 +21,9 @@
 //!    (k_Y): in quasi-steady flight the rudder and aileron hold the sideslip, so the two move
 //!    together there, and they are fitted over the rolling frames, where the aileron and roll-rate
 //!    terms move without sideslip. Along body x, `f_x − (lift and side parts) = k_D·f_x,drag +
-//!    k_T·T/m + b_x`, T the engines' thrust (`aero::ENGINE`): a turbine deck's at the recorded N2
-//!    and throttle, a propeller's at the recorded propeller speed and the boom's airspeed. The
-//!    card's throttle steps move the thrust apart from the drag. The boom step reads
+//!    k_T·T/m + b_x,flight`, T the engines' thrust (`aero::ENGINE`): a turbine deck's at the
+//!    recorded N2 and throttle, a propeller's at the recorded propeller speed and the boom's
+//!    airspeed. The card's throttle steps move the thrust apart from the drag. The boom step reads
 //!    quasi-steady frames only.
 //!
 //! 3. **Moments.** The roll and yaw moments the gyros measure (differentiated across a frame's
@@ -184,7 +184,8 @@ pub struct Calibration {
     /// Boom α: `kinematic = gain·boom + offset_deg_k` (deg; one offset per flight k).
     pub boom_alpha: Fit,
     pub boom_beta: Fit,
-    /// Boom airspeed against the inertial speed (m/s).
+    /// Boom airspeed against the inertial speed (m/s): `boom = scale·v + bias_mps_k` (one bias
+    /// per flight k).
     pub boom_tas: Fit,
     /// Lateral specific force over the rolling frames, m/s²: k_β (the sideslip terms' scale) and
     /// k_Y (the surface and body-rate terms'); one scale, both names, where the sideslip terms
@@ -875,7 +876,8 @@ pub fn boom_flights<'m>(
 }
 
 /// The data-compatibility check's corrections of the boom (step 1): the vanes' gains and
-/// per-flight offsets and the airspeed's scale and bias, fitted against the inertial data.
+/// per-flight offsets and the airspeed's scale and per-flight bias, fitted against the inertial
+/// data.
 #[derive(Clone, Debug)]
 pub struct BoomCorrection {
     /// The boom's arm ahead of the CG, m.
@@ -885,7 +887,8 @@ pub struct BoomCorrection {
     pub alpha: Fit,
     /// Boom β: `kinematic = gain·(boom − r·x/V) + offset_deg_k`.
     pub beta: Fit,
-    /// Boom airspeed against the inertial speed (m/s): `boom = scale·v + bias_mps`.
+    /// Boom airspeed against the inertial speed (m/s): `boom = scale·v + bias_mps_k` (one bias per
+    /// flight k).
     pub tas: Fit,
 }
 
@@ -899,7 +902,7 @@ impl BoomCorrection {
         [
             self.alpha.get("gain") * (boom[0] + arm(q)) + offset(&self.alpha),
             self.beta.get("gain") * (boom[1] - arm(r)) + offset(&self.beta),
-            (boom[2] - self.tas.get("bias_mps")) / self.tas.get("scale"),
+            (boom[2] - self.tas.get(&format!("bias_mps_{k}"))) / self.tas.get("scale"),
         ]
     }
 }
@@ -951,10 +954,17 @@ fn compatibility(ft: &FlightTest) -> Result<BoomCorrection> {
         steady.iter().map(|r| r.beta_kin).collect(),
         "boom β",
     )?;
-    let ones = vec![1.0; steady.len()];
+    // The pitot-static's misalignment bias is, like the vanes' offsets, the flight's own (drawn
+    // per flight, 0.5 m/s 1σ; docs/sensors.md): one bias per flight beside the one scale, which
+    // then reads the speed changes within each flight. One line through all flights runs through
+    // the test points' biases, and where they lie close in speed (a light aircraft's 75–100 kt)
+    // its scale, and q̄ at each point, follow them (docs/calibration.md).
+    let bias_names: Vec<String> = (0..names.len()).map(|k| format!("bias_mps_{k}")).collect();
+    let mut tas_names = vec!["scale"];
+    tas_names.extend(bias_names.iter().map(String::as_str));
     let tas = fit(
-        &["scale", "bias_mps"],
-        vec![steady.iter().map(|r| r.tas_kin).collect(), ones],
+        &tas_names,
+        per_flight(&|r| r.tas_kin),
         steady.iter().map(|r| r.boom_tas).collect(),
         "boom airspeed",
     )?;
@@ -1045,12 +1055,15 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         flap_apart: flap_share.is_some_and(|s| s >= MIN_FLAP_SHARE),
     });
     let apart = structure.sideslip_apart;
-    let side = side_fit(&all_eq, apart).ok_or_else(|| {
-        Error::Numeric(format!(
-            "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
-            count(|r| r.rolling),
-        ))
-    })?;
+    let side_at = |k_d: f64| {
+        side_fit(&all_eq, apart, k_d).ok_or_else(|| {
+            Error::Numeric(format!(
+                "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
+                count(|r| r.rolling),
+            ))
+        })
+    };
+    let side = side_at(1.0)?;
     let (k_b, k_y) = side_scales(&side);
     // A scale far from 1 is not a calibration but a card that did not excite the term; 0 would
     // also divide the spec's sideslip-term scale.
@@ -1062,7 +1075,7 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         }
     }
     let knots = stall_knots(&all_eq, MIN_STALL_FRAMES);
-    let lift_at = |k_d: f64| {
+    let lift_at = |k_b: f64, k_y: f64, k_d: f64| {
         lift_fit(&all_eq, k_b, k_y, k_d, knots, structure.flap_apart).ok_or_else(|| {
             Error::Numeric(format!(
                 "lift: {} quasi-steady frames (angular acceleration ≤ {MAX_OMEGA_DOT_RPS2} rad/s², boom angles moving ≤ {MAX_ANGLE_STEP_DEG}° per frame) do not determine it: the card needs steady points at several speeds",
@@ -1070,18 +1083,22 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
             ))
         })
     };
-    // The lift with the model's drag, the drag with that lift, then each once more with the
-    // other's scale (the drag's normal share and the lift's axial share are small: one pass
-    // settles both).
-    let (lift, drag, drag_why) = {
-        let first = lift_at(1.0)?;
+    // The lift with the model's drag, the drag with that lift, then the side force and the lift
+    // once more with the drag's scale and the drag with those (the drag's lateral and normal
+    // shares and the lift's axial share are small: one pass settles them).
+    let (side, lift, drag, drag_why) = {
+        let first = lift_at(k_b, k_y, 1.0)?;
         let (drag, why) = identified_drag(&all_eq, k_b, k_y, &first);
-        let lift = lift_at(drag.as_ref().map_or(1.0, |d| d.get("k_drag")))?;
+        let k_d = drag.as_ref().map_or(1.0, |d| d.get("k_drag"));
+        let side = if drag.is_some() { side_at(k_d)? } else { side };
+        let (k_b, k_y) = side_scales(&side);
+        let lift = lift_at(k_b, k_y, k_d)?;
         // With the lift at k_D the frames are the same: the refit stands where the first did
         // (the first is kept should it not).
         let drag = drag.map(|first| drag_fit(&all_eq, k_b, k_y, &lift).unwrap_or(first));
-        (lift, drag, why)
+        (side, lift, drag, why)
     };
+    let (k_b, k_y) = side_scales(&side);
     let k_d = drag.as_ref().map_or(1.0, |d| d.get("k_drag"));
     // Each flight alone: the scatter of its scales is the honest part of the 1σ. A flight without
     // roll inputs has no side-force scales of its own; its lift reads the pooled ones.
@@ -1090,7 +1107,7 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         .enumerate()
         .map(|(k, name)| {
             let rows: Vec<&EqRow> = eq.iter().filter(|r| r.flight == k).collect();
-            let s = side_fit(&rows, apart);
+            let s = side_fit(&rows, apart, k_d);
             let (kb, ky) = s.as_ref().map_or((k_b, k_y), side_scales);
             let n = stall_knots(&rows, MIN_STALL_FRAMES_PER_FLIGHT).min(knots);
             let d = drag.as_ref().and_then(|_| {
@@ -1551,8 +1568,14 @@ fn slipstream_ratio(
 /// balance, so those frames tell only their difference; the card's accel/decel (full throttle,
 /// then idle) swings the thrust between the deck's maximum and idle within seconds while the drag
 /// follows the speed slowly, and its push-overs and pull-ups move the drag with α at the same thrust: the
-/// two scales come apart, and the test points' span in dynamic pressure tells k_D from the
-/// accelerometer's constant b_x.
+/// two scales come apart within each flight. The constant b_x is each flight's own
+/// (`bias_mps2_k`): what shifts the axial force by a constant over a flight differs from one flight
+/// to the next (the accelerometers' turn-on bias, the propeller-speed channel's zero shift, each a
+/// per-flight draw, and the lift's axial share through the flight's residual α offset). With one
+/// constant for all flights, k_D also read the differences between the test points' axial
+/// constants through their drag: on a light aircraft whose test points all fly near its minimum-drag
+/// speed so that the drag hardly changes between them, that moved k_D by 1 % (1σ over sensor
+/// seeds) beyond what each flight alone says.
 fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
     let k_l = lift.get("k_lift");
     // Without a flap scale of their own the flap terms are the lift's.
@@ -1563,13 +1586,18 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
         .filter(|r| r.steady && r.alpha_deg < MAX_DRAG_ALPHA_DEG)
         .filter_map(|r| Some((*r, r.thrust_accel_x?)))
         .collect();
+    let refs: Vec<&(&EqRow, f64)> = rows.iter().collect();
+    let (bias_names, biases) = per_flight_columns(&refs, |r| r.0.flight, "bias_mps2", |_| 1.0);
+    let mut names = vec!["k_drag", "k_thrust"];
+    names.extend(bias_names.iter().map(String::as_str));
+    let mut x: Vec<Vec<f64>> = vec![
+        rows.iter().map(|(r, _)| r.parts.drag[0]).collect(),
+        rows.iter().map(|(_, t)| *t).collect(),
+    ];
+    x.extend(biases);
     least_squares(
-        &["k_drag", "k_thrust", "bias_mps2"],
-        &[
-            rows.iter().map(|(r, _)| r.parts.drag[0]).collect(),
-            rows.iter().map(|(_, t)| *t).collect(),
-            vec![1.0; rows.len()],
-        ],
+        &names,
+        &x,
         &rows
             .iter()
             .map(|(r, _)| {
@@ -1586,8 +1614,11 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 
 /// The side-force fit over the rolling frames, then the lift fit over the quasi-steady ones with
 /// the side force at its scales:
-/// `f_y − drag_y = k_β·sideslip_y + k_Y·surfaces_y + Σ_k c_k·∂sideslip_y/∂β·[flight k] + b_y`
-/// (the model's drag: its lateral share, sin β of it, is small, and k_D comes later),
+/// `f_y − k_D·drag_y = k_β·sideslip_y + k_Y·surfaces_y + Σ_k c_k·∂sideslip_y/∂β·[flight k] + b_y`
+/// (first with the model's drag, `k_d` 1, then once more at the identified k_D: the drag's lateral
+/// share, D·sin β, grows with β as the sideslip terms do, so a drag scale left at the model's
+/// reads as theirs; where the sideslip side force is small (a light aircraft's), a drag × 1.10
+/// and × 0.93 moved the sideslip scale by +1.9 % and −1.7 % of the truth, more than 3σ),
 /// `f_z − k_β·sideslip_z − k_Y·surfaces_z − k_D·drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
 /// In quasi-steady flight the surfaces' side force is a fixed share of the sideslip terms' (the
 /// rudder and aileron hold the sideslip; −0.32 on JSBSim's F-16 card), so those frames tell only
@@ -1603,7 +1634,7 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// rolls and stall approach, it is not a constant side force, and left to b_y it moved the
 /// surface terms' scale by 0.09 (1σ) from one sensor draw to the next; c_k = k_β·Δβ_k, one per
 /// flight, takes it (0.011).
-fn side_fit(all: &[&EqRow], sideslip_apart: bool) -> Option<Fit> {
+fn side_fit(all: &[&EqRow], sideslip_apart: bool, k_d: f64) -> Option<Fit> {
     let rolling: Vec<&EqRow> = all.iter().copied().filter(|r| r.rolling).collect();
     let (offset_names, offsets) = per_flight_columns(
         &rolling,
@@ -1621,7 +1652,7 @@ fn side_fit(all: &[&EqRow], sideslip_apart: bool) -> Option<Fit> {
     x.extend(offsets);
     let y: Vec<f64> = rolling
         .iter()
-        .map(|r| r.f_cg[1] - r.parts.drag[1])
+        .map(|r| r.f_cg[1] - k_d * r.parts.drag[1])
         .collect();
     if sideslip_apart {
         return least_squares(&names, &x, &y);
@@ -2364,13 +2395,13 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         }
     }
     m.push_str(
-        "\nThe vanes' gain and per-flight offsets and the airspeed's scale and bias are the boom's \
-         calibration against the inertial data (gain and scale 1: none); the lift scale multiplies \
-         the model's LIFT axis in aircraft.toml, the flap-lift scale the lift terms driven by the \
-         trailing-edge flaps, and the offset joins the lift axis; the surface side-force scale \
-         multiplies the SIDE axis and the sideslip terms carry their own scale over it; a moment \
-         scale that passes the significance test multiplies the ROLL or YAW axis; the drag scale \
-         multiplies the DRAG axis.\n",
+        "\nThe vanes' gain and per-flight offsets and the airspeed's scale and per-flight biases \
+         are the boom's calibration against the inertial data (gain and scale 1: none); the lift \
+         scale multiplies the model's LIFT axis in aircraft.toml, the flap-lift scale the lift \
+         terms driven by the trailing-edge flaps, and the offset joins the lift axis; the surface \
+         side-force scale multiplies the SIDE axis and the sideslip terms carry their own scale \
+         over it; a moment scale that passes the significance test multiplies the ROLL or YAW \
+         axis; the drag scale multiplies the DRAG axis.\n",
     );
     m
 }
@@ -2431,10 +2462,11 @@ fn drag_markdown(r: &Report) -> String {
     m.push_str(&format!(
         "\nThe thrust T is {thrust}. Over the \
          quasi-steady frames below {MAX_DRAG_ALPHA_DEG}° α, with the lift and side force at their \
-         identified scales, the axial force is fitted as k_D·drag + k_T·T/m + b: in steady flight \
-         thrust and drag balance, and the card's throttle steps (thrust) and push-overs and \
-         pull-ups (drag) move them apart. The engine's thrust scale joins the calibrated aircraft \
-         only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more.\n"
+         identified scales, the axial force is fitted as k_D·drag + k_T·T/m + b_k, one constant \
+         per flight: in steady flight thrust and drag balance, and the card's throttle steps \
+         (thrust) and push-overs and pull-ups (drag) move them apart within each flight. The \
+         engine's thrust scale joins the calibrated aircraft only when it differs from 1 by \
+         {SCALE_SIGNIFICANCE}σ or more.\n"
     ));
     m
 }
@@ -2506,7 +2538,7 @@ mod tests {
         let all: Vec<&EqRow> = rows.iter().collect();
         let share = sideslip_share(&all).unwrap();
         assert!((0.1..MIN_SIDESLIP_SHARE).contains(&share), "{share}");
-        let side = side_fit(&all, share >= MIN_SIDESLIP_SHARE).unwrap();
+        let side = side_fit(&all, share >= MIN_SIDESLIP_SHARE, 1.0).unwrap();
         let (kb, ky) = side_scales(&side);
         assert!((kb - 1.07).abs() < 1e-9 && kb == ky, "{side:?}");
         // One regressor for the two: its column is the sum, and only its name is a fit's own.
@@ -2579,7 +2611,7 @@ mod tests {
         };
         let rows: Vec<EqRow> = (0..400).map(|k| row(k, k % 3 != 0)).collect();
         let all: Vec<&EqRow> = rows.iter().collect();
-        let side = side_fit(&all, true).unwrap();
+        let side = side_fit(&all, true, 1.0).unwrap();
         let (kb, ky) = side_scales(&side);
         assert!(
             (kb - 0.9).abs() < 1e-9
@@ -2619,7 +2651,69 @@ mod tests {
         assert!(drag_fit(&no_thrust, kb, ky, &lift).is_none());
         // Without a rolling frame there is no side-force fit.
         let steady: Vec<&EqRow> = rows.iter().filter(|r| r.steady).collect();
-        assert!(side_fit(&steady, true).is_none());
+        assert!(side_fit(&steady, true, 1.0).is_none());
+    }
+
+    #[test]
+    fn each_flight_keeps_its_axial_constant_and_the_side_force_reads_the_drag_scale() {
+        // Three flights, each with its own axial constant (an accelerometer's turn-on bias), and
+        // a drag with a lateral share (D·sin β) at k_D 1.08. Truth k_β 0.9, k_Y 1.1, k_L 0.95,
+        // k_T 0.95.
+        let bias_x = [0.02, -0.05, 0.11];
+        let row = |k: usize| {
+            let t = k as f64 * 0.37;
+            let steady = !k.is_multiple_of(3);
+            let b = 2.0 * t.sin();
+            let rest = if steady {
+                -0.32 * b
+            } else {
+                0.8 * (1.3 * t).cos()
+            };
+            let lift = 9.0 + (0.5 * t).sin();
+            let drag = -(0.8 + 0.2 * (0.7 * t).sin());
+            let drag_y = 0.05 * drag * b;
+            let thrust = 3.0 + 0.5 * (0.3 * t).cos();
+            let flight = (k / 7) % 3;
+            EqRow {
+                flight,
+                alpha_deg: 5.0,
+                steady,
+                rolling: !steady,
+                parts: Parts {
+                    drag: [drag, drag_y, 0.0],
+                    sideslip: [0.0, b, 0.0],
+                    side_rest: [0.0, rest, 0.0],
+                    lift: [0.1 * lift, 0.0, -lift],
+                    flap: [0.0, 0.0, -0.3 * (0.9 * t).cos()],
+                    unit_lift: [0.0, 0.0, -(20.0 + 5.0 * (0.2 * t).sin())],
+                },
+                sideslip_per_deg: [0.0, 0.5 + 0.2 * (0.11 * t).cos(), 0.0],
+                thrust_accel_x: Some(thrust),
+                f_cg: [
+                    0.95 * thrust + 1.08 * drag + 0.95 * 0.1 * lift + bias_x[flight],
+                    0.9 * b + 1.1 * rest + 1.08 * drag_y,
+                    -0.95 * lift - 0.3 * (0.9 * t).cos(),
+                ],
+            }
+        };
+        let rows: Vec<EqRow> = (0..420).map(row).collect();
+        let all: Vec<&EqRow> = rows.iter().collect();
+        // With the model's drag the lateral share reads as the sideslip terms'; at k_D it does not.
+        let (kb, _) = side_scales(&side_fit(&all, true, 1.0).unwrap());
+        assert!((kb - 0.9).abs() > 1e-3, "{kb}");
+        let (kb, ky) = side_scales(&side_fit(&all, true, 1.08).unwrap());
+        assert!(
+            (kb - 0.9).abs() < 1e-9 && (ky - 1.1).abs() < 1e-9,
+            "{kb} {ky}"
+        );
+        let lift = lift_fit(&all, kb, ky, 1.08, 0, true).unwrap();
+        let drag = drag_fit(&all, kb, ky, &lift).unwrap();
+        assert!(
+            (drag.get("k_drag") - 1.08).abs() < 1e-9
+                && (drag.get("k_thrust") - 0.95).abs() < 1e-9
+                && (0..3).all(|k| (drag.get(&format!("bias_mps2_{k}")) - bias_x[k]).abs() < 1e-9),
+            "{drag:?}"
+        );
     }
 
     #[test]
@@ -2673,7 +2767,7 @@ mod tests {
             })
             .collect();
         let all: Vec<&EqRow> = rows.iter().collect();
-        let side = side_fit(&all, true).unwrap();
+        let side = side_fit(&all, true, 1.0).unwrap();
         assert!(
             (side.get("k_sideslip") - 0.9).abs() < 1e-9
                 && (side.get("k_side_controls") - 1.1).abs() < 1e-9
