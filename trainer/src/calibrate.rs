@@ -2561,23 +2561,52 @@ mod tests {
         assert!((lift.get("k_lift") - 0.95).abs() < 1e-9, "{lift:?}");
     }
 
+    /// The model's force parts of synthetic frame `k`: sideslip terms `b`, the surfaces' side force
+    /// `rest` (a fixed −0.32 of `b` in steady frames, apart from it in rolling ones), lift, drag
+    /// and thrust, each a different sinusoid of `t`.
+    struct Signals {
+        t: f64,
+        b: f64,
+        rest: f64,
+        lift: f64,
+        drag: f64,
+        thrust: f64,
+    }
+
+    impl Signals {
+        fn at(k: usize, steady: bool) -> Signals {
+            let t = k as f64 * 0.37;
+            let b = 2.0 * t.sin();
+            Signals {
+                t,
+                b,
+                rest: if steady {
+                    -0.32 * b
+                } else {
+                    0.8 * (1.3 * t).cos()
+                },
+                lift: 9.0 + (0.5 * t).sin(),
+                drag: -(0.8 + 0.2 * (0.7 * t).sin()),
+                thrust: 3.0 + 0.5 * (0.3 * t).cos(),
+            }
+        }
+    }
+
     #[test]
     fn the_side_force_scales_come_from_the_rolling_frames_and_the_lift_from_the_steady_ones() {
         // Steady frames: the surfaces' side force a fixed −0.32 of the sideslip terms' (one
         // combination only); rolling frames: the two move apart. Truth k_β 0.9, k_Y 1.1, k_L 0.95.
         let row = |k: usize, steady: bool| {
-            let t = k as f64 * 0.37;
-            let b = 2.0 * t.sin();
-            let rest = if steady {
-                -0.32 * b
-            } else {
-                0.8 * (1.3 * t).cos()
-            };
-            let lift = 9.0 + (0.5 * t).sin();
             // Drag and thrust along x: truth k_D 1.08, k_T 0.95 (the lift's x share at k_L, a
             // bias 0.02).
-            let drag = -(0.8 + 0.2 * (0.7 * t).sin());
-            let thrust = 3.0 + 0.5 * (0.3 * t).cos();
+            let Signals {
+                t,
+                b,
+                rest,
+                lift,
+                drag,
+                thrust,
+            } = Signals::at(k, steady);
             let parts = Parts {
                 drag: [drag, 0.0, 0.0],
                 sideslip: [0.0, b, 0.1 * b],
@@ -2661,18 +2690,16 @@ mod tests {
         // k_T 0.95.
         let bias_x = [0.02, -0.05, 0.11];
         let row = |k: usize| {
-            let t = k as f64 * 0.37;
             let steady = !k.is_multiple_of(3);
-            let b = 2.0 * t.sin();
-            let rest = if steady {
-                -0.32 * b
-            } else {
-                0.8 * (1.3 * t).cos()
-            };
-            let lift = 9.0 + (0.5 * t).sin();
-            let drag = -(0.8 + 0.2 * (0.7 * t).sin());
+            let Signals {
+                t,
+                b,
+                rest,
+                lift,
+                drag,
+                thrust,
+            } = Signals::at(k, steady);
             let drag_y = 0.05 * drag * b;
-            let thrust = 3.0 + 0.5 * (0.3 * t).cos();
             let flight = (k / 7) % 3;
             EqRow {
                 flight,
