@@ -13,7 +13,7 @@
 //!    misalignment bias per flight as the vanes' offsets); the boom is corrected with them.
 //! 2. **Equation error.** The measured specific force at the CG (accelerometers moved from the IMU,
 //!    Klein & Morelli ch. 5) against the model's at the corrected boom's air data:
-//!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + f_y,drag + b_y` and
+//!    `f_y = k_β·f_y,sideslip + k_Y·f_y,surfaces + k_D·f_y,drag + b_y` and
 //!    `f_z = k_L·f_z,lift + k_D·f_z,drag + k_β·f_z,sideslip + k_Y·f_z,surfaces + b_z`, each model
 //!    part computed from the wind-axis coefficients, the constants b taking the accelerometers' bias
 //!    and misalignment. k_L (lift) is observable in the normal force of quasi-steady frames. The
@@ -1573,9 +1573,8 @@ fn slipstream_ratio(
 /// to the next (the accelerometers' turn-on bias, the propeller-speed channel's zero shift, each a
 /// per-flight draw, and the lift's axial share through the flight's residual α offset). With one
 /// constant for all flights, k_D also read the differences between the test points' axial
-/// constants through their drag: on a light aircraft whose test points all fly near its minimum-drag
-/// speed so that the drag hardly changes between them, that moved k_D by 1 % (1σ over sensor
-/// seeds) beyond what each flight alone says.
+/// constants through their drag, where test points all near the minimum-drag speed (a light
+/// aircraft's card) hardly tell them apart (docs/calibration.md).
 fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
     let k_l = lift.get("k_lift");
     // Without a flap scale of their own the flap terms are the lift's.
@@ -1617,8 +1616,7 @@ fn drag_fit(all: &[&EqRow], k_b: f64, k_y: f64, lift: &Fit) -> Option<Fit> {
 /// `f_y − k_D·drag_y = k_β·sideslip_y + k_Y·surfaces_y + Σ_k c_k·∂sideslip_y/∂β·[flight k] + b_y`
 /// (first with the model's drag, `k_d` 1, then once more at the identified k_D: the drag's lateral
 /// share, D·sin β, grows with β as the sideslip terms do, so a drag scale left at the model's
-/// reads as theirs; where the sideslip side force is small (a light aircraft's), a drag × 1.10
-/// and × 0.93 moved the sideslip scale by +1.9 % and −1.7 % of the truth, more than 3σ),
+/// reads as theirs, most where the sideslip side force is small (a light aircraft's)),
 /// `f_z − k_β·sideslip_z − k_Y·surfaces_z − k_D·drag_z = k_L·lift_z + k_F·flap_z + ΔC_L·unit_z + b_z`.
 /// In quasi-steady flight the surfaces' side force is a fixed share of the sideslip terms' (the
 /// rudder and aileron hold the sideslip; −0.32 on JSBSim's F-16 card), so those frames tell only

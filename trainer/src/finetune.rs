@@ -10,7 +10,7 @@
 //!    `√(1 + a²)/(1 − a)` (1.7 for the vanes' 0.05 s, 3.0 for the probe's 0.1 s).
 //! 2. **The data-compatibility check's corrections** (`calibrate::boom_correction`): the
 //!    rotation-induced flow at the boom removed, the vanes' gains and per-flight offsets and the
-//!    airspeed's scale and bias applied.
+//!    airspeed's scale and per-flight bias applied.
 //! 3. **The intermediate targets** of the cascades from the corrected air data: the body-axis
 //!    vertical and lateral air velocities `w = V·sin α·cos β`, `v = V·sin β`.
 //!
