@@ -1055,25 +1055,28 @@ pub fn calibrate(dir: &Path, structure: Option<Structure>) -> Result<Calibration
         flap_apart: flap_share.is_some_and(|s| s >= MIN_FLAP_SHARE),
     });
     let apart = structure.sideslip_apart;
-    let side_at = |k_d: f64| {
-        side_fit(&all_eq, apart, k_d).ok_or_else(|| {
+    // The pooled side-force fit at a drag scale, refused where the rolling frames do not determine
+    // it: a scale far from 1 is not a calibration but a card that did not excite the term (0 would
+    // also divide the spec's sideslip-term scale).
+    let side_at = |k_d: f64| -> Result<Fit> {
+        let side = side_fit(&all_eq, apart, k_d).ok_or_else(|| {
             Error::Numeric(format!(
                 "side force: {} rolling frames (|p| ≥ {MIN_ROLL_RATE_RPS} rad/s at q̄·S/m ≥ {MIN_QBAR_S_OVER_M} m/s², |α| ≤ {MAX_ALPHA_DEG}°) do not determine its two scales: the card needs roll inputs (doublets or bank captures)",
                 count(|r| r.rolling),
             ))
-        })
+        })?;
+        let (k_b, k_y) = side_scales(&side);
+        for (what, k) in [("sideslip terms", k_b), ("surface and rate terms", k_y)] {
+            if !(0.2..=5.0).contains(&k) {
+                return Err(Error::Numeric(format!(
+                    "side force: the {what}' scale came out at {k:.3}, outside 0.2–5: the rolling frames do not determine it; fly more roll inputs at each test point"
+                )));
+            }
+        }
+        Ok(side)
     };
     let side = side_at(1.0)?;
     let (k_b, k_y) = side_scales(&side);
-    // A scale far from 1 is not a calibration but a card that did not excite the term; 0 would
-    // also divide the spec's sideslip-term scale.
-    for (what, k) in [("sideslip terms", k_b), ("surface and rate terms", k_y)] {
-        if !(0.2..=5.0).contains(&k) {
-            return Err(Error::Numeric(format!(
-                "side force: the {what}' scale came out at {k:.3}, outside 0.2–5: the rolling frames do not determine it; fly more roll inputs at each test point"
-            )));
-        }
-    }
     let knots = stall_knots(&all_eq, MIN_STALL_FRAMES);
     let lift_at = |k_b: f64, k_y: f64, k_d: f64| {
         lift_fit(&all_eq, k_b, k_y, k_d, knots, structure.flap_apart).ok_or_else(|| {
