@@ -62,6 +62,21 @@ aircraft_target() {
   if [ "$1" = "$default_aircraft" ]; then target="$root/target"; else target="$root/target/$1"; fi
 }
 
+# analysis_binaries NAME TOOL...: aircraft_target NAME, `bin` its release build's directory, and a
+# refusal naming how to build it when a TOOL (hil-sim, trainer) is not there (the analyses' check).
+analysis_binaries() {
+  local name="$1" b
+  shift
+  aircraft_target "$name"
+  bin="$target/release"
+  for b in "$@"; do
+    [ -x "$bin/$b" ] || {
+      echo "$(basename "$(dirname "$0")"): no $bin/$b: build $name's release build first (the script's header)" >&2
+      exit 2
+    }
+  done
+}
+
 # aircraft_build NAME: aircraft_target, and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for
 # another aircraft (unsets them for the default one). Another aircraft's first build starts from
 # the default's (seed_build).

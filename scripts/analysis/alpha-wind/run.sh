@@ -14,7 +14,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, paper_test_flights
 command="scripts/analysis/alpha-wind/run.sh${*:+ $*}"
 name="$default_aircraft"
 dest=""
@@ -27,11 +27,7 @@ while [ $# -gt 0 ]; do
     *) echo "alpha-wind: unknown argument $1 (see the header of $0)" >&2; exit 2 ;;
   esac
 done
-aircraft_target "$name"
-bin="$target/release"
-for b in hil-sim trainer; do
-  [ -x "$bin/$b" ] || { echo "alpha-wind: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
-done
+analysis_binaries "$name" hil-sim trainer
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "alpha-wind: --out $dest is not a directory" >&2; exit 2; }
 work="out/alpha-wind/$name"
 mkdir -p "$work"

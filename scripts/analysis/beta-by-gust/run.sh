@@ -15,15 +15,11 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, paper_test_flights
 [ $# -gt 0 ] || set -- "$default_aircraft" c172p
 args=()
 for name in "$@"; do
-  aircraft_target "$name"
-  bin="$target/release"
-  for b in hil-sim trainer; do
-    [ -x "$bin/$b" ] || { echo "beta-by-gust: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
-  done
+  analysis_binaries "$name" hil-sim trainer
   paper_test_flights "$name"
   for d in "${flight_dirs[@]}"; do
     if [ ! "$d.eval.json" -nt "$bin/trainer" ]; then

@@ -21,18 +21,14 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, aircraft_model
 [ $# -gt 0 ] || set -- "$default_aircraft"
 here=scripts/analysis/gust-rotation
 export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
 args=()
 for name in "$@"; do
-  aircraft_target "$name"
-  bin="$target/release"
-  for b in hil-sim trainer; do
-    [ -x "$bin/$b" ] || { echo "gust-rotation: no $bin/$b: build $name's release build first (header)" >&2; exit 2; }
-  done
-  model=$(.venv/bin/python -c "import sys, tomllib; print(tomllib.load(open(sys.argv[1], 'rb'))['jsbsim']['model'])" "aircraft/$name.toml")
+  analysis_binaries "$name" hil-sim trainer
+  model=$(aircraft_model "$name")
   out="out/gust-rotation/$name"
   rm -rf "$out"
   mkdir -p "$out"
