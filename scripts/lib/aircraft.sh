@@ -56,7 +56,7 @@ aircraft_target() {
   if [ ! -f "$root/aircraft/$1.toml" ]; then
     local known
     known="$(cd "$root/aircraft" && ls -- *.toml | sed 's/\.toml$//' | paste -sd' ' -)"
-    echo "scripts/$(basename "$0"): --aircraft $1: no aircraft/$1.toml (described: $known; docs/aircraft.md)" >&2
+    echo "${0#"$root"/}: --aircraft $1: no aircraft/$1.toml (described: $known; docs/aircraft.md)" >&2
     exit 2
   fi
   if [ "$1" = "$default_aircraft" ]; then target="$root/target"; else target="$root/target/$1"; fi
@@ -71,7 +71,7 @@ analysis_binaries() {
   bin="$target/release"
   for b in "$@"; do
     [ -x "$bin/$b" ] || {
-      echo "$(basename "$(dirname "$0")"): no $bin/$b: build $name's release build first (the script's header)" >&2
+      echo "${0#"$root"/}: no $bin/$b: build $name's release build first (the script's header)" >&2
       exit 2
     }
   done
