@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 28] = [
+    let cases: [(&str, &str, &str); 31] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -142,6 +142,21 @@ fn descriptions_are_validated_key_by_key() {
             "learn_scales = true\n",
             "learn_scales = 1\n",
             "filter.learn_scales must be a bool, not 1",
+        ),
+        (
+            "mean_wind_down_sigma_mps = 1.0\n",
+            "mean_wind_down_sigma_mps = 0.0\n",
+            "filter.mean_wind_down_sigma_mps must be above 0, not 0.0",
+        ),
+        (
+            "mean_wind_down_psd = 0.0005\n",
+            "mean_wind_down_psd = -1e-6\n",
+            "filter.mean_wind_down_psd must be 0 or above, not -1e-06",
+        ),
+        (
+            "mean_wind_down_psd = 0.0005\n",
+            "",
+            "filter: missing mean_wind_down_psd",
         ),
         (
             "kinematic_gate_mps2 = 2.0\n",

@@ -415,7 +415,7 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate, max_sigma_rad,
-        /// mean_wind_psd_h, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// mean_wind_psd_h, mean_wind_psd_d, mean_wind_sigma0_d, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
@@ -1375,6 +1375,8 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
                 c.mean_wind_psd[0] = v;
                 c.mean_wind_psd[1] = v;
             }
+            "mean_wind_psd_d" => c.mean_wind_psd[2] = v,
+            "mean_wind_sigma0_d" => c.mean_wind_sigma0[2] = v,
             "lift_scale_psd" => c.lift_scale_psd = v,
             "gear_norm" => c.gear_norm = v,
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,

@@ -107,6 +107,9 @@ pub struct FilterSettings {
     /// The gust states' 1σ, m/s, and their correlation time, s.
     pub gust_sigma_mps: f32,
     pub gust_tau_s: f32,
+    /// The mean wind's vertical part: its initial 1σ, m/s, and its random-walk PSD, (m/s)²/s.
+    pub mean_wind_down_sigma_mps: f32,
+    pub mean_wind_down_psd: f32,
     /// `LOW_CONFIDENCE` above this 1σ of α or β, rad.
     pub max_sigma_rad: f32,
     /// Whether the filter learns its lift and side-force scales in flight; false holds both at 1

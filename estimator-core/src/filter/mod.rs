@@ -238,8 +238,8 @@ const SIDE_SCALE: [f32; 2] = prior(
 /// tuned on the training flights of the `paper` preset, never the test flights
 /// (`trainer eval-filter --split train --tune ...`, table in `docs/filter.md`).
 pub const CONFIG: Config = Config {
-    mean_wind_psd: [0.02, 0.02, 0.0005],
-    mean_wind_sigma0: [15.0, 15.0, 1.0],
+    mean_wind_psd: [0.02, 0.02, AIRCRAFT.filter.mean_wind_down_psd],
+    mean_wind_sigma0: [15.0, 15.0, AIRCRAFT.filter.mean_wind_down_sigma_mps],
     gust_tau_s: AIRCRAFT.filter.gust_tau_s,
     gust_sigma: AIRCRAFT.filter.gust_sigma_mps,
     lift_scale_psd: LIFT_SCALE[0],
