@@ -32,6 +32,10 @@ const ONE_DEG: u32 = 1_000;
 /// [`Feature::FilterNisMean`] of a consistent filter (the measurement's 2 degrees of freedom),
 /// in its 1e-3 units.
 const NIS_CONSISTENT: i64 = 2_000;
+/// The ρV², Pa, at which [`Term::TurbulenceSlow`] equals the turbulence index (a dynamic pressure of
+/// 10 kPa), and the least ρV² it divides by (20 times the index at most).
+pub const RHO_V2_REF_PA: i64 = 20_000;
+pub const RHO_V2_FLOOR_PA: i64 = 1_000;
 
 /// What the 1σ of an angle is made of. Every term is in millidegrees.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,10 +74,15 @@ pub enum Term {
     /// filter gave its prediction alone or kept failing its gate costs more than a frame lost on
     /// the link, so it has its own weight.
     FilterDiverged,
+    /// The turbulence index times [`RHO_V2_REF_PA`] / ρV²: the index is the change of the
+    /// filter's wind estimate, and the filter follows a gust through the force it makes, which
+    /// falls with the dynamic pressure; in slow flight (stall approaches at 2-3 kPa) the index
+    /// reads a small part of the gusts that the α network then misses (docs/filter.md).
+    TurbulenceSlow,
 }
 
 /// How many terms there are.
-pub const TERMS: usize = 14;
+pub const TERMS: usize = 15;
 
 impl Term {
     /// Every term, in index order.
@@ -92,6 +101,7 @@ impl Term {
         Term::Turbulent,
         Term::Caution,
         Term::FilterDiverged,
+        Term::TurbulenceSlow,
     ];
 
     pub const fn name(self) -> &'static str {
@@ -110,6 +120,7 @@ impl Term {
             Term::Turbulent => "turbulent",
             Term::Caution => "caution",
             Term::FilterDiverged => "filter_diverged",
+            Term::TurbulenceSlow => "turbulence_slow",
         }
     }
 }
@@ -255,6 +266,18 @@ pub fn terms(
     } else {
         0
     };
+    // The turbulence index scaled by the reference ρV² over the frame's (at least the floor), so
+    // at most 20 times the index (≤ TERM_MAX × 20: fits i64).
+    let turbulence_slow = if ran {
+        let rho_v2 = i64::from(values.get(Feature::RhoV2)).max(RHO_V2_FLOOR_PA);
+        clamp_term(
+            i64::from(urad_to_mdeg(values.get(Feature::FilterTurbulence)))
+                .saturating_mul(RHO_V2_REF_PA)
+                / rho_v2,
+        )
+    } else {
+        0
+    };
     let on = |set: bool| if set { ONE_DEG } else { 0 };
     let mut t = [0u32; TERMS];
     for (slot, term) in t.iter_mut().zip(Term::ALL) {
@@ -273,6 +296,7 @@ pub fn terms(
             Term::Turbulent => on(flags.turbulent),
             Term::Caution => on(flags.caution),
             Term::FilterDiverged => on(flags.filter_diverged),
+            Term::TurbulenceSlow => turbulence_slow,
         };
     }
     t
@@ -292,7 +316,7 @@ pub fn sigma(weights: &[u16; TERMS], terms: &[u32; TERMS]) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{History, SensorFrame};
+    use crate::{Channel, History, SensorFrame};
 
     #[test]
     fn sigma_is_the_root_sum_of_squares_of_the_weighted_terms() {
@@ -358,6 +382,7 @@ mod tests {
             lift_scale: 1.1,
             side_scale: 0.85,
             nis_mean: 2.5,
+            turbulence_rad: 0.01,
             ..Default::default()
         });
         assert!(v.filter_clear());
@@ -372,6 +397,33 @@ mod tests {
         assert_eq!(t[Term::NisExcess as usize], 50);
         assert_eq!(t[Term::FilterUnclear as usize], 0);
         assert_eq!(t[Term::Magnitude as usize], 6_229);
+        // Turbulence 0.01 rad = 572 mdeg; with no GPS speed ρV² is below its 1,000-Pa floor, so
+        // the slow-flight term is 20 times the index, for either angle.
+        assert_eq!(t[Term::Turbulence as usize], 572);
+        assert!(v.get(Feature::RhoV2) < 1_000);
+        assert_eq!(t[Term::TurbulenceSlow as usize], 11_440);
+        assert_eq!(
+            terms(Angle::Beta, &v, 0, Indicators::default(), 0)[Term::TurbulenceSlow as usize],
+            11_440
+        );
+        // At 100 m/s at sea level ρV² is 12,250 Pa (ISA 1.225 kg/m³): 572 × 20,000 / ρV².
+        let mut frame = SensorFrame::default();
+        frame.set_everywhere(Channel::GpsSpeed, 100_000);
+        frame.set_everywhere(Channel::GpsAlt, 0);
+        let mut fast = FeatureValues::compute(&frame, &History::new());
+        fast.set_filter(&crate::filter::Output {
+            airspeed_mps: 100.0,
+            turbulence_rad: 0.01,
+            ..Default::default()
+        });
+        let rho_v2 = fast.get(Feature::RhoV2);
+        assert!((12_240..=12_260).contains(&rho_v2), "ρV² {rho_v2} Pa");
+        let slow = terms(Angle::Alpha, &fast, 0, Indicators::default(), 0);
+        assert_eq!(
+            slow[Term::TurbulenceSlow as usize],
+            11_440_000 / rho_v2 as u32
+        );
+        assert!((930..=936).contains(&slow[Term::TurbulenceSlow as usize]));
         // The running mean moves 1/512 of the way per clear step, even for a small disagreement,
         // reaches it, and holds while the filter is not clear.
         let mut slow = SlowMean::default();

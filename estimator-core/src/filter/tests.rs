@@ -7,6 +7,11 @@ use proptest::prelude::*;
 
 const DT: f32 = 0.05;
 
+/// The steady wind of most worlds, NED m/s: horizontal only, as the filter's description assumes
+/// of the mean wind over a flight (its vertical part held near zero where the description says so;
+/// [`a_steady_vertical_wind_is_learnt_only_where_the_description_lets_it`]).
+const STEADY_WIND: Vector3<f32> = Vector3::new(12.0, -7.0, 0.0);
+
 /// The flight: the build's aircraft with half its fuel at the point of [`world_point`] (5,000 m,
 /// α 6°, 151 m/s for the F-16), β 1°, banking ±40° so the heading swings; wind `wind` (scaled for
 /// a slow aircraft).
@@ -322,7 +327,7 @@ impl Turn {
 
 /// The kinematic tests' world: [`Turn`] through a steady 12 m/s wind (scaled for a slow aircraft).
 fn steady_turn(c: &Config) -> Turn {
-    Turn::new(Vector3::new(12.0, -7.0, 0.5), c)
+    Turn::new(STEADY_WIND, c)
 }
 
 /// The kinematic tests' accelerometer error, m/s²: 4 g on the normal axis, or 1.5 times the gate
@@ -520,7 +525,7 @@ pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
 #[test]
 fn finds_a_steady_wind_and_alpha_beta_while_turning() {
     let w = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let mut f = AirDataFilter::new(cfg());
@@ -551,7 +556,7 @@ fn finds_a_steady_wind_and_alpha_beta_while_turning() {
 #[test]
 fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
     let calm = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let c = cfg();
@@ -594,7 +599,7 @@ fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
 #[test]
 fn the_turbulence_index_does_not_read_calm_air_in_the_seconds_after_a_restart_in_turbulence() {
     let world = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let c = cfg();
@@ -640,7 +645,7 @@ fn after_a_restart_in_steady_air_the_turbulence_index_stays_below_light_turbulen
     // the 4 s after the restart is 0.17, 0.04 and 0.20 of light turbulence's worst in the F-16's,
     // the c172p's and the f15's worlds).
     let world = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let c = cfg();
@@ -669,7 +674,7 @@ fn after_a_restart_in_steady_air_the_turbulence_index_stays_below_light_turbulen
 #[test]
 fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model_does_not_fit() {
     let calm = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let c = cfg();
@@ -805,7 +810,7 @@ fn learns_the_scales_exactly_when_the_description_says() {
         cfg()
     };
     let w = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.04,
     };
     let mut f = AirDataFilter::new(held);
@@ -829,7 +834,7 @@ fn learns_the_scales_exactly_when_the_description_says() {
 fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
     // The lateral force 15 % above the model's, through a turn in a steady wind.
     let w = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.0,
     };
     let learning = Config {
@@ -867,7 +872,7 @@ fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
 fn learns_a_lift_scale_the_fuel_gauge_does_not_know() {
     // 4 % more force per unit of model coefficient than mass and model predict.
     let w = World {
-        wind: Vector3::new(12.0, -7.0, 0.5),
+        wind: STEADY_WIND,
         k: 1.04,
     };
     let c = learning_cfg();
@@ -1617,4 +1622,41 @@ fn the_leading_edge_flap_takes_its_gear_up_steps_only_with_the_gear_up() {
         }
         assert_eq!(surfaces(&inp, above + 0.01, 0.5, 1.0).lef_deg, deg(lef));
     }
+}
+
+/// The mean wind's vertical 1σ and PSD decide whether a steady sinking air mass is learnt as wind
+/// or taken up as lift: with the loose prior (1 m/s, 5e-4 (m/s)²/s) the filter finds most of 0.5 m/s
+/// of it (0.36 m/s in 120 s, the rest in its lift scale) and α; held near zero (0.05 m/s, 1e-6) the vertical mean wind stays near zero whatever the
+/// flight, which is what lets a lift the model misses show in α instead of in a steady updraft.
+#[test]
+fn a_steady_vertical_wind_is_learnt_only_where_the_description_lets_it() {
+    let w = World {
+        wind: Vector3::new(12.0, -7.0, 0.5),
+        k: 1.0,
+    };
+    let with = |sigma0: f32, psd: f32| {
+        let mut c = cfg();
+        c.mean_wind_sigma0[2] = sigma0;
+        c.mean_wind_psd[2] = psd;
+        let mut f = AirDataFilter::new(c);
+        let mut worst = 0f32;
+        fly(&mut f, &w, 0.0, 120.0, |t, out, truth| {
+            if t > 60.0 {
+                worst = worst.max((out.alpha_rad - truth.alpha).abs());
+            }
+        });
+        (f.x.get(2).copied().unwrap_or(f32::NAN), worst.to_degrees())
+    };
+    let truth = w.wind.z * world_point().wind_scale;
+    let (down, alpha_err) = with(1.0, 0.0005);
+    assert!(
+        down > 0.5 * truth && down < 1.2 * truth,
+        "learnt {down} m/s of {truth}"
+    );
+    assert!(alpha_err < 0.1, "α error {alpha_err}°");
+    let (held, _) = with(0.05, 1e-6);
+    assert!(
+        held.abs() < 0.1,
+        "held mean vertical wind moved to {held} m/s"
+    );
 }
