@@ -266,14 +266,15 @@ pub fn terms(
     } else {
         0
     };
-    // The turbulence index scaled by the reference ρV² over the frame's (at least the floor), so
-    // at most 20 times the index (≤ TERM_MAX × 20: fits i64).
+    // The turbulence index scaled by the reference ρV² over the frame's (at least the floor, so
+    // never 0), so at most 20 times the index (≤ TERM_MAX × 20: fits i64).
     let turbulence_slow = if ran {
         let rho_v2 = i64::from(values.get(Feature::RhoV2)).max(RHO_V2_FLOOR_PA);
         clamp_term(
             i64::from(urad_to_mdeg(values.get(Feature::FilterTurbulence)))
                 .saturating_mul(RHO_V2_REF_PA)
-                / rho_v2,
+                .checked_div(rho_v2)
+                .unwrap_or(i64::from(TERM_MAX)),
         )
     } else {
         0
