@@ -144,17 +144,17 @@ fn descriptions_are_validated_key_by_key() {
             "filter.learn_scales must be a bool, not 1",
         ),
         (
-            "mean_wind_down_sigma_mps = 1.0\n",
+            "mean_wind_down_sigma_mps = 0.05\n",
             "mean_wind_down_sigma_mps = 0.0\n",
             "filter.mean_wind_down_sigma_mps must be above 0, not 0.0",
         ),
         (
-            "mean_wind_down_psd = 0.0005\n",
+            "mean_wind_down_psd = 1e-6\n",
             "mean_wind_down_psd = -1e-6\n",
             "filter.mean_wind_down_psd must be 0 or above, not -1e-06",
         ),
         (
-            "mean_wind_down_psd = 0.0005\n",
+            "mean_wind_down_psd = 1e-6\n",
             "",
             "filter: missing mean_wind_down_psd",
         ),
