@@ -418,7 +418,11 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
             .iter()
             .map(|r| r.reply.map(|f| f.estimate))
             .collect();
-        summary.faults = score::faults::score(faults, &estimates, &reference, &times);
+        let truth: Vec<(f64, f64)> = samples
+            .iter()
+            .map(|s| (s.alpha_true_deg, s.beta_true_deg))
+            .collect();
+        summary.faults = score::faults::score(faults, &estimates, &reference, &truth, &times);
     }
     let w = write_outputs(&a.out, &outcome, &summary)?;
     if a.json {

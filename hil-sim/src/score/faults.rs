@@ -3,7 +3,10 @@
 //!
 //! "Back" is measured against a reference: the same estimator on the same flight without the fault.
 //! The estimate is back at the first frame from which, for [`SETTLED_FRAMES`] frames in a row, both
-//! angles are computed (not held) and within [`BACK_TOLERANCE_DEG`] of the reference.
+//! angles are computed (not held) and each is within [`BACK_TOLERANCE_DEG`] of the reference or,
+//! where the flight carries truth, errs by at most [`BACK_TOLERANCE_DEG`] more than the reference
+//! does: a filter that starts again after a fault can come back nearer the truth than the
+//! fault-free run, which has carried its own error since the start.
 
 use estimator_core::health::STUCK_FRAMES;
 use estimator_core::{Estimate, Flags};
@@ -21,7 +24,8 @@ pub const FAULT_FLAGS: u16 = Flags::INVALID_INPUT
     | Flags::NO_ESTIMATE
     | Flags::GPS_SUBSTITUTED;
 
-/// Largest difference from the fault-free reference that counts as back, degrees (both angles).
+/// Largest difference from the fault-free reference, or largest excess over its error, that counts
+/// as back, degrees (both angles).
 pub const BACK_TOLERANCE_DEG: f64 = 0.1;
 
 /// Frames in a row the estimate must stay back (1 s at 20 Hz).
@@ -56,12 +60,14 @@ pub struct FaultScore {
 }
 
 /// Scores each fault: `estimates` the run with the faults, `reference` the same estimator on the
-/// fault-free flight, `times_s` each frame's flight time. `None` in `estimates`: no reply came back.
-/// Faults are scored in start order, each up to the next one's start.
+/// fault-free flight, `truth` each frame's true (α, β) in degrees (empty, or NaN on a frame, where
+/// the flight has none), `times_s` each frame's flight time. `None` in `estimates`: no reply came
+/// back. Faults are scored in start order, each up to the next one's start.
 pub fn score(
     faults: &[Fault],
     estimates: &[Option<Estimate>],
     reference: &[Estimate],
+    truth: &[(f64, f64)],
     times_s: &[f64],
 ) -> Vec<FaultScore> {
     let mut ordered: Vec<&Fault> = faults.iter().collect();
@@ -111,13 +117,26 @@ pub fn score(
                 ))
             };
             let dev = |k: usize| devs(k).map(|(_, a, b)| a.max(b));
+            // Frame k's estimate errs by at most the tolerance more than the reference, in both
+            // angles (false without truth on that frame).
+            let no_worse = |k: usize| {
+                let (Some((e, ..)), Some(r), Some(&(ta, tb))) =
+                    (devs(k), reference.get(k), truth.get(k))
+                else {
+                    return false;
+                };
+                ta.is_finite()
+                    && tb.is_finite()
+                    && (e.alpha_deg() - ta).abs() <= (r.alpha_deg() - ta).abs() + BACK_TOLERANCE_DEG
+                    && (e.beta_deg() - tb).abs() <= (r.beta_deg() - tb).abs() + BACK_TOLERANCE_DEG
+            };
             let back = |k: usize| {
                 estimates
                     .get(k)
                     .copied()
                     .flatten()
                     .is_some_and(|e| e.flags.is_usable())
-                    && dev(k).is_some_and(|d| d <= BACK_TOLERANCE_DEG)
+                    && (dev(k).is_some_and(|d| d <= BACK_TOLERANCE_DEG) || no_worse(k))
             };
             let back_after_s = ret.and_then(|r| {
                 (r..end)
@@ -184,7 +203,7 @@ mod tests {
             60..70 => est(1300, 0),
             _ => est(1050, 0),
         });
-        let s = &score(&[fault], &run, &reference, &times)[0];
+        let s = &score(&[fault], &run, &reference, &[], &times)[0];
         assert_eq!(s.detectable_frame, Some(20));
         assert_eq!(s.flag_latency_frames, Some(1));
         assert!(!s.flagged_throughout);
@@ -207,7 +226,7 @@ mod tests {
             21..60 => est(5000, Flags::UNCERTAIN),
             _ => est(1000, 0),
         });
-        let s = &score(&[fault], &run, &reference, &times)[0];
+        let s = &score(&[fault], &run, &reference, &[], &times)[0];
         assert_eq!(s.detectable_frame, None);
         assert_eq!(s.flag_latency_frames, None);
         assert_eq!(s.return_frame, Some(60));
@@ -227,11 +246,38 @@ mod tests {
                 _ => Some(est(0, 0)),
             })
             .collect();
-        let s = &score(&[fault], &run, &reference, &times)[0];
+        let s = &score(&[fault], &run, &reference, &[], &times)[0];
         assert_eq!(s.detectable_frame, Some(20 + usize::from(STUCK_FRAMES) - 1));
         assert_eq!(s.flag_latency_frames, Some(0));
         assert!(s.flagged_throughout);
         assert_eq!(s.back_after_s, Some(0.0));
+    }
+
+    #[test]
+    fn back_nearer_the_truth_than_the_reference_counts_where_the_flight_has_truth() {
+        let times = times(100);
+        let fault: Fault = "gps-loss@1+1".parse().unwrap();
+        // The reference errs by 0.3° all flight; after the fault the run is on the truth.
+        let reference = vec![est(300, 0); 100];
+        let run = answered(100, |k| est(if (20..40).contains(&k) { 900 } else { 0 }, 0));
+        let truth = vec![(0.0, 0.0); 100];
+        let with = &score(&[fault], &run, &reference, &truth, &times)[0];
+        assert_eq!(with.return_frame, Some(40));
+        assert_eq!(with.back_after_s, Some(0.0));
+        // Without truth (none, or NaN) only the 0.1° from the reference counts: never back.
+        let without = &score(&[fault], &run, &reference, &[], &times)[0];
+        assert_eq!(without.back_after_s, None);
+        let nan = vec![(f64::NAN, f64::NAN); 100];
+        assert_eq!(
+            score(&[fault], &run, &reference, &nan, &times)[0].back_after_s,
+            None
+        );
+        // 0.15° worse than the reference is not back either.
+        let worse = answered(100, |k| est(if k < 40 { 900 } else { 450 }, 0));
+        assert_eq!(
+            score(&[fault], &worse, &reference, &truth, &times)[0].back_after_s,
+            None
+        );
     }
 
     #[test]
@@ -240,7 +286,7 @@ mod tests {
         let fault: Fault = "gps-loss@1+1".parse().unwrap();
         let reference = vec![est(0, 0); 100];
         let run = vec![Some(est(500, 0)); 100];
-        let s = &score(&[fault], &run, &reference, &times)[0];
+        let s = &score(&[fault], &run, &reference, &[], &times)[0];
         assert_eq!(s.flag_latency_frames, None);
         assert_eq!(s.back_after_s, None);
     }
