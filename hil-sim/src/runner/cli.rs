@@ -418,10 +418,7 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
             .iter()
             .map(|r| r.reply.map(|f| f.estimate))
             .collect();
-        let truth: Vec<(f64, f64)> = samples
-            .iter()
-            .map(|s| (s.alpha_true_deg, s.beta_true_deg))
-            .collect();
+        let truth = super::truth_of(&samples);
         summary.faults = score::faults::score(faults, &estimates, &reference, &truth, &times);
     }
     let w = write_outputs(&a.out, &outcome, &summary)?;

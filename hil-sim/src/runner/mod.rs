@@ -357,6 +357,15 @@ pub fn run_with_progress(
     })
 }
 
+/// Each sample's true (α, β), degrees (NaN where the flight records none): the truth
+/// [`crate::score::faults::score`] judges a recovery by.
+pub fn truth_of(samples: &[Sample]) -> Vec<(f64, f64)> {
+    samples
+        .iter()
+        .map(|s| (s.alpha_true_deg, s.beta_true_deg))
+        .collect()
+}
+
 /// Samples of a recorded flight: frames numbered from 0 (wrapping at u16), truth from the CSV.
 pub fn samples_of(flight: &crate::dataset::Flight) -> Vec<Sample> {
     flight

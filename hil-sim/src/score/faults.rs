@@ -92,13 +92,8 @@ pub fn score(
                 .get(i + 1)
                 .and_then(|next| times_s.iter().position(|&t| next.active(t)))
                 .unwrap_or(n);
-            let flagged = |k: usize| {
-                estimates
-                    .get(k)
-                    .copied()
-                    .flatten()
-                    .map(|e| e.flags.0 & FAULT_FLAGS != 0)
-            };
+            let answered = |k: usize| estimates.get(k).copied().flatten();
+            let flagged = |k: usize| answered(k).map(|e| e.flags.0 & FAULT_FLAGS != 0);
             let (latency, throughout) = match (detectable, ret) {
                 (Some(d), Some(r)) => (
                     (d..r).find(|&k| flagged(k) == Some(true)).map(|k| k - d),
@@ -108,7 +103,7 @@ pub fn score(
             };
             // The answered estimate of frame k and its α and β differences from the reference.
             let devs = |k: usize| -> Option<(Estimate, f64, f64)> {
-                let e = estimates.get(k).copied().flatten()?;
+                let e = answered(k)?;
                 let r = reference.get(k)?;
                 Some((
                     e,
@@ -120,22 +115,19 @@ pub fn score(
             // Frame k's estimate errs by at most the tolerance more than the reference, in both
             // angles (false without truth on that frame).
             let no_worse = |k: usize| {
-                let (Some((e, ..)), Some(r), Some(&(ta, tb))) =
-                    (devs(k), reference.get(k), truth.get(k))
-                else {
-                    return false;
+                let within = |e: f64, r: f64, t: f64| {
+                    t.is_finite() && (e - t).abs() <= (r - t).abs() + BACK_TOLERANCE_DEG
                 };
-                ta.is_finite()
-                    && tb.is_finite()
-                    && (e.alpha_deg() - ta).abs() <= (r.alpha_deg() - ta).abs() + BACK_TOLERANCE_DEG
-                    && (e.beta_deg() - tb).abs() <= (r.beta_deg() - tb).abs() + BACK_TOLERANCE_DEG
+                match (answered(k), reference.get(k), truth.get(k)) {
+                    (Some(e), Some(r), Some(&(ta, tb))) => {
+                        within(e.alpha_deg(), r.alpha_deg(), ta)
+                            && within(e.beta_deg(), r.beta_deg(), tb)
+                    }
+                    _ => false,
+                }
             };
             let back = |k: usize| {
-                estimates
-                    .get(k)
-                    .copied()
-                    .flatten()
-                    .is_some_and(|e| e.flags.is_usable())
+                answered(k).is_some_and(|e| e.flags.is_usable())
                     && (dev(k).is_some_and(|d| d <= BACK_TOLERANCE_DEG) || no_worse(k))
             };
             let back_after_s = ret.and_then(|r| {
