@@ -4,9 +4,10 @@
 //! "Back" is measured against a reference: the same estimator on the same flight without the fault.
 //! The estimate is back at the first frame from which, for [`SETTLED_FRAMES`] frames in a row, both
 //! angles are computed (not held) and each is within [`BACK_TOLERANCE_DEG`] of the reference or,
-//! where the flight carries truth, errs by at most [`BACK_TOLERANCE_DEG`] more than the reference
-//! does: a filter that starts again after a fault can come back nearer the truth than the
-//! fault-free run, which has carried its own error since the start.
+//! where the flight carries truth, lies between the truth and the reference, widened by
+//! [`BACK_TOLERANCE_DEG`] on both sides: a filter that starts again after a fault can come back
+//! nearer the truth than the fault-free run, which has carried its own error since the start, but an
+//! estimate as far off on the other side of the truth is not back.
 
 use estimator_core::health::STUCK_FRAMES;
 use estimator_core::{Estimate, Flags};
@@ -24,8 +25,8 @@ pub const FAULT_FLAGS: u16 = Flags::INVALID_INPUT
     | Flags::NO_ESTIMATE
     | Flags::GPS_SUBSTITUTED;
 
-/// Largest difference from the fault-free reference, or largest excess over its error, that counts
-/// as back, degrees (both angles).
+/// Largest difference from the fault-free reference, or largest step outside the span from the
+/// truth to the reference, that counts as back, degrees (both angles).
 pub const BACK_TOLERANCE_DEG: f64 = 0.1;
 
 /// Frames in a row the estimate must stay back (1 s at 20 Hz).
@@ -112,11 +113,13 @@ pub fn score(
                 ))
             };
             let dev = |k: usize| devs(k).map(|(_, a, b)| a.max(b));
-            // Frame k's estimate errs by at most the tolerance more than the reference, in both
-            // angles (false without truth on that frame).
+            // Frame k's estimate lies between the truth and the reference, each end widened by the
+            // tolerance, in both angles (false without truth on that frame).
             let no_worse = |k: usize| {
                 let within = |e: f64, r: f64, t: f64| {
-                    t.is_finite() && (e - t).abs() <= (r - t).abs() + BACK_TOLERANCE_DEG
+                    t.is_finite()
+                        && e >= t.min(r) - BACK_TOLERANCE_DEG
+                        && e <= t.max(r) + BACK_TOLERANCE_DEG
                 };
                 match (answered(k), reference.get(k), truth.get(k)) {
                     (Some(e), Some(r), Some(&(ta, tb))) => {
@@ -169,6 +172,15 @@ mod tests {
     fn est(alpha_mdeg: i32, flags: u16) -> Estimate {
         Estimate {
             alpha_mdeg,
+            flags: Flags(flags),
+            ..Estimate::default()
+        }
+    }
+
+    fn est2(alpha_mdeg: i32, beta_mdeg: i32, flags: u16) -> Estimate {
+        Estimate {
+            alpha_mdeg,
+            beta_mdeg,
             flags: Flags(flags),
             ..Estimate::default()
         }
@@ -246,30 +258,40 @@ mod tests {
     }
 
     #[test]
-    fn back_nearer_the_truth_than_the_reference_counts_where_the_flight_has_truth() {
+    fn back_between_the_truth_and_the_reference_counts_where_the_flight_has_truth() {
         let times = times(100);
         let fault: Fault = "gps-loss@1+1".parse().unwrap();
-        // The reference errs by 0.3° all flight; after the fault the run is on the truth.
-        let reference = vec![est(300, 0); 100];
-        let run = answered(100, |k| est(if (20..40).contains(&k) { 900 } else { 0 }, 0));
-        let truth = vec![(0.0, 0.0); 100];
-        let with = &score(&[fault], &run, &reference, &truth, &times)[0];
-        assert_eq!(with.return_frame, Some(40));
-        assert_eq!(with.back_after_s, Some(0.0));
-        // Without truth (none, or NaN) only the 0.1° from the reference counts: never back.
-        let without = &score(&[fault], &run, &reference, &[], &times)[0];
-        assert_eq!(without.back_after_s, None);
-        let nan = vec![(f64::NAN, f64::NAN); 100];
-        assert_eq!(
-            score(&[fault], &run, &reference, &nan, &times)[0].back_after_s,
-            None
-        );
-        // 0.15° worse than the reference is not back either.
-        let worse = answered(100, |k| est(if k < 40 { 900 } else { 450 }, 0));
-        assert_eq!(
-            score(&[fault], &worse, &reference, &truth, &times)[0].back_after_s,
-            None
-        );
+        // The reference errs by +0.3° in α and -0.3° in β all flight; the truth is 2° / -1°.
+        let reference = vec![est2(2300, -1300, 0); 100];
+        let truth = vec![(2.0, -1.0); 100];
+        // 5° off in both angles during the fault, then (α, β) in mdeg from frame 40 on.
+        let after = |alpha_mdeg: i32, beta_mdeg: i32| {
+            answered(100, move |k| {
+                if k < 40 {
+                    est2(7000, -6000, 0)
+                } else {
+                    est2(alpha_mdeg, beta_mdeg, 0)
+                }
+            })
+        };
+        let back = |run: &[Option<Estimate>], truth: &[(f64, f64)]| {
+            score(&[fault], run, &reference, truth, &times)[0].back_after_s
+        };
+        // On the truth in both angles: back at once with truth, never without it (none, or NaN).
+        let on_truth = after(2000, -1000);
+        assert_eq!(back(&on_truth, &truth), Some(0.0));
+        assert_eq!(back(&on_truth, &[]), None);
+        assert_eq!(back(&on_truth, &[(f64::NAN, f64::NAN); 100]), None);
+        // Up to the tolerance past the truth, or past the reference, on either angle: back.
+        assert_eq!(back(&after(1910, -1000), &truth), Some(0.0));
+        assert_eq!(back(&after(2000, -1390), &truth), Some(0.0));
+        assert_eq!(back(&after(2150, -910), &truth), Some(0.0));
+        // As far off as the reference but on the other side of the truth, in α or in β: not back.
+        assert_eq!(back(&after(1700, -1000), &truth), None);
+        assert_eq!(back(&after(2000, -700), &truth), None);
+        // 0.15° beyond the reference, in α or in β: not back.
+        assert_eq!(back(&after(2450, -1000), &truth), None);
+        assert_eq!(back(&after(2000, -1450), &truth), None);
     }
 
     #[test]
