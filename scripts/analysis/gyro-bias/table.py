@@ -43,7 +43,8 @@ def main():
           "largest α / β difference from the fault-free run over the estimates that carry no flag, "
           "from the bias's onset to the next one; *past the silent sizes*: onsets whose unflagged "
           "departure exceeds 2° α or 1° β; *back*: the longest time from the bias's end to the "
-          "estimate being back on the fault-free run (inf: not back before the next onset).\n")
+          "estimate being back for 1 s: within 0.1° of the fault-free run, or between it and the truth "
+          "widened by 0.1° (`hil_sim::score::faults`, dropout.md; inf: not back before the next onset).\n")
     print("| gyro | bias, rad/s | onsets | unflagged departure α / β, ° | past the silent sizes | back, s |")
     print("|---|---|---|---|---|---|")
     for (gyro, size), c in sorted(rows.items()):
