@@ -169,14 +169,12 @@ pub fn score(
 mod tests {
     use super::*;
 
+    /// An estimate of α (β 0) with `flags`.
     fn est(alpha_mdeg: i32, flags: u16) -> Estimate {
-        Estimate {
-            alpha_mdeg,
-            flags: Flags(flags),
-            ..Estimate::default()
-        }
+        est2(alpha_mdeg, 0, flags)
     }
 
+    /// An estimate of α and β with `flags`.
     fn est2(alpha_mdeg: i32, beta_mdeg: i32, flags: u16) -> Estimate {
         Estimate {
             alpha_mdeg,
