@@ -676,7 +676,9 @@ fn cmd_train(
 ) -> Result<()> {
     let size = args.size()?;
     let (suite, fs) = args.suite_features()?;
-    let ds = args.dataset(suite)?;
+    let mut ds = args.dataset(suite)?;
+    // Training reads the training flights' features, never their frames.
+    ds.drop_training_frames();
     eprintln!(
         "dataset {} (sensor suite {}): train {} rows, val {} rows, test {} rows",
         args.data.display(),
