@@ -252,8 +252,9 @@ impl Prep {
 
     /// Inputs and both normalised targets of every row of `flights`.
     pub fn matrix(&self, flights: &[&Flight]) -> Matrix {
-        let mut ym = Vec::new();
-        let mut yo = Vec::new();
+        let rows = flights.iter().map(|fl| fl.features.len()).sum();
+        let mut ym = Vec::with_capacity(rows);
+        let mut yo = Vec::with_capacity(rows);
         for fl in flights {
             let mid = fl.truth(self.angle.intermediate());
             let out = fl.truth(self.angle.target());
@@ -270,7 +271,10 @@ impl Prep {
 
     /// Network inputs of every row of `flights` (row-major, `n_inputs()` per row).
     pub fn inputs(&self, flights: &[&Flight]) -> Vec<f32> {
-        let mut x = Vec::new();
+        // Sized once: a vector grown by doubling holds up to twice its rows while it moves (some
+        // 6 GB more for the 13 M rows of the shipped recipe on 24 randomised airframes).
+        let rows: usize = flights.iter().map(|fl| fl.features.len()).sum();
+        let mut x = Vec::with_capacity(rows.saturating_mul(self.n_inputs()));
         for fl in flights {
             for v in &fl.features {
                 self.input(v, &mut x);
