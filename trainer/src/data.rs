@@ -93,13 +93,13 @@ pub struct Flight {
 }
 
 impl Flight {
-    /// Rows: one per frame, counted by the features, which every flight keeps (a training flight
-    /// may have let its frames go, [`Dataset::drop_training_frames`]).
+    /// Rows: one per frame, counted by their times, which every flight keeps (a training flight
+    /// may have let its frames and features go, [`Dataset::drop_training_features`]).
     pub fn len(&self) -> usize {
-        self.features.len()
+        self.time_s.len()
     }
     pub fn is_empty(&self) -> bool {
-        self.features.is_empty()
+        self.time_s.is_empty()
     }
     pub fn truth(&self, t: Target) -> &[f64] {
         &self.truth[t as usize]
@@ -481,12 +481,22 @@ impl Dataset {
     }
 
     /// Lets the training flights' frames go, keeping their features and truth: training reads
-    /// only those, and a frame with its 120 Hz sub-samples is about a third of a row's memory
-    /// (13 M training rows need some 17 GB with their frames, 11 GB without). Validation and test
-    /// flights keep theirs: the compiled-in estimator and the export's vectors step over them.
+    /// only those, and a frame with its 120 Hz sub-samples (420 bytes) is a third of a row's
+    /// memory. Validation and test flights keep theirs: the compiled-in estimator and the export's
+    /// vectors step over them.
     pub fn drop_training_frames(&mut self) {
         for f in self.flights.iter_mut().filter(|f| f.role == Role::Train) {
             f.frames = Vec::new();
+        }
+    }
+
+    /// Lets the training flights' features go as well (824 bytes a row), once the networks'
+    /// matrices are made of them ([`crate::pipeline::prepare_angle`]); their times and truth stay,
+    /// so [`Flight::len`] and the row counts hold.
+    pub fn drop_training_features(&mut self) {
+        self.drop_training_frames();
+        for f in self.flights.iter_mut().filter(|f| f.role == Role::Train) {
+            f.features = Vec::new();
         }
     }
 
@@ -603,7 +613,7 @@ mod tests {
     }
 
     #[test]
-    fn dropping_the_training_frames_keeps_every_row_and_the_other_flights_frames() {
+    fn dropping_the_training_rows_keeps_every_count_and_the_other_flights_rows() {
         let mut ds = Dataset {
             dir: PathBuf::from("x"),
             manifest_sha256: String::new(),
@@ -640,6 +650,16 @@ mod tests {
             .next()
             .map(|f| (f.len(), f.features.len()));
         assert_eq!(train, Some((600, 600)));
+        ds.drop_training_features();
+        assert_eq!(rows(&ds), before);
+        let kept = |r: Role| {
+            ds.flights(r)
+                .next()
+                .map(|f| (f.len(), f.frames.len(), f.features.len()))
+        };
+        assert_eq!(kept(Role::Train), Some((600, 0, 0)));
+        assert_eq!(kept(Role::Val), Some((400, 400, 400)));
+        assert_eq!(kept(Role::Test), Some((200, 200, 200)));
     }
 
     #[test]

@@ -8,7 +8,7 @@ use trainer::export::{plot_curves, plot_series, provenance, write_model};
 use trainer::features::{FeatureSet, SHIPPED as SHIPPED_FEATURES, parse_suite};
 use trainer::metrics::FlightMetrics;
 use trainer::model::{Loss, TrainConfig};
-use trainer::pipeline::{Size, eval_shipped, train_angle};
+use trainer::pipeline::{Size, eval_shipped, prepare_angle, train_angle, train_prepared};
 use trainer::prep::Angle;
 
 fn parse_loss(s: &str) -> std::result::Result<Loss, String> {
@@ -695,9 +695,17 @@ fn cmd_train(
         bars: Some(bars.clone()),
         ..args.train_config(size, a.name().into(), true)
     };
+    // Both angles' matrices first, then the training rows go: a training row's features are
+    // larger than its inputs to both networks together.
+    let (pa, pb) = (
+        prepare_angle(&ds, Angle::Alpha, &fs.alpha, size),
+        prepare_angle(&ds, Angle::Beta, &fs.beta, size),
+    );
+    ds.drop_training_features();
+    let ds = ds;
     let (alpha, beta) = std::thread::scope(|s| {
-        let beta = s.spawn(|| train_angle(&ds, Angle::Beta, &fs.beta, size, &cfg(Angle::Beta)));
-        let alpha = train_angle(&ds, Angle::Alpha, &fs.alpha, size, &cfg(Angle::Alpha));
+        let beta = s.spawn(|| train_prepared(pb, &ds, &cfg(Angle::Beta)));
+        let alpha = train_prepared(pa, &ds, &cfg(Angle::Alpha));
         (alpha, beta.join())
     });
     let beta =

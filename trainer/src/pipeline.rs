@@ -123,13 +123,21 @@ pub fn calibration(prep: &Prep, train: &[&Flight], max_rows: usize) -> Vec<Vec<f
         .collect()
 }
 
-pub fn train_angle(
-    ds: &Dataset,
-    angle: Angle,
-    features: &[Feature],
-    size: Size,
-    cfg: &TrainConfig,
-) -> Trained {
+/// What training an angle reads from the training and validation flights, taken before training
+/// so that the training flights' features can go ([`Dataset::drop_training_features`]) while it
+/// runs.
+pub struct Prepared {
+    pub angle: Angle,
+    prep: Prep,
+    hidden: &'static [usize],
+    train: crate::model::Matrix,
+    val: crate::model::Matrix,
+    /// Evenly spread training rows' inputs, for the activation calibration of the quantization.
+    calib: Vec<Vec<f32>>,
+}
+
+/// The scaling, envelopes, matrices and calibration rows of one angle's training ([`Prepared`]).
+pub fn prepare_angle(ds: &Dataset, angle: Angle, features: &[Feature], size: Size) -> Prepared {
     let tr = flights(ds, Role::Train);
     let va = flights(ds, Role::Val);
     let mut prep = Prep::fit(angle, features, &tr);
@@ -138,17 +146,32 @@ pub fn train_angle(
         prep.turbulence = crate::prep::turbulence_envelope(&tr);
         prep.lift_scale = crate::prep::lift_scale_envelope(&tr);
     }
+    Prepared {
+        angle,
+        hidden: size.hidden(angle),
+        train: prep.matrix(&tr),
+        val: prep.matrix(&va),
+        calib: calibration(&prep, &tr, 20_000),
+        prep,
+    }
+}
+
+/// Trains a [`Prepared`] angle, quantizes it and scores it on `ds`'s validation and test flights
+/// (never its training flights, which may have gone).
+pub fn train_prepared(p: Prepared, ds: &Dataset, cfg: &TrainConfig) -> Trained {
+    let Prepared {
+        angle,
+        prep,
+        hidden,
+        train: tm,
+        val: vm,
+        calib,
+    } = p;
     let n_in = prep.n_inputs();
-    let hidden = size.hidden(angle);
-    let (model, curves) = train(
-        |d| Cascade::new(n_in, hidden, d),
-        cfg,
-        &prep.matrix(&tr),
-        &prep.matrix(&va),
-    );
+    let (model, curves) = train(|d| Cascade::new(n_in, hidden, d), cfg, &tm, &vm);
+    drop((tm, vm));
     let part1 = model.part1.export();
     let part2 = model.part2.export();
-    let calib = calibration(&prep, &tr, 20_000);
     let q = quantize_cascade(&prep, &part1, &part2, &calib);
     let (float_test, int_test, series) = evaluate(&model, &q, ds);
     let int_val = int8_metrics(&q, ds, Role::Val);
@@ -164,6 +187,16 @@ pub fn train_angle(
         int_val,
         series,
     }
+}
+
+pub fn train_angle(
+    ds: &Dataset,
+    angle: Angle,
+    features: &[Feature],
+    size: Size,
+    cfg: &TrainConfig,
+) -> Trained {
+    train_prepared(prepare_angle(ds, angle, features, size), ds, cfg)
 }
 
 /// A model's answers per flight (name, degrees).
