@@ -506,8 +506,8 @@ impl Dataset {
     /// matrices are made of them ([`crate::pipeline::prepare_angle`]); their times and truth stay,
     /// so [`Flight::len`] and the row counts hold.
     pub fn drop_training_features(&mut self) {
-        self.drop_training_frames();
         for f in self.flights.iter_mut().filter(|f| f.role == Role::Train) {
+            f.frames = Vec::new();
             f.features = Vec::new();
         }
         release_freed_memory();

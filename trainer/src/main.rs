@@ -702,7 +702,6 @@ fn cmd_train(
         prepare_angle(&ds, Angle::Beta, &fs.beta, size),
     );
     ds.drop_training_features();
-    let ds = ds;
     let (alpha, beta) = std::thread::scope(|s| {
         let beta = s.spawn(|| train_prepared(pb, &ds, &cfg(Angle::Beta)));
         let alpha = train_prepared(pa, &ds, &cfg(Angle::Alpha));

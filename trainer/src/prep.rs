@@ -185,6 +185,11 @@ fn training_range(train: &[&Flight], f: Feature) -> Option<Envelope> {
     })
 }
 
+/// Rows of `flights` that have their features.
+fn feature_rows(flights: &[&Flight]) -> usize {
+    flights.iter().map(|fl| fl.features.len()).sum()
+}
+
 impl Prep {
     pub fn fit(angle: Angle, features: &[Feature], train: &[&Flight]) -> Prep {
         let rows = || train.iter().flat_map(|f| f.features.iter());
@@ -252,7 +257,7 @@ impl Prep {
 
     /// Inputs and both normalised targets of every row of `flights`.
     pub fn matrix(&self, flights: &[&Flight]) -> Matrix {
-        let rows = flights.iter().map(|fl| fl.features.len()).sum();
+        let rows = feature_rows(flights);
         let mut ym = Vec::with_capacity(rows);
         let mut yo = Vec::with_capacity(rows);
         for fl in flights {
@@ -273,8 +278,7 @@ impl Prep {
     pub fn inputs(&self, flights: &[&Flight]) -> Vec<f32> {
         // Sized once: a vector grown by doubling holds up to twice its rows while it moves (some
         // 6 GB more for the 13 M rows of the shipped recipe on 24 randomised airframes).
-        let rows: usize = flights.iter().map(|fl| fl.features.len()).sum();
-        let mut x = Vec::with_capacity(rows.saturating_mul(self.n_inputs()));
+        let mut x = Vec::with_capacity(feature_rows(flights).saturating_mul(self.n_inputs()));
         for fl in flights {
             for v in &fl.features {
                 self.input(v, &mut x);
