@@ -190,7 +190,9 @@ fn deltas<'a>(channels: &'a [Channel], lags: &'a [Lag]) -> impl Iterator<Item = 
 /// `egi-hybrid-fast-d2` (egi-hybrid-fast + the β dynamics channels' 2-frame deltas), `egi120-beta`
 /// and `egi120` (egi-hybrid-fast-d2 + the 120 Hz sub-samples of β's, and α's, channels: the F-16's
 /// shipped set; each aircraft's is [`SHIPPED`]), `egi120-side-scale` (egi120 + the filter's side-force scale for β),
-/// `egi120-gyro-p` (egi120 + the roll gyro's 120 Hz sub-samples for β),
+/// `egi120-gyro-p` (egi120 + the roll gyro's 120 Hz sub-samples for β), `egi120-gyro-p-beta-alpha`
+/// (egi120-gyro-p with β also reading every input of α's network: the c172p's shipped set),
+/// `egi120-gyro-p-beta-alpha-own` (the same without the inputs that read a sensor β's set did not),
 /// `egi-hybrid-scales` (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
 /// `egi-hybrid-turb` (egi-hybrid + the filter's turbulence index), or explicit comma-separated
 /// lists `alpha=a,b,...;beta=c,d,...`.
@@ -353,6 +355,37 @@ impl FeatureSet {
             "egi120-gyro-p" => {
                 FeatureSet::parse("egi120")?.extended(spec, &[], &subsamples(&[Channel::GyroP]))
             }
+            // egi120-gyro-p with β also reading every input of α's network: what fixes α (the
+            // kinematic α, the pitch, the vertical velocity, the normal force) fixes, through the
+            // lift, the dynamic pressure β's lateral force is read against.
+            "egi120-gyro-p-beta-alpha" => {
+                let s = FeatureSet::parse("egi120-gyro-p")?;
+                let extra: Vec<Feature> = s
+                    .alpha
+                    .iter()
+                    .filter(|f| !s.beta.contains(f))
+                    .copied()
+                    .collect();
+                s.extended(spec, &[], &extra)
+            }
+            // egi120-gyro-p-beta-alpha without the inputs that read a sensor β's own set does not
+            // (the flap's position excepted, which the lift needs): a fault of the elevator's,
+            // the throttle's or the axial accelerometer's does not hold β. Measured on the c172p,
+            // not shipped: its validation β 3 % worse (docs/results/c172p.md).
+            "egi120-gyro-p-beta-alpha-own" => {
+                let s = FeatureSet::parse("egi120-gyro-p")?;
+                let own = s
+                    .beta
+                    .iter()
+                    .fold(Channel::Tef.bit(), |m, f| m | f.sources());
+                let extra: Vec<Feature> = s
+                    .alpha
+                    .iter()
+                    .filter(|f| !s.beta.contains(f) && f.sources() & !own == 0)
+                    .copied()
+                    .collect();
+                s.extended(spec, &[], &extra)
+            }
             // egi120-gyro-p without α's inputs that read the axial force directly: the
             // longitudinal accelerometer, the throttle, F_x / ρV² and their changes (the GPS
             // speed's and altitude's changes stay). With them the c172p's α moves with its drag
@@ -386,7 +419,7 @@ impl FeatureSet {
                     let (k, v) = part.split_once('=').ok_or_else(|| {
                         Error::UnknownFeature(
                             part.into(),
-                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi120-side-scale, egi120-gyro-p, egi120-gyro-p-no-axial, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
+                            "feature sets: table1, physics, dynamics, egi-dynamics, egi-hybrid, egi-hybrid-fast, egi-hybrid-fast-d2, egi120-beta, egi120, egi120-side-scale, egi120-gyro-p, egi120-gyro-p-beta-alpha, egi120-gyro-p-beta-alpha-own, egi120-gyro-p-no-axial, egi-hybrid-scales, egi-hybrid-turb, or alpha=a,b;beta=c,d"
                                 .into(),
                         )
                     })?;
@@ -490,6 +523,24 @@ mod tests {
         assert!(dropped.contains(&Feature::Sensor(Channel::Throttle)));
         assert!(s.alpha.contains(&Feature::Sensor(Channel::AccelZ)));
         assert!(s.alpha.iter().all(|f| full.alpha.contains(f)));
+    }
+
+    #[test]
+    fn the_beta_alpha_set_gives_beta_every_input_of_alpha_once_and_leaves_alpha_alone() {
+        let base = FeatureSet::parse("egi120-gyro-p").unwrap();
+        let s = FeatureSet::parse("egi120-gyro-p-beta-alpha").unwrap();
+        assert_eq!(s.name, "egi120-gyro-p-beta-alpha");
+        assert_eq!(s.alpha, base.alpha);
+        assert_eq!(s.beta[..base.beta.len()], base.beta[..]);
+        assert!(base.alpha.iter().all(|f| s.beta.contains(f)));
+        let mut unique = s.beta.clone();
+        unique.sort();
+        unique.dedup();
+        assert_eq!(unique.len(), s.beta.len());
+        // Something is added: α reads the kinematic α, which β's own set does not.
+        assert!(!base.beta.contains(&Feature::AlphaKin));
+        assert!(s.beta.contains(&Feature::AlphaKin));
+        assert_eq!(s.suite(), Suite::Egi120);
     }
 
     #[test]

@@ -116,6 +116,10 @@ struct TrainArgs {
     /// step as a change of the air data. Validation and test flights stay as flown.
     #[arg(long, value_name = "SEED")]
     gyro_bias_twins: Option<u64>,
+    /// Which networks train on the gyro-bias twins: both, alpha or beta (the other then trains on
+    /// exactly the rows it would without them). Default: both.
+    #[arg(long, value_enum, requires = "gyro_bias_twins", default_value_t = TwinsFor::Both)]
+    gyro_bias_twins_for: TwinsFor,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the
     /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
@@ -151,7 +155,10 @@ struct TrainArgs {
     /// egi120-beta (egi-hybrid-fast-d2 + the 120 Hz sub-samples of Ay, rudder, aileron and r for
     /// β; --suite egi120), egi120 (egi120-beta + those of Az, q and elevator for α),
     /// egi120-side-scale (egi120 + the filter's side-force scale for β), egi120-gyro-p
-    /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi120-gyro-p-no-axial (egi120-gyro-p
+    /// (egi120 + the roll gyro's 120 Hz sub-samples for β), egi120-gyro-p-beta-alpha
+    /// (egi120-gyro-p with β also reading every input of α: through the lift, the dynamic
+    /// pressure), egi120-gyro-p-beta-alpha-own (the same without the inputs that read a sensor β
+    /// did not read, the flap's excepted), egi120-gyro-p-no-axial (egi120-gyro-p
     /// without Ax, throttle, Fx/ρV² and their changes for α), egi-hybrid-scales
     /// (egi-hybrid-fast-d2 + the filter's lift and side-force scales),
     /// egi-hybrid-turb (egi-hybrid + the filter's turbulence index), or
@@ -259,6 +266,24 @@ struct SweepAction {
     /// Gather the jobs' results into OUT/sweep.md.
     #[arg(long)]
     merge: bool,
+}
+
+/// `--gyro-bias-twins-for`: whose training reads the gyro-bias twins.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum TwinsFor {
+    Both,
+    Alpha,
+    Beta,
+}
+
+impl From<TwinsFor> for trainer::data::TwinAngles {
+    fn from(t: TwinsFor) -> Self {
+        match t {
+            TwinsFor::Both => Self::Both,
+            TwinsFor::Alpha => Self::Alpha,
+            TwinsFor::Beta => Self::Beta,
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -631,6 +656,9 @@ impl TrainArgs {
         }
         if let Some(seed) = self.gyro_bias_twins {
             ds.add_gyro_bias_twins(seed);
+            if let Some(t) = ds.gyro_bias_twins.as_mut() {
+                t.angles = self.gyro_bias_twins_for.into();
+            }
         }
         for dir in &self.test_data {
             ds.test_on(dir)
@@ -697,9 +725,10 @@ fn cmd_train(
     };
     // Both angles' matrices first, then the training rows go: a training row's features are
     // larger than its inputs to both networks together.
+    let twins = ds.gyro_bias_twins.map(|t| t.angles).unwrap_or_default();
     let (pa, pb) = (
-        prepare_angle(&ds, Angle::Alpha, &fs.alpha, size),
-        prepare_angle(&ds, Angle::Beta, &fs.beta, size),
+        prepare_angle(&ds, Angle::Alpha, &fs.alpha, size, twins.alpha()),
+        prepare_angle(&ds, Angle::Beta, &fs.beta, size, twins.beta()),
     );
     ds.drop_training_features();
     let (alpha, beta) = std::thread::scope(|s| {
