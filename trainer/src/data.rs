@@ -101,6 +101,9 @@ pub struct Flight {
     pub truth: [Vec<f64>; 4],
     /// True dynamic pressure, Pa (truth only: for error-by-regime plots, never a model input).
     pub qbar_pa: Vec<f64>,
+    /// A gyro-bias twin of a training flight ([`Dataset::add_gyro_bias_twins`]), which an angle
+    /// may train without ([`crate::pipeline::prepare_angle`]).
+    pub gyro_bias_twin: bool,
 }
 
 impl Flight {
@@ -143,6 +146,35 @@ pub struct Dataset {
 pub struct GyroBiasTwins {
     pub flights: usize,
     pub seed: u64,
+    /// Whose training reads them.
+    pub angles: TwinAngles,
+}
+
+/// Which networks train on the gyro-bias twins ([`crate::pipeline::prepare_angle`]); the others
+/// train on exactly the rows they would without them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TwinAngles {
+    #[default]
+    Both,
+    Alpha,
+    Beta,
+}
+
+impl TwinAngles {
+    pub fn alpha(self) -> bool {
+        self != TwinAngles::Beta
+    }
+    pub fn beta(self) -> bool {
+        self != TwinAngles::Alpha
+    }
+    /// For a provenance line: empty for both.
+    pub fn describe(self) -> &'static str {
+        match self {
+            TwinAngles::Both => "",
+            TwinAngles::Alpha => ", in α's training only",
+            TwinAngles::Beta => ", in β's training only",
+        }
+    }
 }
 
 /// A gyro-bias twin's bias, rad/s: its size is drawn log-uniform between these (either sign).
@@ -404,11 +436,16 @@ impl Dataset {
                 features: rows.iter().map(|&i| features[i]).collect(),
                 truth: std::array::from_fn(|k| pick(&f.truth[k])),
                 qbar_pa: pick(&f.qbar_pa),
+                gyro_bias_twin: true,
             });
         }
         let n = twins.len();
         self.flights.extend(twins);
-        self.gyro_bias_twins = Some(GyroBiasTwins { flights: n, seed });
+        self.gyro_bias_twins = Some(GyroBiasTwins {
+            flights: n,
+            seed,
+            angles: TwinAngles::Both,
+        });
         n
     }
 
@@ -575,6 +612,7 @@ fn flight_of(
         features: features_in_flight(&frames),
         truth: Default::default(),
         qbar_pa: Vec::with_capacity(csv.samples.len()),
+        gyro_bias_twin: false,
     };
     for (frame, sample) in frames.into_iter().zip(&csv.samples) {
         fl.frames.push(frame);
@@ -622,6 +660,7 @@ mod tests {
             truth: std::array::from_fn(|_| time_s.clone()),
             qbar_pa: vec![1.0; n],
             time_s,
+            gyro_bias_twin: false,
         }
     }
 
@@ -707,9 +746,16 @@ mod tests {
             one.gyro_bias_twins,
             Some(GyroBiasTwins {
                 flights: 3,
-                seed: 7
+                seed: 7,
+                angles: TwinAngles::Both,
             })
         );
+        // The twins, and only they, are marked: an angle trained without them sees the others.
+        let marked: Vec<bool> = one.flights.iter().map(|f| f.gyro_bias_twin).collect();
+        assert_eq!(marked, [vec![false; 6], vec![true; 3]].concat());
+        assert!(TwinAngles::Both.alpha() && TwinAngles::Both.beta());
+        assert!(!TwinAngles::Beta.alpha() && TwinAngles::Beta.beta());
+        assert!(TwinAngles::Alpha.alpha() && !TwinAngles::Alpha.beta());
         let names = |d: &Dataset| d.flights.iter().map(|f| f.name.clone()).collect::<Vec<_>>();
         assert_eq!(names(&one), names(&two), "the draw is the seed's");
         assert_eq!(one.flights.len(), 9);

@@ -63,8 +63,10 @@ pub fn provenance(
     if let Some(t) = ds.gyro_bias_twins {
         let _ = writeln!(
             s,
-            "plus {} gyro-bias twins of the training flights (seed {})",
-            t.flights, t.seed
+            "plus {} gyro-bias twins of the training flights (seed {}){}",
+            t.flights,
+            t.seed,
+            t.angles.describe()
         );
     }
     let rows = ds.training_rows();

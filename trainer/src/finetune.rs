@@ -138,6 +138,7 @@ pub fn boom_targets(dir: &Path) -> Result<BoomFlights> {
                 features: Vec::new(),
                 truth: Default::default(),
                 qbar_pa: Vec::new(),
+                gyro_bias_twin: false,
             });
             // `truth` holds the targets, here the corrected boom's air data (and `qbar_pa` the
             // dynamic pressure at it and the ISA density), not the simulator's.

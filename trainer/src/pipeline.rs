@@ -136,9 +136,18 @@ pub struct Prepared {
     calib: Vec<Vec<f32>>,
 }
 
-/// The scaling, envelopes, matrices and calibration rows of one angle's training ([`Prepared`]).
-pub fn prepare_angle(ds: &Dataset, angle: Angle, features: &[Feature], size: Size) -> Prepared {
-    let tr = flights(ds, Role::Train);
+/// The scaling, envelopes, matrices and calibration rows of one angle's training ([`Prepared`]);
+/// without the dataset's gyro-bias twins unless `twins` (the angle then trains on exactly the rows
+/// it would without them).
+pub fn prepare_angle(
+    ds: &Dataset,
+    angle: Angle,
+    features: &[Feature],
+    size: Size,
+    twins: bool,
+) -> Prepared {
+    let mut tr = flights(ds, Role::Train);
+    tr.retain(|f| twins || !f.gyro_bias_twin);
     let va = flights(ds, Role::Val);
     let mut prep = Prep::fit(angle, features, &tr);
     if features.iter().any(|f| f.needs_filter()) {
@@ -196,7 +205,7 @@ pub fn train_angle(
     size: Size,
     cfg: &TrainConfig,
 ) -> Trained {
-    train_prepared(prepare_angle(ds, angle, features, size), ds, cfg)
+    train_prepared(prepare_angle(ds, angle, features, size, true), ds, cfg)
 }
 
 /// A model's answers per flight (name, degrees).
