@@ -284,6 +284,17 @@ impl FeatureSet {
         })
     }
 
+    /// This set with β also reading each input of α's it does not read yet that `keep` keeps.
+    fn beta_reads_alpha(self, name: &str, keep: impl Fn(&Feature) -> bool) -> Result<FeatureSet> {
+        let extra: Vec<Feature> = self
+            .alpha
+            .iter()
+            .filter(|f| !self.beta.contains(f) && keep(f))
+            .copied()
+            .collect();
+        self.extended(name, &[], &extra)
+    }
+
     pub fn parse(spec: &str) -> Result<FeatureSet> {
         match spec {
             "table1" => Ok(FeatureSet {
@@ -359,14 +370,7 @@ impl FeatureSet {
             // kinematic α, the pitch, the vertical velocity, the normal force) fixes, through the
             // lift, the dynamic pressure β's lateral force is read against.
             "egi120-gyro-p-beta-alpha" => {
-                let s = FeatureSet::parse("egi120-gyro-p")?;
-                let extra: Vec<Feature> = s
-                    .alpha
-                    .iter()
-                    .filter(|f| !s.beta.contains(f))
-                    .copied()
-                    .collect();
-                s.extended(spec, &[], &extra)
+                FeatureSet::parse("egi120-gyro-p")?.beta_reads_alpha(spec, |_| true)
             }
             // egi120-gyro-p-beta-alpha without the inputs that read a sensor β's own set does not
             // (the flap's position excepted, which the lift needs): a fault of the elevator's,
@@ -378,13 +382,7 @@ impl FeatureSet {
                     .beta
                     .iter()
                     .fold(Channel::Tef.bit(), |m, f| m | f.sources());
-                let extra: Vec<Feature> = s
-                    .alpha
-                    .iter()
-                    .filter(|f| !s.beta.contains(f) && f.sources() & !own == 0)
-                    .copied()
-                    .collect();
-                s.extended(spec, &[], &extra)
+                s.beta_reads_alpha(spec, |f| f.sources() & !own == 0)
             }
             // egi120-gyro-p without α's inputs that read the axial force directly: the
             // longitudinal accelerometer, the throttle, F_x / ρV² and their changes (the GPS
