@@ -152,7 +152,7 @@ pub struct GyroBiasTwins {
 
 /// Which networks train on the gyro-bias twins ([`crate::pipeline::prepare_angle`]); the others
 /// train on exactly the rows they would without them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TwinAngles {
     #[default]
     Both,

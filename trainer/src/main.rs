@@ -118,8 +118,8 @@ struct TrainArgs {
     gyro_bias_twins: Option<u64>,
     /// Which networks train on the gyro-bias twins: both, alpha or beta (the other then trains on
     /// exactly the rows it would without them). Default: both.
-    #[arg(long, value_enum, requires = "gyro_bias_twins", default_value_t = TwinsFor::Both)]
-    gyro_bias_twins_for: TwinsFor,
+    #[arg(long, value_enum, requires = "gyro_bias_twins", default_value_t = trainer::data::TwinAngles::Both)]
+    gyro_bias_twins_for: trainer::data::TwinAngles,
     /// Seed of the weight initialisation, the validation split's draw and the batch order: the
     /// same seed, data and flags give the same weights, bit for bit.
     #[arg(long, default_value_t = 1)]
@@ -266,24 +266,6 @@ struct SweepAction {
     /// Gather the jobs' results into OUT/sweep.md.
     #[arg(long)]
     merge: bool,
-}
-
-/// `--gyro-bias-twins-for`: whose training reads the gyro-bias twins.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum TwinsFor {
-    Both,
-    Alpha,
-    Beta,
-}
-
-impl From<TwinsFor> for trainer::data::TwinAngles {
-    fn from(t: TwinsFor) -> Self {
-        match t {
-            TwinsFor::Both => Self::Both,
-            TwinsFor::Alpha => Self::Alpha,
-            TwinsFor::Beta => Self::Beta,
-        }
-    }
 }
 
 #[derive(Subcommand)]
@@ -657,7 +639,7 @@ impl TrainArgs {
         if let Some(seed) = self.gyro_bias_twins {
             ds.add_gyro_bias_twins(seed);
             if let Some(t) = ds.gyro_bias_twins.as_mut() {
-                t.angles = self.gyro_bias_twins_for.into();
+                t.angles = self.gyro_bias_twins_for;
             }
         }
         for dir in &self.test_data {
