@@ -374,8 +374,9 @@ impl Dataset {
     /// ([`TWIN_BIAS_S`]) are drawn from `seed`, flight by flight in order; a flight too short for
     /// one slot gets no twin. The truth is the flight's:
     /// the networks learn that a gyro that steps without the forces that would turn the aircraft
-    /// has not moved the air data. Returns how many twins were added.
-    pub fn add_gyro_bias_twins(&mut self, seed: u64) -> usize {
+    /// has not moved the air data. `angles` says whose networks train on them (a network it does
+    /// not name trains on the rows it would without them). Returns how many twins were added.
+    pub fn add_gyro_bias_twins(&mut self, seed: u64, angles: TwinAngles) -> usize {
         use estimator_core::Channel;
         use hil_sim::faults::FaultKind;
         use rand::{Rng, SeedableRng};
@@ -444,7 +445,7 @@ impl Dataset {
         self.gyro_bias_twins = Some(GyroBiasTwins {
             flights: n,
             seed,
-            angles: TwinAngles::Both,
+            angles,
         });
         n
     }
@@ -740,14 +741,14 @@ mod tests {
             ]
         };
         let (mut one, mut two) = (ds(flights()), ds(flights()));
-        assert_eq!(one.add_gyro_bias_twins(7), 3);
-        two.add_gyro_bias_twins(7);
+        assert_eq!(one.add_gyro_bias_twins(7, TwinAngles::Beta), 3);
+        two.add_gyro_bias_twins(7, TwinAngles::Both);
         assert_eq!(
             one.gyro_bias_twins,
             Some(GyroBiasTwins {
                 flights: 3,
                 seed: 7,
-                angles: TwinAngles::Both,
+                angles: TwinAngles::Beta,
             })
         );
         // The twins, and only they, are marked: an angle trained without them sees the others.

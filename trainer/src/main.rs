@@ -637,10 +637,7 @@ impl TrainArgs {
                 .with_context(|| format!("adding the training flights of {}", dir.display()))?;
         }
         if let Some(seed) = self.gyro_bias_twins {
-            ds.add_gyro_bias_twins(seed);
-            if let Some(t) = ds.gyro_bias_twins.as_mut() {
-                t.angles = self.gyro_bias_twins_for;
-            }
+            ds.add_gyro_bias_twins(seed, self.gyro_bias_twins_for);
         }
         for dir in &self.test_data {
             ds.test_on(dir)
