@@ -31,6 +31,13 @@ pub fn provenance_data(provenance: &str) -> String {
         .join("; ")
 }
 
+/// The manifest sha256 of the dataset a PROVENANCE text ([`provenance`]) names on its first line,
+/// the one the model was trained with (`dataset: DIR (preset P), manifest sha256 H`).
+pub fn provenance_manifest(provenance: &str) -> Option<&str> {
+    let (_, sha) = provenance.lines().next()?.split_once("manifest sha256 ")?;
+    Some(sha.trim_end())
+}
+
 /// The first PROVENANCE line after the data lines.
 const SPLIT_LINE: &str = "split by flight:";
 

@@ -315,6 +315,21 @@ enum Cmd {
         #[arg(long, value_name = "FILE")]
         vectors_out: Option<PathBuf>,
     },
+    /// One model of the α network of one saved model and the β network of another (both
+    /// `trainer train --out` directories, of one sensor suite and one --data): writes --out's
+    /// model.json, for `trainer eval --model` and `trainer export`. The two networks are trained
+    /// apart, so each can be chosen from its own training.
+    Combine {
+        /// The model whose α network is taken (its model.json).
+        #[arg(long, value_name = "DIR")]
+        alpha: PathBuf,
+        /// The model whose β network is taken (its model.json).
+        #[arg(long, value_name = "DIR")]
+        beta: PathBuf,
+        /// Where model.json goes (created; an existing model.json there is refused).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// Table 2 baselines (linear regression, gradient boosting, plain MLP) on the test flights.
     Baselines {
         #[command(flatten)]
@@ -923,7 +938,7 @@ fn cmd_export(model: &Path, data: &Path, weights_out: &Path, vectors_out: &Path)
     ds.require(suite)?;
     // The provenance's first line names the training dataset and its manifest.
     let trained_on = prov.lines().next().unwrap_or("none");
-    if !trained_on.contains(&format!("manifest sha256 {}", ds.manifest_sha256)) {
+    if trainer::export::provenance_manifest(&prov) != Some(ds.manifest_sha256.as_str()) {
         bail!(
             "{} (manifest sha256 {}) is not the dataset the model in {} was trained with: its provenance begins `{trained_on}`; give that --data",
             data.display(),
@@ -954,6 +969,26 @@ fn export_model(
         "wrote {} (sha256 {hash}) and {}",
         weights_out.display(),
         vectors_out.display()
+    );
+    Ok(())
+}
+
+/// `trainer combine`: the α network of one saved model and the β network of another.
+fn cmd_combine(alpha: &Path, beta: &Path, out: &Path) -> Result<()> {
+    let model = trainer::saved::SavedModel::combine(alpha, beta)?;
+    if out.join("model.json").exists() {
+        bail!(
+            "{} already holds a model.json: give --out a new directory",
+            out.display()
+        );
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let path = model.write(out)?;
+    println!(
+        "wrote {} (α of {}, β of {})",
+        path.display(),
+        alpha.display(),
+        beta.display()
     );
     Ok(())
 }
@@ -2149,6 +2184,7 @@ fn run() -> Result<()> {
             let (w, v) = export_paths(weights_out, vectors_out);
             cmd_export(model, data, &w, &v)
         }
+        Cmd::Combine { alpha, beta, out } => cmd_combine(alpha, beta, out),
         Cmd::Eval {
             model,
             uncertain_hold: Some(_),

@@ -310,6 +310,56 @@ impl SavedModel {
         ))
     }
 
+    /// One model of the α cascade of the model in `alpha_dir` and the β cascade of the one in
+    /// `beta_dir` (`trainer combine`): the two networks are trained apart and read nothing of each
+    /// other, so either can come from another training. Both must read the same sensor suite and
+    /// have trained on the same dataset (their provenances' first line, which `trainer export`
+    /// checks against its `--data`); the provenance keeps both trainings'.
+    pub fn combine(alpha_dir: &Path, beta_dir: &Path) -> Result<SavedModel> {
+        let (a, a_path) = SavedModel::parse(alpha_dir)?;
+        let (b, b_path) = SavedModel::parse(beta_dir)?;
+        let refuse = |msg: String| Error::Model {
+            path: b_path.clone(),
+            msg,
+        };
+        if a.suite != b.suite {
+            return Err(refuse(format!(
+                "reads the sensor suite {}, the α model ({}) {}: combine models of one suite",
+                b.suite,
+                a_path.display(),
+                a.suite
+            )));
+        }
+        // The first line names the training dataset by its manifest (`trainer export` checks that
+        // part against its --data); the path before it may be written either way.
+        let first = |p: &str| p.lines().next().unwrap_or("").to_string();
+        let dataset = first(&a.provenance);
+        let manifest = crate::export::provenance_manifest(&a.provenance);
+        if manifest.is_none() || manifest != crate::export::provenance_manifest(&b.provenance) {
+            return Err(refuse(format!(
+                "was trained on `{}`, the α model ({}) on `{dataset}`: combine models trained with the same --data",
+                first(&b.provenance),
+                a_path.display()
+            )));
+        }
+        // Ends as a training's provenance does, with a newline (`trainer finetune` appends to it).
+        // `trainer ood`'s one-line summary of the training data reads the α network's lines only.
+        let provenance = format!(
+            "{dataset}\ncombined (trainer combine): the α network of {}, the β network of {}\nthe α network's training:\n{}\nthe β network's training:\n{}\n",
+            alpha_dir.display(),
+            beta_dir.display(),
+            a.provenance.trim_end(),
+            b.provenance.trim_end()
+        );
+        Ok(SavedModel {
+            format: FORMAT,
+            suite: a.suite,
+            provenance,
+            alpha: a.alpha,
+            beta: b.beta,
+        })
+    }
+
     /// `dir/model.json`, its format and the order of its cascades checked.
     fn parse(dir: &Path) -> Result<(SavedModel, std::path::PathBuf)> {
         let path = dir.join("model.json");
@@ -337,5 +387,79 @@ impl SavedModel {
             });
         }
         Ok((m, path))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A model.json in a new directory under the system's temp dir: cascades with no layers, each
+    /// told apart by its `out_center` (α `centers.0`, β `centers.1`).
+    fn saved(name: &str, suite: &str, provenance: &str, centers: (i32, i32)) -> std::path::PathBuf {
+        let cascade = |angle: &str, center: i32| {
+            serde_json::json!({
+                "angle": angle, "features": [], "norm": [], "envelope": [], "mid_norm": [0, 1, 0],
+                "out_center": center, "out_sigma": 1.0, "out_range": [-1, 1],
+                "turbulence_speed_lo_mms": 0, "turbulence_band_mms": 1, "turbulence_limit_urad": [],
+                "lift_scale": [0, 1], "part1": [], "part2": []
+            })
+        };
+        let dir =
+            std::env::temp_dir().join(format!("trainer-combine-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let m = serde_json::json!({
+            "format": FORMAT, "suite": suite, "provenance": provenance,
+            "alpha": cascade("Alpha", centers.0), "beta": cascade("Beta", centers.1)
+        });
+        std::fs::write(dir.join("model.json"), m.to_string()).unwrap();
+        dir
+    }
+
+    #[test]
+    fn combine_takes_alpha_from_one_model_and_beta_from_the_other() {
+        let data = "dataset: out/data/large (preset large), manifest sha256 ab";
+        let a = saved("a", "egi120", &format!("{data}\nseed: 1; a"), (11, 12));
+        let b = saved("b", "egi120", &format!("{data}\nseed: 1; b\n"), (21, 22));
+        let m = SavedModel::combine(&a, &b).unwrap();
+        assert_eq!((m.alpha.out_center, m.beta.out_center), (11, 22));
+        assert_eq!(m.suite, "egi120");
+        // The first line stays the dataset's, which `trainer export` checks; both trainings follow.
+        assert_eq!(m.provenance.lines().next(), Some(data));
+        assert!(m.provenance.contains("seed: 1; a") && m.provenance.contains("seed: 1; b"));
+        assert!(m.provenance.ends_with("seed: 1; b\n"));
+        // The same dataset written as another path is the same dataset.
+        let e = saved(
+            "e",
+            "egi120",
+            &data.replace("out/data/large", "./out/data/large/"),
+            (51, 52),
+        );
+        assert_eq!(SavedModel::combine(&a, &e).unwrap().beta.out_center, 52);
+        // It reads back as a model.
+        let out = a.join("combined");
+        std::fs::create_dir_all(&out).unwrap();
+        m.write(&out).unwrap();
+        let (back, _) = SavedModel::parse(&out).unwrap();
+        assert_eq!((back.alpha.out_center, back.beta.out_center), (11, 22));
+
+        // Another suite, or another training dataset, is refused.
+        let c = saved("c", "egi", &format!("{data}\nc"), (31, 32));
+        let d = saved(
+            "d",
+            "egi120",
+            "dataset: out/data/paper (preset paper), manifest sha256 cd",
+            (41, 42),
+        );
+        for (other, why) in [(&c, "of one suite"), (&d, "with the same --data")] {
+            match SavedModel::combine(&a, other) {
+                Err(Error::Model { msg, .. }) => assert!(msg.contains(why), "{msg}"),
+                Err(e) => panic!("{e}"),
+                Ok(_) => panic!("combined {} with {}", a.display(), other.display()),
+            }
+        }
+        for dir in [a, b, c, d, e] {
+            std::fs::remove_dir_all(dir).unwrap();
+        }
     }
 }
