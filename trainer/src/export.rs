@@ -32,14 +32,17 @@ pub fn provenance_data(provenance: &str) -> String {
 }
 
 /// The manifest sha256 of the dataset a PROVENANCE text ([`provenance`]) names on its first line,
-/// the one the model was trained with (`dataset: DIR (preset P), manifest sha256 H`).
+/// the one the model was trained with (`dataset: DIR (preset P), manifest sha256 H`): the 64 hex
+/// digits after the line's last `manifest sha256 `, or `None` where there are none (a path that
+/// holds the words does not fool it).
 pub fn provenance_manifest(provenance: &str) -> Option<&str> {
-    let (_, sha) = provenance.lines().next()?.split_once("manifest sha256 ")?;
-    Some(sha.trim_end())
+    let (_, rest) = provenance.lines().next()?.rsplit_once("manifest sha256 ")?;
+    let sha = rest.split_whitespace().next()?;
+    (sha.len() == 64 && sha.bytes().all(|b| b.is_ascii_hexdigit())).then_some(sha)
 }
 
 /// The first PROVENANCE line after the data lines.
-const SPLIT_LINE: &str = "split by flight:";
+pub const SPLIT_LINE: &str = "split by flight:";
 
 /// PROVENANCE text of a generated model.
 pub fn provenance(
@@ -305,4 +308,29 @@ pub fn plot_series(path: &Path, ds: &Dataset, ts: &[&Trained], max_flights: usiz
         })
         .collect();
     line_panels(path, &panels, 700, 380)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::provenance_manifest;
+
+    #[test]
+    fn the_manifest_is_the_first_line_s_last_64_hex_digits() {
+        let sha = "0123456789abcdef".repeat(4);
+        let line = |dir: &str, tail: &str| {
+            format!("dataset: {dir} (preset large), manifest sha256 {tail}\nsplit by flight: …")
+        };
+        assert_eq!(
+            provenance_manifest(&line("out/data/large", &sha)),
+            Some(sha.as_str())
+        );
+        // A path holding the words, or text after the digits, does not change what is read.
+        let odd = line("out/manifest sha256 x", &format!("{sha} (reused)"));
+        assert_eq!(provenance_manifest(&odd), Some(sha.as_str()));
+        // No digits, too few, or not hex: no manifest.
+        for tail in ["", "abc", &"g".repeat(64)] {
+            assert_eq!(provenance_manifest(&line("d", tail)), None, "{tail}");
+        }
+        assert_eq!(provenance_manifest(""), None);
+    }
 }

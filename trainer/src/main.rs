@@ -982,8 +982,22 @@ fn cmd_combine(alpha: &Path, beta: &Path, out: &Path) -> Result<()> {
             out.display()
         );
     }
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let path = model.write(out)?;
+    // Written into a scratch directory inside --out and linked into place, which fails rather than
+    // replace a model.json that appeared meanwhile: a failure leaves no partial output.
+    let created = !out.exists();
+    let scratch = out.join(".combine-partial");
+    let path = out.join("model.json");
+    let written = (|| -> Result<()> {
+        std::fs::create_dir_all(&scratch)?;
+        let tmp = model.write(&scratch)?;
+        std::fs::hard_link(&tmp, &path)?;
+        std::fs::remove_dir_all(&scratch)?;
+        Ok(())
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_dir_all(if created { out } else { &scratch });
+        return Err(e.context(format!("writing {}", path.display())));
+    }
     println!(
         "wrote {} (α of {}, β of {})",
         path.display(),

@@ -2,6 +2,7 @@
 //! reference path needs, so `trainer eval --model DIR` scores a model without exporting it into the
 //! source tree and rebuilding. The compiled-in form stays `weights.rs` (crate::quant::generate).
 use crate::error::{Error, Result};
+use crate::export::{SPLIT_LINE, provenance_data, provenance_manifest};
 use crate::features::parse_feature;
 use crate::model::FloatLayer;
 use crate::prep::{Angle, Prep};
@@ -334,20 +335,30 @@ impl SavedModel {
         // part against its --data); the path before it may be written either way.
         let first = |p: &str| p.lines().next().unwrap_or("").to_string();
         let dataset = first(&a.provenance);
-        let manifest = crate::export::provenance_manifest(&a.provenance);
-        if manifest.is_none() || manifest != crate::export::provenance_manifest(&b.provenance) {
+        let Some(manifest) = provenance_manifest(&a.provenance) else {
+            return Err(Error::Model {
+                path: a_path.clone(),
+                msg: format!(
+                    "its provenance names no training dataset's manifest (its first line is `{dataset}`): give --alpha a model written by `trainer train --out`"
+                ),
+            });
+        };
+        if provenance_manifest(&b.provenance) != Some(manifest) {
             return Err(refuse(format!(
                 "was trained on `{}`, the α model ({}) on `{dataset}`: combine models trained with the same --data",
                 first(&b.provenance),
                 a_path.display()
             )));
         }
-        // Ends as a training's provenance does, with a newline (`trainer finetune` appends to it).
-        // `trainer ood`'s one-line summary of the training data reads the α network's lines only.
+        // The data lines (what `provenance_data` gives a report) name both networks' training
+        // data; the split line ends them; each training's provenance follows whole. It ends as a
+        // training's does, with a newline (`trainer finetune` appends to it).
         let provenance = format!(
-            "{dataset}\ncombined (trainer combine): the α network of {}, the β network of {}\nthe α network's training:\n{}\nthe β network's training:\n{}\n",
+            "{dataset}\ncombined (trainer combine): the α network of {}, trained on {}; the β network of {}, trained on {}\n{SPLIT_LINE} each network's own, below\nthe α network's training:\n{}\nthe β network's training:\n{}\n",
             alpha_dir.display(),
+            provenance_data(&a.provenance),
             beta_dir.display(),
+            provenance_data(&b.provenance),
             a.provenance.trim_end(),
             b.provenance.trim_end()
         );
@@ -418,15 +429,34 @@ mod tests {
 
     #[test]
     fn combine_takes_alpha_from_one_model_and_beta_from_the_other() {
-        let data = "dataset: out/data/large (preset large), manifest sha256 ab";
-        let a = saved("a", "egi120", &format!("{data}\nseed: 1; a"), (11, 12));
-        let b = saved("b", "egi120", &format!("{data}\nseed: 1; b\n"), (21, 22));
+        let sha = "ab".repeat(32);
+        let data = &format!("dataset: out/data/large (preset large), manifest sha256 {sha}");
+        let a = saved(
+            "a",
+            "egi120",
+            &format!("{data}\nplus extra A\nsplit by flight: a\nseed: 1; a"),
+            (11, 12),
+        );
+        let b = saved(
+            "b",
+            "egi120",
+            &format!("{data}\nplus extra B\nsplit by flight: b\nseed: 1; b\n"),
+            (21, 22),
+        );
         let m = SavedModel::combine(&a, &b).unwrap();
         assert_eq!((m.alpha.out_center, m.beta.out_center), (11, 22));
         assert_eq!(m.suite, "egi120");
         // The first line stays the dataset's, which `trainer export` checks; both trainings follow.
-        assert_eq!(m.provenance.lines().next(), Some(data));
+        assert_eq!(m.provenance.lines().next(), Some(data.as_str()));
         assert!(m.provenance.contains("seed: 1; a") && m.provenance.contains("seed: 1; b"));
+        // What a report names as the training data names both trainings' data and stops there.
+        let summary = provenance_data(&m.provenance);
+        assert!(
+            summary.contains("plus extra A")
+                && summary.contains("plus extra B")
+                && !summary.contains("seed: 1"),
+            "{summary}"
+        );
         assert!(m.provenance.ends_with("seed: 1; b\n"));
         // The same dataset written as another path is the same dataset.
         let e = saved(
@@ -448,7 +478,10 @@ mod tests {
         let d = saved(
             "d",
             "egi120",
-            "dataset: out/data/paper (preset paper), manifest sha256 cd",
+            &format!(
+                "dataset: out/data/paper (preset paper), manifest sha256 {}",
+                "cd".repeat(32)
+            ),
             (41, 42),
         );
         for (other, why) in [(&c, "of one suite"), (&d, "with the same --data")] {
@@ -458,7 +491,15 @@ mod tests {
                 Ok(_) => panic!("combined {} with {}", a.display(), other.display()),
             }
         }
-        for dir in [a, b, c, d, e] {
+        // An α model whose provenance names no manifest is refused as the α model's fault.
+        let f = saved("f", "egi120", "dataset: somewhere", (61, 62));
+        match SavedModel::combine(&f, &a) {
+            Err(Error::Model { path, msg }) => {
+                assert!(path.starts_with(&f) && msg.contains("--alpha"), "{msg}")
+            }
+            other => panic!("{:?}", other.map(|m| m.provenance)),
+        }
+        for dir in [a, b, c, d, e, f] {
             std::fs::remove_dir_all(dir).unwrap();
         }
     }
