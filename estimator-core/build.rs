@@ -29,6 +29,7 @@ fn main() {
     aero_tables(&manifest);
     sigma_weights(&manifest);
     filter_side_scale();
+    filter_te_lift();
     let name = aircraft_name();
     println!("cargo::rustc-check-cfg=cfg(estimator_weights)");
     match weights_file(&manifest) {
@@ -67,6 +68,23 @@ fn filter_side_scale() {
     );
     if v == "off" {
         println!("cargo:rustc-cfg=filter_no_side_scale");
+    }
+}
+
+/// `ESTIMATOR_FILTER_TE_LIFT=on` gives the air-data filter its ninth state, the trailing-edge lift
+/// scale, whatever the description says (`filter.te_lift_sigma0`, which alone sets its prior: 0
+/// holds it at 0): the build in which `scripts/test` runs the state's own tests. Unset or `off`,
+/// the description decides. Anything else is a failed build.
+fn filter_te_lift() {
+    println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_TE_LIFT");
+    println!("cargo::rustc-check-cfg=cfg(filter_te_lift)");
+    let v = std::env::var("ESTIMATOR_FILTER_TE_LIFT").unwrap_or_default();
+    assert!(
+        matches!(v.as_str(), "" | "on" | "off"),
+        "ESTIMATOR_FILTER_TE_LIFT must be on or off, not `{v}`"
+    );
+    if v == "on" {
+        println!("cargo:rustc-cfg=filter_te_lift");
     }
 }
 

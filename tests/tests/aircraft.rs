@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 31] = [
+    let cases: [(&str, &str, &str); 32] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -157,6 +157,11 @@ fn descriptions_are_validated_key_by_key() {
             "mean_wind_down_psd = 1e-6\n",
             "",
             "filter: missing mean_wind_down_psd",
+        ),
+        (
+            "te_lift_sigma0 = 0.0\n",
+            "te_lift_sigma0 = -0.05\n",
+            "filter.te_lift_sigma0 must be at least 0 (0 holds the trailing-edge lift scale at the model's), not -0.05",
         ),
         (
             "kinematic_gate_mps2 = 2.0\n",

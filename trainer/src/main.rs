@@ -437,7 +437,7 @@ enum Cmd {
         split: String,
         /// Override filter constants for a tuning run, e.g. `gust_sigma=3,accel_sigma_z=0.8`
         /// (keys: gust_sigma, gust_tau_s, accel_sigma_y, accel_sigma_z, accel_delay_s, gate, max_sigma_rad,
-        /// mean_wind_psd_h, mean_wind_psd_d, mean_wind_sigma0_d, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
+        /// mean_wind_psd_h, mean_wind_psd_d, mean_wind_sigma0_d, lift_scale_psd, lift_scale_sigma0, side_scale_psd, side_scale_sigma0, te_lift_sigma0 and te_lift_psd (a build with the trailing-edge lift state only), subsamples (0 off, 1 latest, 2 period mean), gear_norm, r_adapt_tau_s, r_adapt_lo_y,
         /// r_adapt_hi_y, r_adapt_lo_z, r_adapt_hi_z).
         #[arg(long, default_value = "")]
         tune: String,
@@ -1448,6 +1448,11 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
             "side_scale_psd" => c.side_scale_psd = v,
             "side_scale_sigma0" => c.side_scale_sigma0 = v,
+            "te_lift_sigma0" | "te_lift_psd" if !estimator_core::filter::LEARNS_TE_LIFT => bail!(
+                "--tune: {k} needs a filter with the trailing-edge lift state: build with ESTIMATOR_FILTER_TE_LIFT=on (or a description whose filter.te_lift_sigma0 is above 0)"
+            ),
+            "te_lift_sigma0" => c.te_lift_sigma0 = v,
+            "te_lift_psd" => c.te_lift_psd = v,
             "subsamples" => {
                 c.subsamples = match v as u8 {
                     0 => estimator_core::filter::SubsampleUse::Off,

@@ -646,7 +646,36 @@ pub struct Coefficients {
 }
 
 impl Model<'_> {
-    /// The coefficients for the estimator's quantities.
+    /// Whether a lift term reads a trailing-edge surface: the aileron, the flaperon mix or the
+    /// trailing-edge flap (what [`Model::trailing_edge_lift_body`] sums).
+    pub fn reads_trailing_edge(t: &Term<'_>) -> bool {
+        const TE: [Var; 4] = [
+            Var::AileronRad,
+            Var::LeftAileronRad,
+            Var::FlaperonMixRad,
+            Var::FlapDeg,
+        ];
+        t.factors.iter().any(|f| TE.iter().any(|v| f.reads(*v)))
+    }
+
+    /// The body-axis coefficient (x, y, z; over `qbar·Sw`) of the lift terms that read a
+    /// trailing-edge surface ([`Model::reads_trailing_edge`]): what a trailing-edge lift scale
+    /// multiplies. `None` if `p` or the sum is not finite.
+    pub fn trailing_edge_lift_body(&self, p: &Point) -> Option<[f32; 3]> {
+        if !p.is_finite() {
+            return None;
+        }
+        let l = self
+            .lift
+            .iter()
+            .filter(|t| Self::reads_trailing_edge(t))
+            .fold(0.0, |acc, t| acc + t.partial(p).value);
+        let (sa, ca) = (libm::sinf(p.alpha_rad), libm::cosf(p.alpha_rad));
+        // Tw2b · (0, 0, −L): the lift's third column of Tw2b, independent of β.
+        let b = [sa * l, 0.0, -ca * l];
+        b.iter().all(|v| v.is_finite()).then_some(b)
+    }
+
     pub fn coefficients(&self, air: &AirState, s: &Surfaces) -> Coefficients {
         match Point::new(self, air, s) {
             Some(p) => self.coefficients_at(&p),
@@ -799,6 +828,48 @@ mod tests {
             stall_hyst_norm: 0.0,
             slipstream_qbar_ratio: 1.0,
         }
+    }
+
+    #[test]
+    fn the_trailing_edge_lift_is_that_of_the_lift_terms_reading_a_trailing_edge_surface() {
+        let te = [Factor::Const(0.5), Factor::Var(Var::FlaperonMixRad)];
+        let plain = [Factor::Const(2.0), Factor::Var(Var::AlphaRad)];
+        let lift = [
+            Term {
+                name: "te",
+                factors: &te,
+            },
+            Term {
+                name: "plain",
+                factors: &plain,
+            },
+        ];
+        let m = Model {
+            drag: &[],
+            side: &[],
+            lift: &lift,
+            wing_area_ft2: 1.0,
+            wingspan_ft: 1.0,
+            chord_ft: 1.0,
+            flaperon_mix_gain: 1.0,
+            stall_hysteresis_rad: None,
+        };
+        assert!(Model::reads_trailing_edge(&lift[0]) && !Model::reads_trailing_edge(&lift[1]));
+        let p = at(0.1, 0.05);
+        let [x, y, z] = m.trailing_edge_lift_body(&p).unwrap();
+        // The body force of a model of that term alone, through the full wind-to-body turn.
+        let alone = Model {
+            lift: &lift[..1],
+            ..m
+        }
+        .coefficients_at(&p);
+        assert!(alone.valid && alone.wind.lift == 0.5 * -0.2);
+        for (got, want) in [(x, alone.body.x), (y, alone.body.y), (z, alone.body.z)] {
+            assert!((got - want).abs() < 1e-7, "{got} against {want}");
+        }
+        assert!(z > 0.0, "a negative lift pushes down (body +z)");
+        // Not finite in, nothing out.
+        assert_eq!(m.trailing_edge_lift_body(&at(f32::NAN, 0.0)), None);
     }
 
     #[test]

@@ -11,11 +11,15 @@
 //! Changes of heading and attitude make every wind component observable over time; in long straight
 //! flight the along-track component is not, which the covariance shows and the flags report.
 //!
-//! # State (7)
+//! # State (7 to 9)
 //! `[mean wind N, E, D; gust N, E, D; lift scale k]`, m/s and 1. The mean wind is a random walk; the
 //! gust a first-order Gauss–Markov process (turbulence changes α within a second; the model force sees
 //! it at once); `k` multiplies the predicted force and takes up what the mass from the fuel gauge and
-//! the model get wrong (≈ 1).
+//! the model get wrong (≈ 1). Where the description says so, a side-force scale `k_y` on the
+//! lateral force (`filter.learn_scales`) and a trailing-edge lift scale `s` (`filter.te_lift_sigma0`):
+//! the lift of the model's terms that read the aileron, the flaperon mix or the flap is `(1 + s)`
+//! times the model's. The ailerons move in every roll and every gust, so `s` is observable apart
+//! from the wind (docs/filter.md).
 //!
 //! # Measurement (2)
 //! Body y and z specific force at the centre of gravity (IMU reading minus the lever-arm terms),
@@ -41,10 +45,17 @@ use crate::aero::{self, AirState, MODEL, Surfaces, Unsteady};
 use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 
-/// Number of states: mean wind (3), gust (3), lift scale, side-force scale.
-pub const STATES: usize = 8;
+/// Whether the build's filter has a trailing-edge lift scale, a ninth state: the description's
+/// `filter.te_lift_sigma0` above 0, or a build with `ESTIMATOR_FILTER_TE_LIFT=on` (build.rs), whose
+/// state the description's prior still holds at 0 unless it says otherwise.
+pub const LEARNS_TE_LIFT: bool = AIRCRAFT.filter.te_lift_sigma0 > 0.0 || cfg!(filter_te_lift);
+
+/// Number of states: mean wind (3), gust (3), lift scale, side-force scale, and the trailing-edge
+/// lift scale where the description learns it ([`LEARNS_TE_LIFT`]).
+pub const STATES: usize = if LEARNS_TE_LIFT { 9 } else { 8 };
 const K: usize = 6;
 const KY: usize = 7;
+const TE: usize = 8;
 
 type Vec7 = SVector<f32, STATES>;
 type Mat7 = SMatrix<f32, STATES, STATES>;
@@ -108,6 +119,10 @@ pub struct Config {
     /// (1/s) and initial 1σ. Both 0 (the default) hold it at 1: the filter of seven states.
     pub side_scale_psd: f32,
     pub side_scale_sigma0: f32,
+    /// Trailing-edge lift scale s: the lift of the terms reading a trailing-edge surface is
+    /// (1 + s) times the model's; random-walk PSD (1/s) and initial 1σ. Both 0 hold s at 0.
+    pub te_lift_psd: f32,
+    pub te_lift_sigma0: f32,
     /// Measurement 1σ of the y and z specific force at the CG, m/s² (model error dominates).
     pub accel_sigma: [f32; 2],
     /// Normalised-innovation gate (χ², 2 degrees of freedom).
@@ -246,6 +261,8 @@ pub const CONFIG: Config = Config {
     lift_scale_sigma0: LIFT_SCALE[1],
     side_scale_psd: SIDE_SCALE[0],
     side_scale_sigma0: SIDE_SCALE[1],
+    te_lift_psd: 0.0,
+    te_lift_sigma0: AIRCRAFT.filter.te_lift_sigma0,
     accel_sigma: AIRCRAFT.filter.accel_sigma_mps2,
     gate: 25.0,
     gate_run: 20,
@@ -761,6 +778,26 @@ fn model_force(
     gear_norm: f32,
     unsteady: Unsteady,
 ) -> Option<Vector3<f32>> {
+    model_force_parts(
+        vb, inp, gyro, rho, a_sound, mass_kg, gear_norm, unsteady, false,
+    )
+    .map(|(f, _)| f)
+}
+
+/// [`model_force`], and with `te` the part of it the lift terms reading a trailing-edge surface
+/// make ([`aero::Model::trailing_edge_lift_body`]; zero without `te`), from one model point.
+#[allow(clippy::too_many_arguments)]
+fn model_force_parts(
+    vb: &Vector3<f32>,
+    inp: &Input,
+    gyro: [f32; 3],
+    rho: f32,
+    a_sound: f32,
+    mass_kg: f32,
+    gear_norm: f32,
+    unsteady: Unsteady,
+    te: bool,
+) -> Option<(Vector3<f32>, Vector3<f32>)> {
     let v = vb.norm();
     if v.is_nan() || v <= 1.0 {
         return None;
@@ -768,13 +805,19 @@ fn model_force(
     let alpha = libm::atan2f(vb.z, vb.x);
     let beta = libm::asinf((vb.y / v).clamp(-1.0, 1.0));
     let mach = v / a_sound;
-    let c = MODEL.coefficients_at(&model_point(
-        inp, gyro, alpha, beta, mach, v, gear_norm, unsteady,
-    )?);
+    let point = model_point(inp, gyro, alpha, beta, mach, v, gear_norm, unsteady)?;
+    let c = MODEL.coefficients_at(&point);
     if !c.valid {
         return None;
     }
-    Some(Vector3::new(c.body.x, c.body.y, c.body.z) * qs_over_m(rho, v, mass_kg))
+    let qs = qs_over_m(rho, v, mass_kg);
+    let te = if te {
+        let [x, y, z] = MODEL.trailing_edge_lift_body(&point)?;
+        Vector3::new(x, y, z) * qs
+    } else {
+        Vector3::zeros()
+    };
+    Some((Vector3::new(c.body.x, c.body.y, c.body.z) * qs, te))
 }
 
 impl AirDataFilter {
@@ -826,7 +869,7 @@ impl AirDataFilter {
             }
         }
         let sq = |v: f32| v * v;
-        self.p = Mat7::from_diagonal(&Vec7::from([
+        let p0 = [
             sq(c.mean_wind_sigma0[0]),
             sq(c.mean_wind_sigma0[1]),
             sq(c.mean_wind_sigma0[2]),
@@ -835,7 +878,9 @@ impl AirDataFilter {
             sq(c.gust_sigma),
             sq(c.lift_scale_sigma0),
             sq(c.side_scale_sigma0),
-        ]));
+            sq(c.te_lift_sigma0),
+        ];
+        self.p = Mat7::from_diagonal(&Vec7::from_fn(|i, _| p0.get(i).copied().unwrap_or(0.0)));
         // A run of steps kept out for a channel in error goes on: the restart does not mend it.
         if !self.kinematics_beyond_gate() {
             self.gated_run = 0;
@@ -1022,6 +1067,11 @@ impl AirDataFilter {
         self.x.get(K).copied().unwrap_or(1.0)
     }
 
+    /// The trailing-edge lift scale s (0 unless [`Config::te_lift_sigma0`] lets it move).
+    pub fn te_lift(&self) -> f32 {
+        self.x.get(TE).copied().unwrap_or(0.0)
+    }
+
     /// The side-force scale (1 unless [`Config::side_scale_sigma0`] lets it move).
     pub fn side_scale(&self) -> f32 {
         self.x.get(KY).copied().unwrap_or(1.0)
@@ -1030,10 +1080,12 @@ impl AirDataFilter {
     fn predict(&mut self, dt: f32) {
         let c = &self.cfg;
         let phi = libm::expf(-dt / c.gust_tau_s);
-        let f = Mat7::from_diagonal(&Vec7::from([1.0, 1.0, 1.0, phi, phi, phi, 1.0, 1.0]));
+        let f = Mat7::from_diagonal(&Vec7::from_fn(
+            |i, _| if (3..6).contains(&i) { phi } else { 1.0 },
+        ));
         let gust_q = c.gust_sigma * c.gust_sigma * (1.0 - phi * phi);
         let [qn, qe, qd] = c.mean_wind_psd;
-        let q = Mat7::from_diagonal(&Vec7::from([
+        let q0 = [
             qn * dt,
             qe * dt,
             qd * dt,
@@ -1042,7 +1094,9 @@ impl AirDataFilter {
             gust_q,
             c.lift_scale_psd * dt,
             c.side_scale_psd * dt,
-        ]));
+            c.te_lift_psd * dt,
+        ];
+        let q = Mat7::from_diagonal(&Vec7::from_fn(|i, _| q0.get(i).copied().unwrap_or(0.0)));
         self.x = f * self.x;
         self.p = f * self.p * f.transpose() + q;
     }
@@ -1075,7 +1129,8 @@ impl AirDataFilter {
             alpha_dot_rps: alpha_rate(&vb, &cbn, u.vel_ned_mps, f_cg, inp.gyro_rps),
             stall_latched: self.stall_latched,
         };
-        let f0 = model_force(
+        let learn_te = STATES > TE && (c.te_lift_sigma0 > 0.0 || c.te_lift_psd > 0.0);
+        let (f0, f_te) = model_force_parts(
             &vb,
             &u,
             inp.gyro_rps,
@@ -1084,8 +1139,10 @@ impl AirDataFilter {
             mass,
             c.gear_norm,
             unsteady,
+            learn_te,
         )?;
         let k = self.lift_scale();
+        let s_te = self.te_lift();
         // d f / d v_body by forward differences, then d h / d wind = −k · (df/dvb) · C_bn.
         const D: f32 = 0.01;
         let mut dfdvb = Matrix3::zeros();
@@ -1108,6 +1165,9 @@ impl AirDataFilter {
         }
         let ky = self.side_scale();
         let dhdw = -(dfdvb * cbn) * k;
+        // The model's force with the trailing-edge lift scaled (the wind columns keep the plain
+        // model's slopes: s is small).
+        let f0 = f0 + f_te * s_te;
         // Rows: the y and z specific force. Mean wind and gust enter alike; k scales the model,
         // ky its lateral force on top.
         let mut h = Mat27::zeros();
@@ -1123,6 +1183,9 @@ impl AirDataFilter {
                 && let Some(e) = h.get_mut((row, KY))
             {
                 *e = k * f;
+            }
+            if learn_te && let Some(e) = h.get_mut((row, TE)) {
+                *e = k * side * f_te.get(axis).copied().unwrap_or(0.0);
             }
         }
         let nu = Vector2::new(f_cg.y - k * ky * f0.y, f_cg.z - k * f0.z);
@@ -1200,6 +1263,7 @@ impl AirDataFilter {
             && self.x.iter().all(|v| v.is_finite())
             && (0.5..=1.5).contains(&k)
             && (0.5..=1.5).contains(&ky)
+            && (-0.5..=0.5).contains(&self.te_lift())
     }
 
     /// One step on a sensor frame; `dt_s` is the time since the previous frame.

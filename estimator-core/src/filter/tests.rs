@@ -824,10 +824,83 @@ fn learns_the_scales_exactly_when_the_description_says() {
         let out = f.step(&inp, !(100.0..102.0).contains(&t));
         assert_eq!((out.lift_scale, out.side_scale), (1.0, 1.0), "at {t} s");
         assert_eq!((f.lift_scale(), f.side_scale()), (1.0, 1.0), "at {t} s");
+        assert_eq!(f.te_lift(), 0.0, "at {t} s");
         outputs += 1;
         t += DT;
     }
     assert_eq!(outputs, 4800);
+}
+
+/// The trailing-edge lift scale, in a build that has the state (`ESTIMATOR_FILTER_TE_LIFT=on`,
+/// which `scripts/test` runs, or a description that learns it): in the steady turn through a
+/// steady wind, with the left flaperon swinging ± 6° and the lift of the terms reading it 20 %
+/// above the model's, s learns +0.2 while the lift scale stays near 1.
+#[cfg(filter_te_lift)]
+#[test]
+fn learns_a_trailing_edge_lift_scale_from_the_flaperon_s_swings() {
+    let c = Config {
+        te_lift_sigma0: 0.1,
+        te_lift_psd: 0.0,
+        ..learning_cfg()
+    };
+    let turn = steady_turn(&c);
+    // The world's force at frame `inp` with its trailing-edge lift (1 + s) times the model's.
+    let force = |inp: &Input, s: f32| {
+        let (rho, a) = isa(inp.alt_m);
+        let mass = c.empty_mass_kg + inp.fuel_kg;
+        let (f, te) = model_force_parts(
+            &turn.vb,
+            inp,
+            inp.gyro_rps,
+            rho,
+            a,
+            mass,
+            c.gear_norm,
+            Unsteady::default(),
+            true,
+        )
+        .unwrap();
+        f + te * s
+    };
+    let mut f = AirDataFilter::new(c);
+    let mut t = 0.0;
+    let mut largest_te = 0.0f32;
+    while t < 300.0 {
+        let (turned, _) = turn.frame(t, &c);
+        let inp = Input {
+            flaperon_left_deg: 6.0 * libm::sinf(2.0 * core::f32::consts::PI * t / 5.0),
+            ..turned
+        };
+        let extra = force(&inp, 0.2) - force(&turned, 0.0);
+        largest_te = largest_te.max(extra.z.abs());
+        let a = Vector3::from(turned.accel_mps2) + extra;
+        let out = f.step(
+            &Input {
+                accel_mps2: [a.x, a.y, a.z],
+                ..inp
+            },
+            true,
+        );
+        // Every update is made: the swing's force is not taken for an accelerometer in error.
+        assert_eq!(
+            out.flags & (flags::DISAGREES | flags::GATED),
+            0,
+            "at {t} s: flags {:#x}",
+            out.flags
+        );
+        t += DT;
+    }
+    // The swing moves the normal force by a measurable amount, and s takes it, not the lift scale.
+    assert!(
+        largest_te > 0.3,
+        "the flaperon's swing moves the force by only {largest_te} m/s²"
+    );
+    assert!((f.te_lift() - 0.2).abs() < 0.03, "s = {}", f.te_lift());
+    assert!(
+        (f.lift_scale() - 1.0).abs() < 0.02,
+        "k = {}",
+        f.lift_scale()
+    );
 }
 
 #[test]
