@@ -315,6 +315,20 @@ enum Cmd {
         #[arg(long, value_name = "FILE")]
         vectors_out: Option<PathBuf>,
     },
+    /// Remake the expected outputs of the committed test vectors (the same frames, the same
+    /// header) for the compiled-in networks, on this build's features: after a change of the
+    /// air-data filter or of the feature code, from which the vectors' expected outputs come. The
+    /// networks are read back from their weights.rs (refused unless they generate the same file
+    /// byte for byte), so no model.json is needed; the weights do not change.
+    Revector {
+        /// The weights.rs `trainer train --export` wrote [default: the build's aircraft's
+        /// estimator-core/src/model/NAME/weights.rs].
+        #[arg(long, value_name = "FILE")]
+        weights: Option<PathBuf>,
+        /// The test vectors to remake, in place [default: estimator-core/tests/vectors/NAME.txt].
+        #[arg(long, value_name = "FILE")]
+        vectors: Option<PathBuf>,
+    },
     /// One model of the α network of one saved model and the β network of another (both
     /// `trainer train --out` directories, of one sensor suite and one --data): writes --out's
     /// model.json, for `trainer eval --model` and `trainer export`. The two networks are trained
@@ -969,6 +983,56 @@ fn export_model(
         "wrote {} (sha256 {hash}) and {}",
         weights_out.display(),
         vectors_out.display()
+    );
+    Ok(())
+}
+
+/// `trainer revector`: the committed vectors' frames, their expected outputs remade.
+fn cmd_revector(weights: &Path, vectors: &Path) -> Result<()> {
+    let (alpha, beta, _) = trainer::saved::read_generated(weights)?;
+    let text = std::fs::read_to_string(vectors)
+        .with_context(|| format!("reading the test vectors {}", vectors.display()))?;
+    let old = trainer::quant::parse_vectors(&text).with_context(|| {
+        format!(
+            "{} is not a test-vector file `trainer train --export` wrote",
+            vectors.display()
+        )
+    })?;
+    // The header's own lines (not the columns line, which format_vectors writes again).
+    let header: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("# "))
+        .filter(|l| !l.starts_with("columns: "))
+        .collect();
+    let hash = trainer::export::sha256_hex(&std::fs::read_to_string(weights)?);
+    if !header
+        .iter()
+        .any(|l| *l == format!("weights_sha256 {hash}"))
+    {
+        bail!(
+            "{} are the vectors of other weights than {} (no `weights_sha256 {hash}` line): export the model again",
+            vectors.display(),
+            weights.display()
+        );
+    }
+    let sources = [&alpha, &beta]
+        .iter()
+        .flat_map(|q| q.prep.features.iter())
+        .fold(0, |m, f| m | f.sources());
+    let suite = Suite::covering(sources).unwrap_or(Suite::Egi120);
+    let frames: Vec<(bool, estimator_core::SensorFrame)> =
+        old.iter().map(|v| (v.reset, v.frame)).collect();
+    let new = trainer::quant::vectors(&alpha, &beta, &frames);
+    let changed = old.iter().zip(&new).filter(|(o, n)| o != n).count();
+    let out = trainer::quant::format_vectors(&new, suite, &header.join("\n"));
+    // Written aside and renamed into place: a failure leaves the old file.
+    let tmp = vectors.with_extension("txt.partial");
+    std::fs::write(&tmp, &out).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, vectors).with_context(|| format!("replacing {}", vectors.display()))?;
+    println!(
+        "wrote {}: {} vectors, {changed} with other expected outputs than before",
+        vectors.display(),
+        new.len()
     );
     Ok(())
 }
@@ -2204,6 +2268,10 @@ fn run() -> Result<()> {
             cmd_export(model, data, &w, &v)
         }
         Cmd::Combine { alpha, beta, out } => cmd_combine(alpha, beta, out),
+        Cmd::Revector { weights, vectors } => {
+            let (w, v) = export_paths(weights, vectors);
+            cmd_revector(&w, &v)
+        }
         Cmd::Eval {
             model,
             uncertain_hold: Some(_),

@@ -314,7 +314,7 @@ impl QCascade {
 // ---------------------------------------------------------------------------------------------
 // Code generation.
 
-fn feature_path(f: Feature) -> String {
+pub(crate) fn feature_path(f: Feature) -> String {
     match f {
         Feature::Sensor(c) => format!("crate::Feature::Sensor(crate::Channel::{c:?})"),
         Feature::Delta(c, l) => {

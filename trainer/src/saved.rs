@@ -401,6 +401,237 @@ impl SavedModel {
     }
 }
 
+/// The networks and provenance of a `weights.rs` that [`crate::quant::generate`] wrote (the
+/// compiled-in `estimator-core/src/model/NAME/weights.rs`): what `trainer export --weights`
+/// remakes the test vectors from when the networks' `model.json` is gone, e.g. after a change of
+/// the air-data filter whose features the vectors carry. Read back exactly: the networks and
+/// provenance found must generate the file byte for byte again, or the file is refused (edited by
+/// hand, or written by another version). The float parts, the output centre and σ are not in the
+/// file and are not needed by the integer reference.
+pub fn read_generated(path: &Path) -> Result<(QCascade, QCascade, String)> {
+    let refuse = |msg: String| Error::Model {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let alpha = generated_cascade(&text, "ALPHA", Angle::Alpha).map_err(refuse)?;
+    let beta = generated_cascade(&text, "BETA", Angle::Beta).map_err(refuse)?;
+    let prov = between(&text, "pub const PROVENANCE: &str = ", ";\n")
+        .and_then(unquote)
+        .ok_or_else(|| refuse("holds no PROVENANCE string".into()))?;
+    if crate::quant::generate(&alpha, &beta, &prov) != text {
+        return Err(refuse(format!(
+            "is not a weights.rs this trainer writes for the {} (read back, it does not generate the same file): export the model again from its model.json, or give a file `trainer train --export` wrote",
+            estimator_core::aircraft::AIRCRAFT.name
+        )));
+    }
+    Ok((alpha, beta, prov))
+}
+
+/// The text between the first `start` and the next `end` after it.
+fn between<'a>(text: &'a str, start: &str, end: &str) -> Option<&'a str> {
+    let (_, rest) = text.split_once(start)?;
+    rest.split_once(end).map(|(mid, _)| mid)
+}
+
+/// A Rust string literal as `{:?}` writes it.
+fn unquote(lit: &str) -> Option<String> {
+    let inner = lit.strip_prefix('"')?.strip_suffix('"')?;
+    let mut out = String::new();
+    let mut chars = inner.chars();
+    while let Some(c) = chars.next() {
+        if c != '\\' {
+            out.push(c);
+            continue;
+        }
+        match chars.next()? {
+            'n' => out.push('\n'),
+            't' => out.push('\t'),
+            'r' => out.push('\r'),
+            '0' => out.push('\0'),
+            e @ ('\\' | '"' | '\'') => out.push(e),
+            'u' => {
+                let hex: String = chars.by_ref().skip(1).take_while(|c| *c != '}').collect();
+                out.push(char::from_u32(u32::from_str_radix(&hex, 16).ok()?)?);
+            }
+            _ => return None,
+        }
+    }
+    Some(out)
+}
+
+/// The integers of `s` in order (decimal, with a sign), whatever stands between them.
+fn integers(s: &str) -> std::result::Result<Vec<i64>, String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    for c in s.chars().chain(std::iter::once(' ')) {
+        if c.is_ascii_digit() || (c == '-' && cur.is_empty()) {
+            cur.push(c);
+        } else if !cur.is_empty() {
+            if cur != "-" {
+                out.push(cur.parse::<i64>().map_err(|e| format!("`{cur}`: {e}"))?);
+            }
+            cur.clear();
+        }
+    }
+    Ok(out)
+}
+
+fn int<T: TryFrom<i64>>(v: i64) -> std::result::Result<T, String> {
+    T::try_from(v).map_err(|_| format!("{v} is out of range"))
+}
+
+/// `Norm { center, mult, shift }` and `Envelope { lo, hi }` items, one per line.
+fn norms(s: &str) -> std::result::Result<Vec<Norm>, String> {
+    s.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(
+            |l| match integers(l.split_once('{').map_or("", |(_, r)| r))?[..] {
+                [c, m, sh] => Ok(Norm {
+                    center: int(c)?,
+                    mult: int(m)?,
+                    shift: int(sh)?,
+                }),
+                _ => Err(format!("`{l}` is not a Norm")),
+            },
+        )
+        .collect()
+}
+
+fn envelope(s: &str) -> std::result::Result<Envelope, String> {
+    match integers(s.split_once('{').map_or("", |(_, r)| r))?[..] {
+        [lo, hi] => Ok(Envelope {
+            lo: int(lo)?,
+            hi: int(hi)?,
+        }),
+        _ => Err(format!("`{s}` is not an Envelope")),
+    }
+}
+
+/// The `Dense::new(weights, bias, requant)` layers of a part, in order; the last is the output.
+fn dense_layers(s: &str) -> std::result::Result<Vec<QLayer>, String> {
+    let blocks: Vec<&str> = s.split("crate::nn::Dense::new(\n").skip(1).collect();
+    let n = blocks.len();
+    blocks
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            // `[` rows (`[w,…],` a line each) `],` `[` bias `],` `[` requantizations `],` `)`.
+            let (w, rest) = b
+                .split_once("],\n],\n[")
+                .ok_or("a Dense::new without its weight rows".to_string())?;
+            let (bias, rq) = rest
+                .split_once("],\n[")
+                .ok_or("a Dense::new without bias and requantization".to_string())?;
+            let weights = w
+                .lines()
+                .map(|row| integers(row)?.into_iter().map(int::<i8>).collect())
+                .collect::<std::result::Result<Vec<Vec<i8>>, String>>()?;
+            let bias = integers(bias)?
+                .into_iter()
+                .map(int::<i32>)
+                .collect::<std::result::Result<_, _>>()?;
+            let requant = integers(rq.split("],\n)").next().unwrap_or(""))?
+                .chunks(3)
+                .map(|c| match *c {
+                    [m, sh, o] => Ok((int(m)?, int(sh)?, int(o)?)),
+                    _ => Err("a Requant without mult, shift and offset".to_string()),
+                })
+                .collect::<std::result::Result<_, _>>()?;
+            Ok(QLayer {
+                weights,
+                bias,
+                requant,
+                hidden: i + 1 < n,
+            })
+        })
+        .collect()
+}
+
+/// One `pub static NAME: crate::CascadeNet<…> = crate::CascadeNet { … };` item.
+fn generated_cascade(
+    text: &str,
+    name: &str,
+    angle: Angle,
+) -> std::result::Result<QCascade, String> {
+    let item = between(
+        text,
+        &format!("pub static {name}: crate::CascadeNet<"),
+        "\n};\n",
+    )
+    .ok_or(format!("holds no {name} cascade"))?;
+    // Every field then ends in ",\n", the last one too.
+    let item = &format!("{item}\n");
+    let field =
+        |start: &str, end: &str| between(item, start, end).ok_or(format!("{name}: no `{start}`"));
+    let known: std::collections::HashMap<String, estimator_core::Feature> =
+        estimator_core::Feature::ALL
+            .iter()
+            .map(|f| (crate::quant::feature_path(*f), *f))
+            .collect();
+    // Each feature's path ends in ", " (`static_item`); paths hold ", " themselves, so the list
+    // is read as the longest known path at each point.
+    let mut rest = field("features: [", "],\nnorm: [")?;
+    let mut features = Vec::new();
+    while !rest.trim().is_empty() {
+        rest = rest.trim_start();
+        let (path, f) = known
+            .iter()
+            .filter(|(p, _)| {
+                rest.strip_prefix(p.as_str())
+                    .is_some_and(|r| r.starts_with(", "))
+            })
+            .max_by_key(|(p, _)| p.len())
+            .ok_or(format!(
+                "{name}: unknown feature at `{}`",
+                rest.chars().take(60).collect::<String>()
+            ))?;
+        features.push(*f);
+        rest = rest.get(path.len() + 2..).unwrap_or("");
+    }
+    let turbulence = match integers(field(
+        "turbulence: crate::normalize::TurbulenceEnvelope {",
+        "},\n",
+    )?)?[..]
+    {
+        [lo, band, ref limits @ ..] if limits.len() == TURBULENCE_BANDS => TurbulenceEnvelope {
+            speed_lo_mms: int(lo)?,
+            band_mms: int(band)?,
+            limit_urad: std::array::from_fn(|i| limits.get(i).map_or(0, |v| *v as i32)),
+        },
+        _ => {
+            return Err(format!(
+                "{name}: the turbulence envelope is not {TURBULENCE_BANDS} bands"
+            ));
+        }
+    };
+    let prep = Prep {
+        angle,
+        features,
+        norm: norms(field("norm: [\n", "],\nenvelope: [")?)?,
+        envelope: field("envelope: [\n", "],\npart1: ")?
+            .lines()
+            .map(envelope)
+            .collect::<std::result::Result<_, _>>()?,
+        mid_norm: norms(field("mid_norm: ", ",\npart2: ")?)?
+            .pop()
+            .ok_or(format!("{name}: no mid_norm"))?,
+        out_center: 0,
+        out_sigma: 1.0,
+        out_range: envelope(field("out_range: ", ",\n")?)?,
+        turbulence,
+        lift_scale: envelope(field("lift_scale: ", ",\n")?)?,
+    };
+    Ok(QCascade {
+        prep,
+        part1: dense_layers(field("part1: ", ",\nmid_norm: ")?)?,
+        part2: dense_layers(field(",\npart2: ", ",\nout_range: ")?)?,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -425,6 +656,55 @@ mod tests {
         });
         std::fs::write(dir.join("model.json"), m.to_string()).unwrap();
         dir
+    }
+
+    /// The build's committed weights.rs and vectors, where it has a model.
+    fn committed(file: &str) -> Option<std::path::PathBuf> {
+        let name = estimator_core::aircraft::AIRCRAFT.name;
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let p = match file {
+            "weights" => root.join(format!("estimator-core/src/model/{name}/weights.rs")),
+            _ => root.join(format!("estimator-core/tests/vectors/{name}.txt")),
+        };
+        p.exists().then_some(p)
+    }
+
+    #[test]
+    fn the_committed_weights_read_back_and_remake_their_vectors_bit_for_bit() {
+        let (Some(w), Some(v)) = (committed("weights"), committed("vectors")) else {
+            panic!("this build's aircraft has no committed weights and vectors");
+        };
+        let (alpha, beta, prov) = read_generated(&w).unwrap();
+        assert_eq!(
+            Some(prov.as_str()),
+            estimator_core::model::SHIPPED_PROVENANCE
+        );
+        // The vectors' frames through this build's features and the networks read back give the
+        // committed expected outputs: the file and the filter agree (after a filter change,
+        // `trainer revector` remakes them).
+        let old = crate::quant::parse_vectors(&std::fs::read_to_string(&v).unwrap()).unwrap();
+        let frames: Vec<_> = old.iter().map(|x| (x.reset, x.frame)).collect();
+        assert_eq!(crate::quant::vectors(&alpha, &beta, &frames), old);
+
+        // One weight changed by hand: the file no longer generates itself, and is refused.
+        let text = std::fs::read_to_string(&w).unwrap();
+        let edited = text.replacen(
+            "crate::nn::Dense::new(\n[[",
+            "crate::nn::Dense::new(\n[[1",
+            1,
+        );
+        assert_ne!(edited, text);
+        let tmp = std::env::temp_dir().join(format!("trainer-weights-{}.rs", std::process::id()));
+        std::fs::write(&tmp, edited).unwrap();
+        match read_generated(&tmp) {
+            Err(Error::Model { msg, .. }) => assert!(
+                msg.contains("does not generate the same file") || msg.contains("out of range"),
+                "{msg}"
+            ),
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("an edited weights.rs was read"),
+        }
+        std::fs::remove_file(tmp).unwrap();
     }
 
     #[test]
