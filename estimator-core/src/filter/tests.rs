@@ -804,10 +804,16 @@ fn learns_the_scales_exactly_when_the_description_says() {
             lift_scale_sigma0: 0.0,
             side_scale_psd: 0.0,
             side_scale_sigma0: 0.0,
+            te_lift_psd: 0.0,
+            te_lift_sigma0: 0.0,
             ..cfg()
         }
     } else {
-        cfg()
+        Config {
+            te_lift_psd: 0.0,
+            te_lift_sigma0: 0.0,
+            ..cfg()
+        }
     };
     let w = World {
         wind: STEADY_WIND,
