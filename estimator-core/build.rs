@@ -57,34 +57,31 @@ fn main() {
 /// `ESTIMATOR_FILTER_SIDE_SCALE=off` builds the air-data filter without its side-force scale
 /// learning (`filter::CONFIG`: the seven-state filter), for networks trained with it; unset or
 /// `on`, the shipped filter, which learns it where the aircraft's description says so
-/// (`filter.learn_scales`, docs/filter.md). Anything else is a failed build.
+/// (`filter.learn_scales`, docs/filter.md).
 fn filter_side_scale() {
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_SIDE_SCALE");
-    println!("cargo::rustc-check-cfg=cfg(filter_no_side_scale)");
-    let v = std::env::var("ESTIMATOR_FILTER_SIDE_SCALE").unwrap_or_default();
-    assert!(
-        matches!(v.as_str(), "" | "on" | "off"),
-        "ESTIMATOR_FILTER_SIDE_SCALE must be on or off, not `{v}`"
-    );
-    if v == "off" {
-        println!("cargo:rustc-cfg=filter_no_side_scale");
-    }
+    filter_switch("ESTIMATOR_FILTER_SIDE_SCALE", "off", "filter_no_side_scale");
 }
 
 /// `ESTIMATOR_FILTER_TE_LIFT=on` gives the air-data filter its ninth state, the trailing-edge lift
 /// scale, whatever the description says (`filter.te_lift_sigma0`, which alone sets its prior: 0
 /// holds it at 0): the build in which `scripts/test` runs the state's own tests. Unset or `off`,
-/// the description decides. Anything else is a failed build.
+/// the description decides.
 fn filter_te_lift() {
-    println!("cargo:rerun-if-env-changed=ESTIMATOR_FILTER_TE_LIFT");
-    println!("cargo::rustc-check-cfg=cfg(filter_te_lift)");
-    let v = std::env::var("ESTIMATOR_FILTER_TE_LIFT").unwrap_or_default();
+    filter_switch("ESTIMATOR_FILTER_TE_LIFT", "on", "filter_te_lift");
+}
+
+/// An on/off build switch of the filter: environment variable `var` set to `value` sets
+/// `cfg(cfg)`; unset, `on` or `off` are the choices, anything else is a failed build.
+fn filter_switch(var: &str, value: &str, cfg: &str) {
+    println!("cargo:rerun-if-env-changed={var}");
+    println!("cargo::rustc-check-cfg=cfg({cfg})");
+    let v = std::env::var(var).unwrap_or_default();
     assert!(
         matches!(v.as_str(), "" | "on" | "off"),
-        "ESTIMATOR_FILTER_TE_LIFT must be on or off, not `{v}`"
+        "{var} must be on or off, not `{v}`"
     );
-    if v == "on" {
-        println!("cargo:rustc-cfg=filter_te_lift");
+    if v == value {
+        println!("cargo:rustc-cfg={cfg}");
     }
 }
 
