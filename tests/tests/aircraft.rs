@@ -159,7 +159,7 @@ fn descriptions_are_validated_key_by_key() {
             "filter: missing mean_wind_down_psd",
         ),
         (
-            "te_lift_sigma0 = 0.0\n",
+            "te_lift_sigma0 = 0.05\n",
             "te_lift_sigma0 = -0.05\n",
             "filter.te_lift_sigma0 must be at least 0 (0 holds the trailing-edge lift scale at the model's), not -0.05",
         ),
