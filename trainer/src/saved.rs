@@ -402,7 +402,7 @@ impl SavedModel {
 }
 
 /// The networks and provenance of a `weights.rs` that [`crate::quant::generate`] wrote (the
-/// compiled-in `estimator-core/src/model/NAME/weights.rs`): what `trainer export --weights`
+/// compiled-in `estimator-core/src/model/NAME/weights.rs`): what `trainer revector --weights`
 /// remakes the test vectors from when the networks' `model.json` is gone, e.g. after a change of
 /// the air-data filter whose features the vectors carry. Read back exactly: the networks and
 /// provenance found must generate the file byte for byte again, or the file is refused (edited by

@@ -116,8 +116,8 @@ pub struct FilterSettings {
     /// (chosen per airframe, docs/aircraft.md).
     pub learn_scales: bool,
     /// Initial 1σ of the filter's trailing-edge lift scale s (the lift of the terms reading a
-    /// trailing-edge surface is (1 + s) times the model's); 0 holds s at 0 and the filter keeps
-    /// eight states (docs/aircraft.md).
+    /// trailing-edge surface is (1 + s) times the model's); 0 holds s at 0, and the filter keeps
+    /// eight states unless the build sets `ESTIMATOR_FILTER_TE_LIFT=on` (docs/aircraft.md).
     pub te_lift_sigma0: f32,
     /// The kinematic check's gate, m/s²: above it the running mean of the accelerometers' y or z
     /// specific force less the one the EGI's velocity change gives keeps the step out of the

@@ -11,7 +11,7 @@
 //! Changes of heading and attitude make every wind component observable over time; in long straight
 //! flight the along-track component is not, which the covariance shows and the flags report.
 //!
-//! # State (7 to 9)
+//! # State (8 or 9; 7 with `ESTIMATOR_FILTER_SIDE_SCALE=off`)
 //! `[mean wind N, E, D; gust N, E, D; lift scale k]`, m/s and 1. The mean wind is a random walk; the
 //! gust a first-order Gauss–Markov process (turbulence changes α within a second; the model force sees
 //! it at once); `k` multiplies the predicted force and takes up what the mass from the fuel gauge and
