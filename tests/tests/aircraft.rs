@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 32] = [
+    let cases: [(&str, &str, &str); 33] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -162,6 +162,11 @@ fn descriptions_are_validated_key_by_key() {
             "te_lift_sigma0 = 0.05\n",
             "te_lift_sigma0 = -0.05\n",
             "filter.te_lift_sigma0 must be at least 0 (0 holds the trailing-edge lift scale at the model's), not -0.05",
+        ),
+        (
+            "te_lift_sigma0 = 0.05\n",
+            "te_lift_sigma0 = 1e30\n",
+            "filter.te_lift_sigma0 must be at most 0.5 (the filter restarts when the scale leaves ±0.5), not 1e+30",
         ),
         (
             "kinematic_gate_mps2 = 2.0\n",
