@@ -1015,11 +1015,7 @@ fn cmd_revector(weights: &Path, vectors: &Path) -> Result<()> {
             weights.display()
         );
     }
-    let sources = [&alpha, &beta]
-        .iter()
-        .flat_map(|q| q.prep.features.iter())
-        .fold(0, |m, f| m | f.sources());
-    let suite = Suite::covering(sources).unwrap_or(Suite::Egi120);
+    let suite = trainer::export::vector_suite(&alpha, &beta);
     let frames: Vec<(bool, estimator_core::SensorFrame)> =
         old.iter().map(|v| (v.reset, v.frame)).collect();
     let new = trainer::quant::vectors(&alpha, &beta, &frames);

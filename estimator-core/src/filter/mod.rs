@@ -1167,7 +1167,7 @@ impl AirDataFilter {
         let dhdw = -(dfdvb * cbn) * k;
         // The model's force with the trailing-edge lift scaled (the wind columns keep the plain
         // model's slopes: s is small).
-        let f0 = f0 + f_te * s_te;
+        let f0 = if learn_te { f0 + f_te * s_te } else { f0 };
         // Rows: the y and z specific force. Mean wind and gust enter alike; k scales the model,
         // ky its lateral force on top.
         let mut h = Mat27::zeros();
