@@ -63,8 +63,8 @@ fn filter_side_scale() {
 }
 
 /// `ESTIMATOR_FILTER_TE_LIFT=on` gives the air-data filter its ninth state, the trailing-edge lift
-/// scale, whatever the description says (`filter.te_lift_sigma0`, which alone sets its prior: 0
-/// holds it at 0): the build in which `scripts/test` runs the state's own tests. Unset or `off`,
+/// scale, whatever the description says (`filter.te_lift_sigma0` and `filter.te_lift_psd`, which
+/// alone set its prior and random walk: both 0 hold it at 0): the build in which `scripts/test` runs the state's own tests. Unset or `off`,
 /// the description decides.
 fn filter_te_lift() {
     filter_switch("ESTIMATOR_FILTER_TE_LIFT", "on", "filter_te_lift");

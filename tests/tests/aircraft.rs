@@ -35,7 +35,7 @@ fn descriptions_are_validated_key_by_key() {
     let (ok, err) = validate(&f16, "f16");
     assert!(ok, "the shipped F-16 description is refused: {err}");
     // (edit, what the message must name)
-    let cases: [(&str, &str, &str); 33] = [
+    let cases: [(&str, &str, &str); 35] = [
         (
             "throttle_properties = [\"fcs/throttle-cmd-norm\"]",
             "throttle_properties = [\"fcs/throttle cmd\"]",
@@ -167,6 +167,16 @@ fn descriptions_are_validated_key_by_key() {
             "te_lift_sigma0 = 0.05\n",
             "te_lift_sigma0 = 1e30\n",
             "filter.te_lift_sigma0 must be at most 0.5 (the filter restarts when the scale leaves ±0.5), not 1e+30",
+        ),
+        (
+            "te_lift_psd = 0.0\n",
+            "te_lift_psd = -1e-6\n",
+            "filter.te_lift_psd must be at least 0 (0 makes the trailing-edge lift scale a constant), not -1e-06",
+        ),
+        (
+            "te_lift_psd = 0.0\n",
+            "te_lift_psd = 1.0\n",
+            "filter.te_lift_psd must be at most 1e-3 (1/s; s's 1σ would grow by 0.3 in 100 s), not 1.0",
         ),
         (
             "kinematic_gate_mps2 = 2.0\n",

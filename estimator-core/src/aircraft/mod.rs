@@ -119,6 +119,10 @@ pub struct FilterSettings {
     /// trailing-edge surface is (1 + s) times the model's); 0 holds s at 0, and the filter keeps
     /// eight states unless the build sets `ESTIMATOR_FILTER_TE_LIFT=on` (docs/aircraft.md).
     pub te_lift_sigma0: f32,
+    /// Random-walk PSD of that scale, 1/s: 0 makes s a constant learnt once; above 0 s can
+    /// follow (and come back from) what moves it in flight. Above 0 the filter has the ninth
+    /// state as for `te_lift_sigma0`.
+    pub te_lift_psd: f32,
     /// The kinematic check's gate, m/s²: above it the running mean of the accelerometers' y or z
     /// specific force less the one the EGI's velocity change gives keeps the step out of the
     /// filter's update (`filter::Config::kinematic_gate_mps2`; at least twice the largest the

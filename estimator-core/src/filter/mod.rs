@@ -46,9 +46,12 @@ use crate::aircraft::AIRCRAFT;
 use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 
 /// Whether the build's filter has a trailing-edge lift scale, a ninth state: the description's
-/// `filter.te_lift_sigma0` above 0, or a build with `ESTIMATOR_FILTER_TE_LIFT=on` (build.rs), whose
-/// state the description's prior still holds at 0 unless it says otherwise.
-pub const LEARNS_TE_LIFT: bool = AIRCRAFT.filter.te_lift_sigma0 > 0.0 || cfg!(filter_te_lift);
+/// `filter.te_lift_sigma0` or `filter.te_lift_psd` above 0, or a build with
+/// `ESTIMATOR_FILTER_TE_LIFT=on` (build.rs), whose state the description's prior still holds at 0
+/// unless it says otherwise.
+pub const LEARNS_TE_LIFT: bool = AIRCRAFT.filter.te_lift_sigma0 > 0.0
+    || AIRCRAFT.filter.te_lift_psd > 0.0
+    || cfg!(filter_te_lift);
 
 /// Number of states: mean wind (3), gust (3), lift scale, side-force scale, and the trailing-edge
 /// lift scale where the description learns it ([`LEARNS_TE_LIFT`]).
@@ -261,7 +264,7 @@ pub const CONFIG: Config = Config {
     lift_scale_sigma0: LIFT_SCALE[1],
     side_scale_psd: SIDE_SCALE[0],
     side_scale_sigma0: SIDE_SCALE[1],
-    te_lift_psd: 0.0,
+    te_lift_psd: AIRCRAFT.filter.te_lift_psd,
     te_lift_sigma0: AIRCRAFT.filter.te_lift_sigma0,
     accel_sigma: AIRCRAFT.filter.accel_sigma_mps2,
     gate: 25.0,
