@@ -18,9 +18,11 @@ pub struct FlagShare {
     /// Mean 1σ of α and β the filter reported, degrees (to set beside the measured error).
     pub mean_sigma_alpha_deg: f64,
     pub mean_sigma_beta_deg: f64,
-    /// The lift and side-force scales the filter had learned at the flight's last frame.
+    /// The lift, side-force and trailing-edge lift scales the filter had learned at the flight's
+    /// last frame (the last 0 where the filter does not learn it).
     pub final_lift_scale: f64,
     pub final_side_scale: f64,
+    pub final_te_lift: f64,
 }
 
 /// What [`eval_filter`] measures.
@@ -106,6 +108,7 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
                 / n,
             final_lift_scale: out.last().map_or(f64::NAN, |o| f64::from(o.lift_scale)),
             final_side_scale: out.last().map_or(f64::NAN, |o| f64::from(o.side_scale)),
+            final_te_lift: out.last().map_or(f64::NAN, |o| f64::from(o.te_lift)),
         });
     }
     FilterEval {

@@ -1775,8 +1775,13 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
         print_metrics("α trusted", &e.alpha_trusted);
         print_metrics("β trusted", &e.beta_trusted);
         for s in &e.flags {
+            let te = if estimator_core::filter::LEARNS_TE_LIFT {
+                format!(", trailing-edge lift s {:+.3}", s.final_te_lift)
+            } else {
+                String::new()
+            };
             println!(
-                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}",
+                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}{te}",
                 s.flight,
                 100.0 * s.no_input,
                 100.0 * s.gated,

@@ -471,6 +471,8 @@ pub struct Output {
     pub lift_scale: f32,
     /// Side-force scale (1 unless [`Config::side_scale_sigma0`] lets it move).
     pub side_scale: f32,
+    /// Trailing-edge lift scale s (0 unless the filter learns it, [`LEARNS_TE_LIFT`]).
+    pub te_lift: f32,
     /// 1σ of α and β from the covariance, rad.
     pub sigma_alpha_rad: f32,
     pub sigma_beta_rad: f32,
@@ -1255,12 +1257,14 @@ impl AirDataFilter {
     }
 
     fn healthy(&self) -> bool {
-        let var_ok = self
-            .p
-            .diagonal()
+        let diag = self.p.diagonal();
+        let var_ok = diag
             .iter()
             .take(6)
-            .all(|v| *v >= 0.0 && *v <= self.cfg.max_wind_var);
+            .all(|v| *v >= 0.0 && *v <= self.cfg.max_wind_var)
+            // The scales': not negative, not NaN (no upper bound: a scale nothing observes for a
+            // while may widen by its random walk without the filter being wrong).
+            && diag.iter().skip(6).all(|v| *v >= 0.0);
         let (k, ky) = (self.lift_scale(), self.side_scale());
         var_ok
             && self.x.iter().all(|v| v.is_finite())
@@ -1462,6 +1466,7 @@ impl AirDataFilter {
             airspeed_mps: v,
             lift_scale: self.lift_scale(),
             side_scale: self.side_scale(),
+            te_lift: self.te_lift(),
             sigma_alpha_rad: libm::sqrtf(var_a.max(0.0)),
             sigma_beta_rad: libm::sqrtf(var_b.max(0.0)),
             nis,

@@ -1739,3 +1739,31 @@ fn a_steady_vertical_wind_is_learnt_only_where_the_description_lets_it() {
         "held mean vertical wind moved to {held} m/s"
     );
 }
+
+/// A scale state's variance that is negative or NaN restarts the filter (the wind variances had
+/// this check; the scales' were not looked at).
+#[test]
+fn a_scale_variance_that_is_negative_or_nan_restarts_the_filter() {
+    let w = World {
+        wind: STEADY_WIND,
+        k: 1.0,
+    };
+    for bad in [-1e-4, f32::NAN] {
+        for state in 6..STATES {
+            let mut f = AirDataFilter::new(cfg());
+            fly(&mut f, &w, 0.0, 5.0, |_, _, _| {});
+            if let Some(v) = f.p.get_mut((state, state)) {
+                *v = bad;
+            }
+            let (inp, _) = w.frame(5.0, &cfg());
+            let out = f.step(&inp, true);
+            assert_ne!(
+                out.flags & flags::RESTARTED,
+                0,
+                "state {state}, variance {bad}"
+            );
+            let back = f.p.get((state, state)).copied().unwrap_or(f32::NAN);
+            assert!((0.0..=0.25).contains(&back), "state {state}: {back}");
+        }
+    }
+}
