@@ -64,10 +64,13 @@ fn filter_side_scale() {
 
 /// `ESTIMATOR_FILTER_TE_LIFT=on` gives the air-data filter its ninth state, the trailing-edge lift
 /// scale, whatever the description says (`filter.te_lift_sigma0` and `filter.te_lift_psd`, which
-/// alone set its prior and random walk: both 0 hold it at 0): the build in which `scripts/test` runs the state's own tests. Unset or `off`,
-/// the description decides.
+/// alone set its prior and random walk: both 0 hold it at 0): the build in which `scripts/test`
+/// runs the state's own tests. `off` leaves it out whatever the description says (the eight-state
+/// filter, to compare; the committed test vectors of a description that learns it do not hold
+/// there). Unset, the description decides.
 fn filter_te_lift() {
     filter_switch("ESTIMATOR_FILTER_TE_LIFT", "on", "filter_te_lift");
+    filter_switch("ESTIMATOR_FILTER_TE_LIFT", "off", "filter_no_te_lift");
 }
 
 /// An on/off build switch of the filter: environment variable `var` set to `value` sets

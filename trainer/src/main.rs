@@ -1509,7 +1509,7 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "side_scale_psd" => c.side_scale_psd = v,
             "side_scale_sigma0" => c.side_scale_sigma0 = v,
             "te_lift_sigma0" | "te_lift_psd" if !estimator_core::filter::LEARNS_TE_LIFT => bail!(
-                "--tune: {k} needs a filter with the trailing-edge lift state: build with ESTIMATOR_FILTER_TE_LIFT=on (or a description whose filter.te_lift_sigma0 is above 0)"
+                "--tune: {k} needs a filter with the trailing-edge lift state: build with ESTIMATOR_FILTER_TE_LIFT=on (not off), or for a description whose filter.te_lift_sigma0 or te_lift_psd is above 0"
             ),
             "te_lift_sigma0" => c.te_lift_sigma0 = v,
             "te_lift_psd" => c.te_lift_psd = v,

@@ -117,7 +117,8 @@ pub struct FilterSettings {
     pub learn_scales: bool,
     /// Initial 1σ of the filter's trailing-edge lift scale s (the lift of the terms reading a
     /// trailing-edge surface is (1 + s) times the model's); 0 holds s at 0, and the filter keeps
-    /// eight states unless the build sets `ESTIMATOR_FILTER_TE_LIFT=on` (docs/aircraft.md).
+    /// eight states unless the build sets `ESTIMATOR_FILTER_TE_LIFT=on` (docs/aircraft.md;
+    /// `=off` leaves the state out whatever this says).
     pub te_lift_sigma0: f32,
     /// Random-walk PSD of that scale, 1/s: 0 makes s a constant learnt once; above 0 s can
     /// follow (and come back from) what moves it in flight. Above 0 the filter has the ninth

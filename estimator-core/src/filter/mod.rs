@@ -48,10 +48,11 @@ use crate::channels::{Channel, SUBSAMPLES, SensorFrame, Subsamples, Suite};
 /// Whether the build's filter has a trailing-edge lift scale, a ninth state: the description's
 /// `filter.te_lift_sigma0` or `filter.te_lift_psd` above 0, or a build with
 /// `ESTIMATOR_FILTER_TE_LIFT=on` (build.rs), whose state the description's prior still holds at 0
-/// unless it says otherwise.
-pub const LEARNS_TE_LIFT: bool = AIRCRAFT.filter.te_lift_sigma0 > 0.0
-    || AIRCRAFT.filter.te_lift_psd > 0.0
-    || cfg!(filter_te_lift);
+/// unless it says otherwise; never in a build with `ESTIMATOR_FILTER_TE_LIFT=off`.
+pub const LEARNS_TE_LIFT: bool = !cfg!(filter_no_te_lift)
+    && (AIRCRAFT.filter.te_lift_sigma0 > 0.0
+        || AIRCRAFT.filter.te_lift_psd > 0.0
+        || cfg!(filter_te_lift));
 
 /// Number of states: mean wind (3), gust (3), lift scale, side-force scale, and the trailing-edge
 /// lift scale where the description learns it ([`LEARNS_TE_LIFT`]).
