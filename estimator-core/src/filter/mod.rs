@@ -1073,7 +1073,8 @@ impl AirDataFilter {
         self.x.get(K).copied().unwrap_or(1.0)
     }
 
-    /// The trailing-edge lift scale s (0 unless [`Config::te_lift_sigma0`] lets it move).
+    /// The trailing-edge lift scale s (0 unless the filter learns it, [`LEARNS_TE_LIFT`], and
+    /// [`Config::te_lift_sigma0`] or [`Config::te_lift_psd`] lets it move).
     pub fn te_lift(&self) -> f32 {
         self.x.get(TE).copied().unwrap_or(0.0)
     }
