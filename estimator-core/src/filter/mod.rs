@@ -178,6 +178,11 @@ pub struct Config {
 /// averages out to a few hundredths of a rad/s in the hardest maneuvers.
 pub const GYRO_TAU_S: f32 = 1.0;
 
+/// Time constant, s, of a disagreeing gyro's running mean on a step whose residual is within half
+/// the gate ([`Config::gyro_gate_rps`]): the check lets go of a gyro whose error has gone in about
+/// a quarter of [`GYRO_TAU_S`]. Fault-free flight never reaches the gate, so it never applies there.
+pub const GYRO_RELEASE_TAU_S: f32 = 0.25;
+
 /// The gyro check's share of this frame's 20 Hz gyro in a step's rate where a frame lacks the
 /// gyros' sub-samples (the previous frame's takes the rest): the 6 Hz anti-alias filter delays a
 /// 20 Hz reading about 0.0375 s, and the EGI's attitude change over a step is centred about
@@ -992,10 +997,20 @@ impl AirDataFilter {
             }
         };
         let r = gyro - egi;
+        let gate = self.cfg.gyro_gate_rps;
         for (mean, r) in self.gyro.iter_mut().zip(r.iter()) {
             // A step whose residual overflowed says nothing: the mean stands.
             if r.is_finite() {
-                running_mean(mean, *r, dt, GYRO_TAU_S);
+                // A gyro that disagrees and reads within half the gate again lets go faster: its
+                // error has gone, and the mean would otherwise take a second to fall under the
+                // gate, taking a stale error off a good gyro all that time.
+                let release = libm::fabsf(*mean) > gate && libm::fabsf(*r) <= 0.5 * gate;
+                let tau = if release {
+                    GYRO_RELEASE_TAU_S
+                } else {
+                    GYRO_TAU_S
+                };
+                running_mean(mean, *r, dt, tau);
             }
         }
     }

@@ -1570,9 +1570,12 @@ fn a_gyro_that_disagrees_with_the_egi_is_flagged_and_its_error_taken_off() {
                 worst_blind = worst_blind.max(d(&n));
             }
         }
-        // After the error the mean decays under the gate as the running mean's arithmetic says
-        // (each step the factor τ / (τ + Δt); the first step after it keeps part of the error).
-        let decay = DT * libm::logf(error / c.gyro_gate_rps) / libm::logf(1.0 + DT / GYRO_TAU_S);
+        // After the error the mean decays under the gate as the running mean's arithmetic says,
+        // with the release's time constant (the gyro reads within half the gate again): each step
+        // the factor τ / (τ + Δt), 0.3 s instead of the 1.2 s of the check's own τ; the first step
+        // after it keeps part of the error.
+        let decay =
+            DT * libm::logf(error / c.gyro_gate_rps) / libm::logf(1.0 + DT / GYRO_RELEASE_TAU_S);
         let back = flagged_after.unwrap_or(f32::INFINITY);
         assert!(
             (back - decay).abs() < 3.0 * DT,
