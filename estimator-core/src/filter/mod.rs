@@ -178,10 +178,15 @@ pub struct Config {
 /// averages out to a few hundredths of a rad/s in the hardest maneuvers.
 pub const GYRO_TAU_S: f32 = 1.0;
 
-/// Time constant, s, of a disagreeing gyro's running mean on a step whose residual is within half
-/// the gate ([`Config::gyro_gate_rps`]): the check lets go of a gyro whose error has gone in about
-/// a quarter of [`GYRO_TAU_S`]. Fault-free flight never reaches the gate, so it never applies there.
+/// Time constant, s, of a disagreeing gyro's running mean once its residual has been within half
+/// the gate ([`Config::gyro_gate_rps`]) for [`GYRO_RELEASE_STEPS`] steps in a row: the check lets
+/// go of a gyro whose error has gone in about a quarter of [`GYRO_TAU_S`]. It applies only to a
+/// gyro whose running mean is beyond the gate, one the check already holds in error.
 pub const GYRO_RELEASE_TAU_S: f32 = 0.25;
+
+/// Steps in a row (0.15 s at 20 Hz) a disagreeing gyro's residual must be within half the gate
+/// before [`GYRO_RELEASE_TAU_S`] applies.
+pub const GYRO_RELEASE_STEPS: u8 = 3;
 
 /// The gyro check's share of this frame's 20 Hz gyro in a step's rate where a frame lacks the
 /// gyros' sub-samples (the previous frame's takes the rest): the 6 Hz anti-alias filter delays a
@@ -545,6 +550,9 @@ pub struct AirDataFilter {
     kinematic: [f32; 2],
     /// Running mean of each gyro's rate less the EGI's, rad/s ([`Config::gyro_gate_rps`]).
     gyro: [f32; 3],
+    /// Steps in a row on which each gyro's residual was within half the gate
+    /// ([`GYRO_RELEASE_STEPS`]).
+    gyro_agrees: [u8; 3],
 }
 
 /// Time constant of [`Output::nis_mean`], s: a few gust correlation times, so one large innovation
@@ -851,6 +859,7 @@ impl AirDataFilter {
             stall_latched: false,
             kinematic: [0.0; 2],
             gyro: [0.0; 3],
+            gyro_agrees: [0; 3],
         };
         f.restart();
         f
@@ -861,10 +870,12 @@ impl AirDataFilter {
     /// of gated steps (as [`AirDataFilter::restart`] does: they compare the sensors with each
     /// other, not with the filter's state).
     pub fn start_again(&mut self) {
-        let (kinematic, gyro, gated_run) = (self.kinematic, self.gyro, self.gated_run);
+        let (kinematic, gyro, gyro_agrees, gated_run) =
+            (self.kinematic, self.gyro, self.gyro_agrees, self.gated_run);
         *self = AirDataFilter::new(self.cfg);
         self.kinematic = kinematic;
         self.gyro = gyro;
+        self.gyro_agrees = gyro_agrees;
         self.gated_run = gated_run;
         // The restart's rule for the run, with the running means back.
         self.restart();
@@ -998,13 +1009,25 @@ impl AirDataFilter {
         };
         let r = gyro - egi;
         let gate = self.cfg.gyro_gate_rps;
-        for (mean, r) in self.gyro.iter_mut().zip(r.iter()) {
-            // A step whose residual overflowed says nothing: the mean stands.
+        for ((mean, agrees), r) in self
+            .gyro
+            .iter_mut()
+            .zip(&mut self.gyro_agrees)
+            .zip(r.iter())
+        {
+            // A step whose residual overflowed says nothing: the mean and the run stand.
             if r.is_finite() {
-                // A gyro that disagrees and reads within half the gate again lets go faster: its
-                // error has gone, and the mean would otherwise take a second to fall under the
-                // gate, taking a stale error off a good gyro all that time.
-                let release = libm::fabsf(*mean) > gate && libm::fabsf(*r) <= 0.5 * gate;
+                *agrees = if libm::fabsf(*r) <= 0.5 * gate {
+                    agrees.saturating_add(1)
+                } else {
+                    0
+                };
+                // A gyro that disagrees and has read within half the gate for a few steps in a
+                // row lets go faster: its error has gone, and the mean would otherwise take a
+                // second to fall under the gate, taking a stale error off a good gyro all that
+                // time. (One step within it is not enough: a bias near the gate plus noise dips
+                // there now and then.)
+                let release = libm::fabsf(*mean) > gate && *agrees >= GYRO_RELEASE_STEPS;
                 let tau = if release {
                     GYRO_RELEASE_TAU_S
                 } else {
