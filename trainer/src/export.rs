@@ -177,7 +177,6 @@ pub fn sha256_hex(text: &str) -> String {
         .collect()
 }
 
-/// Writes weights.rs and the test vectors; returns the weights file's SHA-256.
 /// The smallest suite that feeds both networks, the format of their test vectors: a Table 1
 /// model's vectors stay in the Table 1 format whatever the dataset carries.
 pub fn vector_suite(alpha: &QCascade, beta: &QCascade) -> Suite {
@@ -188,6 +187,7 @@ pub fn vector_suite(alpha: &QCascade, beta: &QCascade) -> Suite {
     Suite::covering(sources).unwrap_or(Suite::Egi120)
 }
 
+/// Writes weights.rs and the test vectors; returns the weights file's SHA-256.
 pub fn write_model(
     ds: &Dataset,
     alpha: &QCascade,

@@ -11,12 +11,13 @@
 //! Changes of heading and attitude make every wind component observable over time; in long straight
 //! flight the along-track component is not, which the covariance shows and the flags report.
 //!
-//! # State (8 or 9; 7 with `ESTIMATOR_FILTER_SIDE_SCALE=off`)
+//! # State (8, or 9 with the trailing-edge lift scale; [`STATES`])
 //! `[mean wind N, E, D; gust N, E, D; lift scale k]`, m/s and 1. The mean wind is a random walk; the
 //! gust a first-order Gauss–Markov process (turbulence changes α within a second; the model force sees
 //! it at once); `k` multiplies the predicted force and takes up what the mass from the fuel gauge and
 //! the model get wrong (≈ 1). Where the description says so, a side-force scale `k_y` on the
-//! lateral force (`filter.learn_scales`) and a trailing-edge lift scale `s` (`filter.te_lift_sigma0`):
+//! lateral force (`filter.learn_scales`; held at 1 otherwise or with `ESTIMATOR_FILTER_SIDE_SCALE=off`)
+//! and a trailing-edge lift scale `s` (`filter.te_lift_sigma0`, `filter.te_lift_psd`; [`LEARNS_TE_LIFT`]):
 //! the lift of the model's terms that read the aileron, the flaperon mix or the flap is `(1 + s)`
 //! times the model's. The ailerons move in every roll and every gust, so `s` is observable apart
 //! from the wind (docs/filter.md).

@@ -20,6 +20,12 @@ struct World {
     k: f32,
 }
 
+/// The steady wind of [`STEADY_WIND`] and the model's own lift (k = 1): most tests' world.
+const STEADY_WORLD: World = World {
+    wind: STEADY_WIND,
+    k: 1.0,
+};
+
 impl World {
     /// The wind at `t` plus a gust that jumps every frame by up to ±`amp` m/s per axis (quasi-random,
     /// deterministic): turbulence as the sensors see it.
@@ -524,10 +530,7 @@ pub(crate) fn consistent_frames(n: u16) -> impl Iterator<Item = SensorFrame> {
 
 #[test]
 fn finds_a_steady_wind_and_alpha_beta_while_turning() {
-    let w = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let w = STEADY_WORLD;
     let mut f = AirDataFilter::new(cfg());
     let mut worst = (0f32, 0f32);
     fly(&mut f, &w, 0.0, 120.0, |t, out, truth| {
@@ -555,10 +558,7 @@ fn finds_a_steady_wind_and_alpha_beta_while_turning() {
 
 #[test]
 fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
-    let calm = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let calm = STEADY_WORLD;
     let c = cfg();
     let fly_for = |f: &mut AirDataFilter, amp: f32, from: f32, to: f32| {
         let mut last = Output::default();
@@ -598,10 +598,7 @@ fn the_turbulence_index_is_near_zero_in_steady_air_and_grows_with_the_gusts() {
 
 #[test]
 fn the_turbulence_index_does_not_read_calm_air_in_the_seconds_after_a_restart_in_turbulence() {
-    let world = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let world = STEADY_WORLD;
     let c = cfg();
     let mut f = AirDataFilter::new(c);
     let mut t = 0.0;
@@ -644,10 +641,7 @@ fn after_a_restart_in_steady_air_the_turbulence_index_stays_below_light_turbulen
     // may still be re-converging: in steady air that must not read as turbulence (its worst over
     // the 4 s after the restart is 0.17, 0.04 and 0.20 of light turbulence's worst in the F-16's,
     // the c172p's and the f15's worlds).
-    let world = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let world = STEADY_WORLD;
     let c = cfg();
     let fly = |f: &mut AirDataFilter, amp: f32, from: f32, to: f32| {
         let (mut t, mut worst) = (from, 0f32);
@@ -673,10 +667,7 @@ fn after_a_restart_in_steady_air_the_turbulence_index_stays_below_light_turbulen
 
 #[test]
 fn the_nis_mean_proves_consistency_before_it_reports_it_and_rises_when_the_model_does_not_fit() {
-    let calm = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let calm = STEADY_WORLD;
     let c = cfg();
     let mut f = AirDataFilter::new(c);
     // It starts at the gate: nothing is proven yet. Its first step has no update to make: its
@@ -912,10 +903,7 @@ fn learns_a_trailing_edge_lift_scale_from_the_flaperon_s_swings() {
 #[test]
 fn learns_a_side_force_scale_when_allowed_and_holds_it_at_one_otherwise() {
     // The lateral force 15 % above the model's, through a turn in a steady wind.
-    let w = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let w = STEADY_WORLD;
     let learning = Config {
         side_scale_psd: LEARNED_SIDE_SCALE[0],
         side_scale_sigma0: LEARNED_SIDE_SCALE[1],
@@ -1750,10 +1738,7 @@ fn a_steady_vertical_wind_is_learnt_only_where_the_description_lets_it() {
 /// `healthy` itself: a NaN anywhere in P spreads to the wind variances in the next prediction.
 #[test]
 fn a_scale_variance_that_is_negative_or_nan_makes_the_filter_unhealthy() {
-    let w = World {
-        wind: STEADY_WIND,
-        k: 1.0,
-    };
+    let w = STEADY_WORLD;
     let mut f = AirDataFilter::new(cfg());
     fly(&mut f, &w, 0.0, 5.0, |_, _, _| {});
     assert!(f.healthy());
