@@ -214,7 +214,8 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
 /// One panel of [`grouped_bar_panels`]: title, x label, rows (a label and one value per series).
 pub type BarPanel<'a> = (String, &'a str, Vec<(String, Vec<f64>)>);
 
-/// Panels of horizontal grouped bars side by side; a row's NaN value draws no bar. Rows are drawn
+/// Panels of horizontal grouped bars side by side, each from 0 (to the left for a negative value);
+/// a row's NaN value draws no bar. Rows are drawn
 /// top-down in the given order, with a legend of `series` in empty rows above them.
 pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -> Result<()> {
     hil_sim::font::register();
@@ -234,13 +235,23 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
             .filter(|v| v.is_finite())
             .fold(0.0, f64::max)
             .max(1e-12);
+        // Bars grow from 0: a panel with a negative value reaches left of it.
+        let min = items
+            .iter()
+            .flat_map(|i| i.1.iter())
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::min);
         let names: Vec<String> = items.iter().map(|i| i.0.clone()).collect();
         let mut chart = ChartBuilder::on(&area)
             .caption(title.as_str(), ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(190)
-            .build_cartesian_2d(0.0..max * 1.15, (0..n + legend_rows).into_segmented())
+            .build_cartesian_2d(
+                min * 1.15..max * 1.15,
+                (0..n + legend_rows).into_segmented(),
+            )
             .map_err(perr)?;
         chart
             .configure_mesh()
