@@ -6,6 +6,7 @@ own CSVs for the true β; writes WORK/bars.json (for `trainer bars`) and prints 
 
 import collections
 import csv
+import datetime
 import json
 import os
 import platform
@@ -35,6 +36,14 @@ def gain(truth, err):
     return slope, float(np.mean(np.abs(err - slope * truth - icept)))
 
 
+def cpu():
+    try:
+        with open("/proc/cpuinfo") as f:
+            return next(ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.machine()
+
+
 def main():
     work, command, names = sys.argv[1], sys.argv[2], sys.argv[3:]
     flights = collections.defaultdict(lambda: ([], []))
@@ -46,7 +55,7 @@ def main():
                 errs.append(float(r["err_mdeg"]) / 1000.0)
     lines = ["# β on an airframe whose side force is not the model's: a gain error", "",
              f"Command: `{command}`  ",
-             f"Machine: {platform.machine()}, {os.cpu_count()} cores; the shipped estimator (int8, deployed).", "",
+             f"Machine: {cpu()}, {os.cpu_count()} cores, {datetime.date.today()}; the shipped estimator (int8, deployed).", "",
              "The four test flights of the `paper` preset (seed 1) on JSBSim's F-16 and on each development",
              "variant. *Gain error*: the slope of the β error over the true β, least squares over every frame of",
              "the four flights (−5 % reads a true 4° as 3.8°); per flight in brackets. *MAE without it*: what",
@@ -56,6 +65,7 @@ def main():
              "| aircraft flown | side force: sideslip terms (surface, rate) | β MAE | gain error | MAE without it | filter's side-force scale |",
              "|---|---|---|---|---|---|"]
     bars = []
+    worst = None
     for name in names:
         ds = f"out/sigma/test/{name}"
         truths, errs, per = [], [], []
@@ -82,6 +92,11 @@ def main():
                      f"({', '.join(f'{100 * s:+.1f}' for s in per)}) | {left:.3f} | "
                      f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f}) |")
         bars.append([label, [100 * slope, 100 * (sb - 1), 100 * (np.mean(ky) - 1)]])
+        if worst is None or abs(slope) > abs(worst[1]):
+            worst = (label, slope, float(np.mean(np.abs(e))), left)
+    lines += ["", f"The largest gain error is {worst[0]}'s ({100 * worst[1]:+.1f} %): its β MAE would be "
+              f"{worst[3]:.3f}° instead of {worst[2]:.3f}° with it taken out.", "",
+              "![β gain error against the side-force change](beta-gain.png)"]
     lines.append("")
     print("\n".join(lines))
     spec = {"series": ["β gain error of the shipped estimator", "the airframe's sideslip side-force change",
