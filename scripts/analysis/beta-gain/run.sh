@@ -12,7 +12,7 @@
 #   scripts/analysis/beta-gain/run.sh --out docs/results    # the page
 #
 # Needs the release build (cargo build --release -p trainer -p hil-sim) and the project's .venv
-# (scripts/bootstrap). Scratch in out/beta-gain/; about 1 min on 2 cores.
+# (scripts/bootstrap). Scratch in out/beta-gain/; about 20 s on 2 cores.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
@@ -30,8 +30,13 @@ done
 trainer=target/release/trainer
 [ -x "$trainer" ] || { echo "beta-gain: no $trainer: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
 [ -x .venv/bin/python ] || { echo "beta-gain: no .venv: run scripts/bootstrap" >&2; exit 2; }
+# The variants by their specs' `name`, as scripts/fit-sigma names their test flights.
 names=(stock)
-for spec in airframes/f16-variants/*.toml; do names+=("$(basename "$spec" .toml)"); done
+while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python -c '
+import glob, os, tomllib
+for p in sorted(glob.glob("airframes/f16-variants/*.toml")):
+    with open(p, "rb") as f:
+        print(tomllib.load(f).get("name", os.path.basename(p)[:-5]))')
 for n in "${names[@]}"; do
   if [ ! -f "out/sigma/test/$n/manifest.json" ]; then
     echo "beta-gain: out/sigma/test/$n missing: making the test flights with scripts/fit-sigma --no-fit --out out/sigma" >&2

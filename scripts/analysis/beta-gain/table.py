@@ -7,6 +7,7 @@ own CSVs for the true β; writes WORK/bars.json (for `trainer bars`) and prints 
 import collections
 import csv
 import datetime
+import glob
 import json
 import os
 import platform
@@ -19,14 +20,23 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.a
 
 
 def side_change(name):
-    """(sideslip terms, surface and rate terms) of the side force, over the model's."""
+    """The scale of the side force's sideslip terms over the model's: the SIDE axis times CYb's
+    own scale (offsets, and the surface and rate terms' scales, are not in it)."""
     if name == "stock":
-        return 1.0, 1.0
-    with open(os.path.join(ROOT, "airframes", "f16-variants", f"{name}.toml"), "rb") as f:
-        spec = tomllib.load(f)
-    axis = spec.get("axes", {}).get("SIDE", 1.0)
-    cyb = spec.get("coefficients", {}).get("aero/coefficient/CYb", {}).get("scale", 1.0)
-    return axis * cyb, axis
+        return 1.0
+    for p in glob.glob(os.path.join(ROOT, "airframes", "f16-variants", "*.toml")):
+        with open(p, "rb") as f:
+            spec = tomllib.load(f)
+        if spec.get("name", os.path.basename(p)[:-5]) == name:
+            axis = spec.get("axes", {}).get("SIDE", 1.0)
+            return axis * spec.get("coefficients", {}).get("aero/coefficient/CYb", {}).get("scale", 1.0)
+    sys.exit(f"beta-gain: no airframes/f16-variants/*.toml is named {name}")
+
+
+def card_order(flight):
+    """A test flight's place on the card (test_KIND_NN) and its short name."""
+    parts = flight.split("_")
+    return int(parts[-1]) if parts[-1].isdigit() else 0, "_".join(parts[1:-1]) or flight
 
 
 def gain(truth, err):
@@ -34,14 +44,6 @@ def gain(truth, err):
     that line is taken out."""
     slope, icept = np.polyfit(truth, err, 1)
     return slope, float(np.mean(np.abs(err - slope * truth - icept)))
-
-
-def cpu():
-    try:
-        with open("/proc/cpuinfo") as f:
-            return next(ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name"))
-    except (OSError, StopIteration):
-        return platform.machine()
 
 
 def main():
@@ -55,28 +57,29 @@ def main():
                 errs.append(float(r["err_mdeg"]) / 1000.0)
     lines = ["# β on an airframe whose side force is not the model's: a gain error", "",
              f"Command: `{command}`  ",
-             f"Machine: {cpu()}, {os.cpu_count()} cores, {datetime.date.today()}; the shipped estimator (int8, deployed).", "",
+             f"Machine: {platform.machine()}, {os.cpu_count()} cores, {datetime.date.today()}; the shipped estimator (int8, deployed).", "",
              "The four test flights of the `paper` preset (seed 1) on JSBSim's F-16 and on each development",
              "variant. *Gain error*: the slope of the β error over the true β, least squares over every frame of",
-             "the four flights (−5 % reads a true 4° as 3.8°); per flight in brackets. *MAE without it*: what",
-             "is left with that line taken out, the β MAE a right gain would give. *Filter's side-force scale*:",
-             "what the air-data filter learned by the end of each flight (mean, range), beside the variant's own",
-             "change of the side force's sideslip terms (and of its surface and rate terms).", "",
-             "| aircraft flown | side force: sideslip terms (surface, rate) | β MAE | gain error | MAE without it | filter's side-force scale |",
+             "the four flights (−5 % reads a true 4° as 3.8°); per flight in brackets, in the card's order.",
+             "*MAE without it*: the β MAE left with that line (slope and offset, fitted on these same frames)",
+             "taken out, about what a right gain would give (a little less). *Filter's side-force scale*: what",
+             "the air-data filter learned by the end of each flight (mean, range), beside the variant's own",
+             "scale of the side force's sideslip terms (its SIDE axis times its CYβ scale).", "",
+             "| aircraft flown | side force's sideslip terms | β MAE | gain error | MAE without it | filter's side-force scale |",
              "|---|---|---|---|---|---|"]
     bars = []
     worst = None
     for name in names:
         ds = f"out/sigma/test/{name}"
         truths, errs, per = [], [], []
-        for (d, fl), (frames, e) in sorted(flights.items()):
+        for (d, fl), (frames, e) in sorted(flights.items(), key=lambda kv: card_order(kv[0][1])):
             if d != ds:
                 continue
             with open(os.path.join(ROOT, d, f"{fl}.csv")) as f:
                 beta = [float(r["beta_deg"]) for r in csv.DictReader(f)]
             t = np.array([beta[i] for i in frames])
             e = np.array(e)
-            per.append(gain(t, e)[0])
+            per.append((card_order(fl)[1], gain(t, e)[0]))
             truths.append(t)
             errs.append(e)
         if not truths:
@@ -84,17 +87,17 @@ def main():
         t, e = np.concatenate(truths), np.concatenate(errs)
         slope, left = gain(t, e)
         with open(os.path.join(work, f"filter-{name}.json")) as f:
-            ky = [fl["final_side_scale"] for fl in json.load(f)["flags"]]
-        sb, sr = side_change(name)
+            # A flight whose filter ended unhealthy has no scale (null).
+            ky = [fl["final_side_scale"] for fl in json.load(f)["flags"] if fl.get("final_side_scale") is not None]
+        sb = side_change(name)
         label = "JSBSim's F-16 (the model)" if name == "stock" else name
-        change = f"× {sb:.3g} (× {sr:.3g})"
-        lines.append(f"| {label} | {change} | {np.mean(np.abs(e)):.3f} | **{100 * slope:+.1f} %** "
-                     f"({', '.join(f'{100 * s:+.1f}' for s in per)}) | {left:.3f} | "
-                     f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f}) |")
-        bars.append([label, [100 * slope, 100 * (sb - 1), 100 * (np.mean(ky) - 1)]])
+        learnt = f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f})" if ky else "–"
+        lines.append(f"| {label} | × {sb:.3g} | {np.mean(np.abs(e)):.3f} | **{100 * slope:+.1f} %** "
+                     f"({', '.join(f'{k} {100 * s:+.1f}' for k, s in per)}) | {left:.3f} | {learnt} |")
+        bars.append([label, [100 * slope, 100 * (sb - 1), 100 * (np.mean(ky) - 1) if ky else float("nan")]])
         if worst is None or abs(slope) > abs(worst[1]):
             worst = (label, slope, float(np.mean(np.abs(e))), left)
-    lines += ["", f"The largest gain error is {worst[0]}'s ({100 * worst[1]:+.1f} %): its β MAE would be "
+    lines += ["", f"The largest gain error is {worst[0]}'s ({100 * worst[1]:+.1f} %): its β MAE would be about "
               f"{worst[3]:.3f}° instead of {worst[2]:.3f}° with it taken out.", "",
               "![β gain error against the side-force change](beta-gain.png)"]
     lines.append("")
