@@ -1,10 +1,12 @@
 """What scripts/airframe-sensitivity, airframe-randomise and airframe-variant share: the aerodynamic
 terms the randomiser draws and how widely, what a base model offers a variant (`base_model`: its
-chord, terms and whether its engines are turbines), where JSBSim finds an engine file, and a writer
+chord, terms and whether its engines are turbines), the named development variants, where JSBSim
+finds an engine file, and a writer
 of the scripts/airframe-variant specs they make (top-level scalars, then tables of scalars, lists
 and inline tables)."""
 
 import functools
+import glob
 import json
 import os
 import subprocess
@@ -53,6 +55,17 @@ def description(name):
     except (OSError, tomllib.TOMLDecodeError, KeyError, TypeError) as e:
         known = " ".join(sorted(f[:-5] for f in os.listdir(os.path.join(ROOT, "aircraft")) if f.endswith(".toml")))
         raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
+
+
+def named_variants(aircraft):
+    """The named variants of an aircraft (airframes/AIRCRAFT-variants/*.toml, the development set), in
+    file order: (name, path, spec), the name the spec's `name` or else its file's."""
+    out = []
+    for p in sorted(glob.glob(os.path.join(ROOT, "airframes", f"{aircraft}-variants", "*.toml"))):
+        with open(p, "rb") as f:
+            spec = tomllib.load(f)
+        out.append((spec.get("name", os.path.basename(p)[:-5]), p, spec))
+    return out
 
 
 def aircraft_model(name):

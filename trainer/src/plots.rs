@@ -228,20 +228,14 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
     let k = series.len().max(1);
     for ((title, xl, items), area) in panels.iter().zip(root.split_evenly((1, panels.len()))) {
         let n = items.len();
-        let max = items
+        // Bars grow from 0: the axis spans 0 and every finite value, left of 0 for a negative one.
+        let (min, max) = items
             .iter()
             .flat_map(|i| i.1.iter())
             .copied()
             .filter(|v| v.is_finite())
-            .fold(0.0, f64::max)
-            .max(1e-12);
-        // Bars grow from 0: a panel with a negative value reaches left of it.
-        let min = items
-            .iter()
-            .flat_map(|i| i.1.iter())
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::min);
+            .fold((0.0, 0.0), |(lo, hi): (f64, f64), v| (lo.min(v), hi.max(v)));
+        let max = max.max(1e-12);
         let names: Vec<String> = items.iter().map(|i| i.0.clone()).collect();
         let mut chart = ChartBuilder::on(&area)
             .caption(title.as_str(), ("sans-serif", 18))

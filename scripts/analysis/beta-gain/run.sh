@@ -32,11 +32,7 @@ trainer=target/release/trainer
 [ -x .venv/bin/python ] || { echo "beta-gain: no .venv: run scripts/bootstrap" >&2; exit 2; }
 # The variants by their specs' `name`, as scripts/fit-sigma names their test flights.
 names=(stock)
-while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python -c '
-import glob, os, tomllib
-for p in sorted(glob.glob("airframes/f16-variants/*.toml")):
-    with open(p, "rb") as f:
-        print(tomllib.load(f).get("name", os.path.basename(p)[:-5]))')
+while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python scripts/analysis/beta-gain/table.py --variants)
 for n in "${names[@]}"; do
   if [ ! -f "out/sigma/test/$n/manifest.json" ]; then
     echo "beta-gain: out/sigma/test/$n missing: making the test flights with scripts/fit-sigma --no-fit --out out/sigma" >&2

@@ -1,36 +1,32 @@
 #!/usr/bin/env python3
 """The page of scripts/analysis/beta-gain/run.sh: WORK COMMAND NAME... (NAME `stock` is JSBSim's
-F-16; every other NAME a development variant, airframes/f16-variants/NAME.toml). Reads WORK/rows.csv
+F-16; every other NAME a development variant of airframes/f16-variants/, by its spec's `name`;
+`--variants` lists those names, one a line). Reads WORK/rows.csv
 (`trainer fit-sigma --rows`) and WORK/filter-NAME.json (`trainer eval-filter --json`), the flights'
 own CSVs for the true β; writes WORK/bars.json (for `trainer bars`) and prints the page."""
 
 import collections
 import csv
 import datetime
-import glob
 import json
 import os
 import platform
 import sys
-import tomllib
 
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from airframe_spec import named_variants  # noqa: E402
 
 
-def side_change(name):
-    """The scale of the side force's sideslip terms over the model's: the SIDE axis times CYb's
-    own scale (offsets, and the surface and rate terms' scales, are not in it)."""
-    if name == "stock":
+def side_change(spec):
+    """The scale of the side force's sideslip terms over the model's (None: the model's own): the
+    SIDE axis times CYb's own scale (offsets, and the surface and rate terms' scales, are not in it)."""
+    if spec is None:
         return 1.0
-    for p in glob.glob(os.path.join(ROOT, "airframes", "f16-variants", "*.toml")):
-        with open(p, "rb") as f:
-            spec = tomllib.load(f)
-        if spec.get("name", os.path.basename(p)[:-5]) == name:
-            axis = spec.get("axes", {}).get("SIDE", 1.0)
-            return axis * spec.get("coefficients", {}).get("aero/coefficient/CYb", {}).get("scale", 1.0)
-    sys.exit(f"beta-gain: no airframes/f16-variants/*.toml is named {name}")
+    axis = spec.get("axes", {}).get("SIDE", 1.0)
+    return axis * spec.get("coefficients", {}).get("aero/coefficient/CYb", {}).get("scale", 1.0)
 
 
 def card_order(flight):
@@ -47,7 +43,14 @@ def gain(truth, err):
 
 
 def main():
+    if sys.argv[1:] == ["--variants"]:
+        print("\n".join(n for n, _, _ in named_variants("f16")))
+        return
     work, command, names = sys.argv[1], sys.argv[2], sys.argv[3:]
+    specs = {n: spec for n, _, spec in named_variants("f16")}
+    unknown = [n for n in names if n != "stock" and n not in specs]
+    if unknown:
+        sys.exit(f"beta-gain: no airframes/f16-variants/*.toml is named {', '.join(unknown)}")
     flights = collections.defaultdict(lambda: ([], []))
     with open(os.path.join(work, "rows.csv")) as f:
         for r in csv.DictReader(f):
@@ -89,7 +92,7 @@ def main():
         with open(os.path.join(work, f"filter-{name}.json")) as f:
             # A flight whose filter ended unhealthy has no scale (null).
             ky = [fl["final_side_scale"] for fl in json.load(f)["flags"] if fl.get("final_side_scale") is not None]
-        sb = side_change(name)
+        sb = side_change(specs.get(name))
         label = "JSBSim's F-16 (the model)" if name == "stock" else name
         learnt = f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f})" if ky else "–"
         lines.append(f"| {label} | × {sb:.3g} | {np.mean(np.abs(e)):.3f} | **{100 * slope:+.1f} %** "
