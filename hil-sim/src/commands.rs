@@ -153,6 +153,14 @@ pub struct CampaignArgs {
     /// 2-6) instead of one range for all: the flag envelope of slow flight stays the presets'.
     #[arg(long)]
     turbulence_per_profile: bool,
+    /// The profiles flown in turn, comma-separated (default: all four), e.g. `high-alpha` for a
+    /// campaign of slow, high-α flight.
+    #[arg(long, value_delimiter = ',')]
+    profiles: Option<Vec<crate::maneuver::ProfileKind>>,
+    /// The time between two 1-cosine gusts, s, `LO:HI` (default: each profile's own, 40:150 on
+    /// the F-16), e.g. 10:30 for a campaign rich in gusts.
+    #[arg(long, value_parser = parse_range)]
+    gust_interval_s: Option<(f64, f64)>,
 }
 
 /// A `--fuel-lbs`/`--wind-mps` range that is not `LO:HI` with finite LO ≤ HI.
@@ -193,14 +201,16 @@ impl GenerateArgs {
             || c.fuel_lbs.is_some()
             || c.wind_mps.is_some()
             || c.turbulence.is_some()
-            || c.turbulence_per_profile;
+            || c.turbulence_per_profile
+            || c.profiles.is_some()
+            || c.gust_interval_s.is_some();
         let mut plan = Plan::new(self.preset, self.flights.seed);
         plan.aircraft_dir = self.flights.aircraft.dir()?;
         plan.test_only = self.test_only;
         if self.preset != Preset::Campaign {
             if any {
                 return Err(Error::Usage(
-                    "--hours, --flight-min, --fuel-lbs, --wind-mps and --turbulence[-per-profile] go with --preset campaign".into(),
+                    "--hours, --flight-min, --fuel-lbs, --wind-mps, --turbulence[-per-profile], --profiles and --gust-interval-s go with --preset campaign".into(),
                 ));
             }
             return Ok(plan);
@@ -229,6 +239,17 @@ impl GenerateArgs {
         }
         if c.turbulence_per_profile {
             k.ranges.turb_severity = None;
+        }
+        if let Some((lo, hi)) = c.gust_interval_s {
+            if lo < 1.0 {
+                return Err(Error::Usage(
+                    "--gust-interval-s: a gust takes seconds to pass; write LO:HI with LO at least 1, e.g. 10:30".into(),
+                ));
+            }
+            k.ranges.gust_interval_s = Some((lo, hi));
+        }
+        if let Some(p) = &c.profiles {
+            k.profiles = Some(p.clone());
         }
         if !(k.hours > 0.0 && k.flight_min >= 1.0 && k.flight_min <= 120.0) {
             return Err(Error::Usage(

@@ -51,7 +51,7 @@ pub const ZONE_RECLIMB: f64 = 2.0;
 const Z: Zones = presets::ZONES;
 
 /// The four training profiles of the paper preset.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum ProfileKind {
     Gentle,
@@ -1450,7 +1450,9 @@ mod tests {
                 fuel_per_tank_lbs: (100.0, 3_400.0),
                 steady_wind_fps: (0.0, 60.0),
                 turb_severity: Some((2, 7)),
+                gust_interval_s: None,
             },
+            profiles: None,
         };
         let plan = Plan {
             campaign: Some(c.clone()),
@@ -1506,6 +1508,52 @@ mod tests {
             kinds.insert(p.turb_severity);
         }
         assert_eq!(kinds.len(), 4, "{kinds:?}");
+    }
+
+    #[test]
+    fn a_campaign_of_chosen_profiles_flies_them_with_its_gust_interval() {
+        let mut c = Campaign {
+            hours: 2.0,
+            flight_min: 20.0,
+            ..Campaign::default()
+        };
+        let all = Plan {
+            campaign: Some(c.clone()),
+            ..Plan::new(Preset::Campaign, 5)
+        };
+        c.profiles = Some(vec![ProfileKind::HighAlpha]);
+        c.ranges.gust_interval_s = Some((10.0, 30.0));
+        let plan = Plan {
+            campaign: Some(c),
+            ..Plan::new(Preset::Campaign, 5)
+        };
+        let f = plan.flights();
+        assert_eq!(f.len(), 6);
+        for x in &f {
+            assert_eq!(x.profile, ProfileKind::HighAlpha);
+            assert_eq!(x.profile().gust_interval_s, (10.0, 30.0));
+            assert_eq!(
+                x.profile().alpha_target_deg,
+                Profile::preset(ProfileKind::HighAlpha).alpha_target_deg
+            );
+        }
+        // The same seeds as the four-profile campaign, flown on the chosen profile.
+        let seeds = |p: &Plan| p.flights().iter().map(|x| x.seed).collect::<Vec<_>>();
+        assert_eq!(seeds(&plan), seeds(&all));
+        // A 20-min flight of gusts every 10-30 s has many more of them than one at 40-150 s.
+        let count = |x: &PlannedFlight| {
+            let m = generate(&x.profile(), x.seed, "g", 1_200.0).unwrap();
+            m.script_xml.matches("cosine-gust/start").count()
+        };
+        let dense = count(&f[0]);
+        let sparse = count(&all.flights()[1]);
+        assert!(dense >= 40 && sparse <= 30, "{dense} against {sparse}");
+        // A campaign without them writes the manifest it wrote before (no new keys).
+        let json = serde_json::to_string(&all).unwrap();
+        assert!(
+            !json.contains("profiles") && !json.contains("gust_interval"),
+            "{json}"
+        );
     }
 
     #[test]
@@ -1861,6 +1909,9 @@ pub struct ProfileRanges {
     /// `None`: every profile keeps its own severity range (slow high-α flight stays in lighter
     /// turbulence than aggressive flight, as in the training presets).
     pub turb_severity: Option<(u32, u32)>,
+    /// The time between two 1-cosine gusts, s; `None`: every profile keeps its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gust_interval_s: Option<Range>,
 }
 
 impl ProfileRanges {
@@ -1870,16 +1921,23 @@ impl ProfileRanges {
         if let Some(t) = self.turb_severity {
             p.turb_severity = t;
         }
+        if let Some(g) = self.gust_interval_s {
+            p.gust_interval_s = g;
+        }
     }
 }
 
-/// A campaign: flights of `flight_min` minutes, the four profiles in turn, until `hours` of
-/// flight; every tenth flight is a test flight. Seeds come from their own stream of the base seed.
+/// A campaign: flights of `flight_min` minutes, its profiles (the four unless it names some) in
+/// turn, until `hours` of flight; every tenth flight is a test flight. Seeds come from their own
+/// stream of the base seed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Campaign {
     pub hours: f64,
     pub flight_min: f64,
     pub ranges: ProfileRanges,
+    /// The profiles flown in turn; `None`: all four.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profiles: Option<Vec<ProfileKind>>,
 }
 
 impl Default for Campaign {
@@ -1892,7 +1950,9 @@ impl Default for Campaign {
                 fuel_per_tank_lbs: profiles_range(|p| p.fuel_per_tank_lbs),
                 steady_wind_fps: profiles_range(|p| p.steady_wind_fps),
                 turb_severity: Some(profiles_range(|p| p.turb_severity)),
+                gust_interval_s: None,
             },
+            profiles: None,
         }
     }
 }
@@ -1906,9 +1966,13 @@ impl Campaign {
             .ceil()
             .max(1.0) as usize;
         let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6361_6d70_6169_676e);
+        let profiles = match &self.profiles {
+            Some(p) if !p.is_empty() => p.as_slice(),
+            _ => ProfileKind::ALL.as_slice(),
+        };
         (0..n)
             .map(|i| {
-                let profile = ProfileKind::ALL[i % ProfileKind::ALL.len()];
+                let profile = profiles[i % profiles.len()];
                 let test = i % CAMPAIGN_TEST_EVERY == CAMPAIGN_TEST_EVERY - 1;
                 PlannedFlight {
                     name: format!(
