@@ -129,6 +129,9 @@ pub struct Dataset {
     /// The sensor suites every flight carries (manifest `suites`).
     pub suites: Vec<estimator_core::Suite>,
     pub flights: Vec<Flight>,
+    /// The sha256 of each flight's CSV by the flight's name here, as its manifest records it
+    /// (empty where none does): the same name on other bytes is another flight.
+    pub flight_sha256: std::collections::BTreeMap<String, String>,
     /// Datasets whose training flights were added with [`Dataset::add_training`].
     pub extra: Vec<ExtraData>,
     /// The aircraft the flights flew (manifest `aircraft`; `None`: JSBSim's own, not recorded).
@@ -287,6 +290,11 @@ impl Dataset {
             preset: manifest.preset.clone(),
             suites: manifest.suites(),
             flights,
+            flight_sha256: manifest
+                .flights
+                .iter()
+                .map(|f| (f.name.clone(), f.sha256.clone()))
+                .collect(),
             extra: Vec::new(),
             test_from: Vec::new(),
             gyro_bias_twins: None,
@@ -333,14 +341,34 @@ impl Dataset {
             .filter(|_| other_aircraft)
             .map(|a| format!("@{}", a.model_xml_sha256.get(..8).unwrap_or("")))
             .unwrap_or_default();
+        // Two campaigns name their flights alike (`train_high-alpha_00001`) and fly other ones: a
+        // name this dataset holds on other bytes is another flight, named apart by its file's hash.
+        // The same bytes under the same name are the same flight, refused below.
+        let mut sha256 = Vec::new();
         let added: Vec<Flight> = other
             .flights
             .into_iter()
             .filter(|f| f.role != Role::Test)
-            .map(|f| Flight {
-                role: Role::Train,
-                name: format!("{}{tag}", f.name),
-                ..f
+            .map(|f| {
+                let sha = other
+                    .flight_sha256
+                    .get(&f.name)
+                    .cloned()
+                    .unwrap_or_default();
+                let mut name = format!("{}{tag}", f.name);
+                if self
+                    .flight_sha256
+                    .get(&name)
+                    .is_some_and(|held| !sha.is_empty() && *held != sha)
+                {
+                    name = format!("{name}#{}", sha.get(..8).unwrap_or(""));
+                }
+                sha256.push((name.clone(), sha));
+                Flight {
+                    role: Role::Train,
+                    name,
+                    ..f
+                }
             })
             .collect();
         self.check_new(
@@ -361,6 +389,7 @@ impl Dataset {
             preset: other.preset,
             flights: added.len(),
         });
+        self.flight_sha256.extend(sha256);
         self.flights.extend(added);
         Ok(())
     }
@@ -677,6 +706,7 @@ mod tests {
                 still_flight("v", Role::Val, 20),
                 still_flight("t", Role::Test, 10),
             ],
+            flight_sha256: Default::default(),
             extra: Vec::new(),
             aircraft: None,
             test_from: Vec::new(),
@@ -724,6 +754,7 @@ mod tests {
             preset: "test".into(),
             suites: Vec::new(),
             flights,
+            flight_sha256: Default::default(),
             extra: Vec::new(),
             aircraft: None,
             test_from: Vec::new(),
@@ -863,12 +894,22 @@ mod tests {
     /// A dataset in a fresh directory: `(name, split)` flights of three zero samples each, the
     /// current format and every suite unless `suites` says otherwise.
     fn tiny_dataset(tag: &str, flights: &[(&str, Split)], suites: &[&str]) -> PathBuf {
+        tiny_dataset_from(tag, flights, suites, 0.0)
+    }
+
+    /// [`tiny_dataset`] whose samples start at `t0_s` (other bytes under the same names).
+    fn tiny_dataset_from(
+        tag: &str,
+        flights: &[(&str, Split)],
+        suites: &[&str],
+        t0_s: f64,
+    ) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("trainer-data-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let samples = (0..3)
             .map(|k| hil_sim::dataset::Sample {
-                time_s: k as f64 * 0.05,
+                time_s: t0_s + k as f64 * 0.05,
                 truth: Default::default(),
                 sensed: [0.0; CHANNELS],
                 sub: hil_sim::dataset::NO_SUBSAMPLES,
@@ -1031,7 +1072,24 @@ mod tests {
             Err(Error::DatasetSuite { suite: "egi", .. })
         ));
         assert_eq!(ds.flights.len(), 6);
-        for d in [main, extra, t1] {
+        // Another campaign names its flights alike and flies other ones: a flight of other bytes
+        // under a name already here trains too, named apart by its file's hash; its twin of the
+        // same bytes is still refused.
+        let other = tiny_dataset_from("other", &[("b0", Train), ("b9", Train)], &both, 1.0);
+        ds.add_training(&other, false).unwrap();
+        let sha = Manifest::read(&other).unwrap().flights[0].sha256.clone();
+        let renamed = format!("b0#{}", &sha[..8]);
+        assert!(
+            roles(&ds, Role::Train).contains(&renamed),
+            "{:?}",
+            roles(&ds, Role::Train)
+        );
+        assert_eq!(ds.flights.len(), 8);
+        assert!(matches!(
+            ds.add_training(&other, false),
+            Err(Error::Split(..))
+        ));
+        for d in [main, extra, t1, other] {
             let _ = std::fs::remove_dir_all(d);
         }
     }
