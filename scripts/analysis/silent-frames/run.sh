@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Where the shipped estimator's silent frames are (docs/results/silent-frames.md): frames with every
+# flag clear and α off by more than 2° or β by more than 1°, on flights none of its choices saw:
+# the `paper` preset's test cards with seed S flown on JSBSim's F-16 and on each development
+# variant (the variants' aircraft directories of scripts/fit-sigma, out/sigma/aircraft/*, made
+# there if missing), and on 12 randomised airframes of seed S (`scripts/airframe-randomise --n 12
+# --seed S --terms --offset 0.03 --test-only`). Each flight is stepped through the estimator on the
+# host (`hil-sim run --firmware host`); table.py sorts the frames by dynamic pressure and by the
+# gust angle (the part of α the EGI's velocity and attitude do not give, scripts/analysis/alpha-wind)
+# and lists each run of silent frames.
+#
+#   scripts/analysis/silent-frames/run.sh [--seed S] [--out DIR]
+#   scripts/analysis/silent-frames/run.sh --out docs/results    # the page and its plot (seed 26)
+#
+# Needs the release build (cargo build --release -p trainer -p hil-sim) and the project's .venv
+# (scripts/bootstrap). Scratch in out/silent-frames/S/; about 6 min on 2 cores the first time
+# (flying the cards and airframes, about 2 min), then 4 min.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+cd "$root"
+command="scripts/analysis/silent-frames/run.sh${*:+ $*}"
+seed=26
+dest=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seed|--out)
+      [ $# -ge 2 ] || { echo "silent-frames: $1 needs a value (see the header of $0)" >&2; exit 2; }
+      if [ "$1" = --seed ]; then seed="$2"; else dest="$2"; fi
+      shift 2 ;;
+    *) echo "silent-frames: unknown argument $1 (see the header of $0)" >&2; exit 2 ;;
+  esac
+done
+[[ "$seed" =~ ^[0-9]+$ ]] || { echo "silent-frames: --seed $seed is not a whole number" >&2; exit 2; }
+[ -z "$dest" ] || [ -d "$dest" ] || { echo "silent-frames: --out $dest is not a directory" >&2; exit 2; }
+bin=target/release
+for b in hil-sim trainer; do
+  [ -x "$bin/$b" ] || { echo "silent-frames: no $bin/$b: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
+done
+[ -x .venv/bin/python ] || { echo "silent-frames: no .venv: run scripts/bootstrap" >&2; exit 2; }
+export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
+work="out/silent-frames/$seed"
+mkdir -p "$work/cards"
+# The variants by their specs' `name`, as scripts/fit-sigma names their aircraft directories.
+names=()
+while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python scripts/analysis/beta-gain/table.py --variants)
+for n in "${names[@]}"; do
+  if [ ! -f "out/sigma/aircraft/$n/f16/f16.xml" ]; then
+    echo "silent-frames: out/sigma/aircraft/$n missing: making it with scripts/fit-sigma --no-fit --out out/sigma" >&2
+    scripts/fit-sigma --no-fit --out out/sigma
+    break
+  fi
+done
+dirs=()
+for n in stock "${names[@]}"; do
+  d="$work/cards/$n"
+  if [ ! -f "$d/manifest.json" ]; then
+    air=()
+    [ "$n" = stock ] || air=(--aircraft-dir "out/sigma/aircraft/$n")
+    "$bin/hil-sim" generate --preset paper --test-only --seed "$seed" "${air[@]}" --out "$d" --force > /dev/null
+  fi
+  dirs+=("$d")
+done
+if [ ! -f "$work/airframes/data/11/manifest.json" ]; then
+  scripts/airframe-randomise --n 12 --seed "$seed" --terms --offset 0.03 --test-only --out "$work/airframes" --force > /dev/null
+fi
+for k in $(seq 0 11); do dirs+=("$work/airframes/data/$k"); done
+for d in "${dirs[@]}"; do
+  for csv in "$d"/test_*.csv; do
+    flight="$(basename "$csv" .csv)"
+    run="$work/runs/${d#"$work"/}/$flight"
+    if [ ! "$run/estimates.csv" -nt "$bin/hil-sim" ]; then
+      rm -rf "$run.tmp"
+      mkdir -p "$run.tmp"
+      "$bin/hil-sim" run --dataset "$csv" --firmware host --out "$run.tmp" > "$run.tmp/log.txt"
+      rm -rf "$run"
+      mv "$run.tmp" "$run"
+    fi
+  done
+  echo "silent-frames: $d flown through the estimator" >&2
+done
+.venv/bin/python scripts/analysis/silent-frames/table.py "$work" "$command" "$seed" "${dirs[@]}"
+"$bin/trainer" bars --spec "$work/bars.json" --out "$work/silent-frames.png"
+if [ -n "$dest" ]; then
+  cp "$work/silent-frames.md" "$work/silent-frames.png" "$dest/"
+  echo "silent-frames: wrote $dest/silent-frames.md and .png" >&2
+fi
