@@ -30,16 +30,10 @@ done
 trainer=target/release/trainer
 [ -x "$trainer" ] || { echo "beta-gain: no $trainer: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
 [ -x .venv/bin/python ] || { echo "beta-gain: no .venv: run scripts/bootstrap" >&2; exit 2; }
-# The variants by their specs' `name`, as scripts/fit-sigma names their test flights.
-names=(stock)
-while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python scripts/analysis/beta-gain/table.py --variants)
-for n in "${names[@]}"; do
-  if [ ! -f "out/sigma/test/$n/manifest.json" ]; then
-    echo "beta-gain: out/sigma/test/$n missing: making the test flights with scripts/fit-sigma --no-fit --out out/sigma" >&2
-    scripts/fit-sigma --no-fit --out out/sigma
-    break
-  fi
-done
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # development_variants
+development_variants
+names=(stock "${variants[@]}")
 work=out/beta-gain
 mkdir -p "$work"
 data=()

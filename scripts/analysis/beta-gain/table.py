@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The page of scripts/analysis/beta-gain/run.sh: WORK COMMAND NAME... (NAME `stock` is JSBSim's
-F-16; every other NAME a development variant of airframes/f16-variants/, by its spec's `name`;
-`--variants` lists those names, one a line). Reads WORK/rows.csv
+F-16; every other NAME a development variant of airframes/f16-variants/, by its spec's `name`).
+Reads WORK/rows.csv
 (`trainer fit-sigma --rows`) and WORK/filter-NAME.json (`trainer eval-filter --json`), the flights'
 own CSVs for the true β; writes WORK/bars.json (for `trainer bars`) and prints the page."""
 
@@ -43,9 +43,6 @@ def gain(truth, err):
 
 
 def main():
-    if sys.argv[1:] == ["--variants"]:
-        print("\n".join(n for n, _, _ in named_variants("f16")))
-        return
     work, command, names = sys.argv[1], sys.argv[2], sys.argv[3:]
     specs = {n: spec for n, _, spec in named_variants("f16")}
     unknown = [n for n in names if n != "stock" and n not in specs]

@@ -40,18 +40,11 @@ done
 export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
 work="out/silent-frames/$seed"
 mkdir -p "$work/cards"
-# The variants by their specs' `name`, as scripts/fit-sigma names their aircraft directories.
-names=()
-while IFS= read -r n; do names+=("$n"); done < <(.venv/bin/python scripts/analysis/beta-gain/table.py --variants)
-for n in "${names[@]}"; do
-  if [ ! -f "out/sigma/aircraft/$n/f16/f16.xml" ]; then
-    echo "silent-frames: out/sigma/aircraft/$n missing: making it with scripts/fit-sigma --no-fit --out out/sigma" >&2
-    scripts/fit-sigma --no-fit --out out/sigma
-    break
-  fi
-done
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # development_variants
+development_variants
 dirs=()
-for n in stock "${names[@]}"; do
+for n in stock "${variants[@]}"; do
   d="$work/cards/$n"
   if [ ! -f "$d/manifest.json" ]; then
     air=()
