@@ -104,7 +104,8 @@ pub struct GenerateArgs {
     /// `paper`: 16 training flights of 15–20 min + 4 test flights; `large`: paper + 48 more training
     /// flights (≈ 19 h); `ci`: 5 flights of 3 min; `ood`: 16 out-of-distribution test flights of
     /// 6 min, kept apart from training (docs/results/ood.md); `campaign`: any number of flight-hours
-    /// with chosen mass, wind and turbulence ranges (--hours, --fuel-lbs, --wind-mps, --turbulence).
+    /// with chosen profiles, mass, wind, turbulence and gust ranges (--hours, --profiles,
+    /// --fuel-lbs, --wind-mps, --turbulence, --gust-interval-s).
     #[arg(long, value_enum)]
     preset: crate::maneuver::Preset,
     /// Dataset directory to write. Without --shard the dataset is written under a temporary name
@@ -154,19 +155,36 @@ pub struct CampaignArgs {
     #[arg(long)]
     turbulence_per_profile: bool,
     /// The profiles flown in turn, comma-separated (default: all four), e.g. `high-alpha` for a
-    /// campaign of slow, high-α flight.
+    /// campaign of slow, high-α flight. Every tenth flight is a test flight, so with two profiles
+    /// all test flights are of the second. Mass, wind and turbulence are drawn from the ranges of
+    /// all four profiles unless set (--turbulence-per-profile keeps each profile's own severity).
     #[arg(long, value_delimiter = ',')]
     profiles: Option<Vec<crate::maneuver::ProfileKind>>,
-    /// The time between two 1-cosine gusts, s, `LO:HI` (default: each profile's own, 40:150 on
-    /// the F-16), e.g. 10:30 for a campaign rich in gusts.
-    #[arg(long, value_parser = parse_range)]
+    /// The time between the starts of two 1-cosine gusts, s, `LO:HI` with LO at least 1 (default:
+    /// each profile's own, 40:150 on the F-16), e.g. 10:30 for a campaign rich in gusts. A gust
+    /// lasts up to 11 s; one that has not ended when the next starts is cut short by it.
+    #[arg(long, value_parser = parse_gust_interval)]
     gust_interval_s: Option<(f64, f64)>,
 }
 
-/// A `--fuel-lbs`/`--wind-mps` range that is not `LO:HI` with finite LO ≤ HI.
+/// A `--fuel-lbs`/`--wind-mps`/`--gust-interval-s` range that is not `LO:HI` with finite LO ≤ HI.
 #[derive(Debug, thiserror::Error)]
 #[error("`{0}`: write LO:HI with LO ≤ HI, e.g. 0:25")]
 pub struct BadRange(String);
+
+/// A `--gust-interval-s` that is not `LO:HI` with 1 ≤ LO ≤ HI.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "`{0}`: write LO:HI in seconds with 1 ≤ LO ≤ HI (a gust takes seconds to pass), e.g. 10:30"
+)]
+pub struct BadGustInterval(String);
+
+fn parse_gust_interval(s: &str) -> std::result::Result<(f64, f64), BadGustInterval> {
+    match parse_range(s) {
+        Ok((lo, hi)) if lo >= 1.0 => Ok((lo, hi)),
+        _ => Err(BadGustInterval(s.to_string())),
+    }
+}
 
 fn parse_range(s: &str) -> std::result::Result<(f64, f64), BadRange> {
     let bad = || BadRange(s.to_string());
@@ -240,13 +258,8 @@ impl GenerateArgs {
         if c.turbulence_per_profile {
             k.ranges.turb_severity = None;
         }
-        if let Some((lo, hi)) = c.gust_interval_s {
-            if lo < 1.0 {
-                return Err(Error::Usage(
-                    "--gust-interval-s: a gust takes seconds to pass; write LO:HI with LO at least 1, e.g. 10:30".into(),
-                ));
-            }
-            k.ranges.gust_interval_s = Some((lo, hi));
+        if let Some(g) = c.gust_interval_s {
+            k.ranges.gust_interval_s = Some(g);
         }
         if let Some(p) = &c.profiles {
             k.profiles = Some(p.clone());
@@ -463,4 +476,19 @@ pub fn bench(a: &BenchArgs) -> Result<()> {
         r.overhead_ratio, r.generate_per_4h_s,
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gust_interval_is_seconds_lo_to_hi_from_one() {
+        assert_eq!(parse_gust_interval("10:30").unwrap(), (10.0, 30.0));
+        assert_eq!(parse_gust_interval(" 1 : 1 ").unwrap(), (1.0, 1.0));
+        for bad in ["0.5:30", "30:10", "10", "a:b", "nan:3", "-5:5", ""] {
+            let e = parse_gust_interval(bad).unwrap_err().to_string();
+            assert!(e.contains("e.g. 10:30"), "{bad}: {e}");
+        }
+    }
 }

@@ -129,9 +129,9 @@ pub struct Dataset {
     /// The sensor suites every flight carries (manifest `suites`).
     pub suites: Vec<estimator_core::Suite>,
     pub flights: Vec<Flight>,
-    /// The sha256 of each flight's CSV by the flight's name here, as its manifest records it
-    /// (empty where none does): the same name on other bytes is another flight.
-    pub flight_sha256: std::collections::BTreeMap<String, String>,
+    /// Each flight's seed and profile by its name here, as its manifest records them: what tells
+    /// two flights of the same name apart ([`Dataset::add_training`]).
+    pub flight_ids: std::collections::BTreeMap<String, (u64, String)>,
     /// Datasets whose training flights were added with [`Dataset::add_training`].
     pub extra: Vec<ExtraData>,
     /// The aircraft the flights flew (manifest `aircraft`; `None`: JSBSim's own, not recorded).
@@ -290,10 +290,10 @@ impl Dataset {
             preset: manifest.preset.clone(),
             suites: manifest.suites(),
             flights,
-            flight_sha256: manifest
+            flight_ids: manifest
                 .flights
                 .iter()
-                .map(|f| (f.name.clone(), f.sha256.clone()))
+                .map(|f| (f.name.clone(), (f.seed, f.profile.clone())))
                 .collect(),
             extra: Vec::new(),
             test_from: Vec::new(),
@@ -310,8 +310,10 @@ impl Dataset {
     /// Adds every training flight of the dataset in `dir` (its test flights are left out) to this
     /// one's training flights. Validation and test stay this dataset's own flights, so models
     /// trained with and without the extra flights are selected and scored on the same flights.
-    /// The other dataset must carry every sensor suite this one does, and no flight name may
-    /// repeat (the same name twice would be one flight counted twice, or two flights confused).
+    /// The other dataset must carry every sensor suite this one does. A flight this dataset holds
+    /// already (the same name, seed and profile: one flight counted twice) is refused; another
+    /// flight under a name held here (two campaigns name their flights alike) trains as
+    /// `NAME~SEED`.
     pub fn add_training(&mut self, dir: &Path, mixed_aircraft: bool) -> Result<()> {
         let other = Dataset::load_any(dir, 0.0)?;
         for s in &self.suites {
@@ -342,28 +344,24 @@ impl Dataset {
             .map(|a| format!("@{}", a.model_xml_sha256.get(..8).unwrap_or("")))
             .unwrap_or_default();
         // Two campaigns name their flights alike (`train_high-alpha_00001`) and fly other ones: a
-        // name this dataset holds on other bytes is another flight, named apart by its file's hash.
-        // The same bytes under the same name are the same flight, refused below.
-        let mut sha256 = Vec::new();
+        // name this dataset holds with another seed or profile is another flight, named apart by
+        // its seed. The same name, seed and profile are the same flight, refused below.
+        let mut ids = Vec::new();
         let added: Vec<Flight> = other
             .flights
             .into_iter()
             .filter(|f| f.role != Role::Test)
             .map(|f| {
-                let sha = other
-                    .flight_sha256
-                    .get(&f.name)
-                    .cloned()
-                    .unwrap_or_default();
+                let id = other.flight_ids.get(&f.name).cloned();
                 let mut name = format!("{}{tag}", f.name);
-                if self
-                    .flight_sha256
-                    .get(&name)
-                    .is_some_and(|held| !sha.is_empty() && *held != sha)
+                if let (Some(held), Some(id)) = (self.flight_ids.get(&name), &id)
+                    && held != id
                 {
-                    name = format!("{name}#{}", sha.get(..8).unwrap_or(""));
+                    name = format!("{name}~{}", id.0);
                 }
-                sha256.push((name.clone(), sha));
+                if let Some(id) = id {
+                    ids.push((name.clone(), id));
+                }
                 Flight {
                     role: Role::Train,
                     name,
@@ -377,7 +375,7 @@ impl Dataset {
             "no training flight in the manifest to add",
             |f| {
                 format!(
-                    "flight `{}` is already in {} (add a dataset of other flights)",
+                    "flight `{}` (the same name, seed and profile) is already in {} or a dataset added before it (add a dataset of other flights)",
                     f.name,
                     self.dir.display()
                 )
@@ -389,7 +387,7 @@ impl Dataset {
             preset: other.preset,
             flights: added.len(),
         });
-        self.flight_sha256.extend(sha256);
+        self.flight_ids.extend(ids);
         self.flights.extend(added);
         Ok(())
     }
@@ -706,7 +704,7 @@ mod tests {
                 still_flight("v", Role::Val, 20),
                 still_flight("t", Role::Test, 10),
             ],
-            flight_sha256: Default::default(),
+            flight_ids: Default::default(),
             extra: Vec::new(),
             aircraft: None,
             test_from: Vec::new(),
@@ -754,7 +752,7 @@ mod tests {
             preset: "test".into(),
             suites: Vec::new(),
             flights,
-            flight_sha256: Default::default(),
+            flight_ids: Default::default(),
             extra: Vec::new(),
             aircraft: None,
             test_from: Vec::new(),
@@ -894,22 +892,22 @@ mod tests {
     /// A dataset in a fresh directory: `(name, split)` flights of three zero samples each, the
     /// current format and every suite unless `suites` says otherwise.
     fn tiny_dataset(tag: &str, flights: &[(&str, Split)], suites: &[&str]) -> PathBuf {
-        tiny_dataset_from(tag, flights, suites, 0.0)
+        tiny_dataset_seeded(tag, flights, suites, 0)
     }
 
-    /// [`tiny_dataset`] whose samples start at `t0_s` (other bytes under the same names).
-    fn tiny_dataset_from(
+    /// [`tiny_dataset`] whose flights have the seed `seed` (other flights under the same names).
+    fn tiny_dataset_seeded(
         tag: &str,
         flights: &[(&str, Split)],
         suites: &[&str],
-        t0_s: f64,
+        seed: u64,
     ) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("trainer-data-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let samples = (0..3)
             .map(|k| hil_sim::dataset::Sample {
-                time_s: t0_s + k as f64 * 0.05,
+                time_s: k as f64 * 0.05,
                 truth: Default::default(),
                 sensed: [0.0; CHANNELS],
                 sub: hil_sim::dataset::NO_SUBSAMPLES,
@@ -932,7 +930,7 @@ mod tests {
                     name: name.into(),
                     split,
                     profile: "gentle".into(),
-                    seed: 0,
+                    seed,
                     duration_s: 0.1,
                     samples: 3,
                     sha256,
@@ -1072,13 +1070,12 @@ mod tests {
             Err(Error::DatasetSuite { suite: "egi", .. })
         ));
         assert_eq!(ds.flights.len(), 6);
-        // Another campaign names its flights alike and flies other ones: a flight of other bytes
-        // under a name already here trains too, named apart by its file's hash; its twin of the
-        // same bytes is still refused.
-        let other = tiny_dataset_from("other", &[("b0", Train), ("b9", Train)], &both, 1.0);
+        // Another campaign names its flights alike and flies other ones: a flight of another seed
+        // under a name already here trains too, named apart by its seed; the same flight again
+        // (same name, seed and profile, whatever its bytes) is still refused.
+        let other = tiny_dataset_seeded("other", &[("b0", Train), ("b9", Train)], &both, 7);
         ds.add_training(&other, false).unwrap();
-        let sha = Manifest::read(&other).unwrap().flights[0].sha256.clone();
-        let renamed = format!("b0#{}", &sha[..8]);
+        let renamed = "b0~7".to_string();
         assert!(
             roles(&ds, Role::Train).contains(&renamed),
             "{:?}",

@@ -96,7 +96,9 @@ struct TrainArgs {
     data: PathBuf,
     /// More training flights: every training flight of this dataset (its test flights are left
     /// out) trains with `--data`'s, while validation and test stay `--data`'s own flights, so runs
-    /// with and without it are selected and scored on the same flights. Repeatable.
+    /// with and without it are selected and scored on the same flights. Repeatable. A flight held
+    /// already (the same name, seed and profile) is refused; another flight under a name held
+    /// (two campaigns name their flights alike) trains as NAME~SEED.
     #[arg(long, value_name = "DIR")]
     extra_data: Vec<PathBuf>,
     /// Accept --extra-data flights of other aircraft (manifest `aircraft`) on purpose: training

@@ -13,8 +13,9 @@
 #   scripts/analysis/silent-frames/run.sh --out docs/results    # the page and its plot (seed 26)
 #
 # Needs the release build (cargo build --release -p trainer -p hil-sim) and the project's .venv
-# (scripts/bootstrap). Scratch in out/silent-frames/S/; about 6 min on 2 cores the first time
-# (flying the cards and airframes, about 2 min), then 4 min.
+# (scripts/bootstrap). Scratch in out/silent-frames/S/; about 1.5 min on 2 cores the first time (the
+# cards and airframes flown, each flight stepped through the estimator), seconds while the build is
+# unchanged (a flight's estimates are kept until hil-sim is rebuilt).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"

@@ -88,6 +88,7 @@ def main():
              "not give, which only the normal force carries (simulator truth, for this sorting only). "
              "*Share missed*: the least-squares slope of the α error on the gust angle, negated (1: the "
              "estimate misses all of it).", "",
+             "![α off by more than 2° and silent frames, by regime](silent-frames.png)", "",
              "| regime | frames | share of the frames | α MAE | share missed | frames α off > 2° | their share | silent frames |",
              "|---|---|---|---|---|---|---|---|"]
     bars, silent_bars = [], []
