@@ -1001,6 +1001,16 @@ mod tests {
             names.contains(&"a0") && names.contains(&"a0@bbbbbbbb"),
             "{names:?}"
         );
+        // Another flight of that aircraft under the same name (another campaign: its seed) trains
+        // too, named apart by the seed after the aircraft's hash; the same flight again is refused.
+        let again = tiny_dataset_seeded("air-again", &[("a0", Train)], &both, 5);
+        fly_on(&again, "b");
+        ds.add_training(&again, true).unwrap();
+        assert!(ds.flights.iter().any(|f| f.name == "a0@bbbbbbbb~5"));
+        assert!(matches!(
+            ds.add_training(&again, true),
+            Err(Error::Split(..))
+        ));
         // Another description's dataset is refused outright: this build evaluates its own
         // aircraft's model.
         let name = estimator_core::aircraft::descriptions()
@@ -1020,7 +1030,7 @@ mod tests {
             }
             r => panic!("another aircraft's dataset loaded: {:?}", r.err()),
         }
-        for d in [main, other, same, twin, elsewhere] {
+        for d in [main, other, same, twin, again, elsewhere] {
             let _ = std::fs::remove_dir_all(d);
         }
     }
