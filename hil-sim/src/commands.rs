@@ -258,12 +258,8 @@ impl GenerateArgs {
         if c.turbulence_per_profile {
             k.ranges.turb_severity = None;
         }
-        if let Some(g) = c.gust_interval_s {
-            k.ranges.gust_interval_s = Some(g);
-        }
-        if let Some(p) = &c.profiles {
-            k.profiles = Some(p.clone());
-        }
+        k.ranges.gust_interval_s = c.gust_interval_s;
+        k.profiles = c.profiles.clone();
         if !(k.hours > 0.0 && k.flight_min >= 1.0 && k.flight_min <= 120.0) {
             return Err(Error::Usage(
                 "--hours must be positive and --flight-min between 1 and 120".into(),

@@ -117,6 +117,21 @@ paper_test_flights() {
   done
 }
 
+# host_run RUN CSV [ARG...]: `hil-sim run --dataset CSV --firmware host ARG...` with the build's
+# hil-sim (`bin`, analysis_binaries) into the directory RUN (estimates.csv, summary.json, log.txt),
+# unless RUN holds a run newer than that hil-sim; written under RUN.tmp and moved into place whole, so
+# an interrupted run leaves no RUN behind (the analyses' cache of stepped flights).
+host_run() {
+  local run="$1" csv="$2"
+  shift 2
+  [ "$run/summary.json" -nt "$bin/hil-sim" ] && return 0
+  rm -rf "$run.tmp"
+  mkdir -p "$run.tmp"
+  "$bin/hil-sim" run --dataset "$csv" --firmware host "$@" --out "$run.tmp" > "$run.tmp/log.txt"
+  rm -rf "$run"
+  mv "$run.tmp" "$run"
+}
+
 # development_variants: the F-16's development variants (airframes/f16-variants/) by their specs'
 # `name`, as scripts/fit-sigma names them, in `variants`; their aircraft directories
 # (out/sigma/aircraft/NAME) and seed-1 test flights (out/sigma/test/NAME) made by

@@ -14,7 +14,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, paper_test_flights
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, paper_test_flights, host_run
 command="scripts/analysis/alpha-wind/run.sh${*:+ $*}"
 name="$default_aircraft"
 dest=""
@@ -35,14 +35,7 @@ paper_test_flights "$name"
 for d in "${flight_dirs[@]}"; do
   for csv in "$d"/test_*.csv; do
     flight="$(basename "$csv" .csv)"
-    run="$work/$(basename "$d")/$flight"
-    if [ ! "$run/estimates.csv" -nt "$bin/hil-sim" ]; then
-      rm -rf "$run.tmp"
-      mkdir -p "$run.tmp"
-      "$bin/hil-sim" run --aircraft "$name" --dataset "$csv" --firmware host --out "$run.tmp" > "$run.tmp/log.txt"
-      rm -rf "$run"
-      mv "$run.tmp" "$run"
-    fi
+    host_run "$work/$(basename "$d")/$flight" "$csv" --aircraft "$name"
   done
   echo "alpha-wind: $d flown" >&2
 done

@@ -67,11 +67,12 @@ def moving_mean(x, frames):
     return np.convolve(x, k, "same") / np.convolve(np.ones_like(x), k, "same")
 
 
-def gust_alpha_deg(flight_csv):
+def gust_alpha_deg(flight):
+    """The gust angle, degrees, of every row of a flight's CSV as `read` gives it."""
     names = ["phi_deg", "theta_deg", "psi_deg", "v_north_mps", "v_east_mps", "v_down_mps",
              "wind_north_mps", "wind_east_mps", "wind_down_mps", "alpha_deg"]
     phi, th, psi, vn, ve, vd, wn, we, wd, alpha = (
-        np.array(c, dtype=float) for c in columns(read(flight_csv), names))
+        np.array(c, dtype=float) for c in columns(flight, names))
     v = np.stack([v - moving_mean(w, MEAN_WIND_FRAMES) for v, w in ((vn, wn), (ve, we), (vd, wd))], 1)
     c_bn = body_from_ned(np.radians(phi), np.radians(th), np.radians(psi))
     u, _, w = np.einsum("kij,kj->ik", c_bn, v)
@@ -112,7 +113,7 @@ def main():
             table = read(est)
             a_true, a_est, s_a, received = columns(
                 table, ["alpha_true_deg", "alpha_deg", "sigma_alpha_deg", "received"])
-            g = gust_alpha_deg(os.path.join(d, csv_name))
+            g = gust_alpha_deg(read(os.path.join(d, csv_name)))
             n = min(len(g), len(a_true))
             a_est = np.array([x if x else "nan" for x in a_est[:n]], dtype=float)
             ok = (np.array(received[:n]) == "1") & np.isfinite(a_est)

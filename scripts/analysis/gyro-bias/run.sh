@@ -20,7 +20,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights
+. scripts/lib/aircraft.sh  # default_aircraft, aircraft_target, paper_test_flights, host_run
 command="scripts/analysis/gyro-bias/run.sh${*:+ $*}"
 name="$default_aircraft"
 dest=""
@@ -52,14 +52,7 @@ for csv in "${flights[@]}"; do
       for ((t = 25; t + 25 <= ${last%.*}; t += 25)); do
         faults+=(--fault "bias:gyro_${gyro}_rps=${size}@${t}+10")
       done
-      run="$work/$flight/$gyro-$size"
-      if [ ! "$run/summary.json" -nt "$bin/hil-sim" ]; then
-        rm -rf "$run.tmp"
-        mkdir -p "$run.tmp"
-        "$bin/hil-sim" run --aircraft "$name" --dataset "$csv" --firmware host "${faults[@]}" --out "$run.tmp" > "$run.tmp/log.txt"
-        rm -rf "$run"
-        mv "$run.tmp" "$run"
-      fi
+      host_run "$work/$flight/$gyro-$size" "$csv" --aircraft "$name" "${faults[@]}"
     done
   done
   echo "gyro-bias: $flight flown" >&2

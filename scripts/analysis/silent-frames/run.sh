@@ -12,7 +12,7 @@
 #   scripts/analysis/silent-frames/run.sh [--seed S] [--out DIR]
 #   scripts/analysis/silent-frames/run.sh --out docs/results    # the page and its plot (seed 26)
 #
-# Needs the release build (cargo build --release -p trainer -p hil-sim) and the project's .venv
+# Needs the F-16's release build (cargo build --release -p trainer -p hil-sim) and the project's .venv
 # (scripts/bootstrap). Scratch in out/silent-frames/S/; about 1.5 min on 2 cores the first time (the
 # cards and airframes flown, each flight stepped through the estimator), seconds while the build is
 # unchanged (a flight's estimates are kept until hil-sim is rebuilt).
@@ -33,16 +33,12 @@ while [ $# -gt 0 ]; do
 done
 [[ "$seed" =~ ^[0-9]+$ ]] || { echo "silent-frames: --seed $seed is not a whole number" >&2; exit 2; }
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "silent-frames: --out $dest is not a directory" >&2; exit 2; }
-bin=target/release
-for b in hil-sim trainer; do
-  [ -x "$bin/$b" ] || { echo "silent-frames: no $bin/$b: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
-done
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, host_run, development_variants
+analysis_binaries "$default_aircraft" hil-sim trainer
 [ -x .venv/bin/python ] || { echo "silent-frames: no .venv: run scripts/bootstrap" >&2; exit 2; }
-export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
 work="out/silent-frames/$seed"
 mkdir -p "$work/cards"
-# shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # development_variants
 development_variants
 dirs=()
 for n in stock "${variants[@]}"; do
@@ -60,15 +56,7 @@ fi
 for k in $(seq 0 11); do dirs+=("$work/airframes/data/$k"); done
 for d in "${dirs[@]}"; do
   for csv in "$d"/test_*.csv; do
-    flight="$(basename "$csv" .csv)"
-    run="$work/runs/${d#"$work"/}/$flight"
-    if [ ! "$run/estimates.csv" -nt "$bin/hil-sim" ]; then
-      rm -rf "$run.tmp"
-      mkdir -p "$run.tmp"
-      "$bin/hil-sim" run --dataset "$csv" --firmware host --out "$run.tmp" > "$run.tmp/log.txt"
-      rm -rf "$run"
-      mv "$run.tmp" "$run"
-    fi
+    host_run "$work/runs/${d#"$work"/}/$(basename "$csv" .csv)" "$csv"
   done
   echo "silent-frames: $d flown through the estimator" >&2
 done

@@ -39,9 +39,9 @@ def flight_frames(work, d, csv_name):
     est = read(os.path.join(work, "runs", os.path.relpath(d, work), flight, "estimates.csv"))
     t, a_true, a_est, b_true, b_est, s_a, received = columns(
         est, ["time_s", "alpha_true_deg", "alpha_deg", "beta_true_deg", "beta_deg", "sigma_alpha_deg", "received"])
-    path = os.path.join(d, csv_name)
-    g = gust_alpha_deg(path)
-    (q,) = columns(read(path), ["qbar_pa"])
+    flown = read(os.path.join(d, csv_name))
+    g = gust_alpha_deg(flown)
+    (q,) = columns(flown, ["qbar_pa"])
     n = min(len(g), len(a_true))
     num = lambda c: np.array([x if x else "nan" for x in c[:n]], dtype=float)  # noqa: E731
     ea, eb = num(a_est) - num(a_true), num(b_est) - num(b_true)
