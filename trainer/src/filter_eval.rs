@@ -23,6 +23,8 @@ pub struct FlagShare {
     pub final_lift_scale: f64,
     pub final_side_scale: f64,
     pub final_te_lift: f64,
+    /// The filter's gain error in β on this flight ([`gain_error`]).
+    pub beta_gain_error: f64,
 }
 
 /// What [`eval_filter`] measures.
@@ -35,6 +37,22 @@ pub struct FilterEval {
     pub alpha_trusted: FlightMetrics,
     pub beta_trusted: FlightMetrics,
     pub flags: Vec<FlagShare>,
+    /// The filter's gain error in β over every frame of the flights ([`gain_error`]).
+    pub beta_gain_error: f64,
+}
+
+/// The gain error of an estimate: the least-squares slope (with an intercept) of its error over
+/// the truth, −0.05 reading a true 4° as 3.8°. NaN without a spread in the truth.
+pub fn gain_error(estimate: &[f64], truth: &[f64]) -> f64 {
+    let n = estimate.len().min(truth.len()) as f64;
+    let mean = |v: &[f64]| v.iter().take(n as usize).sum::<f64>() / n;
+    let (mt, me) = (mean(truth), mean(estimate));
+    let (mut cov, mut var) = (0.0, 0.0);
+    for (e, t) in estimate.iter().zip(truth) {
+        cov += (t - mt) * ((e - t) - (me - mt));
+        var += (t - mt) * (t - mt);
+    }
+    if var > 0.0 { cov / var } else { f64::NAN }
 }
 
 /// Runs one flight; the outputs, one per frame.
@@ -67,6 +85,7 @@ pub fn degrees(out: &[Output]) -> (Vec<f64>, Vec<f64>) {
 pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
     let (mut a, mut b, mut at, mut bt, mut shares) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut every_b, mut every_tb) = (Vec::new(), Vec::new());
     for fl in ds.flights(role) {
         let out = run_flight(cfg, &fl.frames);
         let ta = fl.truth(Target::AlphaDeg);
@@ -82,6 +101,9 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         };
         at.push((fl.name.clone(), keep(&pa), keep(ta)));
         bt.push((fl.name.clone(), keep(&pb), keep(tb)));
+        let beta_gain_error = gain_error(&pb, tb);
+        every_b.extend_from_slice(&pb);
+        every_tb.extend_from_slice(tb);
         a.push((fl.name.clone(), pa, ta.to_vec()));
         b.push((fl.name.clone(), pb, tb.to_vec()));
         let n = out.len().max(1) as f64;
@@ -109,6 +131,7 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
             final_lift_scale: out.last().map_or(f64::NAN, |o| f64::from(o.lift_scale)),
             final_side_scale: out.last().map_or(f64::NAN, |o| f64::from(o.side_scale)),
             final_te_lift: out.last().map_or(f64::NAN, |o| f64::from(o.te_lift)),
+            beta_gain_error,
         });
     }
     FilterEval {
@@ -117,5 +140,22 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         alpha_trusted: FlightMetrics::of(&at),
         beta_trusted: FlightMetrics::of(&bt),
         flags: shares,
+        beta_gain_error: gain_error(&every_b, &every_tb),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::gain_error;
+
+    #[test]
+    fn a_gain_error_is_the_slope_of_the_error_over_the_truth() {
+        let truth = [-4.0, -1.0, 0.0, 2.0, 5.0];
+        // 5 % low with an offset of 0.1°: the offset is not a gain.
+        let low: Vec<f64> = truth.iter().map(|t| 0.95 * t + 0.1).collect();
+        assert!((gain_error(&low, &truth) + 0.05).abs() < 1e-12);
+        assert!(gain_error(&truth, &truth).abs() < 1e-12);
+        assert!(gain_error(&[1.0, 2.0], &[3.0, 3.0]).is_nan());
+        assert!(gain_error(&[], &[]).is_nan());
     }
 }

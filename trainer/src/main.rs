@@ -1765,6 +1765,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
             "alpha": e.alpha, "beta": e.beta,
             "alpha_trusted": e.alpha_trusted, "beta_trusted": e.beta_trusted,
             "flags": e.flags,
+            "beta_gain_error": e.beta_gain_error,
         });
         println!("{}", serde_json::to_string(&v)?);
     } else {
@@ -1776,6 +1777,10 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
         println!("frames with no flag raised:");
         print_metrics("α trusted", &e.alpha_trusted);
         print_metrics("β trusted", &e.beta_trusted);
+        println!(
+            "β gain error {:+.1} % (the slope of the β error over the true β)",
+            100.0 * e.beta_gain_error
+        );
         for s in &e.flags {
             let te = if estimator_core::filter::LEARNS_TE_LIFT {
                 format!(", trailing-edge lift s {:+.3}", s.final_te_lift)
@@ -1783,7 +1788,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
                 String::new()
             };
             println!(
-                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, scales at the end: lift {:.3}, side force {:.3}{te}",
+                "  {}: no input {:.1} %, gated {:.1} %, low confidence {:.1} %, {} restarts, mean 1σ α {:.3}° β {:.3}°, β gain error {:+.1} %, scales at the end: lift {:.3}, side force {:.3}{te}",
                 s.flight,
                 100.0 * s.no_input,
                 100.0 * s.gated,
@@ -1791,6 +1796,7 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
                 s.restarted,
                 s.mean_sigma_alpha_deg,
                 s.mean_sigma_beta_deg,
+                100.0 * s.beta_gain_error,
                 s.final_lift_scale,
                 s.final_side_scale
             );

@@ -62,13 +62,14 @@ def main():
              "variant. *Gain error*: the slope of the β error over the true β, least squares over every frame of",
              "the four flights (−5 % reads a true 4° as 3.8°); per flight in brackets, in the card's order.",
              "*MAE without it*: the β MAE left with that line (slope and offset, fitted on these same frames)",
-             "taken out, about what a right gain would give (a little less). *Filter's side-force scale*: what",
-             "the air-data filter learned by the end of each flight (mean, range), beside the variant's own",
-             "scale of the side force's sideslip terms (its SIDE axis times its CYβ scale).", "",
-             "| aircraft flown | side force's sideslip terms | β MAE | gain error | MAE without it | filter's side-force scale |",
-             "|---|---|---|---|---|---|"]
+             "taken out, about what a right gain would give (a little less). *Filter's own gain error*: the",
+             "same slope of the air-data filter's β alone (`trainer eval-filter`), which the β network reads.",
+             "*Filter's side-force scale*: what the filter learned by the end of each flight (mean, range), beside",
+             "the variant's own scale of the side force's sideslip terms (its SIDE axis times its CYβ scale).", "",
+             "| aircraft flown | side force's sideslip terms | β MAE | gain error | MAE without it | filter's own gain error | filter's side-force scale |",
+             "|---|---|---|---|---|---|---|"]
     bars = []
-    worst = None
+    worst = model_fslope = None
     for name in names:
         ds = f"out/sigma/test/{name}"
         truths, errs, per = [], [], []
@@ -87,22 +88,31 @@ def main():
         t, e = np.concatenate(truths), np.concatenate(errs)
         slope, left = gain(t, e)
         with open(os.path.join(work, f"filter-{name}.json")) as f:
-            # A flight whose filter ended unhealthy has no scale (null).
-            ky = [fl["final_side_scale"] for fl in json.load(f)["flags"] if fl.get("final_side_scale") is not None]
+            filt = json.load(f)
+        # A flight whose filter ended unhealthy has no scale (null).
+        ky = [fl["final_side_scale"] for fl in filt["flags"] if fl.get("final_side_scale") is not None]
+        fper = sorted((card_order(fl["flight"]), fl["beta_gain_error"]) for fl in filt["flags"])
+        fslope = filt["beta_gain_error"]
         sb = side_change(specs.get(name))
         label = "JSBSim's F-16 (the model)" if name == "stock" else name
         learnt = f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f})" if ky else "–"
         lines.append(f"| {label} | × {sb:.3g} | {np.mean(np.abs(e)):.3f} | **{100 * slope:+.1f} %** "
-                     f"({', '.join(f'{k} {100 * s:+.1f}' for k, s in per)}) | {left:.3f} | {learnt} |")
-        bars.append([label, [100 * slope, 100 * (sb - 1), 100 * (np.mean(ky) - 1) if ky else float("nan")]])
+                     f"({', '.join(f'{k} {100 * s:+.1f}' for k, s in per)}) | {left:.3f} | {100 * fslope:+.1f} % "
+                     f"({', '.join(f'{k} {100 * s:+.1f}' for (_, k), s in fper)}) | {learnt} |")
+        bars.append([label, [100 * slope, 100 * fslope, 100 * (sb - 1), 100 * (np.mean(ky) - 1) if ky else float("nan")]])
+        if name == "stock":
+            model_fslope = fslope
         if worst is None or abs(slope) > abs(worst[1]):
-            worst = (label, slope, float(np.mean(np.abs(e))), left)
+            worst = (label, slope, float(np.mean(np.abs(e))), left, fslope)
     lines += ["", f"The largest gain error is {worst[0]}'s ({100 * worst[1]:+.1f} %): its β MAE would be about "
-              f"{worst[3]:.3f}° instead of {worst[2]:.3f}° with it taken out.", "",
+              f"{worst[3]:.3f}° instead of {worst[2]:.3f}° with it taken out. The filter's own β is off by "
+              f"{100 * worst[4]:+.1f} % there"
+              + (f" ({100 * model_fslope:+.1f} % on JSBSim's F-16)" if model_fslope is not None else "") + ".", "",
               "![β gain error against the side-force change](beta-gain.png)"]
     lines.append("")
     print("\n".join(lines))
-    spec = {"series": ["β gain error of the shipped estimator", "the airframe's sideslip side-force change",
+    spec = {"series": ["β gain error of the shipped estimator", "β gain error of the filter alone",
+                       "the airframe's sideslip side-force change",
                        "the filter's side-force scale − 1"],
             "panels": [{"title": "β gain error against the side-force change, %", "xlabel": "%", "rows": bars}]}
     with open(os.path.join(work, "bars.json"), "w") as f:
