@@ -42,17 +42,23 @@ pub struct FilterEval {
 }
 
 /// The gain error of an estimate: the least-squares slope (with an intercept) of its error over
-/// the truth, −0.05 reading a true 4° as 3.8°. NaN without a spread in the truth.
+/// the truth, −0.05 reading a true 4° as 3.8°. NaN when the two differ in length or the truth has
+/// no spread beyond rounding.
 pub fn gain_error(estimate: &[f64], truth: &[f64]) -> f64 {
-    let n = estimate.len().min(truth.len()) as f64;
-    let mean = |v: &[f64]| v.iter().take(n as usize).sum::<f64>() / n;
+    if estimate.len() != truth.len() || truth.is_empty() {
+        return f64::NAN;
+    }
+    let n = truth.len() as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let (mt, me) = (mean(truth), mean(estimate));
     let (mut cov, mut var) = (0.0, 0.0);
     for (e, t) in estimate.iter().zip(truth) {
         cov += (t - mt) * ((e - t) - (me - mt));
         var += (t - mt) * (t - mt);
     }
-    if var > 0.0 { cov / var } else { f64::NAN }
+    // A constant truth leaves only the rounding of its mean: about ε² · mean² per sample.
+    let floor = n * (f64::EPSILON * mt.abs().max(1.0)).powi(2) * 1e4;
+    if var > floor { cov / var } else { f64::NAN }
 }
 
 /// Runs one flight; the outputs, one per frame.
@@ -156,6 +162,9 @@ mod tests {
         assert!((gain_error(&low, &truth) + 0.05).abs() < 1e-12);
         assert!(gain_error(&truth, &truth).abs() < 1e-12);
         assert!(gain_error(&[1.0, 2.0], &[3.0, 3.0]).is_nan());
+        // A constant truth whose mean does not round exactly.
+        assert!(gain_error(&[0.2, 0.1, 0.0], &[0.1, 0.1, 0.1]).is_nan());
         assert!(gain_error(&[], &[]).is_nan());
+        assert!(gain_error(&[1.0], &[1.0, 2.0]).is_nan());
     }
 }

@@ -1774,13 +1774,13 @@ fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<(
         print_metrics("filter", &e.alpha);
         println!("β (deg):");
         print_metrics("filter", &e.beta);
-        println!("frames with no flag raised:");
-        print_metrics("α trusted", &e.alpha_trusted);
-        print_metrics("β trusted", &e.beta_trusted);
         println!(
             "β gain error {:+.1} % (the slope of the β error over the true β)",
             100.0 * e.beta_gain_error
         );
+        println!("frames with no flag raised:");
+        print_metrics("α trusted", &e.alpha_trusted);
+        print_metrics("β trusted", &e.beta_trusted);
         for s in &e.flags {
             let te = if estimator_core::filter::LEARNS_TE_LIFT {
                 format!(", trailing-edge lift s {:+.3}", s.final_te_lift)

@@ -91,8 +91,10 @@ def main():
             filt = json.load(f)
         # A flight whose filter ended unhealthy has no scale (null).
         ky = [fl["final_side_scale"] for fl in filt["flags"] if fl.get("final_side_scale") is not None]
-        fper = sorted((card_order(fl["flight"]), fl["beta_gain_error"]) for fl in filt["flags"])
-        fslope = filt["beta_gain_error"]
+        # A gain the filter could not measure (no spread in the truth) is null in the JSON.
+        nan = lambda v: float("nan") if v is None else v  # noqa: E731
+        fper = sorted((card_order(fl["flight"]), nan(fl["beta_gain_error"])) for fl in filt["flags"])
+        fslope = nan(filt["beta_gain_error"])
         sb = side_change(specs.get(name))
         label = "JSBSim's F-16 (the model)" if name == "stock" else name
         learnt = f"{np.mean(ky):.3f} ({min(ky):.3f}–{max(ky):.3f})" if ky else "–"
