@@ -91,7 +91,6 @@ pub fn degrees(out: &[Output]) -> (Vec<f64>, Vec<f64>) {
 pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
     let (mut a, mut b, mut at, mut bt, mut shares) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut every_b, mut every_tb) = (Vec::new(), Vec::new());
     for fl in ds.flights(role) {
         let out = run_flight(cfg, &fl.frames);
         let ta = fl.truth(Target::AlphaDeg);
@@ -108,8 +107,6 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         at.push((fl.name.clone(), keep(&pa), keep(ta)));
         bt.push((fl.name.clone(), keep(&pb), keep(tb)));
         let beta_gain_error = gain_error(&pb, tb);
-        every_b.extend_from_slice(&pb);
-        every_tb.extend_from_slice(tb);
         a.push((fl.name.clone(), pa, ta.to_vec()));
         b.push((fl.name.clone(), pb, tb.to_vec()));
         let n = out.len().max(1) as f64;
@@ -140,6 +137,11 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
             beta_gain_error,
         });
     }
+    // Every frame of every flight, for the pooled gain.
+    let (every_b, every_tb): (Vec<f64>, Vec<f64>) = b
+        .iter()
+        .flat_map(|(_, p, t)| p.iter().copied().zip(t.iter().copied()))
+        .unzip();
     FilterEval {
         alpha: FlightMetrics::of(&a),
         beta: FlightMetrics::of(&b),

@@ -42,6 +42,11 @@ def gain(truth, err):
     return slope, float(np.mean(np.abs(err - slope * truth - icept)))
 
 
+def nan(v):
+    """A gain the filter could not measure (no spread in the truth), null in its JSON, as NaN."""
+    return float("nan") if v is None else v
+
+
 def main():
     work, command, names = sys.argv[1], sys.argv[2], sys.argv[3:]
     specs = {n: spec for n, _, spec in named_variants("f16")}
@@ -91,8 +96,6 @@ def main():
             filt = json.load(f)
         # A flight whose filter ended unhealthy has no scale (null).
         ky = [fl["final_side_scale"] for fl in filt["flags"] if fl.get("final_side_scale") is not None]
-        # A gain the filter could not measure (no spread in the truth) is null in the JSON.
-        nan = lambda v: float("nan") if v is None else v  # noqa: E731
         fper = sorted((card_order(fl["flight"]), nan(fl["beta_gain_error"])) for fl in filt["flags"])
         fslope = nan(filt["beta_gain_error"])
         sb = side_change(specs.get(name))
