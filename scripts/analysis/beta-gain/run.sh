@@ -5,7 +5,7 @@
 # shipped estimator (`trainer fit-sigma --rows`: every frame's β error) and by its air-data filter
 # alone (`trainer eval-filter`: the side-force scale it learned); then table.py: per aircraft and
 # flight, the slope of the β error over the true β (a gain error of -0.1 reads 10 % low), the MAE
-# and the share of frames within the reported 2σ with that gain taken out, and the filter's
+# and the share of frames within the reported 2σ as flown and with that gain taken out, and the filter's
 # side-force scale at the end of the flight, beside the variant's own side-force change
 # (airframes/f16-variants/NAME.toml).
 #

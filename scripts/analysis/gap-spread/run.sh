@@ -14,9 +14,11 @@
 # directories, the reference and matched estimators' f16_tables.rs, weights.rs and sigma.rs, the
 # seed-1 test flights), the release build (cargo build --release -p trainer -p hil-sim) and the
 # project's .venv (scripts/bootstrap). Each estimator is compiled in with its own tables, weights
-# and 1σ into target/aircraft (build-estimator's), the shipped one is the tree's build. Scratch in
-# out/gap-spread/ (flights per seed and variant, flown once); about 5 min on 2 cores, most of it
-# the five builds.
+# and 1σ into target/aircraft (build-estimator's; seeded from the tree's target/release when missing,
+# as build-estimator does), the shipped one is the tree's build. Scratch in out/gap-spread/ (flights
+# per seed and variant, flown again when the variant's aircraft is newer); about 5 min on 2 cores,
+# most of it the five builds. Seed 7 is refused: build-estimator fits each estimator's 1σ on the
+# `paper` flights of seed 7.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
@@ -35,17 +37,26 @@ while [ $# -gt 0 ]; do
   esac
 done
 [[ "$seeds" =~ ^[0-9]+(,[0-9]+)*$ ]] || { echo "gap-spread: --seeds $seeds: expected seeds like 28,29" >&2; exit 2; }
-IFS=, read -r -a seed_list <<< "$seeds"
-for s in "${seed_list[@]}"; do
+IFS=, read -r -a given <<< "$seeds"
+seed_list=()
+declare -A seen
+for s in "${given[@]}"; do
+  s=$((10#$s))
   [ "$s" != 1 ] || { echo "gap-spread: --seeds: seed 1 is the calibration table's own flights, always scored; give others" >&2; exit 2; }
+  [ "$s" != 7 ] || { echo "gap-spread: --seeds: seed 7's paper flights fitted the estimators' 1σ (build-estimator); give others" >&2; exit 2; }
+  [ -z "${seen[$s]:-}" ] || { echo "gap-spread: --seeds: seed $s given twice" >&2; exit 2; }
+  seen[$s]=1
+  seed_list+=("$s")
 done
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "gap-spread: --out $dest is not a directory" >&2; exit 2; }
 for b in trainer hil-sim; do
   [ -x "target/release/$b" ] || { echo "gap-spread: no target/release/$b: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
 done
 [ -x .venv/bin/python ] || { echo "gap-spread: no .venv: run scripts/bootstrap" >&2; exit 2; }
-names="$(PYTHONPATH=scripts .venv/bin/python -c 'from airframe_spec import named_variants; print(" ".join(n for n, _, _ in named_variants("f16")))')"
+names="$(PYTHONPATH=scripts .venv/bin/python -c 'from airframe_spec import named_variants; print(" ".join(n for n, _, _ in named_variants("f16")))')" ||
+  { echo "gap-spread: cannot read airframes/f16-variants/ (scripts/airframe_spec.py)" >&2; exit 2; }
 read -r -a variants <<< "$names"
+[ "${#variants[@]}" -gt 0 ] || { echo "gap-spread: airframes/f16-variants/ holds no variant spec" >&2; exit 2; }
 cal=out/calibration
 need=("$cal/reference")
 for n in "${variants[@]}"; do need+=("$cal/matched/$n"); done
@@ -66,7 +77,7 @@ for n in "${variants[@]}"; do
   flights["1/$n"]="$cal/test/$n"
   for s in "${seed_list[@]}"; do
     d="$work/$s/$n"
-    if [ ! -f "$d/manifest.json" ]; then
+    if [ ! "$d/manifest.json" -nt "$cal/aircraft/$n/f16/f16.xml" ]; then
       echo "gap-spread: flying seed $s on $n" >&2
       rm -rf "$d"
       target/release/hil-sim generate --preset paper --test-only --seed "$s" --aircraft-dir "$cal/aircraft/$n" --out "$d" > /dev/null
@@ -86,6 +97,9 @@ score() {  # score EST TRAINER VARIANT...: every seed's test flights of each var
   done
 }
 est_target=target/aircraft
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # seed_build
+(target="$root/$est_target"; seed_build release)
 build_with() {  # build_with DIR: the trainer with DIR's tables, weights and 1σ compiled in
   echo "gap-spread: building the estimator of $1" >&2
   ESTIMATOR_AIRCRAFT=f16 ESTIMATOR_AERO="$root/$1/f16_tables.rs" ESTIMATOR_WEIGHTS="$root/$1/weights.rs" ESTIMATOR_SIGMA="$root/$1/sigma.rs" \

@@ -1,6 +1,7 @@
+#!/usr/bin/env python3
 """The gap-spread page (scripts/analysis/gap-spread/run.sh): per development variant and test
 seed, the int8 α/β MAE of the matched, uncalibrated and shipped (in-service) estimators, the share
-of the uncalibrated-to-matched gap the shipped one closes, and its 1σ coverage, then the same
+of the uncalibrated-to-matched gap the shipped one closes, and its share of frames within 2σ, then the same
 pooled over every seed's flights (frame-weighted). Reads WORK/eval/EST-SEED-VARIANT.json
 (`trainer eval --json`); writes WORK/bars.json (for `trainer bars`) and prints the page.
 
@@ -32,25 +33,34 @@ def load(work, est, seed, name):
             e = json.load(f)
     except (OSError, json.JSONDecodeError) as err:
         sys.exit(f"gap-spread: cannot read {path} ({err}): re-run scripts/analysis/gap-spread/run.sh")
-    out = {"n": e["alpha"]["overall"]["n"], "silent": sum(c["silent"] for c in e["flagged"])}
+    out = {"silent": sum(c["silent"] for c in e["flagged"])}
     for a in ("alpha", "beta"):
         out[a] = e[a]["overall"]["mae"]
+        out[a + "_n"] = e[a]["overall"]["n"]
+        # The share within 2σ is of the frames with a known 1σ.
         out[a + "_2s"] = e["sigma"][a]["within_2sigma"]
+        out[a + "_2s_n"] = e["sigma"][a]["frames"]
     return out
 
 
 def pool(rows):
-    """Frame-weighted means over several seeds' figures; silent frames summed."""
-    n = sum(r["n"] for r in rows)
-    out = {"n": n, "silent": sum(r["silent"] for r in rows)}
+    """Frame-weighted means over several seeds' figures, each over its own frames; silent frames summed."""
+    out = {"silent": sum(r["silent"] for r in rows)}
     for k in ("alpha", "beta", "alpha_2s", "beta_2s"):
-        out[k] = sum(r[k] * r["n"] for r in rows) / n
+        n = sum(r[k + "_n"] for r in rows)
+        out[k + "_n"] = n
+        out[k] = sum(r[k] * r[k + "_n"] for r in rows) / n if n else float("nan")
     return out
 
 
 def closed(u, s, m):
-    """The share of the gap from the uncalibrated u to the matched m that s closes (NaN: no gap)."""
-    return (u - s) / (u - m) if u > m else float("nan")
+    """The share of the gap from the uncalibrated u to the matched m that s closes, as the
+    calibration table computes it (NaN: no gap)."""
+    return (u - s) / (u - m) if u != m else float("nan")
+
+
+def finite(xs):
+    return [x for x in xs if x == x]
 
 
 def pct(x):
@@ -90,9 +100,11 @@ def main():
                          f"{b}{pct(g['alpha'])}{b} | {b}{pct(g['beta'])}{b} | "
                          f"{100 * sh['alpha_2s']:.1f} / {100 * sh['beta_2s']:.1f} % | {sh['silent']} |")
         for a in ("alpha", "beta"):
-            bars[a].append([name, [100 * gaps[s][a] for s in seeds + ["pooled"]]])
-        lo = {a: min(gaps[s][a] for s in seeds) for a in ("alpha", "beta")}
-        hi = {a: max(gaps[s][a] for s in seeds) for a in ("alpha", "beta")}
+            # `trainer bars` reads numbers only: a seed without a gap draws no bar.
+            bars[a].append([name, [100 * gaps[s][a] if gaps[s][a] == gaps[s][a] else 0.0
+                                   for s in seeds + ["pooled"]]])
+        lo = {a: min(finite([gaps[s][a] for s in seeds]), default=float("nan")) for a in ("alpha", "beta")}
+        hi = {a: max(finite([gaps[s][a] for s in seeds]), default=float("nan")) for a in ("alpha", "beta")}
         summary.append(f"{name} α {pct(lo['alpha'])}–{pct(hi['alpha'])} (pooled {pct(gaps['pooled']['alpha'])}), "
                        f"β {pct(lo['beta'])}–{pct(hi['beta'])} (pooled {pct(gaps['pooled']['beta'])})")
     lines += ["", "Gap closed over the seeds, lowest–highest: " + "; ".join(summary) + ".", "",
