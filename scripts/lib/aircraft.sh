@@ -132,18 +132,24 @@ host_run() {
   mv "$run.tmp" "$run"
 }
 
-# development_variants: the F-16's development variants (airframes/f16-variants/) by their specs'
-# `name`, as scripts/fit-sigma names them, in `variants`; their aircraft directories
-# (out/sigma/aircraft/NAME) and seed-1 test flights (out/sigma/test/NAME) made by
-# `scripts/fit-sigma --no-fit --out out/sigma` when one is missing (about a minute: it flies the
-# seed-1 test flights and measures the committed 1σ on them; expects the working directory `root`
-# and the project's .venv).
-development_variants() {
-  local listed n
+# variant_names: the F-16's development variants (airframes/f16-variants/) by their specs' `name`,
+# as scripts/fit-sigma names them, in `variants` (expects the working directory `root` and the
+# project's .venv); refuses when none can be read.
+variant_names() {
+  local listed
   listed="$(PYTHONPATH="$root/scripts" .venv/bin/python -c 'from airframe_spec import named_variants; print("\n".join(n for n, _, _ in named_variants("f16")))')" ||
     { echo "${0#"$root"/}: cannot read airframes/f16-variants/ (scripts/airframe_spec.py)" >&2; exit 2; }
   [ -n "$listed" ] || { echo "${0#"$root"/}: airframes/f16-variants/ holds no variant spec" >&2; exit 2; }
   mapfile -t variants <<< "$listed"
+}
+
+# development_variants: variant_names, and their aircraft directories (out/sigma/aircraft/NAME)
+# and seed-1 test flights (out/sigma/test/NAME) made by `scripts/fit-sigma --no-fit --out out/sigma`
+# when one is missing (about a minute: it flies the seed-1 test flights and measures the committed
+# 1σ on them).
+development_variants() {
+  local n
+  variant_names
   for n in "${variants[@]}"; do
     if [ ! -f "out/sigma/test/$n/manifest.json" ] || [ ! -f "out/sigma/aircraft/$n/f16/f16.xml" ]; then
       echo "${0#"$root"/}: out/sigma lacks $n: making the variants' test flights with scripts/fit-sigma --no-fit --out out/sigma" >&2

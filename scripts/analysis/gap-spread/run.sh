@@ -53,10 +53,9 @@ for b in trainer hil-sim; do
   [ -x "target/release/$b" ] || { echo "gap-spread: no target/release/$b: run cargo build --release -p trainer -p hil-sim" >&2; exit 2; }
 done
 [ -x .venv/bin/python ] || { echo "gap-spread: no .venv: run scripts/bootstrap" >&2; exit 2; }
-names="$(PYTHONPATH=scripts .venv/bin/python -c 'from airframe_spec import named_variants; print(" ".join(n for n, _, _ in named_variants("f16")))')" ||
-  { echo "gap-spread: cannot read airframes/f16-variants/ (scripts/airframe_spec.py)" >&2; exit 2; }
-read -r -a variants <<< "$names"
-[ "${#variants[@]}" -gt 0 ] || { echo "gap-spread: airframes/f16-variants/ holds no variant spec" >&2; exit 2; }
+# shellcheck source=../../lib/aircraft.sh
+. scripts/lib/aircraft.sh  # variant_names, seed_build
+variant_names
 cal=out/calibration
 need=("$cal/reference")
 for n in "${variants[@]}"; do need+=("$cal/matched/$n"); done
@@ -97,8 +96,6 @@ score() {  # score EST TRAINER VARIANT...: every seed's test flights of each var
   done
 }
 est_target=target/aircraft
-# shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # seed_build
 (target="$root/$est_target"; seed_build release)
 build_with() {  # build_with DIR: the trainer with DIR's tables, weights and 1σ compiled in
   echo "gap-spread: building the estimator of $1" >&2

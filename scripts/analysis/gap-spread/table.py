@@ -14,18 +14,6 @@ import platform
 import sys
 
 
-def cpu():
-    """The host's CPU model, as the other pages name it."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
 def load(work, est, seed, name):
     path = os.path.join(work, "eval", f"{est}-{seed}-{name}.json")
     try:
@@ -71,7 +59,7 @@ def main():
     work, command, seeds, names = sys.argv[1], sys.argv[2], sys.argv[3].split(), sys.argv[4:]
     lines = ["# How firm the calibration table's gap closed is: the same estimators on more test flights", "",
              f"Command: `{command}`  ",
-             f"Machine: {platform.machine()} ({cpu()}), {os.cpu_count()} cores, {datetime.date.today()}.", "",
+             f"Machine: {platform.machine()}, {os.cpu_count()} cores, {datetime.date.today()}.", "",
              "The table of [calibration.md](calibration.md) scores every estimator on the four test flights of",
              "the `paper` preset with seed 1 flown on each development variant. Here the same estimators, as",
              "`scripts/calibration-accuracy` built them (nothing trained or fitted again), are scored on the",
