@@ -9,6 +9,7 @@ pooled over every seed's flights (frame-weighted). Reads WORK/eval/EST-SEED-VARI
 
 import datetime
 import json
+import math
 import os
 import platform
 import sys
@@ -47,10 +48,6 @@ def closed(u, s, m):
     return (u - s) / (u - m) if u != m else float("nan")
 
 
-def finite(xs):
-    return [x for x in xs if x == x]
-
-
 def pct(x):
     return "–" if x != x else f"{100 * x:.0f} %"
 
@@ -87,12 +84,13 @@ def main():
                          f"{u['alpha']:.3f} / {u['beta']:.3f} | {sh['alpha']:.3f} / {sh['beta']:.3f} | "
                          f"{b}{pct(g['alpha'])}{b} | {b}{pct(g['beta'])}{b} | "
                          f"{100 * sh['alpha_2s']:.1f} / {100 * sh['beta_2s']:.1f} % | {sh['silent']} |")
+        lo, hi = {}, {}
         for a in ("alpha", "beta"):
+            per_seed = [gaps[s][a] for s in seeds]
             # `trainer bars` reads numbers only: a seed without a gap draws no bar.
-            bars[a].append([name, [100 * gaps[s][a] if gaps[s][a] == gaps[s][a] else 0.0
-                                   for s in seeds + ["pooled"]]])
-        lo = {a: min(finite([gaps[s][a] for s in seeds]), default=float("nan")) for a in ("alpha", "beta")}
-        hi = {a: max(finite([gaps[s][a] for s in seeds]), default=float("nan")) for a in ("alpha", "beta")}
+            bars[a].append([name, [0.0 if math.isnan(x) else 100 * x for x in per_seed + [gaps["pooled"][a]]]])
+            known = [x for x in per_seed if not math.isnan(x)]
+            lo[a], hi[a] = (min(known), max(known)) if known else (math.nan, math.nan)
         summary.append(f"{name} α {pct(lo['alpha'])}–{pct(hi['alpha'])} (pooled {pct(gaps['pooled']['alpha'])}), "
                        f"β {pct(lo['beta'])}–{pct(hi['beta'])} (pooled {pct(gaps['pooled']['beta'])})")
     lines += ["", "Gap closed over the seeds, lowest–highest: " + "; ".join(summary) + ".", "",
