@@ -1,7 +1,9 @@
 //! The model-based air-data filter ([`estimator_core::filter`]) scored on a dataset's flights, on the
 //! target's own path: each flight's integer sensor frames, in order, through
 //! [`AirDataFilter::step_frame`], exactly as the firmware runs it.
-use estimator_core::filter::{AirDataFilter, Config, Output, flags};
+use estimator_core::aero::{MODEL, Unsteady};
+use estimator_core::filter::{self, AirDataFilter, Config, Input, Output, flags};
+use hil_sim::dataset::Truth;
 
 use crate::data::{Dataset, Role, Target};
 use crate::metrics::FlightMetrics;
@@ -150,6 +152,163 @@ pub fn eval_filter(ds: &Dataset, role: Role, cfg: Config) -> FilterEval {
         flags: shares,
         beta_gain_error: gain_error(&every_b, &every_tb),
     }
+}
+
+/// One frame of [`force_frames`]: the normal (body z) specific force at the CG as the IMU measures
+/// it and as the filter's force model gives it, at the flight's true air-data point and at the
+/// filter's own estimate. NaN where a value cannot be had (no input, the model undefined there).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceFrame {
+    pub alpha_true_deg: f64,
+    pub qbar_pa: f64,
+    pub alpha_filter_deg: f64,
+    pub sigma_alpha_filter_deg: f64,
+    /// The filter had no standing flag ([`flags::clear`]).
+    pub filter_clear: bool,
+    /// The IMU's specific force moved to the CG ([`filter::specific_force_cg`]), m/s².
+    pub fz_measured: f64,
+    /// The model at the true α, β, Mach, airspeed, dynamic pressure, mass and body rates (JSBSim's
+    /// truth: what the model would say if the filter knew the air-data point), m/s².
+    pub fz_model_true: f64,
+    /// The model at the filter's α, β and airspeed (ISA density at the frame's altitude, the mass
+    /// from the fuel gauge, times the filter's lift scale), m/s².
+    pub fz_model_filter: f64,
+    /// ∂(fz_model_filter)/∂α at the filter's point, m/s² per degree: what one degree of α does to
+    /// the normal force there.
+    pub dfz_dalpha_filter: f64,
+}
+
+impl ForceFrame {
+    /// The CSV header of [`ForceFrame::csv_row`] (after the flight name and frame index).
+    pub const CSV_HEADER: &str = "flight,frame,alpha_true_deg,qbar_pa,alpha_filter_deg,sigma_alpha_filter_deg,filter_clear,fz_measured_mps2,fz_model_true_mps2,fz_model_filter_mps2,dfz_dalpha_filter_mps2_per_deg";
+
+    pub fn csv_row(&self, flight: &str, frame: usize) -> String {
+        format!(
+            "{flight},{frame},{:.5},{:.1},{:.5},{:.5},{},{:.5},{:.5},{:.5},{:.5}",
+            self.alpha_true_deg,
+            self.qbar_pa,
+            self.alpha_filter_deg,
+            self.sigma_alpha_filter_deg,
+            u8::from(self.filter_clear),
+            self.fz_measured,
+            self.fz_model_true,
+            self.fz_model_filter,
+            self.dfz_dalpha_filter
+        )
+    }
+}
+
+/// The filter with `cfg` over a flight's `frames` (as [`run_flight`]) and, frame by frame, the
+/// normal force it is given against the force its model makes at the true air-data point
+/// (`truth`, one record per frame) and at its own estimate: whether the model explains what the
+/// accelerometers measure, and how much of the filter's α error the normal force shows.
+pub fn force_frames(
+    cfg: Config,
+    frames: &[estimator_core::SensorFrame],
+    truth: &[Truth],
+) -> Vec<ForceFrame> {
+    let out = run_flight(cfg, frames);
+    let s_m2 = f64::from(MODEL.wing_area_ft2) * 0.3048 * 0.3048;
+    let mut prev: Option<(Input, u32)> = None;
+    let (mut latch_true, mut latch_filter) = (false, false);
+    let mut alpha_true_prev: Option<(f64, u32)> = None;
+    frames
+        .iter()
+        .zip(&out)
+        .zip(truth)
+        .map(|((fr, o), t)| {
+            let nan = f64::NAN;
+            let dt = prev.map_or(0.05, |(_, ms)| fr.time_ms.wrapping_sub(ms) as f32 / 1000.0);
+            let inp = Input::from_frame(fr, dt, cfg.lever_arm_m, cfg.subsamples);
+            let a_true = t.alpha_deg.to_radians();
+            let alpha_dot_true = alpha_true_prev
+                .filter(|(_, ms)| fr.time_ms > *ms)
+                .map_or(0.0, |(a, ms)| {
+                    (a_true - a) / (f64::from(fr.time_ms - ms) / 1000.0)
+                });
+            alpha_true_prev = Some((a_true, fr.time_ms));
+            latch_true = MODEL.stall_latch(latch_true, a_true as f32);
+            let mut row = ForceFrame {
+                alpha_true_deg: t.alpha_deg,
+                qbar_pa: t.qbar_pa,
+                alpha_filter_deg: f64::from(o.alpha_rad).to_degrees(),
+                sigma_alpha_filter_deg: f64::from(o.sigma_alpha_rad).to_degrees(),
+                filter_clear: flags::clear(o.flags),
+                fz_measured: nan,
+                fz_model_true: nan,
+                fz_model_filter: nan,
+                dfz_dalpha_filter: nan,
+            };
+            let (Some(inp), Some((p, _))) = (inp, prev) else {
+                prev = inp.map(|i| (i, fr.time_ms));
+                return row;
+            };
+            prev = Some((inp, fr.time_ms));
+            let f_cg = filter::specific_force_cg(&inp, &p, cfg.lever_arm_m);
+            row.fz_measured = f64::from(f_cg.z);
+            // The model at the true point, in JSBSim's own dynamic pressure and mass.
+            let unsteady = Unsteady {
+                alpha_dot_rps: alpha_dot_true as f32,
+                stall_latched: latch_true,
+            };
+            let rates = [t.p_true_rps, t.q_true_rps, t.r_true_rps].map(|r| r as f32);
+            let at_true = filter::model_point(
+                &inp,
+                rates,
+                a_true as f32,
+                t.beta_deg.to_radians() as f32,
+                t.mach as f32,
+                t.vt_mps as f32,
+                cfg.gear_norm,
+                unsteady,
+            );
+            if let Some(pt) = at_true {
+                let c = MODEL.coefficients_at(&pt);
+                if c.valid {
+                    row.fz_model_true = f64::from(c.body.z) * t.qbar_pa * s_m2 / t.mass_kg;
+                }
+            }
+            // The model at the filter's point, as its update evaluates it.
+            let (rho, a_sound) = filter::isa(inp.alt_m);
+            let v = o.airspeed_mps;
+            let (sa, ca) = o.alpha_rad.sin_cos();
+            let (sb, cb) = o.beta_rad.sin_cos();
+            let vb = nalgebra::Vector3::new(v * ca * cb, v * sb, v * sa * cb);
+            latch_filter = MODEL.stall_latch(latch_filter, o.alpha_rad);
+            let unsteady = Unsteady {
+                alpha_dot_rps: filter::alpha_rate(
+                    &vb,
+                    &filter::c_bn(inp.euler_rad),
+                    inp.vel_ned_mps,
+                    &f_cg,
+                    inp.gyro_rps,
+                ),
+                stall_latched: latch_filter,
+            };
+            let at_filter = filter::model_point(
+                &inp,
+                inp.gyro_rps,
+                o.alpha_rad,
+                o.beta_rad,
+                v / a_sound,
+                v,
+                cfg.gear_norm,
+                unsteady,
+            );
+            if let Some(pt) = at_filter.filter(|_| v > 1.0) {
+                let c = MODEL.coefficients_at(&pt);
+                if c.valid {
+                    let qs = f64::from(
+                        filter::qs_over_m(rho, v, cfg.mass_kg(inp.fuel_kg)) * o.lift_scale,
+                    );
+                    row.fz_model_filter = f64::from(c.body.z) * qs;
+                    row.dfz_dalpha_filter =
+                        f64::from(c.body_d_alpha.z) * qs / 180.0 * std::f64::consts::PI;
+                }
+            }
+            row
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -460,11 +460,27 @@ enum Cmd {
         /// Print exactly one JSON object.
         #[arg(long)]
         json: bool,
+        /// Also write, frame by frame, the normal specific force the IMU measures beside the one
+        /// the filter's force model gives at the flight's true air-data point and at the filter's
+        /// estimate (CSV; scripts/analysis/force-residual reads it). Needs the dataset's truth.
+        #[arg(long, value_name = "FILE")]
+        frames: Option<PathBuf>,
     },
     /// Draw grouped horizontal bars from a JSON description, for the scripts' reports
     /// (scripts/calibration-accuracy): `{"series": [..], "panels": [{"title": .., "xlabel": ..,
     /// "rows": [[label, [value per series]], ..]}, ..]}`.
     Bars {
+        /// The JSON description.
+        #[arg(long, value_name = "FILE")]
+        spec: PathBuf,
+        /// The PNG to write.
+        #[arg(long, value_name = "FILE")]
+        out: PathBuf,
+    },
+    /// Draw line-chart panels side by side from a JSON description, for the analysis scripts
+    /// (scripts/analysis/force-residual): `{"panels": [{"title": .., "xlabel": .., "ylabel": ..,
+    /// "series": [{"name": .., "points": [[x, y], ..]}, ..]}, ..]}`; one legend below them.
+    Lines {
         /// The JSON description.
         #[arg(long, value_name = "FILE")]
         spec: PathBuf,
@@ -817,6 +833,46 @@ fn require_suite(what: &str, needs: Suite, suite: Suite) -> Result<()> {
 
 /// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
 /// least one flight in `role`.
+/// `eval-filter --frames`: every flight of `role`, frame by frame ([`trainer::filter_eval::force_frames`]),
+/// into the CSV `path` (written whole or not at all).
+fn write_force_frames(
+    ds: &Dataset,
+    role: Role,
+    cfg: estimator_core::filter::Config,
+    path: &Path,
+) -> Result<()> {
+    use std::io::Write;
+    use trainer::filter_eval::{ForceFrame, force_frames};
+    let manifest = hil_sim::dataset::Manifest::read(&ds.dir)
+        .with_context(|| format!("cannot read the manifest of {}", ds.dir.display()))?;
+    let tmp = path.with_extension("csv.tmp");
+    let file = std::fs::File::create(&tmp).with_context(|| {
+        format!(
+            "cannot write {} (does its directory exist?)",
+            path.display()
+        )
+    })?;
+    let mut w = std::io::BufWriter::new(file);
+    writeln!(w, "{}", ForceFrame::CSV_HEADER)?;
+    for fl in ds.flights(role) {
+        let entry = manifest
+            .flights
+            .iter()
+            .find(|f| f.name == fl.name)
+            .with_context(|| format!("{} lists no flight {}", ds.dir.display(), fl.name))?;
+        let csv = manifest.read_flight(&ds.dir, &entry.file)?;
+        let truth: Vec<_> = csv.samples.iter().map(|s| s.truth).collect();
+        for (i, row) in force_frames(cfg, &fl.frames, &truth).iter().enumerate() {
+            writeln!(w, "{}", row.csv_row(&fl.name, i))?;
+        }
+    }
+    w.flush()?;
+    drop(w);
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))?;
+    Ok(())
+}
+
 fn load_split(data: &Path, role: Role) -> Result<Dataset> {
     let ds = Dataset::load_any(data, 0.15)
         .with_context(|| format!("cannot load the dataset {}", data.display()))?;
@@ -1675,6 +1731,74 @@ struct BarsPanel {
     rows: Vec<(String, Vec<f64>)>,
 }
 
+#[derive(serde::Deserialize)]
+struct LinesSpec {
+    panels: Vec<LinesPanel>,
+}
+
+#[derive(serde::Deserialize)]
+struct LinesPanel {
+    title: String,
+    xlabel: String,
+    ylabel: String,
+    series: Vec<LinesSeries>,
+}
+
+#[derive(serde::Deserialize)]
+struct LinesSeries {
+    name: String,
+    points: Vec<(f64, f64)>,
+}
+
+fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(spec).with_context(|| format!("cannot read {}", spec.display()))?;
+    let s: LinesSpec = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected {{\"panels\": [{{\"title\", \"xlabel\", \"ylabel\", \"series\": [{{\"name\", \"points\": [[x, y]]}}]}}]}}",
+            spec.display()
+        )
+    })?;
+    if s.panels.is_empty() {
+        bail!("{}: no panel to draw", spec.display());
+    }
+    if let Some(p) = s
+        .panels
+        .iter()
+        .find(|p| p.series.iter().all(|l| l.points.is_empty()))
+    {
+        bail!(
+            "{}: panel `{}` has no point to draw",
+            spec.display(),
+            p.title
+        );
+    }
+    let panels: Vec<_> = s
+        .panels
+        .iter()
+        .map(|p| {
+            let series = p
+                .series
+                .iter()
+                .map(|l| trainer::plots::Series {
+                    name: l.name.clone(),
+                    points: &l.points,
+                })
+                .collect();
+            (
+                p.title.clone(),
+                p.xlabel.as_str(),
+                p.ylabel.as_str(),
+                false,
+                series,
+            )
+        })
+        .collect();
+    trainer::plots::line_panels(out, &panels, 520, 400)
+        .with_context(|| format!("cannot draw {}", out.display()))?;
+    Ok(())
+}
+
 fn cmd_bars(spec: &Path, out: &Path) -> Result<()> {
     let text =
         std::fs::read_to_string(spec).with_context(|| format!("cannot read {}", spec.display()))?;
@@ -1747,12 +1871,21 @@ fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
     Ok(())
 }
 
-fn cmd_eval_filter(data: &Path, split: &str, tune: &str, json: bool) -> Result<()> {
+fn cmd_eval_filter(
+    data: &Path,
+    split: &str,
+    tune: &str,
+    json: bool,
+    frames: Option<&Path>,
+) -> Result<()> {
     use trainer::filter_eval::eval_filter;
     let role = parse_split(split)?;
     // Any dataset with flights of that split (a test-only one from `generate --test-only` too).
     let ds = load_split(data, role)?;
     let cfg = filter_config(tune)?;
+    if let Some(path) = frames {
+        write_force_frames(&ds, role, cfg, path)?;
+    }
     let e = eval_filter(&ds, role, cfg);
     if json {
         let v = serde_json::json!({
@@ -2315,7 +2448,8 @@ fn run() -> Result<()> {
             split,
             tune,
             json,
-        } => cmd_eval_filter(data, split, tune, *json),
+            frames,
+        } => cmd_eval_filter(data, split, tune, *json, frames.as_deref()),
         Cmd::FitSigma {
             data,
             every,
@@ -2368,6 +2502,7 @@ fn run() -> Result<()> {
         ),
         Cmd::Ood { data, out, json } => cmd_ood(data, out, *json),
         Cmd::Bars { spec, out } => cmd_bars(spec, out),
+        Cmd::Lines { spec, out } => cmd_lines(spec, out),
         Cmd::Sweep { grid, action } => cmd_sweep(grid, action),
         Cmd::Report(r) => cmd_report(r),
         Cmd::Features {

@@ -596,7 +596,7 @@ fn arm_velocity_ned(cbn: &Matrix3<f32>, w: [f32; 3], r: [f32; 3]) -> Vector3<f32
 }
 
 /// NED → body direction-cosine matrix from roll, pitch, heading.
-fn c_bn(euler: [f32; 3]) -> Matrix3<f32> {
+pub fn c_bn(euler: [f32; 3]) -> Matrix3<f32> {
     let (sf, cf) = (libm::sinf(euler[0]), libm::cosf(euler[0]));
     let (st, ct) = (libm::sinf(euler[1]), libm::cosf(euler[1]));
     let (sp, cp) = (libm::sinf(euler[2]), libm::cosf(euler[2]));
