@@ -193,9 +193,10 @@ def main():
         "## The model at the true air-data point, JSBSim's F-16",
         "",
         "Measured less modelled normal force. The model is the plant's own here, so what is left comes from the "
-        "measurement chain: the IMU's noise and 6 Hz anti-alias filter against the instant the truth is sampled at, "
-        "the lever-arm correction, the surfaces as sensed (not separated here). *The 1σ as α*: the residual's 1σ over "
-        "the median |∂f_z/∂α| of the band.",
+        "measurement: the truth sampled at the frame's instant against the IMU's force through its 6 Hz anti-alias "
+        "filter (most in turbulence: the aggressive card flies Milspec severity 4), the lever-arm correction, the "
+        "surfaces as sensed (not separated here). *The 1σ as α*: the residual's 1σ over the median |∂f_z/∂α| of the "
+        "band.",
         "",
         *model_table(stock),
         "",
@@ -207,7 +208,7 @@ def main():
         "",
         f"Each run of at least {MISS_FRAMES} frames below {SLOW_PA / 1000:.0f} kPa with the filter's α off by more than "
         f"{MISS_DEG}°: from a second before the run to its worst frame, the true α and q̄, the wind's change (north, "
-        "east, down, m/s; a 1-cosine gust), the measured normal force's change (in brackets, the change the α change "
+        "east, down, m/s), the measured normal force's change (in brackets, the change the α change "
         "alone would have made at the first frame's q̄), and at the worst frame the filter's and the shipped "
         "estimate's α error and the α the force shows.",
         "",
