@@ -1750,15 +1750,18 @@ struct LinesSeries {
     points: Vec<(f64, f64)>,
 }
 
-fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
+/// A plot command's JSON description at `spec`, or an error that names the shape it expects.
+fn read_spec<T: serde::de::DeserializeOwned>(spec: &Path, shape: &str) -> Result<T> {
     let text =
         std::fs::read_to_string(spec).with_context(|| format!("cannot read {}", spec.display()))?;
-    let s: LinesSpec = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: expected {{\"panels\": [{{\"title\", \"xlabel\", \"ylabel\", \"series\": [{{\"name\", \"points\": [[x, y]]}}]}}]}}",
-            spec.display()
-        )
-    })?;
+    serde_json::from_str(&text).with_context(|| format!("{}: expected {shape}", spec.display()))
+}
+
+fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
+    let s: LinesSpec = read_spec(
+        spec,
+        r#"{"panels": [{"title", "xlabel", "ylabel", "series": [{"name", "points": [[x, y]]}]}]}"#,
+    )?;
     if s.panels.is_empty() {
         bail!("{}: no panel to draw", spec.display());
     }
@@ -1800,14 +1803,10 @@ fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
 }
 
 fn cmd_bars(spec: &Path, out: &Path) -> Result<()> {
-    let text =
-        std::fs::read_to_string(spec).with_context(|| format!("cannot read {}", spec.display()))?;
-    let s: BarsSpec = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: expected {{\"series\": [..], \"panels\": [{{\"title\", \"xlabel\", \"rows\": [[label, [values]]]}}]}}",
-            spec.display()
-        )
-    })?;
+    let s: BarsSpec = read_spec(
+        spec,
+        r#"{"series": [..], "panels": [{"title", "xlabel", "rows": [[label, [values]]]}]}"#,
+    )?;
     if let Some(p) = s
         .panels
         .iter()
