@@ -15,6 +15,9 @@ pub enum Error {
     Dataset(#[from] hil_sim::dataset::DatasetError),
     #[error("dataset {0}: {1}")]
     Split(PathBuf, String),
+    /// A flight's frames and its truth records that do not pair up one to one.
+    #[error("{frames} frames but {truth} truth records: one truth record per frame is needed")]
+    TruthLength { frames: usize, truth: usize },
     /// A model card that cannot stand for the model in a flight-test calibration.
     #[error("model card {card}: {why}")]
     ModelCard { card: PathBuf, why: String },

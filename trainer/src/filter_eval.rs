@@ -202,17 +202,25 @@ impl ForceFrame {
 /// normal force it is given against the force its model makes at the true air-data point
 /// (`truth`, one record per frame) and at its own estimate: whether the model explains what the
 /// accelerometers measure, and how much of the filter's α error the normal force shows.
+///
+/// `frames` and `truth` are one flight's, one record per frame: lengths that differ are refused.
 pub fn force_frames(
     cfg: Config,
     frames: &[estimator_core::SensorFrame],
     truth: &[Truth],
-) -> Vec<ForceFrame> {
+) -> crate::error::Result<Vec<ForceFrame>> {
+    if frames.len() != truth.len() {
+        return Err(crate::error::Error::TruthLength {
+            frames: frames.len(),
+            truth: truth.len(),
+        });
+    }
     let out = run_flight(cfg, frames);
     let s_m2 = f64::from(MODEL.wing_area_ft2) * 0.3048 * 0.3048;
     let mut prev: Option<(Input, u32)> = None;
     let (mut latch_true, mut latch_filter) = (false, false);
     let mut alpha_true_prev: Option<(f64, u32)> = None;
-    frames
+    Ok(frames
         .iter()
         .zip(&out)
         .zip(truth)
@@ -308,7 +316,7 @@ pub fn force_frames(
             }
             row
         })
-        .collect()
+        .collect())
 }
 
 #[cfg(test)]

@@ -831,10 +831,8 @@ fn require_suite(what: &str, needs: Suite, suite: Suite) -> Result<()> {
     Ok(())
 }
 
-/// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
-/// least one flight in `role`.
 /// `eval-filter --frames`: every flight of `role`, frame by frame ([`trainer::filter_eval::force_frames`]),
-/// into the CSV `path` (written whole or not at all).
+/// into the CSV `path` (written whole or not at all: on an error the partial file is removed).
 fn write_force_frames(
     ds: &Dataset,
     role: Role,
@@ -846,33 +844,44 @@ fn write_force_frames(
     let manifest = hil_sim::dataset::Manifest::read(&ds.dir)
         .with_context(|| format!("cannot read the manifest of {}", ds.dir.display()))?;
     let tmp = path.with_extension("csv.tmp");
-    let file = std::fs::File::create(&tmp).with_context(|| {
-        format!(
-            "cannot write {} (does its directory exist?)",
-            path.display()
-        )
-    })?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{}", ForceFrame::CSV_HEADER)?;
-    for fl in ds.flights(role) {
-        let entry = manifest
-            .flights
-            .iter()
-            .find(|f| f.name == fl.name)
-            .with_context(|| format!("{} lists no flight {}", ds.dir.display(), fl.name))?;
-        let csv = manifest.read_flight(&ds.dir, &entry.file)?;
-        let truth: Vec<_> = csv.samples.iter().map(|s| s.truth).collect();
-        for (i, row) in force_frames(cfg, &fl.frames, &truth).iter().enumerate() {
-            writeln!(w, "{}", row.csv_row(&fl.name, i))?;
+    let write = || -> Result<()> {
+        let file = std::fs::File::create(&tmp).with_context(|| {
+            format!(
+                "cannot write {} (does its directory exist?)",
+                path.display()
+            )
+        })?;
+        let mut w = std::io::BufWriter::new(file);
+        writeln!(w, "{}", ForceFrame::CSV_HEADER)?;
+        for fl in ds.flights(role) {
+            let entry = manifest
+                .flights
+                .iter()
+                .find(|f| f.name == fl.name)
+                .with_context(|| format!("{} lists no flight {}", ds.dir.display(), fl.name))?;
+            let csv = manifest.read_flight(&ds.dir, &entry.file)?;
+            let truth: Vec<_> = csv.samples.iter().map(|s| s.truth).collect();
+            let rows = force_frames(cfg, &fl.frames, &truth)
+                .with_context(|| format!("flight {} of {}", fl.name, ds.dir.display()))?;
+            for (i, row) in rows.iter().enumerate() {
+                writeln!(w, "{}", row.csv_row(&fl.name, i))?;
+            }
         }
+        w.flush()?;
+        Ok(())
+    };
+    if let Err(e) = write() {
+        // Nothing half-written stays behind (the file may not exist: nothing to remove then).
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
     }
-    w.flush()?;
-    drop(w);
     std::fs::rename(&tmp, path)
         .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))?;
     Ok(())
 }
 
+/// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
+/// least one flight in `role`.
 fn load_split(data: &Path, role: Role) -> Result<Dataset> {
     let ds = Dataset::load_any(data, 0.15)
         .with_context(|| format!("cannot load the dataset {}", data.display()))?;

@@ -55,6 +55,8 @@ for n in "${names[@]}"; do
   done
   echo "force-residual: $n done" >&2
 done
+# The plot is drawn only when a slow-flight miss is found: none left from an earlier run.
+rm -f "$work/force-residual.png"
 TRAINER="$bin/trainer" .venv/bin/python scripts/analysis/force-residual/table.py "$work" "$command" "$seed" "${names[@]}"
 if [ -n "$dest" ]; then
   cp "$work/force-residual.md" "$dest/"

@@ -202,7 +202,7 @@ def main():
         "",
         "## How much of the filter's α error the normal force shows",
         "",
-        *shows_table([(names[0], stock), ("all five", pooled)]),
+        *shows_table([(names[0], stock), (f"all {len(names)}", pooled)]),
         "",
         "## The slow-flight misses",
         "",
@@ -214,7 +214,7 @@ def main():
         "",
         "| aircraft | flight | time, s | true α | q̄, kPa | wind change N, E, D | Δf_z measured (α alone), m/s² | filter's α error | estimate's α error | α the force shows |",
         "|---|---|---|---|---|---|---|---|---|---|",
-        *rows,
+        *(rows or ["| none | | | | | | | | | |"]),
         "",
     ]
     if worst is not None:
