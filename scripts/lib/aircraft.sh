@@ -158,3 +158,21 @@ development_variants() {
     fi
   done
 }
+
+# development_cards DIR SEED: the `paper` preset's test card with seed SEED flown on JSBSim's F-16
+# (DIR/stock) and on each development variant (DIR/NAME, development_variants' aircraft
+# directories) with the build's hil-sim (`bin`, analysis_binaries), each made once; their names,
+# stock first, in `card_names`.
+development_cards() {
+  local n d air
+  development_variants
+  card_names=(stock "${variants[@]}")
+  mkdir -p "$1"
+  for n in "${card_names[@]}"; do
+    d="$1/$n"
+    [ -f "$d/manifest.json" ] && continue
+    air=()
+    [ "$n" = stock ] || air=(--aircraft-dir "out/sigma/aircraft/$n")
+    "$bin/hil-sim" generate --preset paper --test-only --seed "$2" "${air[@]}" --out "$d" --force > /dev/null
+  done
+}

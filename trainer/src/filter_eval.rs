@@ -4,6 +4,8 @@
 use estimator_core::aero::{MODEL, Unsteady};
 use estimator_core::filter::{self, AirDataFilter, Config, Input, Output, flags};
 use hil_sim::dataset::Truth;
+use hil_sim::flight::FT_TO_M;
+use nalgebra::Vector3;
 
 use crate::data::{Dataset, Role, Target};
 use crate::metrics::FlightMetrics;
@@ -216,25 +218,29 @@ pub fn force_frames(
         });
     }
     let out = run_flight(cfg, frames);
-    let s_m2 = f64::from(MODEL.wing_area_ft2) * 0.3048 * 0.3048;
-    let mut prev: Option<(Input, u32)> = None;
+    let s_m2 = f64::from(MODEL.wing_area_ft2) * FT_TO_M * FT_TO_M;
+    // The previous frame's time and true α, and the previous valid input (none after an invalid
+    // frame: the IMU's force is moved to the CG with the gyro change since it).
+    let mut prev_frame: Option<(u32, f64)> = None;
+    let mut prev: Option<Input> = None;
     let (mut latch_true, mut latch_filter) = (false, false);
-    let mut alpha_true_prev: Option<(f64, u32)> = None;
     Ok(frames
         .iter()
         .zip(&out)
         .zip(truth)
         .map(|((fr, o), t)| {
             let nan = f64::NAN;
-            let dt = prev.map_or(0.05, |(_, ms)| fr.time_ms.wrapping_sub(ms) as f32 / 1000.0);
-            let inp = Input::from_frame(fr, dt, cfg.lever_arm_m, cfg.subsamples);
             let a_true = t.alpha_deg.to_radians();
-            let alpha_dot_true = alpha_true_prev
-                .filter(|(_, ms)| fr.time_ms > *ms)
-                .map_or(0.0, |(a, ms)| {
+            // The step as `run_flight` times it, and α̇ by the difference over it.
+            let dt = prev_frame.map_or(0.05, |(ms, _)| fr.time_ms.wrapping_sub(ms) as f32 / 1000.0);
+            let alpha_dot_true = match prev_frame {
+                Some((ms, a)) if fr.time_ms > ms => {
                     (a_true - a) / (f64::from(fr.time_ms - ms) / 1000.0)
-                });
-            alpha_true_prev = Some((a_true, fr.time_ms));
+                }
+                _ => 0.0,
+            };
+            prev_frame = Some((fr.time_ms, a_true));
+            let inp = Input::from_frame(fr, dt, cfg.lever_arm_m, cfg.subsamples);
             latch_true = MODEL.stall_latch(latch_true, a_true as f32);
             let mut row = ForceFrame {
                 alpha_true_deg: t.alpha_deg,
@@ -247,11 +253,11 @@ pub fn force_frames(
                 fz_model_filter: nan,
                 dfz_dalpha_filter: nan,
             };
-            let (Some(inp), Some((p, _))) = (inp, prev) else {
-                prev = inp.map(|i| (i, fr.time_ms));
+            let (Some(inp), Some(p)) = (inp, prev) else {
+                prev = inp;
                 return row;
             };
-            prev = Some((inp, fr.time_ms));
+            prev = Some(inp);
             let f_cg = filter::specific_force_cg(&inp, &p, cfg.lever_arm_m);
             row.fz_measured = f64::from(f_cg.z);
             // The model at the true point, in JSBSim's own dynamic pressure and mass.
@@ -279,18 +285,12 @@ pub fn force_frames(
             // The model at the filter's point, as its update evaluates it.
             let (rho, a_sound) = filter::isa(inp.alt_m);
             let v = o.airspeed_mps;
-            let (sa, ca) = o.alpha_rad.sin_cos();
-            let (sb, cb) = o.beta_rad.sin_cos();
-            let vb = nalgebra::Vector3::new(v * ca * cb, v * sb, v * sa * cb);
+            // The filter's body air velocity, as its output derives α, β and the airspeed.
+            let cbn = filter::c_bn(inp.euler_rad);
+            let vb = cbn * (Vector3::from(inp.vel_ned_mps) - Vector3::from(o.wind_ned_mps));
             latch_filter = MODEL.stall_latch(latch_filter, o.alpha_rad);
             let unsteady = Unsteady {
-                alpha_dot_rps: filter::alpha_rate(
-                    &vb,
-                    &filter::c_bn(inp.euler_rad),
-                    inp.vel_ned_mps,
-                    &f_cg,
-                    inp.gyro_rps,
-                ),
+                alpha_dot_rps: filter::alpha_rate(&vb, &cbn, inp.vel_ned_mps, &f_cg, inp.gyro_rps),
                 stall_latched: latch_filter,
             };
             let at_filter = filter::model_point(
@@ -310,8 +310,8 @@ pub fn force_frames(
                         filter::qs_over_m(rho, v, cfg.mass_kg(inp.fuel_kg)) * o.lift_scale,
                     );
                     row.fz_model_filter = f64::from(c.body.z) * qs;
-                    row.dfz_dalpha_filter =
-                        f64::from(c.body_d_alpha.z) * qs / 180.0 * std::f64::consts::PI;
+                    // Per radian to per degree.
+                    row.dfz_dalpha_filter = (f64::from(c.body_d_alpha.z) * qs).to_radians();
                 }
             }
             row

@@ -832,49 +832,41 @@ fn require_suite(what: &str, needs: Suite, suite: Suite) -> Result<()> {
 }
 
 /// `eval-filter --frames`: every flight of `role`, frame by frame ([`trainer::filter_eval::force_frames`]),
-/// into the CSV `path` (written whole or not at all: on an error the partial file is removed).
+/// into the CSV `path`, made whole in memory and written aside, then renamed into place: an error
+/// leaves no file.
 fn write_force_frames(
     ds: &Dataset,
     role: Role,
     cfg: estimator_core::filter::Config,
     path: &Path,
 ) -> Result<()> {
-    use std::io::Write;
     use trainer::filter_eval::{ForceFrame, force_frames};
     let manifest = hil_sim::dataset::Manifest::read(&ds.dir)
         .with_context(|| format!("cannot read the manifest of {}", ds.dir.display()))?;
-    let tmp = path.with_extension("csv.tmp");
-    let write = || -> Result<()> {
-        let file = std::fs::File::create(&tmp).with_context(|| {
-            format!(
-                "cannot write {} (does its directory exist?)",
-                path.display()
-            )
-        })?;
-        let mut w = std::io::BufWriter::new(file);
-        writeln!(w, "{}", ForceFrame::CSV_HEADER)?;
-        for fl in ds.flights(role) {
-            let entry = manifest
-                .flights
-                .iter()
-                .find(|f| f.name == fl.name)
-                .with_context(|| format!("{} lists no flight {}", ds.dir.display(), fl.name))?;
-            let csv = manifest.read_flight(&ds.dir, &entry.file)?;
-            let truth: Vec<_> = csv.samples.iter().map(|s| s.truth).collect();
-            let rows = force_frames(cfg, &fl.frames, &truth)
-                .with_context(|| format!("flight {} of {}", fl.name, ds.dir.display()))?;
-            for (i, row) in rows.iter().enumerate() {
-                writeln!(w, "{}", row.csv_row(&fl.name, i))?;
-            }
+    let mut text = format!("{}\n", ForceFrame::CSV_HEADER);
+    for fl in ds.flights(role) {
+        let entry = manifest
+            .flights
+            .iter()
+            .find(|f| f.name == fl.name)
+            .with_context(|| format!("{} lists no flight {}", ds.dir.display(), fl.name))?;
+        // The dataset keeps only the targets' truth and q̄; the model's point needs all of it.
+        let csv = manifest.read_flight(&ds.dir, &entry.file)?;
+        let truth: Vec<_> = csv.samples.iter().map(|s| s.truth).collect();
+        let rows = force_frames(cfg, &fl.frames, &truth)
+            .with_context(|| format!("flight {} of {}", fl.name, ds.dir.display()))?;
+        for (i, row) in rows.iter().enumerate() {
+            text.push_str(&row.csv_row(&fl.name, i));
+            text.push('\n');
         }
-        w.flush()?;
-        Ok(())
-    };
-    if let Err(e) = write() {
-        // Nothing half-written stays behind (the file may not exist: nothing to remove then).
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
     }
+    let tmp = path.with_extension("csv.tmp");
+    std::fs::write(&tmp, &text).with_context(|| {
+        format!(
+            "cannot write {} (does its directory exist?)",
+            path.display()
+        )
+    })?;
     std::fs::rename(&tmp, path)
         .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))?;
     Ok(())

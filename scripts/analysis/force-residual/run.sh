@@ -33,20 +33,14 @@ done
 [[ "$seed" =~ ^[0-9]+$ ]] || { echo "force-residual: --seed $seed is not a whole number" >&2; exit 2; }
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "force-residual: --out $dest is not a directory" >&2; exit 2; }
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, host_run, development_variants
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, host_run, development_cards
 analysis_binaries "$default_aircraft" hil-sim trainer
 [ -x .venv/bin/python ] || { echo "force-residual: no .venv: run scripts/bootstrap" >&2; exit 2; }
 work="out/force-residual/$seed"
-mkdir -p "$work/cards" "$work/frames"
-development_variants
-names=(stock "${variants[@]}")
-for n in "${names[@]}"; do
+development_cards "$work/cards" "$seed"
+mkdir -p "$work/frames"
+for n in "${card_names[@]}"; do
   d="$work/cards/$n"
-  if [ ! -f "$d/manifest.json" ]; then
-    air=()
-    [ "$n" = stock ] || air=(--aircraft-dir "out/sigma/aircraft/$n")
-    "$bin/hil-sim" generate --preset paper --test-only --seed "$seed" "${air[@]}" --out "$d" --force > /dev/null
-  fi
   if [ ! "$work/frames/$n.csv" -nt "$bin/trainer" ] || [ ! "$work/frames/$n.csv" -nt "$d/manifest.json" ]; then
     "$bin/trainer" eval-filter --data "$d" --frames "$work/frames/$n.csv" --json > "$work/frames/$n.json"
   fi
@@ -57,7 +51,7 @@ for n in "${names[@]}"; do
 done
 # The plot is drawn only when a slow-flight miss is found: none left from an earlier run.
 rm -f "$work/force-residual.png"
-TRAINER="$bin/trainer" .venv/bin/python scripts/analysis/force-residual/table.py "$work" "$command" "$seed" "${names[@]}"
+TRAINER="$bin/trainer" .venv/bin/python scripts/analysis/force-residual/table.py "$work" "$command" "$seed" "${card_names[@]}"
 if [ -n "$dest" ]; then
   cp "$work/force-residual.md" "$dest/"
   [ ! -f "$work/force-residual.png" ] || cp "$work/force-residual.png" "$dest/"

@@ -53,10 +53,6 @@ def estimate_alpha(work, name, flight, n):
     return np.concatenate([a, np.full(max(0, n - len(a)), np.nan)])[:n]
 
 
-def fmt(x, d=2):
-    return "–" if not np.isfinite(x) else f"{x:.{d}f}"
-
-
 def model_table(d):
     """The model at the true point: residual by flight and α band."""
     lines = ["| flight | true α | frames | residual mean, m/s² | residual 1σ, m/s² | median ∂f_z/∂α, m/s² per ° | the 1σ as α |",
@@ -95,36 +91,28 @@ def shows_table(sets):
     return lines
 
 
-def misses(work, name, d):
-    """Runs of slow-flight frames with the filter's α off by more than MISS_DEG."""
+def misses(d):
+    """Runs of at least MISS_FRAMES slow-flight frames with the filter's α off by more than MISS_DEG:
+    (flight, index of its first frame, first and last index of the run), indices into `d`."""
     out = []
     for fl in dict.fromkeys(d["flight"]):
-        m = d["flight"] == fl
-        idx = np.flatnonzero(m)
-        err, q = d["err"][m], d["qbar_pa"][m]
-        bad = (np.abs(err) > MISS_DEG) & (q < SLOW_PA)
-        i = 0
-        while i < len(bad):
-            if not bad[i]:
-                i += 1
-                continue
-            j = i
-            while j + 1 < len(bad) and bad[j + 1]:
-                j += 1
-            if j - i + 1 >= MISS_FRAMES:
-                out.append((name, fl, idx[i], idx[j]))
-            i = j + 1
+        idx = np.flatnonzero(d["flight"] == fl)
+        bad = (np.abs(d["err"][idx]) > MISS_DEG) & (d["qbar_pa"][idx] < SLOW_PA)
+        # Where a run of bad frames starts and ends (+1/-1 steps of the padded mask).
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(int), [0]])))
+        for i, j in zip(edges[0::2], edges[1::2]):
+            if j - i >= MISS_FRAMES:
+                out.append((fl, idx[0], idx[i], idx[j - 1]))
     return out
 
 
-def miss_row(work, d, name, fl, i, j):
+def miss_row(work, d, name, fl, start, i, j):
     """One miss: what the gust did to α and q̄ from a second before it to its worst frame, and what
     the normal force did meanwhile."""
     k = i + int(np.argmax(np.abs(d["err"][i:j + 1])))
-    b = max(i - int(1.0 / DT), int(np.flatnonzero(d["flight"] == fl)[0]))
+    b = max(i - int(1.0 / DT), start)
     flown = read(os.path.join(work, "cards", name, f"{fl}.csv"))
     wn, we, wd = (np.array(c, dtype=float) for c in columns(flown, ["wind_north_mps", "wind_east_mps", "wind_down_mps"]))
-    start = int(np.flatnonzero(d["flight"] == fl)[0])
     dw = [w[k - start] - w[b - start] for w in (wn, we, wd)]
     est = estimate_alpha(work, name, fl, int((d["flight"] == fl).sum()))
     fz = d["fz_measured_mps2"]
@@ -137,8 +125,7 @@ def miss_row(work, d, name, fl, i, j):
             f"{d['err'][k]:+.2f}° | {est[k - start] - d['alpha_true_deg'][k]:+.2f}° | {d['shows'][k]:+.2f}° |"), (k, b)
 
 
-def plot_spec(work, d, name, fl, k):
-    start = int(np.flatnonzero(d["flight"] == fl)[0])
+def plot_spec(work, d, name, fl, start, k):
     lo, hi = max(start, k - int(4 / DT)), min(k + int(4 / DT), int(np.flatnonzero(d["flight"] == fl)[-1]))
     t = (np.arange(lo, hi + 1) - start) * DT
     est = estimate_alpha(work, name, fl, int((d["flight"] == fl).sum()))[lo - start:hi - start + 1]
@@ -168,12 +155,12 @@ def main():
     pooled = {k: np.concatenate([data[n][k] for n in names]) for k in stock}
     rows, worst = [], None
     for n in names:
-        for (_, fl, i, j) in misses(work, n, data[n]):
-            row, (k, _) = miss_row(work, data[n], n, fl, i, j)
+        for fl, start, i, j in misses(data[n]):
+            row, (k, _) = miss_row(work, data[n], n, fl, start, i, j)
             rows.append(row)
             e = abs(data[n]["err"][k])
             if n == names[0] and (worst is None or e > worst[0]):
-                worst = (e, fl, k)
+                worst = (e, fl, start, k)
     machine = f"{platform.machine()}, {os.cpu_count()} cores, {datetime.date.today().isoformat()}"
     page = [
         "# What the normal force shows",
@@ -218,9 +205,9 @@ def main():
         "",
     ]
     if worst is not None:
-        _, fl, k = worst
+        _, fl, start, k = worst
         with open(os.path.join(work, "lines.json"), "w") as f:
-            json.dump(plot_spec(work, stock, names[0], fl, k), f)
+            json.dump(plot_spec(work, stock, names[0], fl, start, k), f)
         subprocess.run([os.environ["TRAINER"], "lines", "--spec", os.path.join(work, "lines.json"),
                         "--out", os.path.join(work, "force-residual.png")], check=True)
         at = page.index("## The model at the true air-data point, JSBSim's F-16")

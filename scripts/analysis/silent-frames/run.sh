@@ -34,22 +34,13 @@ done
 [[ "$seed" =~ ^[0-9]+$ ]] || { echo "silent-frames: --seed $seed is not a whole number" >&2; exit 2; }
 [ -z "$dest" ] || [ -d "$dest" ] || { echo "silent-frames: --out $dest is not a directory" >&2; exit 2; }
 # shellcheck source=../../lib/aircraft.sh
-. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, host_run, development_variants
+. scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, host_run, development_cards
 analysis_binaries "$default_aircraft" hil-sim trainer
 [ -x .venv/bin/python ] || { echo "silent-frames: no .venv: run scripts/bootstrap" >&2; exit 2; }
 work="out/silent-frames/$seed"
-mkdir -p "$work/cards"
-development_variants
+development_cards "$work/cards" "$seed"
 dirs=()
-for n in stock "${variants[@]}"; do
-  d="$work/cards/$n"
-  if [ ! -f "$d/manifest.json" ]; then
-    air=()
-    [ "$n" = stock ] || air=(--aircraft-dir "out/sigma/aircraft/$n")
-    "$bin/hil-sim" generate --preset paper --test-only --seed "$seed" "${air[@]}" --out "$d" --force > /dev/null
-  fi
-  dirs+=("$d")
-done
+for n in "${card_names[@]}"; do dirs+=("$work/cards/$n"); done
 if [ ! -f "$work/airframes/data/11/manifest.json" ]; then
   scripts/airframe-randomise --n 12 --seed "$seed" --terms --offset 0.03 --test-only --out "$work/airframes" --force > /dev/null
 fi
