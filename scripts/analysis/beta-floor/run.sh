@@ -25,27 +25,45 @@ HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 say() { printf '\n--> %s\n' "$*" >&2; }
 die() { printf 'beta-floor: ERROR: %s\n' "$*" >&2; exit 1; }
 
+usage() { echo "usage: scripts/analysis/beta-floor/run.sh [data|estimates|replay|tables|floors|cf|filter ...]" >&2; exit 2; }
+
+# Everything is checked before anything is written: a refused run leaves no $WORK behind.
 steps=("$@")
+case "${1:-}" in
+  -h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$HERE/run.sh"; exit 0 ;;
+esac
+if [ ! -f "$REPO/aircraft/$AIRCRAFT.toml" ]; then
+  known="$(cd "$REPO/aircraft" && ls -- *.toml | sed 's/\.toml$//' | paste -sd' ' -)"
+  echo "beta-floor: AIRCRAFT=$AIRCRAFT: no aircraft/$AIRCRAFT.toml (described: $known; docs/aircraft.md)" >&2
+  exit 2
+fi
 [ ${#steps[@]} -gt 0 ] || steps=(data estimates replay tables cf filter)
 for s in "${steps[@]}"; do
-  case "$s" in data|estimates|replay|tables|floors|cf|filter) ;; *) die "unknown step '$s'" ;; esac
+  case "$s" in data|estimates|replay|tables|floors|cf|filter) ;; *) echo "beta-floor: unknown step '$s'" >&2; usage ;; esac
   case "$AIRCRAFT:$s" in f16:*|*:data|*:replay|*:floors) ;; *) die "step '$s' is the F-16's only (AIRCRAFT=$AIRCRAFT)" ;; esac
 done
 want() { local s; for s in "${steps[@]}"; do [ "$s" = "$1" ] && return 0; done; return 1; }
 
 [ -x "$PY" ] || die "no Python at $PY; run scripts/bootstrap (or set PY)"
+if want data || want estimates || want cf; then
+  [ -x "$HIL_SIM" ] || die "no hil-sim at $HIL_SIM; cargo build --release -p hil-sim (or set HIL_SIM)"
+fi
+if want filter; then
+  [ -x "$TRAINER" ] || die "no trainer at $TRAINER; cargo build --release -p trainer (or set TRAINER)"
+fi
+if [ "${COPY_BINS:-0}" = 1 ]; then
+  [ -x "$HIL_SIM" ] && [ -x "$TRAINER" ] ||
+    die "COPY_BINS=1 copies both $HIL_SIM and $TRAINER; cargo build --release -p hil-sim -p trainer (or set HIL_SIM, TRAINER)"
+fi
+if ! want data; then
+  [ -f "$DATA/manifest.json" ] || die "no dataset at $DATA (run the 'data' step or set DATA)"
+fi
 mkdir -p "$WORK/out"
 if [ "${COPY_BINS:-0}" = 1 ]; then
   mkdir -p "$WORK/bin"
   cp -p "$HIL_SIM" "$TRAINER" "$WORK/bin/"
   HIL_SIM="$WORK/bin/hil-sim"; TRAINER="$WORK/bin/trainer"
   export HIL_SIM TRAINER
-fi
-if want data || want estimates || want cf; then
-  [ -x "$HIL_SIM" ] || die "no hil-sim at $HIL_SIM; cargo build --release -p hil-sim (or set HIL_SIM)"
-fi
-if want filter; then
-  [ -x "$TRAINER" ] || die "no trainer at $TRAINER; cargo build --release -p trainer (or set TRAINER)"
 fi
 say "AIRCRAFT=$AIRCRAFT  DATA=$DATA  WORK=$WORK  HIL_SIM=$HIL_SIM  PY=$PY"
 

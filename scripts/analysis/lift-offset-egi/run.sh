@@ -17,8 +17,15 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 cd "$root"
 # shellcheck source=../../lib/aircraft.sh
 . scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries
+usage() { echo "usage: scripts/analysis/lift-offset-egi/run.sh [AIRCRAFT]" >&2; exit 2; }
+case "${1:-}" in
+  -h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$root/scripts/analysis/lift-offset-egi/run.sh"; exit 0 ;;
+  -*) echo "lift-offset-egi: unknown option $1" >&2; usage ;;
+esac
+[ $# -le 1 ] || { echo "lift-offset-egi: one AIRCRAFT at most (given: $*)" >&2; usage; }
 name="${1:-$default_aircraft}"
 analysis_binaries "$name" hil-sim trainer
+[ -x .venv/bin/python ] || { echo "lift-offset-egi: no .venv: run scripts/bootstrap" >&2; exit 2; }
 here=scripts/analysis/lift-offset-egi
 out="out/lift-offset-egi/$name"
 export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
