@@ -135,7 +135,7 @@ pub struct GenerateArgs {
 /// 20-min flights over the training presets' ranges).
 #[derive(clap::Args)]
 pub struct CampaignArgs {
-    /// Flight-hours of the campaign (required with --preset campaign).
+    /// Flight-hours of the campaign (required with --preset campaign; more than 0, at most 10,000).
     #[arg(long)]
     hours: Option<f64>,
     /// Length of each flight, minutes (default 20).
@@ -260,11 +260,9 @@ impl GenerateArgs {
         }
         k.ranges.gust_interval_s = c.gust_interval_s;
         k.profiles = c.profiles.clone();
-        if !(k.hours > 0.0 && k.flight_min >= 1.0 && k.flight_min <= 120.0) {
-            return Err(Error::Usage(
-                "--hours must be positive and --flight-min between 1 and 120".into(),
-            ));
-        }
+        // Non-finite, absurd (above `Campaign::MAX_HOURS`) or no hours are refused here, before
+        // anything is planned or written.
+        k.flight_count()?;
         plan.campaign = Some(k);
         Ok(plan)
     }
@@ -308,7 +306,7 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
                 a.out.display()
             )));
         }
-        let pb = flights_bar(shard.of(&plan.flights()).len());
+        let pb = flights_bar(shard.of(&plan.flights()?).len());
         let outcome =
             dataset::generate_shard(&plan, &a.out, &sensors, a.flights.workers, shard, Some(&pb))?;
         pb.finish_and_clear();
@@ -329,7 +327,7 @@ pub fn generate(a: &GenerateArgs) -> Result<()> {
         return Ok(());
     }
     let staging = dataset::Staging::begin(&a.out, a.force)?;
-    let pb = flights_bar(plan.flights().len());
+    let pb = flights_bar(plan.flights()?.len());
     let (m, flights) = dataset::generate(
         &plan,
         staging.path(),
@@ -401,10 +399,12 @@ fn summarize(
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Preset to generate and raw-step (docs/results/generate-bench.md measures `paper`).
+    /// Preset to generate and raw-step (docs/results/generate-bench.md measures `paper`); any but
+    /// `campaign`.
     #[arg(long, value_enum, default_value = "paper")]
     preset: crate::maneuver::Preset,
-    /// Scratch dataset directory (overwritten every repeat).
+    /// Scratch dataset directory (overwritten every repeat): a new or empty one, or an earlier
+    /// bench's; anything else is refused.
     #[arg(long, default_value = "out/bench/generate")]
     out: PathBuf,
     /// The same `--workers` on both sides.
@@ -419,6 +419,21 @@ pub struct BenchArgs {
 }
 
 pub fn bench(a: &BenchArgs) -> Result<()> {
+    use crate::maneuver::Preset;
+    // A campaign's size is the user's (--hours), which bench does not take: it would fly the
+    // default 100 h campaign twice over.
+    if a.preset == Preset::Campaign {
+        let fixed: Vec<&str> = <Preset as clap::ValueEnum>::value_variants()
+            .iter()
+            .filter(|p| **p != Preset::Campaign)
+            .map(|p| p.name())
+            .collect();
+        return Err(Error::Usage(format!(
+            "bench times the fixed presets ({}), not campaign; to time a campaign, time \
+             `hil-sim generate --preset campaign --hours H`",
+            fixed.join(", ")
+        )));
+    }
     let sensors = sensors_of(&a.flights.sensors)?;
     let n = a.preset.plan(a.flights.seed).len();
     // One tick per flight per side per repeat.

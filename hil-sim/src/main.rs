@@ -60,4 +60,76 @@ mod tests {
         assert!(n >= 10, "only {n} hil-sim commands found");
         assert!(bad.is_empty(), "{}", bad.join("\n"));
     }
+
+    /// The words of the bash array or string `NAME=(...)` / `NAME="..."` in `script`.
+    fn script_list(script: &str, name: &str) -> std::collections::BTreeSet<String> {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let text = std::fs::read_to_string(root.join(script)).expect("reading the script");
+        let (open, close) = [("=(", ')'), ("=\"", '"')]
+            .into_iter()
+            .find(|(o, _)| text.contains(&format!("\n{name}{o}")))
+            .unwrap_or_else(|| panic!("{script} has no {name}=( or {name}=\""));
+        let head = format!("\n{name}{open}");
+        let start = text.find(&head).map(|i| i + head.len()).unwrap_or_default();
+        let end = start + text[start..].find(close).expect("the list ends");
+        text[start..end]
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    }
+
+    /// scripts/hil refuses a mistyped flag before it builds anything, from its own lists of the
+    /// flags `hil-sim run` takes (`run_values`, `run_switches`): they are exactly run's flags
+    /// besides the ones the script handles itself.
+    #[test]
+    fn scripts_hil_lists_exactly_the_flags_of_run() {
+        use clap::CommandFactory;
+        let own = [
+            "--out",
+            "--firmware",
+            "--dataset",
+            "--script",
+            "--byte-loss",
+            "--bit-flip",
+            "--aircraft",
+            "--elf",
+            "--help",
+            "--version",
+        ];
+        let cli = super::Cli::command();
+        let run = cli.find_subcommand("run").expect("a run subcommand");
+        let mut values = std::collections::BTreeSet::new();
+        let mut switches = std::collections::BTreeSet::new();
+        for a in run.get_arguments() {
+            let Some(long) = a.get_long() else { continue };
+            let flag = format!("--{long}");
+            if own.contains(&flag.as_str()) {
+                continue;
+            }
+            if a.get_action().takes_values() {
+                values.insert(flag);
+            } else {
+                switches.insert(flag);
+            }
+        }
+        assert_eq!(script_list("scripts/hil", "run_values"), values);
+        assert_eq!(script_list("scripts/hil", "run_switches"), switches);
+    }
+
+    /// scripts/build-estimator checks its preset names before it builds: every name it lists is a
+    /// preset of `generate`, and its 1σ presets are all of them but `campaign` (which needs --hours).
+    #[test]
+    fn build_estimator_lists_presets_of_generate() {
+        use clap::ValueEnum;
+        let all: std::collections::BTreeSet<String> = hil_sim::maneuver::Preset::value_variants()
+            .iter()
+            .filter_map(|p| p.to_possible_value().map(|v| v.get_name().to_string()))
+            .collect();
+        let train = script_list("scripts/build-estimator", "train_presets");
+        let sigma = script_list("scripts/build-estimator", "sigma_presets");
+        assert!(train.is_subset(&all), "{train:?} not all in {all:?}");
+        let mut expected = all.clone();
+        expected.remove("campaign");
+        assert_eq!(sigma, expected);
+    }
 }

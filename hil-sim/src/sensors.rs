@@ -52,14 +52,49 @@ pub struct InertialErrors {
     /// Output quantum of the integrated quantity (Δθ in rad, Δv in m/s); 0 = none.
     pub quantum: f64,
     /// 1σ of each axis's scale-factor error, drawn once per flight (dimensionless: 100e-6 = 100 ppm).
-    /// Omitted from a TOML table → 0 (term off), so an override written for the five-field model
-    /// still parses and keeps meaning what it meant.
-    #[serde(default)]
     pub scale_factor_sigma: f64,
     /// 1σ of each off-diagonal element of the triad's small-angle misalignment / non-orthogonality
-    /// matrix, drawn once per flight, rad. Omitted → 0, as above.
-    #[serde(default)]
+    /// matrix, drawn once per flight, rad.
     pub misalignment_sigma_rad: f64,
+}
+
+/// An `[imu.gyro]` or `[imu.accel]` table as a `--sensors` file gives it: any subset of the
+/// fields, each one left out taking the built-in sensor's value ([`ImuConfig::default`]: the
+/// gyro's for `gyro`, the accelerometer's for `accel`), as every other table does.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InertialOverride {
+    turn_on_bias_sigma: Option<f64>,
+    in_run_bias_sigma: Option<f64>,
+    in_run_bias_tau_s: Option<f64>,
+    noise_density: Option<f64>,
+    quantum: Option<f64>,
+    scale_factor_sigma: Option<f64>,
+    misalignment_sigma_rad: Option<f64>,
+}
+
+impl InertialOverride {
+    fn over(self, d: InertialErrors) -> InertialErrors {
+        InertialErrors {
+            turn_on_bias_sigma: self.turn_on_bias_sigma.unwrap_or(d.turn_on_bias_sigma),
+            in_run_bias_sigma: self.in_run_bias_sigma.unwrap_or(d.in_run_bias_sigma),
+            in_run_bias_tau_s: self.in_run_bias_tau_s.unwrap_or(d.in_run_bias_tau_s),
+            noise_density: self.noise_density.unwrap_or(d.noise_density),
+            quantum: self.quantum.unwrap_or(d.quantum),
+            scale_factor_sigma: self.scale_factor_sigma.unwrap_or(d.scale_factor_sigma),
+            misalignment_sigma_rad: self
+                .misalignment_sigma_rad
+                .unwrap_or(d.misalignment_sigma_rad),
+        }
+    }
+}
+
+fn gyro_over_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<InertialErrors, D::Error> {
+    InertialOverride::deserialize(d).map(|o| o.over(ImuConfig::default().gyro))
+}
+
+fn accel_over_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<InertialErrors, D::Error> {
+    InertialOverride::deserialize(d).map(|o| o.over(ImuConfig::default().accel))
 }
 
 /// IMU model parameters.
@@ -67,8 +102,10 @@ pub struct InertialErrors {
 #[serde(default, deny_unknown_fields)]
 pub struct ImuConfig {
     /// Gyro errors, rad/s.
+    #[serde(deserialize_with = "gyro_over_defaults")]
     pub gyro: InertialErrors,
     /// Accelerometer errors, m/s².
+    #[serde(deserialize_with = "accel_over_defaults")]
     pub accel: InertialErrors,
     /// g-dependent gyro bias: rad/s per m/s² of specific force along the same axis.
     pub gyro_g_sensitivity_rps_per_mps2: f64,
@@ -1061,6 +1098,45 @@ impl SensorModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A `--sensors` table may give any subset of its fields (docs/sensors.md): in `[imu.gyro]`
+    /// and `[imu.accel]` too, each field left out taking the built-in gyro's or accelerometer's
+    /// value, the scale factor and misalignment included; an unknown field is still refused.
+    #[test]
+    fn a_partial_inertial_table_takes_the_defaults_for_what_it_leaves_out() {
+        let d = ImuConfig::default();
+        let c: SensorConfig = toml::from_str(
+            "[imu.gyro]\nturn_on_bias_sigma = 4.8e-5\n[imu.accel]\nmisalignment_sigma_rad = 1e-3\n",
+        )
+        .unwrap();
+        assert_eq!(
+            c.imu.gyro,
+            InertialErrors {
+                turn_on_bias_sigma: 4.8e-5,
+                ..d.gyro.clone()
+            }
+        );
+        assert_eq!(c.imu.gyro.scale_factor_sigma, 100e-6);
+        assert_eq!(
+            c.imu.accel,
+            InertialErrors {
+                misalignment_sigma_rad: 1e-3,
+                ..d.accel.clone()
+            }
+        );
+        assert_eq!(c.imu.accel.scale_factor_sigma, 300e-6);
+        assert_eq!(c.imu.lag_tau_s, d.lag_tau_s);
+        // An empty table is the built-in sensor; a whole one is what it says.
+        let c: SensorConfig = toml::from_str("[imu.accel]\n").unwrap();
+        assert_eq!(c, SensorConfig::default());
+        let json = serde_json::to_string(&SensorConfig::default()).unwrap();
+        assert_eq!(
+            serde_json::from_str::<SensorConfig>(&json).unwrap(),
+            SensorConfig::default()
+        );
+        let e = toml::from_str::<SensorConfig>("[imu.gyro]\nbias = 1.0\n").unwrap_err();
+        assert!(e.to_string().contains("bias"), "{e}");
+    }
 
     #[test]
     fn lever_arm_pull_up_adds_centripetal_and_tangential_terms() {

@@ -512,8 +512,8 @@ fn bad_sensor_configs_are_rejected_with_the_field() {
     std::fs::write(&p, "[imu.accel]\nmisalignment_sigma_rad = -1e-4\n").unwrap();
     let e = SensorConfig::load(&p).unwrap_err();
     assert!(
-        matches!(e, hil_sim::sensors::SensorConfigError::Parse { .. }),
-        "a table without the five base fields must not parse: {e}"
+        e.to_string().contains("imu.accel.misalignment_sigma_rad"),
+        "a partial table parses, and its negative σ is refused by name: {e}"
     );
     std::fs::write(
         &p,
@@ -523,7 +523,7 @@ fn bad_sensor_configs_are_rejected_with_the_field() {
     .unwrap();
     let e = SensorConfig::load(&p).unwrap_err();
     assert!(e.to_string().contains("imu.gyro.scale_factor_sigma"), "{e}");
-    // A table written for the five-field model still parses; the new terms are then off.
+    // A partial table parses; the fields it leaves out take the built-in gyro's values.
     std::fs::write(
         &p,
         "[imu.gyro]\nturn_on_bias_sigma = 4.8e-5\nin_run_bias_sigma = 1.7e-6\n\
@@ -532,8 +532,12 @@ fn bad_sensor_configs_are_rejected_with_the_field() {
     .unwrap();
     let c = SensorConfig::load(&p).unwrap();
     assert_eq!(c.imu.gyro.turn_on_bias_sigma, 4.8e-5);
-    assert_eq!(c.imu.gyro.scale_factor_sigma, 0.0);
-    assert_eq!(c.imu.gyro.misalignment_sigma_rad, 0.0);
+    let gyro = SensorConfig::default().imu.gyro;
+    assert_eq!(c.imu.gyro.scale_factor_sigma, gyro.scale_factor_sigma);
+    assert_eq!(
+        c.imu.gyro.misalignment_sigma_rad,
+        gyro.misalignment_sigma_rad
+    );
     assert_eq!(c.imu.accel, SensorConfig::default().imu.accel);
     std::fs::write(&p, "[surfaces]\nquantum_deg = 0.1\n").unwrap();
     let c = SensorConfig::load(&p).unwrap();

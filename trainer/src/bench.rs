@@ -222,9 +222,42 @@ pub struct Torch<'a> {
     pub threads: usize,
 }
 
+impl Torch<'_> {
+    /// The PyTorch side can run: its script is a file and the interpreter starts and imports
+    /// torch. Checked before anything is trained or written to the exchange directory.
+    pub fn check(&self) -> Result<()> {
+        let status = std::process::Command::new(self.python)
+            .args(["-c", "import torch"])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .status();
+        let why = match status {
+            Ok(s) if s.success() => None,
+            Ok(s) => Some(format!(
+                "cannot import torch ({s}; its error is printed above)"
+            )),
+            Err(e) => Some(format!("cannot be started ({e})")),
+        };
+        if let Some(why) = why {
+            return Err(Error::Torch(format!(
+                "--python {} {why}; run scripts/bench-train, which makes the benchmark venv",
+                self.python.display()
+            )));
+        }
+        if !self.script.is_file() {
+            return Err(Error::Torch(format!(
+                "--torch-script {} is not a file: give the path of scripts/bench/torch_train.py \
+                 (the default is relative to the repository's root)",
+                self.script.display()
+            )));
+        }
+        Ok(())
+    }
+}
+
 fn write_f32(path: &Path, v: impl IntoIterator<Item = f32>) -> Result<()> {
     let bytes: Vec<u8> = v.into_iter().flat_map(f32::to_le_bytes).collect();
-    std::fs::write(path, bytes).map_err(crate::error::io(path))
+    std::fs::write(path, bytes).map_err(crate::error::io("write", path))
 }
 
 #[derive(Serialize)]
@@ -251,7 +284,7 @@ fn write_exchange(
     tr: &Matrix,
     va: &Matrix,
 ) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(crate::error::io(dir))?;
+    std::fs::create_dir_all(dir).map_err(crate::error::io("create", dir))?;
     for (name, m) in [("train", tr), ("val", va)] {
         write_f32(&dir.join(format!("x_{name}.f32")), m.x.iter().copied())?;
         write_f32(&dir.join(format!("ym_{name}.f32")), m.ym.iter().copied())?;
@@ -271,7 +304,7 @@ fn write_exchange(
         }
     }
     let p = dir.join("order.u32");
-    std::fs::write(&p, order).map_err(crate::error::io(&p))?;
+    std::fs::write(&p, order).map_err(crate::error::io("write", &p))?;
     let meta = Meta {
         n_in: tr.n_in,
         hidden,
@@ -288,7 +321,7 @@ fn write_exchange(
     };
     let p = dir.join("meta.json");
     let text = serde_json::to_string(&meta).map_err(|e| Error::Torch(e.to_string()))?;
-    std::fs::write(&p, text).map_err(crate::error::io(&p))
+    std::fs::write(&p, text).map_err(crate::error::io("write", &p))
 }
 
 #[derive(Deserialize)]

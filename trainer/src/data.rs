@@ -276,6 +276,22 @@ impl Dataset {
                 Split::Test => Role::Test,
             };
             let csv = manifest.read_flight(dir, &mf.file)?;
+            // The rows read against the manifest's count: a CSV cut short or edited is refused
+            // (its SHA-256 is not checked here: that would read every file a second time).
+            if csv.samples.len() != mf.samples {
+                return Err(Error::Split(
+                    dir.join(&mf.file),
+                    format!(
+                        "{} rows, but the manifest lists {} samples for flight `{}`: the file was \
+                         cut short or edited; regenerate the dataset (or, for a file edited on \
+                         purpose, set its `samples` to {})",
+                        csv.samples.len(),
+                        mf.samples,
+                        mf.name,
+                        csv.samples.len()
+                    ),
+                ));
+            }
             flights.push(flight_of(
                 csv,
                 &dir.join(&mf.file),
@@ -955,6 +971,36 @@ mod tests {
         .write(&dir)
         .unwrap();
         dir
+    }
+
+    /// A CSV with fewer or more rows than its manifest's `samples` is refused when the dataset is
+    /// read, naming the flight and both counts; so is a manifest whose flight is outside the
+    /// directory or named twice (`Manifest::read`).
+    #[test]
+    fn a_flight_whose_rows_are_not_its_samples_is_refused() {
+        use Split::{Test, Train};
+        let dir = tiny_dataset("rows", &[("a0", Train), ("at", Test)], &["table1", "egi"]);
+        assert!(Dataset::load_any(&dir, 0.0).is_ok());
+        let csv = dir.join("at.csv");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let cut: Vec<&str> = text.lines().take(3).collect();
+        std::fs::write(&csv, cut.join("\n") + "\n").unwrap();
+        let e = Dataset::load_any(&dir, 0.0).unwrap_err();
+        assert!(
+            matches!(&e, Error::Split(p, m) if *p == csv && m.starts_with("2 rows, but the manifest lists 3 samples for flight `at`")),
+            "{e}"
+        );
+        let mut m = Manifest::read(&dir).unwrap();
+        m.flights[1].file = "../at.csv".into();
+        m.write(&dir).unwrap();
+        let e = Dataset::load_any(&dir, 0.0).unwrap_err().to_string();
+        assert!(e.contains("is not inside the dataset directory"), "{e}");
+        m.flights[1].file = "a0.csv".into();
+        m.flights[1].name = "a0".into();
+        m.write(&dir).unwrap();
+        let e = Dataset::load_any(&dir, 0.0).unwrap_err().to_string();
+        assert!(e.contains("flight `a0` is listed twice"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// Sets the `aircraft` of the manifest in `dir`.

@@ -3,8 +3,10 @@ use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    #[error("cannot read {path}: {source}")]
+    /// A file or directory that cannot be read, written or created (`action` says which).
+    #[error("cannot {action} {path}: {source}")]
     Io {
+        action: &'static str,
         path: PathBuf,
         source: std::io::Error,
     },
@@ -68,7 +70,15 @@ pub enum Error {
 
 pub type Result<T> = std::result::Result<T, Error>;
 
-pub(crate) fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Error {
+/// [`Error::Io`] of `action` ("read", "write", "create") on `path`, for `map_err`.
+pub(crate) fn io(
+    action: &'static str,
+    path: impl Into<PathBuf>,
+) -> impl FnOnce(std::io::Error) -> Error {
     let path = path.into();
-    move |source| Error::Io { path, source }
+    move |source| Error::Io {
+        action,
+        path,
+        source,
+    }
 }

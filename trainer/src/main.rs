@@ -37,6 +37,15 @@ fn fraction(s: &str) -> std::result::Result<f64, String> {
     }
 }
 
+/// `--epochs` of the benchmarks: at least 2, as the first epoch is warm-up and is not averaged.
+fn bench_epochs(s: &str) -> std::result::Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 2 => Ok(n),
+        Ok(_) => Err("must be at least 2 (the first epoch is warm-up and is not averaged)".into()),
+        Err(_) => Err(format!("`{s}` is not a whole number")),
+    }
+}
+
 /// Seeds given as one comma-separated value (`--seeds 1,2,3`).
 #[derive(Clone, Debug)]
 struct Seeds(Vec<u64>);
@@ -389,8 +398,8 @@ enum Cmd {
         /// Dataset directory (manifest.json + CSVs from `hil-sim generate`).
         #[arg(long, value_name = "DIR")]
         data: PathBuf,
-        /// Epochs timed.
-        #[arg(long, default_value_t = 3, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
+        /// Epochs timed (at least 2: the first is warm-up, reported apart).
+        #[arg(long, default_value_t = 3, value_parser = bench_epochs, allow_hyphen_values = true)]
         epochs: usize,
         /// Mini-batch size, rows.
         #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
@@ -409,7 +418,7 @@ enum Cmd {
         #[arg(long, value_name = "DIR")]
         data: PathBuf,
         /// Epochs per run (at least 2: the first is warm-up and is not averaged).
-        #[arg(long, default_value_t = 5, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
+        #[arg(long, default_value_t = 5, value_parser = bench_epochs, allow_hyphen_values = true)]
         epochs: usize,
         /// Mini-batch size, rows.
         #[arg(long, default_value_t = 256, value_parser = hil_sim::cli_values::at_least_one, allow_hyphen_values = true)]
@@ -702,6 +711,122 @@ fn load(data: &Path, val_fraction: f64) -> Result<Dataset> {
     Dataset::load(data, val_fraction).with_context(|| format!("loading dataset {}", data.display()))
 }
 
+/// The first of `path` and its ancestors that exists, when it is not a directory: the file that
+/// stops a directory from being created at `path`.
+fn blocking_file(path: &Path) -> Option<&Path> {
+    path.ancestors()
+        .filter(|a| !a.as_os_str().is_empty())
+        .find(|a| a.exists())
+        .filter(|a| !a.is_dir())
+}
+
+/// An output directory (`flag DIR`), checked before any work: a directory, or one that can be
+/// created (no file stands at it or at a parent).
+fn check_out_dir(flag: &str, dir: &Path) -> Result<()> {
+    match blocking_file(dir) {
+        Some(f) if f == dir => bail!(
+            "{flag} {} is a file, not a directory: give a directory",
+            dir.display()
+        ),
+        Some(f) => bail!(
+            "{flag} {}: {} is a file, so no directory can be made there",
+            dir.display(),
+            f.display()
+        ),
+        None => Ok(()),
+    }
+}
+
+/// An output file (`flag FILE`), checked before any work: not a directory, and in a directory that
+/// exists (or, when the command makes it, `makes_dir`, one that can be created).
+fn check_out_file(flag: &str, file: &Path, makes_dir: bool) -> Result<()> {
+    if file.is_dir() {
+        bail!(
+            "{flag} {} is a directory: give the file to write",
+            file.display()
+        );
+    }
+    let Some(dir) = file.parent().filter(|p| !p.as_os_str().is_empty()) else {
+        return Ok(());
+    };
+    if makes_dir {
+        if let Some(f) = blocking_file(dir) {
+            bail!(
+                "{flag} {}: {} is a file, so its directory cannot be made",
+                file.display(),
+                f.display()
+            );
+        }
+    } else if !dir.is_dir() {
+        bail!(
+            "{flag} {}: the directory {} does not exist; create it first",
+            file.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Where a command writes, checked before it reads or computes anything: an output that cannot be
+/// written is refused up front, not after the work.
+fn check_outputs(cmd: &Cmd) -> Result<()> {
+    let dir = match cmd {
+        Cmd::Train { out, .. }
+        | Cmd::Combine { out, .. }
+        | Cmd::Ood { out, .. }
+        | Cmd::Calibrate { out, .. }
+        | Cmd::Finetune { out, .. }
+        | Cmd::Features { out, .. }
+        | Cmd::BenchEpoch { out, .. }
+        | Cmd::BenchTrain { out, .. } => Some(out),
+        Cmd::Report(r) => Some(&r.out),
+        Cmd::Sweep { grid, .. } => Some(&grid.out),
+        _ => None,
+    };
+    if let Some(dir) = dir {
+        check_out_dir("--out", dir)?;
+    }
+    match cmd {
+        Cmd::Train {
+            export: true,
+            weights_out,
+            vectors_out,
+            ..
+        }
+        | Cmd::Export {
+            weights_out,
+            vectors_out,
+            ..
+        } => {
+            let (w, v) = export_paths(weights_out, vectors_out);
+            check_out_file("--weights-out", &w, true)?;
+            check_out_file("--vectors-out", &v, true)?;
+        }
+        Cmd::FitSigma { out, rows, .. } => {
+            check_out_file("--out", &committed(out, "src/model/{}/sigma.rs"), false)?;
+            if let Some(rows) = rows {
+                check_out_file("--rows", rows, false)?;
+            }
+        }
+        Cmd::EvalFilter {
+            frames: Some(f), ..
+        } => check_out_file("--frames", f, false)?,
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Writes `text` to `path` through `tmp` (written whole, then renamed into place): a failure
+/// leaves neither a partial `path` nor `tmp`.
+fn write_via(tmp: &Path, path: &Path, text: &str) -> Result<()> {
+    let written = std::fs::write(tmp, text).and_then(|()| std::fs::rename(tmp, path));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(tmp);
+        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+    }
+    Ok(())
+}
+
 /// This process's command line, for provenance and reports.
 fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
@@ -860,16 +985,7 @@ fn write_force_frames(
             text.push('\n');
         }
     }
-    let tmp = path.with_extension("csv.tmp");
-    std::fs::write(&tmp, &text).with_context(|| {
-        format!(
-            "cannot write {} (does its directory exist?)",
-            path.display()
-        )
-    })?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot move {} to {}", tmp.display(), path.display()))?;
-    Ok(())
+    write_via(&path.with_extension("csv.tmp"), path, &text)
 }
 
 /// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
@@ -883,11 +999,24 @@ fn load_split(data: &Path, role: Role) -> Result<Dataset> {
             .filter(|r| ds.flights(*r).next().is_some())
             .map(Role::name)
             .collect();
+        if have.is_empty() {
+            bail!(
+                "{} lists no flight at all: generate a dataset with `hil-sim generate` (or `fly`)",
+                data.display()
+            );
+        }
         bail!(
             "{} has no {} flight; pass --split {}",
             data.display(),
             role.name(),
             have.join(" or --split ")
+        );
+    }
+    if ds.flights(role).all(|f| f.frames.is_empty()) {
+        bail!(
+            "{}: its {} flights hold no frame to score (their CSVs have no rows): regenerate them",
+            data.display(),
+            role.name()
         );
     }
     Ok(ds)
@@ -1276,9 +1405,7 @@ fn cmd_fit_sigma(
         100.0 * cb.within_2sigma,
     );
     let text = rust_file(&alpha, &beta, &provenance, prov);
-    let tmp = out.with_extension("rs.tmp");
-    std::fs::write(&tmp, &text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, out).with_context(|| format!("writing {}", out.display()))?;
+    write_via(&out.with_extension("rs.tmp"), out, &text)?;
     if json {
         let v = serde_json::json!({"alpha": alpha, "beta": beta, "flights": flights, "datasets": each, "out": out.display().to_string()});
         println!("{}", serde_json::to_string(&v)?);
@@ -1538,6 +1665,32 @@ fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Res
     Ok(())
 }
 
+/// A test of a `--tune` value and the words for the values it passes.
+type TuneRange = (fn(f32) -> bool, &'static str);
+
+/// The values a `--tune` key takes (finite, and the test), with how to say them; `None` for a key
+/// that is not one.
+fn tune_range(key: &str) -> Option<TuneRange> {
+    let positive: TuneRange = (|v| v > 0.0, "more than 0");
+    let non_negative: TuneRange = (|v| v >= 0.0, "0 or more");
+    Some(match key {
+        // A time constant divides, a measurement 1σ is inverted, a gate and a flag limit of 0
+        // would refuse every update or raise every flag.
+        "gust_tau_s" | "accel_sigma_y" | "accel_sigma_z" | "gate" | "max_sigma_rad"
+        | "r_adapt_lo_y" | "r_adapt_hi_y" | "r_adapt_lo_z" | "r_adapt_hi_z" => positive,
+        // Spectral densities, initial 1σ and delays: 0 holds the state, or takes no delay.
+        "gust_sigma" | "accel_delay_s" | "mean_wind_psd_h" | "mean_wind_psd_d"
+        | "mean_wind_sigma0_d" | "lift_scale_psd" | "lift_scale_sigma0" | "side_scale_psd"
+        | "side_scale_sigma0" | "te_lift_sigma0" | "te_lift_psd" | "r_adapt_tau_s" => non_negative,
+        "gear_norm" => (|v| (0.0..=1.0).contains(&v), "between 0 (up) and 1 (down)"),
+        "subsamples" => (
+            |v| v == 0.0 || v == 1.0 || v == 2.0,
+            "0 (off), 1 (latest) or 2 (period mean)",
+        ),
+        _ => return None,
+    })
+}
+
 /// `CONFIG` with the `--tune` overrides.
 fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
     let mut c = estimator_core::filter::CONFIG;
@@ -1548,6 +1701,12 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
         let v: f32 = v
             .parse()
             .with_context(|| format!("--tune: `{v}` is not a number"))?;
+        // A known key's value is refused outside its range (an unknown key below).
+        if let Some((holds, range)) = tune_range(k)
+            && !(v.is_finite() && holds(v))
+        {
+            bail!("--tune: {k}={v}: {k} must be {range}");
+        }
         match k {
             "gust_sigma" => c.gust_sigma = v,
             "gust_tau_s" => c.gust_tau_s = v,
@@ -1573,11 +1732,11 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
             "te_lift_sigma0" => c.te_lift_sigma0 = v,
             "te_lift_psd" => c.te_lift_psd = v,
             "subsamples" => {
+                // 0, 1 or 2 exactly (`tune_range`).
                 c.subsamples = match v as u8 {
                     0 => estimator_core::filter::SubsampleUse::Off,
                     1 => estimator_core::filter::SubsampleUse::Latest,
-                    2 => estimator_core::filter::SubsampleUse::Mean,
-                    _ => bail!("--tune: subsamples is 0 (off), 1 (latest) or 2 (period mean)"),
+                    _ => estimator_core::filter::SubsampleUse::Mean,
                 }
             }
             "r_adapt_tau_s" => c.r_adapt_tau_s = v,
@@ -1601,8 +1760,25 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
 
 fn cmd_sweep(g: &SweepGrid, action: &SweepAction) -> Result<()> {
     use trainer::sweep::{Grid, JobResult, Scores, merge, write_result};
+    // Every name of the grid is checked before a job is listed, run or merged.
     for c in &g.sizes {
         Size::parse(c).with_context(|| format!("--config `{c}`: {}", Size::choices()))?;
+    }
+    for f in &g.features {
+        FeatureSet::parse(f).with_context(|| format!("--features `{f}`"))?;
+    }
+    for s in &g.suites {
+        parse_suite(s).with_context(|| format!("--suite `{s}`"))?;
+    }
+    for (flag, names) in [
+        ("--config", &g.sizes),
+        ("--features", &g.features),
+        ("--suite", &g.suites),
+    ] {
+        let mut seen = std::collections::BTreeSet::new();
+        if let Some(n) = names.iter().find(|n| !seen.insert(n.as_str())) {
+            bail!("{flag} `{n}` is repeated: give each once");
+        }
     }
     let grid = Grid {
         sizes: g.sizes.clone(),
@@ -1758,7 +1934,37 @@ fn read_spec<T: serde::de::DeserializeOwned>(spec: &Path, shape: &str) -> Result
     serde_json::from_str(&text).with_context(|| format!("{}: expected {shape}", spec.display()))
 }
 
+/// A plot command's `--out`: a `.png` file (the image format follows the name) in a directory that
+/// exists, checked before the spec is read.
+fn png_out(out: &Path) -> Result<()> {
+    if !out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        bail!(
+            "--out {}: the plot is a PNG; give a file name ending in .png",
+            out.display()
+        );
+    }
+    if out.is_dir() {
+        bail!(
+            "--out {} is a directory; give the PNG file to write",
+            out.display()
+        );
+    }
+    let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = parent.filter(|p| !p.is_dir()) {
+        bail!(
+            "--out {}: the directory {} does not exist; create it first",
+            out.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
 fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
+    png_out(out)?;
     let s: LinesSpec = read_spec(
         spec,
         r#"{"panels": [{"title", "xlabel", "ylabel", "series": [{"name", "points": [[x, y]]}]}]}"#,
@@ -1804,10 +2010,14 @@ fn cmd_lines(spec: &Path, out: &Path) -> Result<()> {
 }
 
 fn cmd_bars(spec: &Path, out: &Path) -> Result<()> {
+    png_out(out)?;
     let s: BarsSpec = read_spec(
         spec,
         r#"{"series": [..], "panels": [{"title", "xlabel", "rows": [[label, [values]]]}]}"#,
     )?;
+    if s.panels.is_empty() {
+        bail!("{}: no panel to draw", spec.display());
+    }
     if let Some(p) = s
         .panels
         .iter()
@@ -1830,10 +2040,25 @@ fn cmd_bars(spec: &Path, out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
-    let t0 = std::time::Instant::now();
+/// The `ood` preset's dataset at `data`: another preset's flights have no twins and no cases, and
+/// would give a table of NaN.
+fn load_ood(data: &Path) -> Result<Dataset> {
     let ds = Dataset::load_any(data, 0.0)
         .with_context(|| format!("cannot load the OOD dataset {}", data.display()))?;
+    if ds.preset != "ood" {
+        bail!(
+            "{} is a `{}` dataset, not an `ood` one: its flights have no in-distribution twins to \
+             compare with; generate one with `hil-sim generate --preset ood --out DIR`",
+            data.display(),
+            ds.preset
+        );
+    }
+    Ok(ds)
+}
+
+fn cmd_ood(data: &Path, out: &Path, json: bool) -> Result<()> {
+    let t0 = std::time::Instant::now();
+    let ds = load_ood(data)?;
     let r = trainer::ood::run(&ds);
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let md = format!(
@@ -2019,13 +2244,9 @@ fn cmd_report(r: &ReportArgs) -> Result<()> {
         // A killed run leaves its finished rows here; the next run with the same settings resumes.
         progress_file: Some(out.join(".report-progress.jsonl")),
     };
+    // Every input is read before --out is made: a missing one leaves nothing behind.
+    let ood = ood.map(load_ood).transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let ood = ood
-        .map(|d| {
-            Dataset::load_any(d, 0.0)
-                .with_context(|| format!("cannot load the OOD dataset {}", d.display()))
-        })
-        .transpose()?;
     let report = run(
         &ds,
         ood.as_ref(),
@@ -2203,9 +2424,6 @@ fn cmd_bench(
 ) -> Result<()> {
     use trainer::model::{Cascade, train};
     use trainer::report::BenchEpoch;
-    if epochs < 2 {
-        bail!("--epochs must be at least 2 (the first epoch is reported separately as warm-up)");
-    }
     let ds = load(data, 0.15)?;
     let (train_m, val_m) = trainer::bench::alpha_matrices(&ds, &FeatureSet::parse("table1")?);
     let n_in = train_m.n_in;
@@ -2279,9 +2497,6 @@ fn cmd_bench_train(
     out: &Path,
 ) -> Result<()> {
     use trainer::bench::{CASES, CaseSeeds, markdown, run_case};
-    if o.epochs < 2 {
-        bail!("--epochs must be at least 2 (the first epoch is warm-up and is not averaged)");
-    }
     if o.seeds.len() > 20 {
         bail!("--seeds: at most 20 seeds (got {})", o.seeds.len());
     }
@@ -2307,6 +2522,8 @@ fn cmd_bench_train(
             })
             .collect::<Result<_>>()?
     };
+    // The PyTorch side can start, before anything is trained or written to the exchange.
+    torch.check()?;
     let ds = load(data, 0.15)?;
     let mut results = Vec::new();
     let seeds = o.seeds.clone();
@@ -2389,7 +2606,16 @@ fn export_paths(
 
 fn run() -> Result<()> {
     let cli = Cli::parse();
+    check_outputs(&cli.cmd)?;
     match &cli.cmd {
+        Cmd::Train {
+            weights_out,
+            vectors_out,
+            export: false,
+            ..
+        } if weights_out.is_some() || vectors_out.is_some() => bail!(
+            "--weights-out and --vectors-out say where --export writes: pass --export too, or drop them"
+        ),
         Cmd::Train {
             args,
             out,
@@ -2567,6 +2793,130 @@ fn run() -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    /// scripts/build-estimator refuses an unknown `--config` before it builds: its list is exactly
+    /// the network sizes `trainer train --config` takes.
+    #[test]
+    fn build_estimator_lists_exactly_the_network_sizes() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let text = std::fs::read_to_string(root.join("scripts/build-estimator"))
+            .expect("reading scripts/build-estimator");
+        let line = text
+            .lines()
+            .find_map(|l| l.strip_prefix("configs=\""))
+            .expect("scripts/build-estimator has a configs=\"...\" line");
+        let listed: Vec<&str> = line.trim_end_matches('"').split_whitespace().collect();
+        let sizes: Vec<&str> = trainer::pipeline::Size::ALL
+            .iter()
+            .map(|z| z.name())
+            .collect();
+        assert_eq!(listed, sizes);
+    }
+
+    /// A `--tune` value that is not finite, out of its key's range or not a whole number where one
+    /// is meant is refused with the key's range; values in range are taken as given.
+    #[test]
+    fn a_tune_value_outside_its_range_is_refused() {
+        for (tune, says) in [
+            ("gust_sigma=nan", "gust_sigma must be 0 or more"),
+            ("gust_sigma=inf", "gust_sigma must be 0 or more"),
+            ("gust_sigma=1e39", "gust_sigma must be 0 or more"),
+            ("gate=-1", "gate must be more than 0"),
+            ("gust_tau_s=0", "gust_tau_s must be more than 0"),
+            ("accel_sigma_y=0", "accel_sigma_y must be more than 0"),
+            ("lift_scale_psd=-1e-6", "lift_scale_psd must be 0 or more"),
+            (
+                "gear_norm=1.5",
+                "gear_norm must be between 0 (up) and 1 (down)",
+            ),
+            (
+                "subsamples=1.7",
+                "subsamples must be 0 (off), 1 (latest) or 2 (period mean)",
+            ),
+            (
+                "subsamples=3",
+                "subsamples must be 0 (off), 1 (latest) or 2 (period mean)",
+            ),
+            ("r_adapt_tau_s=-2", "r_adapt_tau_s must be 0 or more"),
+        ] {
+            let e = super::filter_config(tune).unwrap_err().to_string();
+            assert!(
+                e.starts_with("--tune: ") && e.ends_with(says),
+                "{tune}: {e}"
+            );
+        }
+        let e = super::filter_config("bogus=-1").unwrap_err().to_string();
+        assert!(e.contains("unknown key `bogus`"), "{e}");
+        let c = super::filter_config("subsamples=2,gate=30,accel_delay_s=0,gear_norm=0").unwrap();
+        assert_eq!(c.subsamples, estimator_core::filter::SubsampleUse::Mean);
+        assert_eq!((c.gate, c.accel_delay_s, c.gear_norm), (30.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn bench_epochs_are_at_least_two_in_one_message() {
+        for bad in ["0", "1"] {
+            let e = super::bench_epochs(bad).unwrap_err();
+            assert_eq!(
+                e,
+                "must be at least 2 (the first epoch is warm-up and is not averaged)"
+            );
+        }
+        assert_eq!(super::bench_epochs("2"), Ok(2));
+    }
+
+    /// An output that cannot be written is refused before any work, saying why; one that can is
+    /// taken, and nothing is created by the check.
+    #[test]
+    fn outputs_are_checked_before_any_work() {
+        let dir = std::env::temp_dir().join(format!("trainer-outputs-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("afile");
+        std::fs::write(&file, "x").unwrap();
+        let err = |r: anyhow::Result<()>| r.unwrap_err().to_string();
+        assert_eq!(
+            err(super::check_out_dir("--out", &file)),
+            format!(
+                "--out {} is a file, not a directory: give a directory",
+                file.display()
+            )
+        );
+        let under = file.join("x");
+        assert!(err(super::check_out_dir("--out", &under)).contains("is a file, so no directory"));
+        assert!(
+            err(super::check_out_dir(
+                "--out",
+                std::path::Path::new("/dev/null/x")
+            ))
+            .contains("/dev/null is a file")
+        );
+        super::check_out_dir("--out", &dir.join("new/deeper")).unwrap();
+        super::check_out_dir("--out", &dir).unwrap();
+        assert!(!dir.join("new").exists());
+
+        assert!(err(super::check_out_file("--out", &dir, false)).contains("is a directory"));
+        assert!(
+            err(super::check_out_file(
+                "--frames",
+                &dir.join("none/f.csv"),
+                false
+            ))
+            .contains("the directory")
+        );
+        assert!(
+            err(super::check_out_file("--weights-out", &under, true)).contains("afile is a file")
+        );
+        super::check_out_file("--weights-out", &dir.join("new/w.rs"), true).unwrap();
+        super::check_out_file("--frames", &dir.join("f.csv"), false).unwrap();
+
+        // A write that fails leaves neither the file nor its temporary name.
+        let target = dir.join("sub");
+        std::fs::create_dir_all(&target).unwrap();
+        let tmp = dir.join("sub.rs.tmp");
+        assert!(super::write_via(&tmp, &target, "text").is_err());
+        assert!(!tmp.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// Every `trainer` command line in README.md and docs/ parses against this CLI: its flags exist
     /// and its values parse (a line may leave out required flags, as prose does).
     #[test]

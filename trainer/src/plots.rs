@@ -42,6 +42,19 @@ pub fn fmt_tick(v: f64) -> String {
     }
 }
 
+/// An axis from `lo` to `hi` plotters can lay out: both ends and the span finite. A span that
+/// overflows (values of ±1e308) would never finish placing its ticks.
+fn drawable(what: &str, lo: f64, hi: f64) -> Result<()> {
+    if lo.is_finite() && hi.is_finite() && (hi - lo).is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Plot(format!(
+            "{what}: the values span {lo:e} to {hi:e}, too wide for an axis (give values whose \
+             span is finite, well inside ±1e307)"
+        )))
+    }
+}
+
 /// One line of a line chart.
 pub struct Series<'a> {
     pub name: String,
@@ -55,6 +68,14 @@ pub fn line_panels(
     panel_w: u32,
     h: u32,
 ) -> Result<()> {
+    if panels.is_empty() {
+        return Err(Error::Plot("no panel to draw".into()));
+    }
+    // Every panel's axes, checked before the PNG is created: `None` for a panel with no point.
+    let axes = panels
+        .iter()
+        .map(|(title, _, _, logy, series)| line_axes(title, *logy, series))
+        .collect::<Result<Vec<_>>>()?;
     hil_sim::font::register();
     // Panels with more than one series share one legend below them, off the data.
     let legend: Vec<String> = panels
@@ -98,27 +119,10 @@ pub fn line_panels(
         COLORS[k % COLORS.len()]
     };
     let areas = charts.split_evenly((1, panels.len()));
-    for ((title, xl, yl, logy, series), area) in panels.iter().zip(areas) {
-        let pts = series.iter().flat_map(|s| s.points.iter());
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for (x, y) in pts {
-            if !x.is_finite() || !y.is_finite() || (*logy && *y <= 0.0) {
-                continue;
-            }
-            x0 = x0.min(*x);
-            x1 = x1.max(*x);
-            y0 = y0.min(*y);
-            y1 = y1.max(*y);
-        }
-        if x0 > x1 {
+    for (((title, xl, yl, logy, series), area), axes) in panels.iter().zip(areas).zip(axes) {
+        let Some((x0, x1, y0, y1)) = axes else {
             continue;
-        }
-        if x1 <= x0 {
-            x1 = x0 + 1.0;
-        }
-        if y1 <= y0 {
-            y1 = y0 + 1e-9_f64.max(y0.abs() * 0.1);
-        }
+        };
         let mut b = ChartBuilder::on(&area);
         b.caption(title, ("sans-serif", 18))
             .margin(10)
@@ -153,19 +157,50 @@ pub fn line_panels(
         }
         if *logy {
             draw!(
-                b.build_cartesian_2d(x0..x1, (y0 * 0.9..y1 * 1.1).log_scale())
+                b.build_cartesian_2d(x0..x1, (y0..y1).log_scale())
                     .map_err(perr)?
             );
         } else {
-            let pad = (y1 - y0) * 0.05;
-            draw!(
-                b.build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)
-                    .map_err(perr)?
-            );
+            draw!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(perr)?);
         }
     }
     root.present().map_err(perr)?;
     Ok(())
+}
+
+/// The x and y ranges of a line panel (y padded: 5 % each side, or ×0.9..×1.1 on a log scale) over
+/// its finite points (positive ones on a log scale); `None` when it has none; an error when an
+/// axis would not be finite.
+fn line_axes(title: &str, logy: bool, series: &[Series]) -> Result<Option<(f64, f64, f64, f64)>> {
+    let pts = series.iter().flat_map(|s| s.points.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for (x, y) in pts {
+        if !x.is_finite() || !y.is_finite() || (logy && *y <= 0.0) {
+            continue;
+        }
+        x0 = x0.min(*x);
+        x1 = x1.max(*x);
+        y0 = y0.min(*y);
+        y1 = y1.max(*y);
+    }
+    if x0 > x1 {
+        return Ok(None);
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    if y1 <= y0 {
+        y1 = y0 + 1e-9_f64.max(y0.abs() * 0.1);
+    }
+    let (y0, y1) = if logy {
+        (y0 * 0.9, y1 * 1.1)
+    } else {
+        let pad = (y1 - y0) * 0.05;
+        (y0 - pad, y1 + pad)
+    };
+    drawable(&format!("panel `{title}`, x"), x0, x1)?;
+    drawable(&format!("panel `{title}`, y"), y0, y1)?;
+    Ok(Some((x0, x1, y0, y1)))
 }
 
 /// Horizontal bar chart (e.g. mean |SHAP| per feature), largest first.
@@ -174,9 +209,10 @@ pub fn bars(path: &Path, title: &str, xlabel: &str, items: &[(String, f64)]) -> 
     let mut items = items.to_vec();
     items.sort_by(|a, b| b.1.total_cmp(&a.1));
     let h = 80 + 28 * items.len() as u32;
+    let max = items.iter().map(|i| i.1).fold(0.0, f64::max).max(1e-12);
+    drawable(title, 0.0, max * 1.1)?;
     let root = BitMapBackend::new(path, (800, h)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
-    let max = items.iter().map(|i| i.1).fold(0.0, f64::max).max(1e-12);
     let n = items.len();
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 18))
@@ -218,6 +254,17 @@ pub type BarPanel<'a> = (String, &'a str, Vec<(String, Vec<f64>)>);
 /// a row's NaN value draws no bar. Rows are drawn
 /// top-down in the given order, with a legend of `series` in empty rows above them.
 pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -> Result<()> {
+    if panels.is_empty() {
+        return Err(Error::Plot("no panel to draw".into()));
+    }
+    // Every panel's value axis, checked before the PNG is created.
+    let spans = panels
+        .iter()
+        .map(|(title, _, items)| {
+            let (lo, hi) = bar_span(items);
+            drawable(&format!("panel `{title}`"), lo, hi).map(|()| (lo, hi))
+        })
+        .collect::<Result<Vec<_>>>()?;
     hil_sim::font::register();
     let rows = panels.iter().map(|p| p.2.len()).max().unwrap_or(0);
     // Rows of 30 px kept free at the top for the legend (20 px per series).
@@ -226,26 +273,16 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
     let root = BitMapBackend::new(path, (620 * panels.len() as u32, h)).into_drawing_area();
     root.fill(&WHITE).map_err(perr)?;
     let k = series.len().max(1);
-    for ((title, xl, items), area) in panels.iter().zip(root.split_evenly((1, panels.len()))) {
+    let areas = root.split_evenly((1, panels.len()));
+    for (((title, xl, items), area), (lo, hi)) in panels.iter().zip(areas).zip(spans) {
         let n = items.len();
-        // Bars grow from 0: the axis spans 0 and every finite value, left of 0 for a negative one.
-        let (min, max) = items
-            .iter()
-            .flat_map(|i| i.1.iter())
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold((0.0, 0.0), |(lo, hi): (f64, f64), v| (lo.min(v), hi.max(v)));
-        let max = max.max(1e-12);
         let names: Vec<String> = items.iter().map(|i| i.0.clone()).collect();
         let mut chart = ChartBuilder::on(&area)
             .caption(title.as_str(), ("sans-serif", 18))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(190)
-            .build_cartesian_2d(
-                min * 1.15..max * 1.15,
-                (0..n + legend_rows).into_segmented(),
-            )
+            .build_cartesian_2d(lo..hi, (0..n + legend_rows).into_segmented())
             .map_err(perr)?;
         chart
             .configure_mesh()
@@ -294,6 +331,19 @@ pub fn grouped_bar_panels(path: &Path, panels: &[BarPanel], series: &[String]) -
     }
     root.present().map_err(perr)?;
     Ok(())
+}
+
+/// The value axis of a grouped-bar panel: bars grow from 0, so it spans 0 and every finite value
+/// (left of 0 for a negative one), with 15 % to spare.
+fn bar_span(items: &[(String, Vec<f64>)]) -> (f64, f64) {
+    let (min, max) = items
+        .iter()
+        .flat_map(|i| i.1.iter())
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold((0.0, 0.0), |(lo, hi): (f64, f64), v| (lo.min(v), hi.max(v)));
+    let max = max.max(1e-12);
+    (min * 1.15, max * 1.15)
 }
 
 /// Label of a segmented axis drawn top-down: segment `i` from the bottom shows `names[n - 1 - i]`.
@@ -382,9 +432,86 @@ pub fn heatmap(path: &Path, title: &str, names: &[String], m: &[Vec<f64>]) -> Re
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    fn scratch(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("trainer-plots-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir.join("x.png")
+    }
+
+    /// Values of ±1e308 make an axis whose span overflows: refused before the PNG is created
+    /// (plotters would place ticks on it forever).
+    #[test]
+    fn an_axis_whose_span_overflows_is_refused_and_nothing_is_written() {
+        let path = scratch("span");
+        let points = [(0.0, 1e308), (1.0, -1e308)];
+        let panels = vec![(
+            "t".to_string(),
+            "x",
+            "y",
+            false,
+            vec![Series {
+                name: "s".into(),
+                points: &points,
+            }],
+        )];
+        let e = line_panels(&path, &panels, 300, 200).unwrap_err();
+        assert!(
+            matches!(&e, Error::Plot(m) if m.contains("panel `t`, y") && m.contains("too wide")),
+            "{e}"
+        );
+        let xs = [(-1e308, 1.0), (1e308, 2.0)];
+        let panels = vec![(
+            "u".to_string(),
+            "x",
+            "y",
+            false,
+            vec![Series {
+                name: "s".into(),
+                points: &xs,
+            }],
+        )];
+        let e = line_panels(&path, &panels, 300, 200).unwrap_err();
+        assert!(
+            matches!(&e, Error::Plot(m) if m.contains("panel `u`, x")),
+            "{e}"
+        );
+        // One bar of 1.6e308 (its axis, 15 % wider, overflows), or two of ±1e308 (their span does).
+        for rows in [vec![1.6e308], vec![-1.6e308], vec![1e308, -1e308]] {
+            let rows = rows
+                .into_iter()
+                .map(|v| ("r".to_string(), vec![v]))
+                .collect();
+            let bars: Vec<BarPanel> = vec![("b".into(), "x", rows)];
+            let e = grouped_bar_panels(&path, &bars, &["a".to_string()]).unwrap_err();
+            assert!(
+                matches!(&e, Error::Plot(m) if m.contains("panel `b`")),
+                "{e}"
+            );
+        }
+        assert!(bars(&path, "t", "x", &[("r".into(), 1.7e308)]).is_err());
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn no_panel_is_refused_and_nothing_is_written() {
+        let path = scratch("empty");
+        let e = grouped_bar_panels(&path, &[], &["a".to_string()]).unwrap_err();
+        assert!(
+            matches!(&e, Error::Plot(m) if m == "no panel to draw"),
+            "{e}"
+        );
+        let e = line_panels(&path, &[], 300, 200).unwrap_err();
+        assert!(
+            matches!(&e, Error::Plot(m) if m == "no panel to draw"),
+            "{e}"
+        );
+        assert!(!path.exists());
+    }
+
     #[test]
     fn ticks_have_no_float_noise() {
-        use super::fmt_tick;
         assert_eq!(fmt_tick(0.7000000000000001), "0.7");
         assert_eq!(fmt_tick(0.30000000000000004), "0.3");
         assert_eq!(fmt_tick(120.0), "120");

@@ -460,7 +460,7 @@ impl Progress {
             .append(true)
             .open(path)
             .and_then(|mut f| f.write_all(line.as_bytes()))
-            .map_err(crate::error::io(&path))?;
+            .map_err(crate::error::io("write", &path))?;
         Ok(Entry {
             preds: saved.preds,
             preds_int8: saved.preds_int8,

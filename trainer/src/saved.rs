@@ -277,6 +277,7 @@ impl SavedModel {
             msg: e.to_string(),
         })?;
         std::fs::write(&path, text).map_err(|source| Error::Io {
+            action: "write",
             path: path.clone(),
             source,
         })?;
@@ -375,6 +376,7 @@ impl SavedModel {
     fn parse(dir: &Path) -> Result<(SavedModel, std::path::PathBuf)> {
         let path = dir.join("model.json");
         let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
+            action: "read",
             path: path.clone(),
             source,
         })?;
@@ -414,6 +416,7 @@ pub fn read_generated(path: &Path) -> Result<(QCascade, QCascade, String)> {
         msg,
     };
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        action: "read",
         path: path.to_path_buf(),
         source,
     })?;

@@ -83,13 +83,13 @@ pub fn result_path(dir: &Path, k: usize) -> PathBuf {
 
 /// Writes a job's result (under a temporary name, then renamed: never seen half written).
 pub fn write_result(dir: &Path, r: &JobResult) -> Result<PathBuf> {
-    std::fs::create_dir_all(dir).map_err(crate::error::io(dir))?;
+    std::fs::create_dir_all(dir).map_err(crate::error::io("create", dir))?;
     let path = result_path(dir, r.job.index);
     let tmp = path.with_extension("json.tmp");
     let text = serde_json::to_string_pretty(r).map_err(|e| Error::Sweep(e.to_string()))?;
     std::fs::write(&tmp, text)
         .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(crate::error::io(&path))?;
+        .map_err(crate::error::io("write", &path))?;
     Ok(path)
 }
 

@@ -15,7 +15,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::generator::tick;
-use super::{FlightEntry, GenerateError, Manifest, machine, par_map};
+use super::{DatasetError, FlightEntry, GenerateError, Manifest, machine, par_map};
 use crate::flight::Flight;
 use crate::plant::{self, Plant, PlantError, SIM_HZ, STEPS_PER_SAMPLE};
 
@@ -115,8 +115,41 @@ fn first_mismatch(flights: &[FlightEntry], steps: &[u64]) -> Option<String> {
         })
 }
 
+/// The file that marks a directory as `hil-sim bench`'s scratch, which the next bench overwrites.
+pub const SCRATCH_MARK: &str = ".hil-sim-bench";
+
+/// Makes `out` bench's scratch directory: a new or empty one, or one a bench marked before
+/// ([`SCRATCH_MARK`]). Anything else (a dataset, a file) is refused before any flight is flown,
+/// since every repeat writes over it.
+pub fn claim_scratch(out: &Path) -> Result<(), GenerateError> {
+    if out.exists() && !out.is_dir() {
+        return Err(DatasetError::NotADirectory {
+            path: out.to_path_buf(),
+        }
+        .into());
+    }
+    if super::holds_something(out) && !out.join(SCRATCH_MARK).is_file() {
+        return Err(GenerateError::BenchOut(out.to_path_buf()));
+    }
+    let mark = out.join(SCRATCH_MARK);
+    std::fs::create_dir_all(out)
+        .and_then(|()| {
+            std::fs::write(
+                &mark,
+                "scratch of `hil-sim bench`: the next bench writes over this directory\n",
+            )
+        })
+        .map_err(|source| DatasetError::Io {
+            action: "write",
+            path: mark,
+            source,
+        })?;
+    Ok(())
+}
+
 /// Generates `preset` into `out` and raw-steps the same flights, `repeats` times each, alternating
-/// which goes first; then writes the dataset report once and times it.
+/// which goes first; then writes the dataset report once and times it. `out` must be bench's
+/// scratch ([`claim_scratch`]).
 pub fn run(
     plan: &crate::maneuver::Plan,
     out: &Path,
@@ -125,6 +158,7 @@ pub fn run(
     repeats: usize,
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<BenchReport, GenerateError> {
+    claim_scratch(out)?;
     let repeats = repeats.max(1);
     let (mut generate_s, mut raw_s) = (Vec::new(), Vec::new());
     let generate = |times: &mut Vec<f64>| -> Result<(Manifest, Vec<Flight>), GenerateError> {
@@ -208,6 +242,42 @@ mod tests {
             "cut": null
         }))
         .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Bench writes over its --out on every repeat: only a new or empty directory, or its own
+    /// scratch from an earlier bench, is taken; a dataset or a file is refused as it was.
+    #[test]
+    fn bench_takes_only_its_own_scratch_directory() {
+        let dir = std::env::temp_dir().join(format!("hil-bench-out-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let fresh = dir.join("fresh");
+        claim_scratch(&fresh).unwrap();
+        assert!(fresh.join(SCRATCH_MARK).is_file());
+        std::fs::write(fresh.join("manifest.json"), "{}").unwrap();
+        claim_scratch(&fresh).unwrap();
+
+        let dataset = dir.join("dataset");
+        std::fs::create_dir_all(&dataset).unwrap();
+        std::fs::write(dataset.join("manifest.json"), "{}").unwrap();
+        let e = claim_scratch(&dataset).unwrap_err();
+        assert!(
+            matches!(&e, GenerateError::BenchOut(p) if *p == dataset),
+            "{e}"
+        );
+        assert!(!dataset.join(SCRATCH_MARK).exists());
+
+        let file = dir.join("file");
+        std::fs::write(&file, "x").unwrap();
+        let e = claim_scratch(&file).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                GenerateError::Dataset(DatasetError::NotADirectory { .. })
+            ),
+            "{e}"
+        );
+        assert_eq!(std::fs::read(&file).unwrap(), b"x");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

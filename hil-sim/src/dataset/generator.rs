@@ -30,6 +30,13 @@ pub enum GenerateError {
          reported (a cut flight records fewer samples: `hil-sim generate` prints why it was cut)"
     )]
     NotComparable(String),
+    /// `hil-sim bench --out` that holds what bench did not write.
+    #[error(
+        "{0} holds files without `hil-sim bench`'s mark (a dataset, or a bench's scratch from before \
+         benches marked theirs), and bench writes over its --out on every repeat: delete it if it is \
+         a bench's scratch, or give a new or empty directory (default out/bench/generate)"
+    )]
+    BenchOut(std::path::PathBuf),
     /// Every draw of a flight's start failed JSBSim's trim.
     #[error(
         "no start of profile {profile} trimmed in {draws} draws (each a new altitude and speed \
@@ -88,7 +95,7 @@ pub fn generate(
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<(Manifest, Vec<Flight>), GenerateError> {
     create_dir(out)?;
-    let planned = plan.flights();
+    let planned = plan.flights()?;
     let (entries, flights, flown) = fly_plan(
         &planned,
         plan.aircraft_dir.as_deref(),
@@ -385,6 +392,7 @@ pub fn generate_shard(
     progress: Option<&indicatif::ProgressBar>,
 ) -> Result<ShardOutcome, GenerateError> {
     create_dir(out)?;
+    check_shard_siblings(out, plan, sensors, shard)?;
     let path = shard.record_path(out);
     if let Ok(text) = std::fs::read_to_string(&path)
         && let Ok(r) = serde_json::from_str::<ShardRecord>(&text)
@@ -398,7 +406,7 @@ pub fn generate_shard(
             return Ok(ShardOutcome::AlreadyComplete(r.flights.len()));
         }
     }
-    let share = shard.of(&plan.flights());
+    let share = shard.of(&plan.flights()?);
     let (flights, _, flown) = fly_plan(
         &share,
         plan.aircraft_dir.as_deref(),
@@ -430,6 +438,62 @@ pub fn generate_shard(
             source,
         })?;
     Ok(ShardOutcome::Flown(n))
+}
+
+/// Refuses to fly a shard into `out` when a shard record there (this shard's own included) is of
+/// another dataset: another preset, seed, shard count, campaign or sensor config. Such shards never
+/// merge, and flying into their directory mixes two datasets' flights. A record that does not
+/// read is left to [`generate_shard`] (its own is flown again) and to [`merge`].
+fn check_shard_siblings(
+    out: &Path,
+    plan: &Plan,
+    sensors: &crate::sensors::SensorConfig,
+    shard: Shard,
+) -> Result<(), GenerateError> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(());
+    };
+    for p in entries.flatten().map(|e| e.path()) {
+        let name = p.file_name().map(|n| n.to_string_lossy().into_owned());
+        if !name.is_some_and(|n| n.starts_with("shard-") && n.ends_with(".json")) {
+            continue;
+        }
+        let Some(r) = std::fs::read_to_string(&p)
+            .ok()
+            .and_then(|t| serde_json::from_str::<ShardRecord>(&t).ok())
+        else {
+            continue;
+        };
+        let differs = if r.plan.preset != plan.preset {
+            Some(format!(
+                "preset {} (this run: {})",
+                r.plan.preset.name(),
+                plan.preset.name()
+            ))
+        } else if r.plan.seed != plan.seed {
+            Some(format!("seed {} (this run: {})", r.plan.seed, plan.seed))
+        } else if r.shard.count != shard.count {
+            Some(format!(
+                "shard count {} (this run: {})",
+                r.shard.count, shard.count
+            ))
+        } else if r.plan != *plan {
+            Some("campaign, --test-only or --aircraft-dir".to_string())
+        } else if r.sensors != *sensors {
+            Some("sensor config (--sensors)".to_string())
+        } else {
+            None
+        };
+        if let Some(what) = differs {
+            return Err(GenerateError::Shard(format!(
+                "{} is shard {} of another dataset, by its {what}: the shards of one dataset share \
+                 them all. Give this shard another --out (or run it with the same settings)",
+                p.display(),
+                r.shard
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Joins the shards in `out` into the dataset a one-machine [`generate`] writes: checks that the
@@ -529,7 +593,7 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
         )));
     }
     let sensors = first.sensors.clone();
-    let plan = first.plan.flights();
+    let plan = first.plan.flights()?;
     let mut flights = Vec::with_capacity(plan.len());
     for f in &plan {
         let mut found = records
@@ -550,6 +614,28 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
             "the shard records list {listed} flights, the plan has {}",
             plan.len()
         )));
+    }
+    // Every file the records list, as recorded, before anything is written or removed: a set with
+    // a missing or changed CSV stays a set of shards, to re-fly that shard and merge again.
+    for (_, r) in &records {
+        for (file, sha256) in r.flights.iter().flat_map(|e| {
+            std::iter::once((&e.file, &e.sha256)).chain(e.boom.iter().map(|b| (&b.file, &b.sha256)))
+        }) {
+            let path = out.join(file);
+            let what = match sha256_file(&path) {
+                Ok(h) if h == *sha256 => continue,
+                Ok(_) => "differs from what its shard record lists (SHA-256)".to_string(),
+                Err(e) => format!("cannot be read ({e})"),
+            };
+            return Err(GenerateError::Shard(format!(
+                "{} of shard {} {what}: nothing was merged; fly that shard again (the same \
+                 `hil-sim generate ... --shard {} --out {}`), then merge",
+                path.display(),
+                r.shard,
+                r.shard,
+                out.display()
+            )));
+        }
     }
     let flown = Flown {
         jsbsim_version: records
@@ -574,6 +660,129 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A one-shard `ci` set in a fresh directory: a record listing every planned flight, each CSV
+    /// and maneuver file a few bytes.
+    fn one_shard_set(tag: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("hil-merge-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let plan = Plan::new(crate::maneuver::Preset::Ci, 1);
+        let shard = Shard { index: 0, count: 1 };
+        let mut flights = Vec::new();
+        for f in plan.flights().unwrap() {
+            let file = format!("{}.csv", f.name);
+            std::fs::write(dir.join(&file), &f.name).unwrap();
+            let (script, init) = crate::maneuver::files(&dir, &f.name);
+            std::fs::write(script, "<runscript/>").unwrap();
+            std::fs::write(init, "<initialize/>").unwrap();
+            flights.push(FlightEntry {
+                sha256: sha256_file(&dir.join(&file)).unwrap(),
+                file,
+                name: f.name.clone(),
+                split: f.split,
+                profile: f.profile.name().to_string(),
+                seed: f.seed,
+                duration_s: f.duration_s,
+                samples: 1,
+                cut: None,
+                zones: None,
+                faults: Vec::new(),
+                boom: None,
+            });
+        }
+        let record = ShardRecord {
+            plan,
+            shard,
+            sensors: crate::sensors::SensorConfig::default(),
+            jsbsim_version: "test".into(),
+            git_rev: "test".into(),
+            flights,
+            aircraft: None,
+        };
+        std::fs::write(
+            shard.record_path(&dir),
+            serde_json::to_string_pretty(&record).unwrap(),
+        )
+        .unwrap();
+        dir
+    }
+
+    /// A shard is not flown into a directory whose records are of another dataset, and the
+    /// message says what differs; one of the same dataset (another shard, or its own) is fine.
+    #[test]
+    fn a_shard_of_another_dataset_is_not_flown_beside_the_records() {
+        let dir = one_shard_set("siblings");
+        let sensors = crate::sensors::SensorConfig::default();
+        let ci = |seed| Plan::new(crate::maneuver::Preset::Ci, seed);
+        let one = Shard { index: 0, count: 1 };
+        check_shard_siblings(&dir, &ci(1), &sensors, one).unwrap();
+        for (plan, shard, says) in [
+            (ci(7), one, "seed 1 (this run: 7)"),
+            (
+                ci(1),
+                Shard { index: 1, count: 5 },
+                "shard count 1 (this run: 5)",
+            ),
+            (
+                Plan::new(crate::maneuver::Preset::Paper, 1),
+                one,
+                "preset ci (this run: paper)",
+            ),
+        ] {
+            let e = check_shard_siblings(&dir, &plan, &sensors, shard).unwrap_err();
+            let text = e.to_string();
+            assert!(
+                matches!(&e, GenerateError::Shard(m) if m.contains("shard-0-of-1.json is shard 0/1 of another dataset") && m.contains(says)),
+                "{text}"
+            );
+        }
+        let mut other = sensors.clone();
+        other.gps.latency_s += 0.1;
+        let e = check_shard_siblings(&dir, &ci(1), &other, one).unwrap_err();
+        assert!(e.to_string().contains("sensor config"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A shard set with a missing or changed CSV is refused before `manifest.json` is written or
+    /// a record removed: once the file is as recorded again, the same set merges.
+    #[test]
+    fn merge_checks_every_csv_before_writing_or_removing_anything() {
+        let dir = one_shard_set("csv");
+        let record = Shard { index: 0, count: 1 }.record_path(&dir);
+        let csv = dir.join("test_aggressive_00.csv");
+        let good = std::fs::read(&csv).unwrap();
+        for bad in [Some(&b"changed"[..]), None] {
+            match bad {
+                Some(b) => std::fs::write(&csv, b).unwrap(),
+                None => std::fs::remove_file(&csv).unwrap(),
+            }
+            let e = merge(&dir).unwrap_err();
+            let text = e.to_string();
+            assert!(
+                matches!(&e, GenerateError::Shard(m) if m.contains("test_aggressive_00.csv of shard 0/1")),
+                "{text}"
+            );
+            assert!(
+                text.contains(if bad.is_some() {
+                    "differs"
+                } else {
+                    "cannot be read"
+                }),
+                "{text}"
+            );
+            assert!(record.is_file(), "the record was removed");
+            assert!(
+                !dir.join("manifest.json").exists(),
+                "a manifest was written"
+            );
+        }
+        std::fs::write(&csv, good).unwrap();
+        let m = merge(&dir).unwrap();
+        assert_eq!(m.flights.len(), 5);
+        assert!(!record.exists() && dir.join("manifest.json").is_file());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     /// What a larger re-draw budget relies on to leave earlier datasets as they were: draw 0 is the
     /// planned seed and draw k's seed depends on k alone, so a flight that trimmed on draw k flies

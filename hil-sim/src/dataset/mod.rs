@@ -45,6 +45,11 @@ pub enum DatasetError {
         "{path} already exists and is not empty: choose another --out, or pass --force to replace it"
     )]
     Exists { path: PathBuf },
+    /// An output directory that names an existing file.
+    #[error(
+        "{path} is a file, not a directory: give --out a directory (a new one, or an empty one)"
+    )]
+    NotADirectory { path: PathBuf },
 }
 
 /// A dataset directory written under a temporary name beside its final one and renamed into place
@@ -75,6 +80,13 @@ fn io(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> Datas
 
 impl Staging {
     pub fn begin(out: &Path, force: bool) -> Result<Staging, DatasetError> {
+        // A file at `out` is refused before any work, not when the finished dataset cannot replace
+        // it (even --force replaces a dataset, not a file).
+        if out.exists() && !out.is_dir() {
+            return Err(DatasetError::NotADirectory {
+                path: out.to_path_buf(),
+            });
+        }
         if holds_something(out) && !force {
             return Err(DatasetError::Exists {
                 path: out.to_path_buf(),
@@ -275,9 +287,11 @@ impl Flight {
     }
 
     /// [`Flight::read_log`] of a file that may be a dataset's flight: when a `manifest.json`
-    /// beside it lists the file, the manifest's promises hold ([`Manifest::read_flight`]).
-    pub fn read_log_in_dataset(path: &Path) -> Result<Flight, DatasetError> {
-        let (flight, has_sub) = Flight::read(path, false)?;
+    /// beside it lists the file, the manifest's promises hold ([`Manifest::read_flight`]). With the
+    /// flight, the richest sensor suite whose columns the file has (table1: no EGI columns; egi:
+    /// no sub-sample columns; egi120: both).
+    pub fn read_log_in_dataset(path: &Path) -> Result<(Flight, Suite), DatasetError> {
+        let (flight, has) = Flight::read(path, false)?;
         if let Some((dir, m, _)) = Manifest::listing(path)? {
             if let Some(why) = m.other_aircraft() {
                 return Err(DatasetError::Manifest {
@@ -285,13 +299,13 @@ impl Flight {
                     message: format!("{} not read: {why}", path.display()),
                 });
             }
-            m.check_subsamples(dir, path, has_sub)?;
+            m.check_subsamples(dir, path, has == Suite::Egi120)?;
         }
-        Ok(flight)
+        Ok((flight, has))
     }
 
-    /// The flight, and whether its file has the sub-sample columns.
-    fn read(path: &Path, truth_required: bool) -> Result<(Flight, bool), DatasetError> {
+    /// The flight, and the richest sensor suite whose columns its file has.
+    fn read(path: &Path, truth_required: bool) -> Result<(Flight, Suite), DatasetError> {
         let f = std::fs::File::open(path).map_err(|source| DatasetError::Io {
             action: "open",
             path: path.to_path_buf(),
@@ -376,7 +390,14 @@ impl Flight {
             zones: None,
             engine: Vec::new(),
         };
-        Ok((flight, !no_sub))
+        let has = if format3 {
+            Suite::Table1
+        } else if no_sub {
+            Suite::Egi
+        } else {
+            Suite::Egi120
+        };
+        Ok((flight, has))
     }
 }
 
@@ -553,8 +574,8 @@ impl Manifest {
     /// sub-sample columns in every flight.
     pub fn read_flight(&self, dir: &Path, file: &str) -> Result<Flight, DatasetError> {
         let path = dir.join(file);
-        let (flight, has_sub) = Flight::read(&path, true)?;
-        self.check_subsamples(dir, &path, has_sub)?;
+        let (flight, has) = Flight::read(&path, true)?;
+        self.check_subsamples(dir, &path, has == Suite::Egi120)?;
         Ok(flight)
     }
 
@@ -642,7 +663,43 @@ impl Manifest {
                 ),
             });
         }
+        if let Some(message) = m.flights_problem() {
+            return Err(DatasetError::Manifest { path, message });
+        }
         Ok(m)
+    }
+
+    /// A flight whose file is not inside the dataset directory (an absolute path, or one through
+    /// `..`), or a flight name listed twice: what no writer of a dataset writes, and what would
+    /// read another directory's file or score a flight twice.
+    fn flights_problem(&self) -> Option<String> {
+        let inside = |file: &str| {
+            !file.is_empty()
+                && Path::new(file).components().all(|c| {
+                    matches!(
+                        c,
+                        std::path::Component::Normal(_) | std::path::Component::CurDir
+                    )
+                })
+        };
+        let mut names = std::collections::BTreeSet::new();
+        for f in &self.flights {
+            let files = std::iter::once(&f.file).chain(f.boom.iter().map(|b| &b.file));
+            if let Some(file) = files.into_iter().find(|file| !inside(file)) {
+                return Some(format!(
+                    "flight `{}`: file `{file}` is not inside the dataset directory (a path \
+                     relative to it, without `..`)",
+                    f.name
+                ));
+            }
+            if !names.insert(f.name.as_str()) {
+                return Some(format!(
+                    "flight `{}` is listed twice: every flight once, under its own name",
+                    f.name
+                ));
+            }
+        }
+        None
     }
 }
 
@@ -888,6 +945,73 @@ mod tests {
         assert_eq!(text, r#"{"name":"f16","dir":"x","model_xml_sha256":"ab"}"#);
     }
 
+    /// A manifest whose flight points outside its directory, or lists a name twice, is refused
+    /// when it is read, saying which flight.
+    #[test]
+    fn a_manifest_flight_outside_the_dataset_or_listed_twice_is_refused() {
+        let dir = std::env::temp_dir().join(format!("hil-ds-escape-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let entry = |name: &str, file: &str| FlightEntry {
+            file: file.into(),
+            name: name.into(),
+            split: Split::Test,
+            profile: "gentle".into(),
+            seed: 0,
+            duration_s: 0.05,
+            samples: 1,
+            sha256: String::new(),
+            cut: None,
+            zones: None,
+            faults: Vec::new(),
+            boom: None,
+        };
+        let mut m = Manifest {
+            format: Manifest::FORMAT,
+            suites: Manifest::written_suites(),
+            preset: "ci".into(),
+            jsbsim_version: String::new(),
+            git_rev: String::new(),
+            config: serde_json::json!({}),
+            flights: vec![entry("a", "a.csv"), entry("b", "./b.csv")],
+            files: Default::default(),
+            aircraft: None,
+        };
+        m.write(&dir).unwrap();
+        assert!(Manifest::read(&dir).is_ok());
+        for (flights, says) in [
+            (
+                vec![entry("a", "../x.csv")],
+                "flight `a`: file `../x.csv` is not inside",
+            ),
+            (
+                vec![entry("a", "/tmp/x.csv")],
+                "flight `a`: file `/tmp/x.csv` is not inside",
+            ),
+            (vec![entry("a", "d/../../x.csv")], "is not inside"),
+            (vec![entry("a", "")], "is not inside"),
+            (
+                vec![entry("a", "a.csv"), entry("a", "b.csv")],
+                "flight `a` is listed twice",
+            ),
+        ] {
+            m.flights = flights;
+            m.write(&dir).unwrap();
+            let e = Manifest::read(&dir).unwrap_err();
+            assert!(
+                matches!(&e, DatasetError::Manifest { message, .. } if message.contains(says)),
+                "{e}"
+            );
+        }
+        m.flights = vec![entry("a", "a.csv")];
+        m.flights[0].boom = Some(RecordFile {
+            file: "../a.boom.csv".into(),
+            sha256: String::new(),
+        });
+        m.write(&dir).unwrap();
+        assert!(Manifest::read(&dir).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn column_names_are_unique() {
         let c = columns();
@@ -969,7 +1093,8 @@ mod tests {
         m.write(&dir).unwrap();
         let err = Flight::read_log_in_dataset(&p).unwrap_err().to_string();
         assert!(err.contains("egi120"), "{err}");
-        assert!(Flight::read_log_in_dataset(&dir.join("dead.csv")).is_ok());
+        let (_, has) = Flight::read_log_in_dataset(&dir.join("dead.csv")).unwrap();
+        assert_eq!(has, Suite::Egi120);
         m.suites = vec!["table1".into(), "egi".into()];
         assert!(m.read_flight(&dir, "old.csv").is_ok());
         m.format = 4;

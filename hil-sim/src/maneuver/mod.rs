@@ -519,6 +519,14 @@ pub enum ManeuverError {
     BadName(String),
     #[error("maneuver duration {0} s must be between 1 and 7200 s")]
     BadDuration(f64),
+    #[error(
+        "--hours {0}: give the campaign's flight-hours, more than 0 and at most {max} (e.g. \
+         --hours 40)",
+        max = Campaign::MAX_HOURS
+    )]
+    BadCampaignHours(f64),
+    #[error("--flight-min {0}: give each flight's length in minutes, between 1 and 120")]
+    BadFlightMin(f64),
 }
 
 fn draw(rng: &mut ChaCha12Rng, r: Range) -> f64 {
@@ -1458,7 +1466,7 @@ mod tests {
             campaign: Some(c.clone()),
             ..Plan::new(Preset::Campaign, 5)
         };
-        let f = plan.flights();
+        let f = plan.flights().unwrap();
         assert_eq!(f.len(), 30);
         assert_eq!(
             f.iter()
@@ -1479,12 +1487,12 @@ mod tests {
             assert_eq!(x.duration_s, 1_200.0);
         }
         // The same plan from the same spec; another seed, other flights.
-        assert_eq!(plan.flights(), f);
+        assert_eq!(plan.flights().unwrap(), f);
         let other = Plan {
             seed: 6,
             ..plan.clone()
         };
-        assert_ne!(other.flights()[0].seed, f[0].seed);
+        assert_ne!(other.flights().unwrap()[0].seed, f[0].seed);
         // A campaign flight's script draws from the campaign's ranges: severity 2..7.
         let m = generate(&f[0].profile(), f[0].seed, "c", 60.0).unwrap();
         assert!(m.script_xml.contains("milspec/severity"));
@@ -1501,7 +1509,7 @@ mod tests {
             ..plan
         };
         let mut kinds = std::collections::BTreeSet::new();
-        for x in &own.flights() {
+        for x in &own.flights().unwrap() {
             let p = x.profile();
             assert_eq!(p.turb_severity, Profile::preset(x.profile).turb_severity);
             assert_eq!(p.fuel_per_tank_lbs, (100.0, 3_400.0));
@@ -1527,7 +1535,7 @@ mod tests {
             campaign: Some(c),
             ..Plan::new(Preset::Campaign, 5)
         };
-        let f = plan.flights();
+        let f = plan.flights().unwrap();
         assert_eq!(f.len(), 6);
         for x in &f {
             assert_eq!(x.profile, ProfileKind::HighAlpha);
@@ -1538,7 +1546,13 @@ mod tests {
             );
         }
         // The same seeds as the four-profile campaign, flown on the chosen profile.
-        let seeds = |p: &Plan| p.flights().iter().map(|x| x.seed).collect::<Vec<_>>();
+        let seeds = |p: &Plan| {
+            p.flights()
+                .unwrap()
+                .iter()
+                .map(|x| x.seed)
+                .collect::<Vec<_>>()
+        };
         assert_eq!(seeds(&plan), seeds(&all));
         // A 20-min flight of gusts every 10-30 s has many more of them than one at 40-150 s.
         let count = |x: &PlannedFlight| {
@@ -1546,7 +1560,7 @@ mod tests {
             m.script_xml.matches("cosine-gust/start").count()
         };
         let dense = count(&f[0]);
-        let sparse = count(&all.flights()[1]);
+        let sparse = count(&all.flights().unwrap()[1]);
         assert!(dense >= 40 && sparse <= 30, "{dense} against {sparse}");
         // A campaign without them writes the manifest it wrote before (no new keys).
         let json = serde_json::to_string(&all).unwrap();
@@ -1554,6 +1568,39 @@ mod tests {
             !json.contains("profiles") && !json.contains("gust_interval"),
             "{json}"
         );
+    }
+
+    #[test]
+    fn a_campaign_of_no_or_absurd_hours_is_refused_before_planning() {
+        let plan = |hours: f64, flight_min: f64| Plan {
+            campaign: Some(Campaign {
+                hours,
+                flight_min,
+                ..Campaign::default()
+            }),
+            ..Plan::new(Preset::Campaign, 1)
+        };
+        for hours in [f64::INFINITY, f64::NAN, 1e15, 10_000.5, 0.0, -1.0] {
+            assert!(
+                matches!(plan(hours, 20.0).flights(), Err(ManeuverError::BadCampaignHours(h)) if h.to_bits() == hours.to_bits()),
+                "{hours}"
+            );
+        }
+        for m in [0.5, 121.0, f64::NAN, f64::INFINITY] {
+            assert!(
+                matches!(plan(10.0, m).flights(), Err(ManeuverError::BadFlightMin(_))),
+                "{m}"
+            );
+        }
+        // The cap itself plans: 10,000 h of 120-min flights, and the count of 1-min flights.
+        assert_eq!(plan(10_000.0, 120.0).flights().unwrap().len(), 5_000);
+        let most = Campaign {
+            hours: Campaign::MAX_HOURS,
+            flight_min: 1.0,
+            ..Campaign::default()
+        };
+        assert_eq!(most.flight_count().unwrap(), 600_000);
+        assert_eq!(plan(1e-9, 20.0).flights().unwrap().len(), 1);
     }
 
     #[test]
@@ -1961,16 +2008,35 @@ impl Default for Campaign {
 const CAMPAIGN_TEST_EVERY: usize = 10;
 
 impl Campaign {
-    fn flights(&self, base_seed: u64) -> Vec<PlannedFlight> {
-        let n = (self.hours * 60.0 / self.flight_min.max(1.0))
-            .ceil()
-            .max(1.0) as usize;
+    /// The largest campaign planned, flight-hours: docs/scale.md projects one of 10,000 h (at most
+    /// 600,000 flights of a minute). A larger one is refused before anything is planned.
+    pub const MAX_HOURS: f64 = 10_000.0;
+    /// The flight lengths a campaign may have, minutes.
+    pub const FLIGHT_MIN: Range = (1.0, 120.0);
+
+    /// How many flights the campaign plans, or why it cannot be planned (hours not in
+    /// (0, [`Self::MAX_HOURS`]], flight length not in [`Self::FLIGHT_MIN`]).
+    pub fn flight_count(&self) -> Result<usize, ManeuverError> {
+        if !(self.hours > 0.0 && self.hours <= Self::MAX_HOURS) {
+            return Err(ManeuverError::BadCampaignHours(self.hours));
+        }
+        let (lo, hi) = Self::FLIGHT_MIN;
+        if !(self.flight_min >= lo && self.flight_min <= hi) {
+            return Err(ManeuverError::BadFlightMin(self.flight_min));
+        }
+        // In 1..=600,000 by the two checks above: the conversion is exact.
+        let n = (self.hours * 60.0 / self.flight_min).ceil().max(1.0);
+        Ok(n as usize)
+    }
+
+    fn flights(&self, base_seed: u64) -> Result<Vec<PlannedFlight>, ManeuverError> {
+        let n = self.flight_count()?;
         let mut rng = ChaCha12Rng::seed_from_u64(base_seed ^ 0x6361_6d70_6169_676e);
         let profiles = match &self.profiles {
             Some(p) if !p.is_empty() => p.as_slice(),
             _ => ProfileKind::ALL.as_slice(),
         };
-        (0..n)
+        Ok((0..n)
             .map(|i| {
                 let profile = profiles[i % profiles.len()];
                 let test = i % CAMPAIGN_TEST_EVERY == CAMPAIGN_TEST_EVERY - 1;
@@ -1993,7 +2059,7 @@ impl Campaign {
                     card: None,
                 }
             })
-            .collect()
+            .collect())
     }
 }
 
@@ -2025,16 +2091,17 @@ impl Plan {
         }
     }
 
-    /// The planned flights.
-    pub fn flights(&self) -> Vec<PlannedFlight> {
+    /// The planned flights; a campaign that cannot be planned ([`Campaign::flight_count`]) is an
+    /// error.
+    pub fn flights(&self) -> Result<Vec<PlannedFlight>, ManeuverError> {
         let mut f = match (self.preset, &self.campaign) {
-            (Preset::Campaign, Some(c)) => c.flights(self.seed),
+            (Preset::Campaign, Some(c)) => c.flights(self.seed)?,
             (p, _) => p.plan(self.seed),
         };
         if self.test_only {
             f.retain(|f| f.split == crate::flight::Split::Test);
         }
-        f
+        Ok(f)
     }
 }
 
@@ -2149,7 +2216,8 @@ impl Preset {
             return Self::ood_plan(base_seed);
         }
         if self == Preset::Campaign {
-            return Campaign::default().flights(base_seed);
+            // The default campaign (100 h of 20-min flights) always plans.
+            return Campaign::default().flights(base_seed).unwrap_or_default();
         }
         if self == Preset::FlightTest {
             return test_points()

@@ -43,20 +43,22 @@ pub struct RunArgs {
     /// target directory, thumbv7em-none-eabihf/firmware/firmware: this build's aircraft).
     #[arg(long)]
     pub elf: Option<PathBuf>,
-    /// QEMU binary.
-    #[arg(long, default_value = "qemu-system-arm")]
-    pub qemu: String,
-    /// How bytes reach the image in QEMU: semihosting on QEMU's stdin/stdout, whole frames per call
-    /// (fast), or USART1 on a TCP socket, the board's own path (one byte per QEMU main-loop round
-    /// trip: the 20-minute flight takes minutes). The same bytes and estimates either way.
-    #[arg(long, value_enum, default_value = "semihost")]
-    pub qemu_link: QemuLink,
+    /// QEMU binary, for --firmware qemu [default: qemu-system-arm].
+    #[arg(long)]
+    pub qemu: Option<String>,
+    /// How bytes reach the image in QEMU (--firmware qemu): semihosting on QEMU's stdin/stdout,
+    /// whole frames per call (fast), or USART1 on a TCP socket, the board's own path (one byte per
+    /// QEMU main-loop round trip: the 20-minute flight takes minutes). The same bytes and
+    /// estimates either way [default: semihost].
+    #[arg(long, value_enum)]
+    pub qemu_link: Option<QemuLink>,
     /// Serial device of a flashed board.
     #[arg(long)]
     pub port: Option<PathBuf>,
-    /// Baud rate of --port (the board's USART1 runs 115 200 Bd, from whichever clock it got).
-    #[arg(long, default_value_t = 115_200)]
-    pub baud: u32,
+    /// Baud rate of --port (the board's USART1 runs 115 200 Bd, from whichever clock it got)
+    /// [default: 115200].
+    #[arg(long, value_parser = baud_rate)]
+    pub baud: Option<u32>,
     /// Pace the link in real time: every byte leaves when the link model (at its baud, `--link-baud`)
     /// says it arrives, one frame per 50 ms of wall time. For a board on `--port`; without it frames
     /// go as fast as the firmware answers.
@@ -182,50 +184,133 @@ pub fn flight_on(
     seed: u64,
     max_time_s: Option<f64>,
 ) -> Result<Flight, RunError> {
+    flight_and_suite(source, aircraft_dir, seed, max_time_s).map(|(f, _)| f)
+}
+
+/// [`flight_on`], with the richest sensor suite the flight carries: a log's columns say which, a
+/// flown script carries every one.
+fn flight_and_suite(
+    source: &Source,
+    aircraft_dir: Option<&Path>,
+    seed: u64,
+    max_time_s: Option<f64>,
+) -> Result<(Flight, estimator_core::Suite), RunError> {
     if source.dataset.is_some() && aircraft_dir.is_some() {
         return Err(RunError::Usage(
             "--aircraft-dir goes with --script: a recorded flight (--dataset) already flew its aircraft"
                 .into(),
         ));
     }
-    let mut f = match (&source.dataset, &source.script) {
+    let (mut f, carries) = match (&source.dataset, &source.script) {
         (Some(csv), _) => Flight::read_log_in_dataset(csv)?,
-        (None, Some(script)) => crate::fly::fly_script(
-            script,
-            &crate::fly::FlyConfig {
-                seed,
-                max_time_s,
-                aircraft_dir: aircraft_dir.map(Path::to_path_buf),
-                ..Default::default()
-            },
-        )?,
+        (None, Some(script)) => (
+            crate::fly::fly_script(
+                script,
+                &crate::fly::FlyConfig {
+                    seed,
+                    max_time_s,
+                    aircraft_dir: aircraft_dir.map(Path::to_path_buf),
+                    ..Default::default()
+                },
+            )?,
+            estimator_core::Suite::Egi120,
+        ),
         (None, None) => return Err(RunError::EmptyFlight),
     };
+    let first_s = f.samples.first().map(|s| s.time_s);
     if let Some(t) = max_time_s {
         f.samples.retain(|s| s.time_s <= t + 1e-9);
+        // A log that has samples, or a script flown only that long, ends before its first one.
+        if f.samples.is_empty() && (first_s.is_some() || source.script.is_some()) {
+            return Err(RunError::Usage(format!(
+                "the flight has no sample within --max-time-s {t}{}: give a longer --max-time-s",
+                first_s.map_or_else(String::new, |x| format!(" (its first is at {x:.2} s)"))
+            )));
+        }
     }
     if f.samples.is_empty() {
         return Err(RunError::EmptyFlight);
     }
-    Ok(f)
+    Ok((f, carries))
 }
 
-/// The firmware that answers: `--firmware`, or serial with `--port`; a port with another firmware
-/// is refused rather than ignored.
-pub fn firmware_kind(a: &RunArgs) -> Result<FirmwareKind, RunError> {
-    match (a.firmware, &a.port) {
-        (Some(k @ (FirmwareKind::Host | FirmwareKind::Qemu)), Some(p)) => {
-            Err(RunError::Usage(format!(
-                "--port {} goes with a flashed board (--firmware serial), not --firmware {}: drop one of them",
-                p.display(),
-                clap::ValueEnum::to_possible_value(&k)
-                    .map_or_else(String::new, |v| v.get_name().to_string())
-            )))
-        }
-        (Some(k), _) => Ok(k),
-        (None, Some(_)) => Ok(FirmwareKind::Serial),
-        (None, None) => Ok(FirmwareKind::Host),
+/// Refuses a log whose columns lack channels the frames of `suite` carry: they would go invalid
+/// in every frame, and an estimator that reads them would score none.
+fn check_log_suite(
+    csv: &Path,
+    carries: estimator_core::Suite,
+    suite: estimator_core::Suite,
+) -> Result<(), RunError> {
+    use estimator_core::Suite;
+    if carries.delivers(suite) {
+        return Ok(());
     }
+    let missing = if carries == Suite::Table1 {
+        "EGI columns (`egi_roll_rad` … `fuel_qty_kg`)"
+    } else {
+        "120 Hz sub-sample columns (`gyro_p_rps_sub0` … `speedbrake_deg_sub5`)"
+    };
+    Err(RunError::Usage(format!(
+        "{} has no {missing}, which the `{}` frames the estimator reads carry (docs/flight-log.md): \
+         fly the log again with hil-sim (fly or generate write them), or run it with an estimator \
+         built for the `{}` suite",
+        csv.display(),
+        suite.name(),
+        carries.name()
+    )))
+}
+
+/// The firmware that answers: `--firmware`, or serial with `--port`. A flag of another firmware
+/// (`--port`/`--baud` of a board, `--elf`/`--qemu`/`--qemu-link` of QEMU) is refused rather than
+/// ignored, and a board needs its `--port`.
+pub fn firmware_kind(a: &RunArgs) -> Result<FirmwareKind, RunError> {
+    use FirmwareKind::{Host, Qemu, Serial};
+    let kind = match (a.firmware, &a.port) {
+        (Some(k), _) => k,
+        (None, Some(_)) => Serial,
+        (None, None) => Host,
+    };
+    let name = |k: FirmwareKind| {
+        clap::ValueEnum::to_possible_value(&k)
+            .map_or_else(String::new, |v| v.get_name().to_string())
+    };
+    let show = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let own: [(&str, Option<String>, FirmwareKind); 5] = [
+        ("--port", show(&a.port), Serial),
+        ("--baud", a.baud.map(|b| b.to_string()), Serial),
+        ("--elf", show(&a.elf), Qemu),
+        ("--qemu", a.qemu.clone(), Qemu),
+        (
+            "--qemu-link",
+            a.qemu_link
+                .and_then(|l| clap::ValueEnum::to_possible_value(&l))
+                .map(|v| v.get_name().to_string()),
+            Qemu,
+        ),
+    ];
+    for (flag, value, owner) in own {
+        if let Some(v) = value
+            && owner != kind
+        {
+            let what = if owner == Serial {
+                "a flashed board"
+            } else {
+                "QEMU"
+            };
+            return Err(RunError::Usage(format!(
+                "{flag} {v} goes with {what} (--firmware {}), not --firmware {}: drop one of them",
+                name(owner),
+                name(kind)
+            )));
+        }
+    }
+    if kind == Serial && a.port.is_none() {
+        return Err(RunError::Usage(
+            "--firmware serial needs --port DEVICE: the board's serial port, e.g. /dev/ttyACM0"
+                .into(),
+        ));
+    }
+    Ok(kind)
 }
 
 /// Opens the firmware `kind` ([`firmware_kind`]).
@@ -234,16 +319,15 @@ pub fn open_target(a: &RunArgs, kind: FirmwareKind) -> Result<Box<dyn Target>, R
         FirmwareKind::Host => Box::new(InProcess::new()),
         FirmwareKind::Qemu => {
             let elf = a.elf.clone().unwrap_or_else(default_elf);
-            Box::new(Qemu::start(&a.qemu, &elf, a.qemu_link)?)
+            let qemu = a.qemu.as_deref().unwrap_or("qemu-system-arm");
+            Box::new(Qemu::start(qemu, &elf, a.qemu_link.unwrap_or_default())?)
         }
         FirmwareKind::Serial => {
-            let port = a.port.clone().ok_or_else(|| {
-                RunError::Serial(
-                    PathBuf::new(),
-                    "--firmware serial needs --port /dev/ttyX".into(),
-                )
-            })?;
-            Box::new(Serial::open(&port, a.baud)?)
+            let port = a
+                .port
+                .clone()
+                .ok_or_else(|| RunError::Usage("--firmware serial needs --port DEVICE".into()))?;
+            Box::new(Serial::open(&port, a.baud.unwrap_or(115_200))?)
         }
     })
 }
@@ -269,6 +353,16 @@ pub fn write_outputs(dir: &Path, o: &RunOutcome, s: &score::Summary) -> Result<W
     std::fs::write(&w.json, text).map_err(|e| out(&w.json, e.to_string()))?;
     score::plot::write_png(&w.png, &o.records, s).map_err(|e| out(&w.png, e.to_string()))?;
     Ok(w)
+}
+
+/// A `--baud` value: a whole number of bits per second, at least 1.
+fn baud_rate(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(b) if b > 0 => Ok(b),
+        _ => Err(format!(
+            "`{s}`: give a baud rate, a positive whole number, e.g. 115200"
+        )),
+    }
 }
 
 /// A `--suite` value that names no suite.
@@ -342,11 +436,13 @@ pub fn run(a: &RunArgs) -> Result<score::Summary, RunError> {
         FirmwareLog::install();
     }
     let aircraft_dir = a.aircraft.dir()?;
-    let flight = flight_on(&a.source, aircraft_dir.as_deref(), a.seed, a.max_time_s)?;
-    if let Some(csv) = &a.source.dataset
-        && !a.any_time_base
-    {
-        crate::dataset::check_time_base(csv, &flight)?;
+    let (flight, carries) =
+        flight_and_suite(&a.source, aircraft_dir.as_deref(), a.seed, a.max_time_s)?;
+    if let Some(csv) = &a.source.dataset {
+        check_log_suite(csv, carries, suite)?;
+        if !a.any_time_base {
+            crate::dataset::check_time_base(csv, &flight)?;
+        }
     }
     check_faults(&a.faults, &flight)?;
     let mut faults = a.faults.clone();
@@ -610,5 +706,93 @@ mod silicon_time {
         assert_eq!(super::SILICON_SYSCLK_HZ, 168_000_000);
         assert_eq!(super::cycles_to_us(8_400_000), 50_000.0);
         assert_eq!(super::cycles_to_us(168), 1.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        run: RunArgs,
+    }
+
+    fn kind(args: &[&str]) -> Result<FirmwareKind, String> {
+        let all = ["run", "--dataset", "f.csv"].iter().chain(args);
+        let cli = <Cli as clap::Parser>::try_parse_from(all).map_err(|e| e.to_string())?;
+        firmware_kind(&cli.run).map_err(|e| e.to_string())
+    }
+
+    /// A flag of another firmware is refused, not ignored, each the same way; a board needs its
+    /// port; a firmware's own flags are taken.
+    #[test]
+    fn a_flag_of_another_firmware_is_refused() {
+        for (args, says) in [
+            (
+                &["--firmware", "host", "--elf", "a.elf"][..],
+                "--elf a.elf goes with QEMU (--firmware qemu), not --firmware host",
+            ),
+            (
+                &["--firmware", "host", "--qemu", "q"],
+                "--qemu q goes with QEMU (--firmware qemu), not --firmware host",
+            ),
+            (
+                &["--firmware", "host", "--qemu-link", "usart"],
+                "--qemu-link usart goes with QEMU (--firmware qemu), not --firmware host",
+            ),
+            (
+                &["--firmware", "qemu", "--baud", "9600"],
+                "--baud 9600 goes with a flashed board (--firmware serial), not --firmware qemu",
+            ),
+            (
+                &["--port", "/dev/ttyACM0", "--elf", "a.elf"],
+                "--elf a.elf goes with QEMU (--firmware qemu), not --firmware serial",
+            ),
+            (&["--firmware", "serial"], "--firmware serial needs --port"),
+            (&["--baud", "0"], "give a baud rate"),
+        ] {
+            let e = kind(args).unwrap_err();
+            assert!(e.contains(says), "{args:?}: {e}");
+        }
+        assert_eq!(kind(&[]), Ok(FirmwareKind::Host));
+        assert_eq!(
+            kind(&[
+                "--firmware",
+                "qemu",
+                "--elf",
+                "a",
+                "--qemu-link",
+                "usart",
+                "--qemu",
+                "q"
+            ]),
+            Ok(FirmwareKind::Qemu)
+        );
+        assert_eq!(
+            kind(&["--port", "/dev/ttyACM0", "--baud", "9600"]),
+            Ok(FirmwareKind::Serial)
+        );
+    }
+
+    /// Frames of a suite whose channels the log lacks are refused, saying which columns.
+    #[test]
+    fn a_log_without_the_columns_the_frames_carry_is_refused() {
+        use estimator_core::Suite;
+        let csv = Path::new("log.csv");
+        let e = check_log_suite(csv, Suite::Egi, Suite::Egi120)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no 120 Hz sub-sample columns") && e.contains("built for the `egi` suite"),
+            "{e}"
+        );
+        let e = check_log_suite(csv, Suite::Table1, Suite::Egi)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no EGI columns"), "{e}");
+        assert!(check_log_suite(csv, Suite::Egi120, Suite::Egi120).is_ok());
+        assert!(check_log_suite(csv, Suite::Egi, Suite::Table1).is_ok());
     }
 }
