@@ -57,11 +57,13 @@ def description(name):
         raise SystemExit(f"no aircraft description {path} with a `[jsbsim] model` ({e}); described: {known}")
 
 
-def named_variants(aircraft):
-    """The named variants of an aircraft (airframes/AIRCRAFT-variants/*.toml, the development set), in
-    file order: (name, path, spec), the name the spec's `name` or else its file's."""
+def named_variants(aircraft, folder=None):
+    """The named variants of an aircraft (airframes/AIRCRAFT-variants/*.toml, the development set, or
+    the specs in `folder`), in file order: (name, path, spec), the name the spec's `name` or else its
+    file's."""
     out = []
-    for p in sorted(glob.glob(os.path.join(ROOT, "airframes", f"{aircraft}-variants", "*.toml"))):
+    folder = folder or os.path.join(ROOT, "airframes", f"{aircraft}-variants")
+    for p in sorted(glob.glob(os.path.join(folder, "*.toml"))):
         with open(p, "rb") as f:
             spec = tomllib.load(f)
         out.append((spec.get("name", os.path.basename(p)[:-5]), p, spec))
