@@ -498,3 +498,127 @@ fn eval_reads_a_one_flight_dataset_from_fly() {
     );
     refused(&o, "has no train flight; pass --split test");
 }
+
+/// A path as the `&str` an argument list takes.
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `--hours inf` once panicked planning an endless campaign, `1e15` aborted allocating it.
+#[test]
+fn a_campaign_of_endless_hours_is_refused_and_writes_nothing() {
+    let d = scratch("hours");
+    let out = d.join("c");
+    for hours in ["inf", "1e15", "NaN", "10000.5"] {
+        let o = run(
+            "hil-sim",
+            &[
+                "generate",
+                "--preset",
+                "campaign",
+                "--hours",
+                hours,
+                "--out",
+                s(&out),
+            ],
+        );
+        refused(&o, "more than 0 and at most 10000");
+    }
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 0);
+}
+
+/// Values of ±1e308 once made the axis code spin forever; no panel once left a 12-byte PNG.
+#[test]
+fn a_plot_that_cannot_be_drawn_is_refused_and_writes_nothing() {
+    let d = scratch("plots");
+    let png = d.join("x.png");
+    let spec = d.join("spec.json");
+    for (cmd, text, needle) in [
+        (
+            "lines",
+            r#"{"panels":[{"title":"t","xlabel":"x","ylabel":"y","series":[{"name":"s","points":[[0,1e308],[1,-1e308]]}]}]}"#,
+            "too wide for an axis",
+        ),
+        (
+            "bars",
+            r#"{"series":["a"],"panels":[{"title":"t","xlabel":"x","rows":[["r1",[1e308]],["r2",[-1e308]]]}]}"#,
+            "too wide for an axis",
+        ),
+        (
+            "bars",
+            r#"{"series":["a"],"panels":[]}"#,
+            "no panel to draw",
+        ),
+    ] {
+        std::fs::write(&spec, text).unwrap();
+        refused(
+            &run("trainer", &[cmd, "--spec", s(&spec), "--out", s(&png)]),
+            needle,
+        );
+        assert!(!png.exists(), "{cmd}: {text} left {}", png.display());
+    }
+    for out in ["x.txt", "x"] {
+        let o = run(
+            "trainer",
+            &["bars", "--spec", s(&spec), "--out", s(&d.join(out))],
+        );
+        refused(&o, "give a file name ending in .png");
+    }
+}
+
+/// An --out that names a file is refused before the dataset is read or anything trains.
+#[test]
+fn an_out_that_is_a_file_is_refused_before_any_work() {
+    let d = scratch("outfile");
+    let file = d.join("afile");
+    std::fs::write(&file, "x").unwrap();
+    let missing = d.join("no-dataset");
+    for args in [
+        &["train", "--data", s(&missing), "--out", s(&file)][..],
+        &["bench-epoch", "--data", s(&missing), "--out", s(&file)],
+        &[
+            "finetune",
+            "--model",
+            s(&missing),
+            "--flight-test",
+            s(&missing),
+            "--out",
+            s(&file),
+        ],
+    ] {
+        refused(&run("trainer", args), "is a file, not a directory");
+    }
+    refused(
+        &run(
+            "hil-sim",
+            &["generate", "--preset", "ci", "--out", s(&file)],
+        ),
+        "is a file, not a directory",
+    );
+    assert_eq!(std::fs::read(&file).unwrap(), b"x");
+}
+
+/// `hil-sim run`: a flag of another firmware and a board without a port are refused alike.
+#[test]
+fn run_refuses_flags_of_another_firmware() {
+    let csv = "no-such-log.csv";
+    for (extra, needle) in [
+        (
+            &["--firmware", "serial"][..],
+            "--firmware serial needs --port",
+        ),
+        (
+            &["--firmware", "host", "--elf", "x.elf"],
+            "--elf x.elf goes with QEMU (--firmware qemu), not --firmware host",
+        ),
+        (
+            &["--firmware", "host", "--qemu-link", "usart"],
+            "--qemu-link usart goes with QEMU",
+        ),
+        (&["--firmware", "host", "--baud", "0"], "give a baud rate"),
+    ] {
+        let mut args = vec!["run", "--dataset", csv];
+        args.extend_from_slice(extra);
+        refused(&run("hil-sim", &args), needle);
+    }
+}

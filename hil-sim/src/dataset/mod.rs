@@ -947,11 +947,9 @@ mod tests {
 
     /// A manifest whose flight points outside its directory, or lists a name twice, is refused
     /// when it is read, saying which flight.
-    #[test]
-    fn a_manifest_flight_outside_the_dataset_or_listed_twice_is_refused() {
-        let dir = std::env::temp_dir().join(format!("hil-ds-escape-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let entry = |name: &str, file: &str| FlightEntry {
+    /// A one-sample test flight `name` in `file`, for manifests the tests write.
+    fn entry(name: &str, file: &str) -> FlightEntry {
+        FlightEntry {
             file: file.into(),
             name: name.into(),
             split: Split::Test,
@@ -964,7 +962,13 @@ mod tests {
             zones: None,
             faults: Vec::new(),
             boom: None,
-        };
+        }
+    }
+
+    #[test]
+    fn a_manifest_flight_outside_the_dataset_or_listed_twice_is_refused() {
+        let dir = std::env::temp_dir().join(format!("hil-ds-escape-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
         let mut m = Manifest {
             format: Manifest::FORMAT,
             suites: Manifest::written_suites(),
@@ -1076,20 +1080,7 @@ mod tests {
         std::fs::write(dir.join("dead.csv"), empty_subs).unwrap();
         assert!(m.read_flight(&dir, "dead.csv").is_ok());
         // `hil-sim run --dataset` of a flight listed in the manifest beside it: the same check.
-        m.flights = vec![FlightEntry {
-            file: "old.csv".into(),
-            name: "old".into(),
-            split: Split::Test,
-            profile: "gentle".into(),
-            seed: 0,
-            duration_s: 0.05,
-            samples: 1,
-            sha256: String::new(),
-            cut: None,
-            zones: None,
-            faults: Vec::new(),
-            boom: None,
-        }];
+        m.flights = vec![entry("old", "old.csv")];
         m.write(&dir).unwrap();
         let err = Flight::read_log_in_dataset(&p).unwrap_err().to_string();
         assert!(err.contains("egi120"), "{err}");
