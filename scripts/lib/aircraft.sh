@@ -77,6 +77,20 @@ analysis_binaries() {
   done
 }
 
+# analysis_aircraft NAME...: the AIRCRAFT arguments of an analysis script, every one checked
+# (described, its hil-sim and trainer built) before any aircraft's work starts; -h/--help prints
+# the script's header, another option is refused with its usage line.
+analysis_aircraft() {
+  local name
+  for name in "$@"; do
+    case "$name" in
+      -h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$0"; exit 0 ;;
+      -*) echo "${0#"$root"/}: unknown option $name" >&2; echo "usage: ${0#"$root"/} [AIRCRAFT ...]" >&2; exit 2 ;;
+    esac
+    analysis_binaries "$name" hil-sim trainer
+  done
+}
+
 # aircraft_build NAME: aircraft_target, and exports ESTIMATOR_AIRCRAFT and CARGO_TARGET_DIR for
 # another aircraft (unsets them for the default one). Another aircraft's first build starts from
 # the default's (seed_build).

@@ -17,14 +17,7 @@ cd "$root"
 # shellcheck source=../../lib/aircraft.sh
 . scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, paper_test_flights
 [ $# -gt 0 ] || set -- "$default_aircraft" c172p
-# Every name is checked (described, built) before any aircraft's work starts.
-for name in "$@"; do
-  case "$name" in
-    -h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$root/scripts/analysis/beta-by-gust/run.sh"; exit 0 ;;
-    -*) echo "beta-by-gust: unknown option $name" >&2; echo "usage: scripts/analysis/beta-by-gust/run.sh [AIRCRAFT ...]" >&2; exit 2 ;;
-  esac
-  analysis_binaries "$name" hil-sim trainer
-done
+analysis_aircraft "$@"  # every name checked before any aircraft's work starts
 [ -x .venv/bin/python ] || { echo "beta-by-gust: no .venv: run scripts/bootstrap" >&2; exit 2; }
 args=()
 for name in "$@"; do

@@ -23,14 +23,7 @@ cd "$root"
 # shellcheck source=../../lib/aircraft.sh
 . scripts/lib/aircraft.sh  # default_aircraft, analysis_binaries, aircraft_model
 [ $# -gt 0 ] || set -- "$default_aircraft"
-# Every name is checked (described, built) before any aircraft's work starts.
-for name in "$@"; do
-  case "$name" in
-    -h|--help) awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "$root/scripts/analysis/gust-rotation/run.sh"; exit 0 ;;
-    -*) echo "gust-rotation: unknown option $name" >&2; echo "usage: scripts/analysis/gust-rotation/run.sh [AIRCRAFT ...]" >&2; exit 2 ;;
-  esac
-  analysis_binaries "$name" hil-sim trainer
-done
+analysis_aircraft "$@"  # every name checked before any aircraft's work starts
 [ -x .venv/bin/python ] || { echo "gust-rotation: no .venv: run scripts/bootstrap" >&2; exit 2; }
 here=scripts/analysis/gust-rotation
 export HIL_PYTHON="${HIL_PYTHON:-$root/.venv/bin/python}"
