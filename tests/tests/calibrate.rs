@@ -3,7 +3,8 @@
 //! (`airframes/NAME-variants/c-pure-scales.toml`: lift × 0.94, side force × 1.10, drag × 1.10),
 //! calibrated with and without its truth columns, against the same card flown on the model
 //! (JSBSim's model of the aircraft) on four other sensor seeds (its CG and pitch moment the
-//! model's too). A model card on the flight test's seed is refused. scripts/test runs it in every
+//! model's too), then with its roll and yaw moments over the card flown on the first calibrated
+//! aircraft. A model card on the flight test's seed is refused. scripts/test runs it in every
 //! build whose aircraft has development variants.
 
 use std::path::{Path, PathBuf};
@@ -260,7 +261,96 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
         se < 0.15 && (k - 1.0).abs() <= 2.0 * se,
         "pitch scale {k} ± {se}, truth 1"
     );
+    moment_cards(&dir, &dir.join("ft"), &models);
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The roll and yaw moments over the card flown on the first calibrated aircraft (`cal`'s
+/// aircraft.toml, with the moments it carries): the scales are the flight test's over that card's
+/// fit divided by the carried scale, C's moments (the model's) come out 1 within 2σ, and the
+/// forces stay the model cards'. Moment cards without model cards, or without the first
+/// calibration, are refused and nothing is written.
+fn moment_cards(dir: &Path, ft: &Path, models: &[PathBuf]) {
+    let cal = dir.join("cal");
+    let aircraft = dir.join("first-aircraft");
+    ok(Command::new(root().join("scripts/airframe-variant"))
+        .arg(cal.join("aircraft.toml"))
+        .args([
+            "--model",
+            estimator_core::aircraft::AIRCRAFT.jsbsim_model,
+            "--out",
+        ])
+        .arg(&aircraft));
+    let moments: Vec<PathBuf> = (2..=5)
+        .map(|seed| {
+            let card_dir = dir.join(format!("moment-ft-seed{seed}"));
+            card(seed, &card_dir, Some(&aircraft));
+            card_dir
+        })
+        .collect();
+    let with_moment_cards = |cmd: &mut Command, first: bool| {
+        for m in &moments {
+            cmd.arg("--moment-flight-test").arg(m);
+        }
+        if first {
+            cmd.arg("--first-calibration")
+                .arg(cal.join("calibration.json"));
+        }
+    };
+    let refused = dir.join("cal-moments-refused");
+    for (models, first, what) in [
+        (&[][..], true, "needs --model-flight-test"),
+        (models, false, "--first-calibration"),
+    ] {
+        let mut cmd = calibrate(ft, models, &refused);
+        with_moment_cards(&mut cmd, first);
+        let o = cmd.output().unwrap();
+        assert!(
+            !o.status.success() && String::from_utf8_lossy(&o.stderr).contains(what),
+            "{o:?}"
+        );
+        assert!(!refused.exists());
+    }
+    let out = dir.join("cal-moments");
+    let mut cmd = calibrate(ft, models, &out);
+    with_moment_cards(&mut cmd, true);
+    ok(&mut cmd);
+    let json = |p: PathBuf| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+    };
+    let (first, r) = (
+        json(cal.join("calibration.json")),
+        json(out.join("calibration.json")),
+    );
+    assert_eq!(r["moment_card_seeds"], serde_json::json!([2, 3, 4, 5]));
+    assert_eq!(r["moment_cards"], 4);
+    let v = |e: &serde_json::Value| e["value"].as_f64().unwrap();
+    for (i, axis) in ["roll", "yaw"].into_iter().enumerate() {
+        let carried = first["applied_moments"][i].as_f64().unwrap_or(1.0);
+        assert_eq!(r["moment_card_carries"][i].as_f64(), Some(carried));
+        let (k, se) = (
+            v(&r["scales"][axis]),
+            r["scales"][axis]["std_error"].as_f64().unwrap(),
+        );
+        let over =
+            v(&r["flight_test"]["scales"][axis]) / (v(&r["moment_card"]["scales"][axis]) / carried);
+        assert!((k - over).abs() < 1e-12, "{axis}: {k}, not {over}");
+        assert!(
+            (k - 1.0).abs() <= 2.0 * se,
+            "{axis} scale {k} ± {se}, truth 1"
+        );
+    }
+    // The forces stay the model cards' identification.
+    for what in [
+        "lift",
+        "sideslip",
+        "side_controls",
+        "drag",
+        "pitch",
+        "cg_aft_in",
+    ] {
+        assert_eq!(r["scales"][what], first["scales"][what], "{what}");
+    }
 }
 
 /// A copy of the dataset `from` in `to` with every truth column deleted from every flight CSV.

@@ -1923,6 +1923,11 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .flap
         .map_or(String::new(), |e| format!(", flap lift x {:.5}", e.value));
     let drag = scales.drag.map(|d| d.value);
+    let moment_text = if r.moment_card.is_some() {
+        "; roll and yaw over it flown on a first calibrated aircraft"
+    } else {
+        ""
+    };
     let how = match (corrected, drag) {
         (true, Some(_)) => "equation error, over the same card flown on the model",
         (true, None) => {
@@ -1949,7 +1954,7 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .collect();
     let mut t = format!(
         "name = \"calibrated\"\n\
-         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}{flap_text}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){drag_text}{moments_text} ({how}).\"\n\
+         description = \"Calibrated from the flight-test dataset {} ({} flights) by trainer calibrate: lift x {l:.5}{flap_text}, lift offset {o:+.5}, side force x {sb:.5} (sideslip terms) and x {sc:.5} (surface and rate terms){drag_text}{moments_text} ({how}{moment_text}).\"\n\
          [axes]\nLIFT = {l:.5}\nSIDE = {sc:.5}\n",
         ft.display(),
         c.flights.len()
@@ -2001,6 +2006,33 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
     t
 }
 
+/// The roll and yaw moment scales the calibrated aircraft of a first identification carries (its
+/// `calibration.json`'s `applied_moments`; 1 where it keeps the model's).
+pub fn carried_moments(path: &Path) -> Result<[f64; 2]> {
+    let fail = |why: String| Error::FirstCalibration {
+        path: path.to_path_buf(),
+        why,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| fail(e.to_string()))?;
+    let applied = v
+        .get("applied_moments")
+        .and_then(|a| a.as_array())
+        .filter(|a| a.len() == 2)
+        .ok_or_else(|| fail("no `applied_moments` pair: not a calibration.json".into()))?;
+    let mut carries = [1.0; 2];
+    for (c, a) in carries.iter_mut().zip(applied) {
+        *c = match a {
+            serde_json::Value::Null => 1.0,
+            a => a
+                .as_f64()
+                .filter(|k| k.is_finite() && *k > 0.0)
+                .ok_or_else(|| fail(format!("applied moment scale {a}: not a positive number")))?,
+        };
+    }
+    Ok(carries)
+}
+
 /// What `trainer calibrate` writes to calibration.json: the flight test's identification, the model
 /// card's (when given) and the scales the calibrated aircraft carries.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -2029,6 +2061,17 @@ pub struct Report {
     pub model_cards: usize,
     /// Their sensor seeds, in the order given (each `None` where its manifest records none).
     pub model_card_seeds: Vec<Option<u64>>,
+    /// The same card flown on the calibrated aircraft of a first identification (over the model
+    /// cards alone): the roll and yaw fits' bias where the aircraft flies, divided out of the roll
+    /// and yaw scales in place of the model card's. Its roll and yaw scales are its fits' raw
+    /// ones, pooled like the model cards'; `None` without one.
+    pub moment_card: Option<Calibration>,
+    /// The roll and yaw moment scales that aircraft carries (1: the model's); the bias is the
+    /// moment card's scale over it.
+    pub moment_card_carries: [f64; 2],
+    /// How many moment cards were pooled, and their sensor seeds.
+    pub moment_cards: usize,
+    pub moment_card_seeds: Vec<Option<u64>>,
     /// The model's lift terms the flap-lift scale applies to (JSBSim function names).
     pub flap_terms: Vec<String>,
     /// The lift term the offset joins.
@@ -2039,16 +2082,33 @@ pub struct Report {
     pub stall_knots_deg: Vec<f64>,
 }
 
+/// Several cards' identifications as one: the first card's, its scales the cards' pooled
+/// ([`Scales::pooled`]); `None` without a card.
+fn pooled_card(cards: Vec<Calibration>) -> Option<Calibration> {
+    let pooled = Scales::pooled(&cards.iter().map(|c| c.scales).collect::<Vec<_>>());
+    cards
+        .into_iter()
+        .next()
+        .zip(pooled)
+        .map(|(first, scales)| Calibration { scales, ..first })
+}
+
 impl Report {
-    pub fn new(flight_test: Calibration, model_cards: Vec<Calibration>) -> Report {
-        let cards = model_cards.len();
+    /// The flight test's identification over the model cards' (each a [`Calibration`] of the same
+    /// card flown on the model) and, for the roll and yaw moments, over the moment cards' (the card
+    /// flown on a first calibrated aircraft, which carries the roll and yaw scales `carries`;
+    /// none: the model cards' serve). Moment cards count only beside model cards.
+    pub fn new(
+        flight_test: Calibration,
+        model_cards: Vec<Calibration>,
+        moment_cards: Vec<Calibration>,
+        carries: [f64; 2],
+    ) -> Report {
         let model_card_seeds = model_cards.iter().map(|c| c.sensor_seed).collect();
-        let pooled = Scales::pooled(&model_cards.iter().map(|c| c.scales).collect::<Vec<_>>());
-        let model_card = model_cards
-            .into_iter()
-            .next()
-            .zip(pooled)
-            .map(|(first, scales)| Calibration { scales, ..first });
+        let moment_card_seeds = moment_cards.iter().map(|c| c.sensor_seed).collect();
+        let (cards, moments) = (model_cards.len(), moment_cards.len());
+        let model_card = pooled_card(model_cards);
+        let moment_card = pooled_card(moment_cards).filter(|_| model_card.is_some());
         let mut scales = match &model_card {
             Some(m) => flight_test.scales.over(&m.scales),
             // The moment scales mean something only over the model card's: alone they carry the
@@ -2062,6 +2122,26 @@ impl Report {
                 ..flight_test.scales
             },
         };
+        // The roll and yaw fits' bias depends on where the aircraft flies (its α, its sideslip):
+        // on an aircraft with 10 % less lift and a softer stall the model card's yaw bias missed
+        // by 40 % (docs/calibration.md). The card flown on a first calibrated aircraft flies where
+        // the aircraft does; its bias is its fit over the scale that aircraft carries.
+        if let Some(mc) = &moment_card {
+            let bias = |e: Option<Estimate>, carried: f64| {
+                e.map(|e| Estimate {
+                    value: e.value / carried,
+                    std_error: e.std_error / carried,
+                })
+            };
+            let card = Scales {
+                roll: bias(mc.scales.roll, carries[0]),
+                yaw: bias(mc.scales.yaw, carries[1]),
+                ..mc.scales
+            };
+            let over = flight_test.scales.over(&card);
+            scales.roll = over.roll;
+            scales.yaw = over.yaw;
+        }
         // The drag the flight test's lift reads at high α: k_D is fitted below the first knot,
         // and the drag's rise toward the stall is not observed, so the prior stays, with k_D's
         // own 1σ beside it.
@@ -2084,6 +2164,14 @@ impl Report {
             model_card,
             model_cards: cards,
             model_card_seeds,
+            moment_cards: if moment_card.is_some() { moments } else { 0 },
+            moment_card_carries: if moment_card.is_some() {
+                carries
+            } else {
+                [1.0; 2]
+            },
+            moment_card,
+            moment_card_seeds,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
             offset_term: MODEL.lift.first().map(|t| t.name.to_string()),
             sideslip_terms: sideslip_side_terms().map(|t| t.name.to_string()).collect(),
@@ -2151,13 +2239,25 @@ fn moments_markdown(r: &Report) -> String {
         e(c.scales.yaw),
         arm(ft)
     ));
-    if let Some(mc) = &r.model_card {
-        m.push_str(&format!(
-            "| the same card flown on the model | {} | {} | {} |\n",
-            e(mc.scales.roll),
-            e(mc.scales.yaw),
-            mc.moments.as_ref().map_or("– | –".into(), arm)
-        ));
+    let cards = [
+        ("the same card flown on the model", &r.model_card),
+        (
+            &*format!(
+                "the same card flown on the first calibrated aircraft (roll × {:.4}, yaw × {:.4})",
+                r.moment_card_carries[0], r.moment_card_carries[1]
+            ),
+            &r.moment_card,
+        ),
+    ];
+    for (what, card) in cards {
+        if let Some(mc) = card {
+            m.push_str(&format!(
+                "| {what} | {} | {} | {} |\n",
+                e(mc.scales.roll),
+                e(mc.scales.yaw),
+                mc.moments.as_ref().map_or("– | –".into(), arm)
+            ));
+        }
     }
     let applied = r.applied_moments;
     m.push_str(&format!(
@@ -2171,8 +2271,28 @@ fn moments_markdown(r: &Report) -> String {
          the ROLL and YAW axes at the corrected boom's air data. The side force's moment arm (the \
          aerodynamic reference point's height above the CG in roll, its distance ahead of the CG in \
          yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale; the scale is written into the \
-         calibrated aircraft only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more.\n"
+         calibrated aircraft only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more and lies \
+         within {:.2}–{:.2}.\n",
+        MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
     ));
+    m.push_str(&if r.moment_card.is_some() {
+        let seeds: Vec<String> = r
+            .moment_card_seeds
+            .iter()
+            .map(|s| s.map_or("?".into(), |s| s.to_string()))
+            .collect();
+        format!(
+            "\nThe roll and yaw scales are the flight test's over the bias of the card flown on the \
+             first calibrated aircraft (the forces, CG and moments identified over the model cards \
+             alone; {} cards, sensor seeds {}, pooled as the model cards): its fit over the scale \
+             that aircraft carries. The fit's bias depends on where the aircraft flies, and that \
+             card flies where it does.\n",
+            r.moment_cards,
+            seeds.join(", ")
+        )
+    } else {
+        "\nThe roll and yaw scales are the flight test's over the model card's.\n".to_string()
+    });
     m.push_str(&pitch_markdown(r));
     m
 }

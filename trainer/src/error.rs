@@ -23,6 +23,11 @@ pub enum Error {
     /// A model card that cannot stand for the model in a flight-test calibration.
     #[error("model card {card}: {why}")]
     ModelCard { card: PathBuf, why: String },
+    /// A first calibration (`calibration.json`) whose carried moments cannot be read.
+    #[error(
+        "first calibration {path}: {why} (give the calibration.json trainer calibrate wrote beside the aircraft.toml the moment cards flew)"
+    )]
+    FirstCalibration { path: PathBuf, why: String },
     /// Sweep results that cannot be read or do not belong to the grid.
     #[error("sweep: {0}")]
     Sweep(String),

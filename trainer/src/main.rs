@@ -545,6 +545,19 @@ enum Cmd {
         /// their spread joins the 1σ.
         #[arg(long, value_name = "DIR")]
         model_flight_test: Vec<PathBuf>,
+        /// The same test card flown on the calibrated aircraft of a first `trainer calibrate`
+        /// with the model cards alone (its aircraft.toml made an aircraft by
+        /// `scripts/airframe-variant`), on sensor seeds other than the flight test's. The roll and
+        /// yaw scales are then the flight test's over these cards' bias (their fit over the scale
+        /// that aircraft carries, pooled as the model cards): the moment fits' bias depends on
+        /// where the aircraft flies. Needs --model-flight-test and --first-calibration;
+        /// scripts/calibrate flies 8.
+        #[arg(long, value_name = "DIR", requires = "first_calibration")]
+        moment_flight_test: Vec<PathBuf>,
+        /// The first calibration's calibration.json, whose aircraft the moment cards flew: the
+        /// roll and yaw scales that aircraft carries.
+        #[arg(long, value_name = "FILE", requires = "moment_flight_test")]
+        first_calibration: Option<PathBuf>,
         /// Output directory.
         #[arg(long, value_name = "DIR", default_value = "out/calibration")]
         out: PathBuf,
@@ -1602,20 +1615,42 @@ fn cmd_finetune(
     Ok(())
 }
 
-fn cmd_calibrate(ft: &Path, model_ft: &[PathBuf], out: &Path, json: bool) -> Result<()> {
+fn cmd_calibrate(
+    ft: &Path,
+    model_ft: &[PathBuf],
+    moment_ft: &[PathBuf],
+    first: Option<&Path>,
+    out: &Path,
+    json: bool,
+) -> Result<()> {
     let t0 = std::time::Instant::now();
+    if model_ft.is_empty() && !moment_ft.is_empty() {
+        bail!(
+            "--moment-flight-test needs --model-flight-test: the aircraft the moment cards fly is the calibrated aircraft of a first trainer calibrate --model-flight-test CARD ..., and the forces stay over the model cards"
+        );
+    }
+    let carries = match first {
+        Some(f) => trainer::calibrate::carried_moments(f)
+            .with_context(|| format!("reading the first calibration {}", f.display()))?,
+        None => [1.0; 2],
+    };
     trainer::calibrate::check_model_cards(ft, model_ft)
         .with_context(|| format!("checking the model cards against {}", ft.display()))?;
+    trainer::calibrate::check_model_cards(ft, moment_ft)
+        .with_context(|| format!("checking the moment cards against {}", ft.display()))?;
     let c = trainer::calibrate::calibrate(ft, None)
         .with_context(|| format!("calibrating from {}", ft.display()))?;
-    let model_cards = model_ft
-        .iter()
-        .map(|d| {
-            trainer::calibrate::calibrate(d, Some(c.structure))
-                .with_context(|| format!("identifying the model card {}", d.display()))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let r = trainer::calibrate::Report::new(c, model_cards);
+    let cards = |dirs: &[PathBuf], what: &str| {
+        dirs.iter()
+            .map(|d| {
+                trainer::calibrate::calibrate(d, Some(c.structure))
+                    .with_context(|| format!("identifying the {what} {}", d.display()))
+            })
+            .collect::<Result<Vec<_>>>()
+    };
+    let model_cards = cards(model_ft, "model card")?;
+    let moment_cards = cards(moment_ft, "moment card")?;
+    let r = trainer::calibrate::Report::new(c, model_cards, moment_cards, carries);
     let spec = trainer::calibrate::spec_toml(&r, ft);
     let md =
         trainer::calibrate::markdown(&r, &command_line(), &machine(), t0.elapsed().as_secs_f64());
@@ -2692,9 +2727,18 @@ fn run() -> Result<()> {
         Cmd::Calibrate {
             flight_test,
             model_flight_test,
+            moment_flight_test,
+            first_calibration,
             out,
             json,
-        } => cmd_calibrate(flight_test, model_flight_test, out, *json),
+        } => cmd_calibrate(
+            flight_test,
+            model_flight_test,
+            moment_flight_test,
+            first_calibration.as_deref(),
+            out,
+            *json,
+        ),
         Cmd::Finetune {
             model,
             flight_test,
