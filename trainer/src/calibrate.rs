@@ -48,7 +48,10 @@
 //!    and the boom of that flight, never its truth) measures this bias, and the scales reported are
 //!    the flight test's over the model card's. The moment scales need it most (0.72 roll, 0.82 yaw
 //!    on the model's own aircraft: the empty inertia, the gyros' filter); without it none is
-//!    reported.
+//!    reported. The roll and yaw fits' bias also depends on where the aircraft flies the card, so
+//!    with `--moment-flight-test` (the card flown on the calibrated aircraft of a first
+//!    identification) the roll and yaw scales are the flight test's over that card's fits divided
+//!    by the scales that aircraft carries ([`moment_bias`]).
 //!
 //! Standard errors are least squares' σ²(XᵀX)⁻¹ inflated for the residuals' autocorrelation
 //! (effective sample size n·(1 − ρ₁)/(1 + ρ₁), ρ₁ the lag-1 autocorrelation), raised to the
@@ -1924,7 +1927,7 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .map_or(String::new(), |e| format!(", flap lift x {:.5}", e.value));
     let drag = scales.drag.map(|d| d.value);
     let moment_text = if r.moment_card.is_some() {
-        "; roll and yaw over it flown on a first calibrated aircraft"
+        "; roll and yaw over the same card flown on a first calibrated aircraft"
     } else {
         ""
     };
@@ -2039,8 +2042,9 @@ pub fn carried_moments(path: &Path) -> Result<[f64; 2]> {
 pub struct Report {
     /// The aircraft description whose model the identification evaluates (the build's).
     pub aircraft: &'static str,
-    /// The identified scales, over the model card's: the calibrated aircraft (`aircraft.toml`)
-    /// carries the force scales and [`Report::applied_moments`].
+    /// The identified scales, over the model card's (roll and yaw over the moment card's bias when
+    /// given): the calibrated aircraft (`aircraft.toml`) carries the force scales and
+    /// [`Report::applied_moments`].
     pub scales: Scales,
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
     /// `None`: the model's).
@@ -2080,6 +2084,23 @@ pub struct Report {
     pub sideslip_terms: Vec<String>,
     /// The α (deg) of the stall table's knots: the first holds 1, [`Scales::stall`] the others.
     pub stall_knots_deg: Vec<f64>,
+}
+
+/// The roll and yaw fits' bias of a card flown on an aircraft that carries the roll and yaw
+/// scales `carries`: its fits over them (a carried scale is exact, so the 1σ scales alike); the
+/// rest of `card` as it is.
+pub fn moment_bias(card: &Scales, carries: [f64; 2]) -> Scales {
+    let bias = |e: Option<Estimate>, carried: f64| {
+        e.map(|e| Estimate {
+            value: e.value / carried,
+            std_error: e.std_error / carried,
+        })
+    };
+    Scales {
+        roll: bias(card.roll, carries[0]),
+        yaw: bias(card.yaw, carries[1]),
+        ..*card
+    }
 }
 
 /// Several cards' identifications as one: the first card's, its scales the cards' pooled
@@ -2127,18 +2148,7 @@ impl Report {
         // by 40 % (docs/calibration.md). The card flown on a first calibrated aircraft flies where
         // the aircraft does; its bias is its fit over the scale that aircraft carries.
         if let Some(mc) = &moment_card {
-            let bias = |e: Option<Estimate>, carried: f64| {
-                e.map(|e| Estimate {
-                    value: e.value / carried,
-                    std_error: e.std_error / carried,
-                })
-            };
-            let card = Scales {
-                roll: bias(mc.scales.roll, carries[0]),
-                yaw: bias(mc.scales.yaw, carries[1]),
-                ..mc.scales
-            };
-            let over = flight_test.scales.over(&card);
+            let over = flight_test.scales.over(&moment_bias(&mc.scales, carries));
             scales.roll = over.roll;
             scales.yaw = over.yaw;
         }
@@ -2186,12 +2196,16 @@ impl Report {
     }
 
     /// Why the calibrated aircraft carries no identified moment (`None`: the moments are
-    /// identified, over the model card's).
+    /// identified, over the model card's and, for roll and yaw, the moment card's when given).
     pub fn moments_why(&self) -> Option<String> {
         self.why_not(
             |c| &c.moments_why,
             Some("without the model card (--model-flight-test) the moment scales carry the empty inertia and the gyros' filter"),
         )
+        .or_else(|| {
+            let why = self.moment_card.as_ref()?.moments_why.as_ref()?;
+            Some(format!("the moment card: {why}"))
+        })
     }
 
     /// The flight test's reason (`why` of a [`Calibration`]) for leaving a part out, else the
@@ -2891,6 +2905,75 @@ mod tests {
                 && (0..3).all(|k| (drag.get(&format!("bias_mps2_{k}")) - bias_x[k]).abs() < 1e-9),
             "{drag:?}"
         );
+    }
+
+    #[test]
+    fn the_moment_cards_bias_is_their_fit_over_the_carried_scale() {
+        let e = |value, std_error| Some(Estimate { value, std_error });
+        let scales = |roll, yaw| Scales {
+            lift: Estimate {
+                value: 0.99,
+                std_error: 0.01,
+            },
+            flap: None,
+            offset: Estimate::default(),
+            sideslip: Estimate::default(),
+            side_controls: Estimate::default(),
+            drag: None,
+            thrust: None,
+            roll,
+            yaw,
+            pitch: e(0.97, 0.01),
+            cg_aft_in: None,
+            stall: [None; STALL_PARAMS],
+        };
+        // A card on an aircraft carrying roll × 1.1 and the model's yaw.
+        let card = scales(e(0.88, 0.011), e(0.9, 0.03));
+        let bias = moment_bias(&card, [1.1, 1.0]);
+        assert!((bias.roll.unwrap().value - 0.8).abs() < 1e-12);
+        assert!((bias.roll.unwrap().std_error - 0.01).abs() < 1e-12);
+        assert_eq!(bias.yaw, card.yaw);
+        assert_eq!((bias.lift, bias.pitch), (card.lift, card.pitch));
+        // The flight test's 0.88 over it: the carried 1.1 (the card flew where the aircraft does).
+        let ft = scales(e(0.88, 0.0), e(0.45, 0.0));
+        let k = ft.over(&bias);
+        assert!((k.roll.unwrap().value - 1.1).abs() < 1e-12);
+        assert!((k.roll.unwrap().std_error - 1.1 * 0.01 / 0.8).abs() < 1e-12);
+        assert!((k.yaw.unwrap().value - 0.5).abs() < 1e-12);
+        assert!(moment_bias(&scales(None, None), [1.1, 0.9]).roll.is_none());
+    }
+
+    #[test]
+    fn the_carried_moments_are_read_from_a_calibration_json() {
+        let dir = std::env::temp_dir().join(format!("carried-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let read = |text: &str| {
+            let p = dir.join("calibration.json");
+            std::fs::write(&p, text).unwrap();
+            carried_moments(&p)
+        };
+        assert_eq!(
+            read(r#"{"applied_moments": [1.1, null]}"#).unwrap(),
+            [1.1, 1.0]
+        );
+        assert_eq!(
+            read(r#"{"applied_moments": [null, null]}"#).unwrap(),
+            [1.0, 1.0]
+        );
+        for bad in [
+            r#"{"applied_moments": [1.1]}"#,
+            r#"{"applied_moments": [0.0, 1.0]}"#,
+            r#"{"applied_moments": ["1.1", 1.0]}"#,
+            r#"{"scales": {}}"#,
+            "LIFT = 0.9",
+        ] {
+            assert!(
+                matches!(read(bad), Err(Error::FirstCalibration { .. })),
+                "{bad}"
+            );
+        }
+        assert!(carried_moments(&dir.join("none.json")).is_err());
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
