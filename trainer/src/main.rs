@@ -1700,32 +1700,6 @@ fn cmd_calibrate(
     Ok(())
 }
 
-/// A test of a `--tune` value and the words for the values it passes.
-type TuneRange = (fn(f32) -> bool, &'static str);
-
-/// The values a `--tune` key takes (finite, and the test), with how to say them; `None` for a key
-/// that is not one.
-fn tune_range(key: &str) -> Option<TuneRange> {
-    let positive: TuneRange = (|v| v > 0.0, "more than 0");
-    let non_negative: TuneRange = (|v| v >= 0.0, "0 or more");
-    Some(match key {
-        // A time constant divides, a measurement 1σ is inverted, a gate and a flag limit of 0
-        // would refuse every update or raise every flag.
-        "gust_tau_s" | "accel_sigma_y" | "accel_sigma_z" | "gate" | "max_sigma_rad"
-        | "r_adapt_lo_y" | "r_adapt_hi_y" | "r_adapt_lo_z" | "r_adapt_hi_z" => positive,
-        // Spectral densities, initial 1σ and delays: 0 holds the state, or takes no delay.
-        "gust_sigma" | "accel_delay_s" | "mean_wind_psd_h" | "mean_wind_psd_d"
-        | "mean_wind_sigma0_d" | "lift_scale_psd" | "lift_scale_sigma0" | "side_scale_psd"
-        | "side_scale_sigma0" | "te_lift_sigma0" | "te_lift_psd" | "r_adapt_tau_s" => non_negative,
-        "gear_norm" => (|v| (0.0..=1.0).contains(&v), "between 0 (up) and 1 (down)"),
-        "subsamples" => (
-            |v| v == 0.0 || v == 1.0 || v == 2.0,
-            "0 (off), 1 (latest) or 2 (period mean)",
-        ),
-        _ => return None,
-    })
-}
-
 /// `CONFIG` with the `--tune` overrides.
 fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
     let mut c = estimator_core::filter::CONFIG;
@@ -1736,49 +1710,58 @@ fn filter_config(tune: &str) -> Result<estimator_core::filter::Config> {
         let v: f32 = v
             .parse()
             .with_context(|| format!("--tune: `{v}` is not a number"))?;
-        // A known key's value is refused outside its range (an unknown key below).
-        if let Some((holds, range)) = tune_range(k)
-            && !(v.is_finite() && holds(v))
-        {
-            bail!("--tune: {k}={v}: {k} must be {range}");
-        }
-        match k {
-            "gust_sigma" => c.gust_sigma = v,
-            "gust_tau_s" => c.gust_tau_s = v,
-            "accel_sigma_y" => c.accel_sigma[0] = v,
-            "accel_sigma_z" => c.accel_sigma[1] = v,
-            "accel_delay_s" => c.accel_delay_s = v,
-            "gate" => c.gate = v,
-            "max_sigma_rad" => c.max_sigma_rad = v,
-            "mean_wind_psd_h" => {
-                c.mean_wind_psd[0] = v;
-                c.mean_wind_psd[1] = v;
+        // Each key's value is refused outside its range: `v` if finite and `holds`.
+        let check = |holds: fn(f32) -> bool, range: &str| -> Result<f32> {
+            if v.is_finite() && holds(v) {
+                Ok(v)
+            } else {
+                bail!("--tune: {k}={v}: {k} must be {range}")
             }
-            "mean_wind_psd_d" => c.mean_wind_psd[2] = v,
-            "mean_wind_sigma0_d" => c.mean_wind_sigma0[2] = v,
-            "lift_scale_psd" => c.lift_scale_psd = v,
-            "gear_norm" => c.gear_norm = v,
-            "lift_scale_sigma0" => c.lift_scale_sigma0 = v,
-            "side_scale_psd" => c.side_scale_psd = v,
-            "side_scale_sigma0" => c.side_scale_sigma0 = v,
+        };
+        // A time constant divides, a measurement 1σ is inverted, a gate and a flag limit of 0
+        // would refuse every update or raise every flag.
+        let positive = || check(|v| v > 0.0, "more than 0");
+        // Spectral densities, initial 1σ and delays: 0 holds the state, or takes no delay.
+        let non_negative = || check(|v| v >= 0.0, "0 or more");
+        match k {
+            "gust_sigma" => c.gust_sigma = non_negative()?,
+            "gust_tau_s" => c.gust_tau_s = positive()?,
+            "accel_sigma_y" => c.accel_sigma[0] = positive()?,
+            "accel_sigma_z" => c.accel_sigma[1] = positive()?,
+            "accel_delay_s" => c.accel_delay_s = non_negative()?,
+            "gate" => c.gate = positive()?,
+            "max_sigma_rad" => c.max_sigma_rad = positive()?,
+            "mean_wind_psd_h" => c.mean_wind_psd[..2].fill(non_negative()?),
+            "mean_wind_psd_d" => c.mean_wind_psd[2] = non_negative()?,
+            "mean_wind_sigma0_d" => c.mean_wind_sigma0[2] = non_negative()?,
+            "lift_scale_psd" => c.lift_scale_psd = non_negative()?,
+            "gear_norm" => {
+                c.gear_norm = check(|v| (0.0..=1.0).contains(&v), "between 0 (up) and 1 (down)")?
+            }
+            "lift_scale_sigma0" => c.lift_scale_sigma0 = non_negative()?,
+            "side_scale_psd" => c.side_scale_psd = non_negative()?,
+            "side_scale_sigma0" => c.side_scale_sigma0 = non_negative()?,
             "te_lift_sigma0" | "te_lift_psd" if !estimator_core::filter::LEARNS_TE_LIFT => bail!(
                 "--tune: {k} needs a filter with the trailing-edge lift state: build with ESTIMATOR_FILTER_TE_LIFT=on (not off), or for a description whose filter.te_lift_sigma0 or te_lift_psd is above 0"
             ),
-            "te_lift_sigma0" => c.te_lift_sigma0 = v,
-            "te_lift_psd" => c.te_lift_psd = v,
+            "te_lift_sigma0" => c.te_lift_sigma0 = non_negative()?,
+            "te_lift_psd" => c.te_lift_psd = non_negative()?,
             "subsamples" => {
-                // 0, 1 or 2 exactly (`tune_range`).
+                let v = check(
+                    |v| v == 0.0 || v == 1.0 || v == 2.0,
+                    "0 (off), 1 (latest) or 2 (period mean)",
+                )?;
                 c.subsamples = match v as u8 {
                     0 => estimator_core::filter::SubsampleUse::Off,
                     1 => estimator_core::filter::SubsampleUse::Latest,
                     _ => estimator_core::filter::SubsampleUse::Mean,
                 }
             }
-            "r_adapt_tau_s" => c.r_adapt_tau_s = v,
-            "r_adapt_lo_y" => c.r_adapt_range[0][0] = v,
-            "r_adapt_hi_y" => c.r_adapt_range[0][1] = v,
-            "r_adapt_lo_z" => c.r_adapt_range[1][0] = v,
-            "r_adapt_hi_z" => c.r_adapt_range[1][1] = v,
+            "r_adapt_tau_s" => c.r_adapt_tau_s = non_negative()?,
+            "r_adapt_lo_y" => c.r_adapt_range[0][0] = positive()?,
+            "r_adapt_hi_y" => c.r_adapt_range[0][1] = positive()?,
+            "r_adapt_lo_z" => c.r_adapt_range[1][0] = positive()?,
+            "r_adapt_hi_z" => c.r_adapt_range[1][1] = positive()?,
             other => bail!("--tune: unknown key `{other}` (see trainer eval-filter --help)"),
         }
     }
