@@ -2,6 +2,19 @@
 //! error's message often already ends with its cause (`cannot read X: No such file`), and the
 //! chain then repeats it; a cause whose text the line before already holds is left out.
 
+/// A binary's `main`: `run`, its error printed by [`exit`]. Its output piped into a reader that
+/// stops early (`trainer eval … | head`) ends it quietly, as it does any Unix tool: Rust's runtime
+/// ignores SIGPIPE, and `println!` would then panic on the closed pipe.
+pub fn main(run: impl FnOnce() -> anyhow::Result<()>) -> std::process::ExitCode {
+    #[cfg(unix)]
+    // SAFETY: at the start of `main`, before any thread of the binary starts; SIG_DFL is a valid
+    // disposition of SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    exit(run())
+}
+
 /// A binary's exit: success, or the error printed by [`chain_text`] and exit code 1.
 pub fn exit(result: anyhow::Result<()>) -> std::process::ExitCode {
     match result {

@@ -34,7 +34,7 @@ enum Cmd {
 }
 
 fn main() -> std::process::ExitCode {
-    hil_sim::error_text::exit(run())
+    hil_sim::error_text::main(run)
 }
 
 fn run() -> Result<()> {

@@ -169,6 +169,41 @@ fn both_binaries_have_a_version() {
     }
 }
 
+/// Output piped into a reader that has stopped (`trainer … | head`) ends the binary quietly by
+/// SIGPIPE, as any Unix tool, never by a panic on the closed pipe. Here the pipe's read end is
+/// closed before the binary starts, so its first line meets it closed.
+#[cfg(unix)]
+#[test]
+fn both_binaries_stop_quietly_on_a_closed_pipe() {
+    use std::os::unix::process::ExitStatusExt;
+    let out = scratch("closed-pipe");
+    for (program, args) in [
+        (
+            "trainer",
+            vec!["sweep", "--list", "--data", "no-such-data", "--out"],
+        ),
+        ("hil-sim", vec!["generate", "--help"]),
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let mut cmd = Command::new(bin(program));
+        cmd.args(&args).env_remove("RUST_BACKTRACE");
+        if program == "trainer" {
+            cmd.arg(&out);
+        }
+        let o = cmd.stdout(writer).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("panicked"), "{program}: {stderr}");
+        // Killed by SIGPIPE (13 on Linux and the BSDs).
+        assert_eq!(
+            o.status.signal(),
+            Some(13),
+            "{program}: {:?}, {stderr}",
+            o.status
+        );
+    }
+}
+
 #[test]
 fn fly_refuses_a_duration_that_is_not_positive_and_writes_nothing() {
     let d = scratch("fly-time");

@@ -2599,7 +2599,7 @@ fn cmd_bench_train(
 }
 
 fn main() -> std::process::ExitCode {
-    hil_sim::error_text::exit(run())
+    hil_sim::error_text::main(run)
 }
 
 /// `path`, else the build's aircraft's committed file `estimator-core/PATTERN` (`{}` = its name).
