@@ -11,6 +11,7 @@ pub mod data;
 pub mod error;
 pub mod export;
 pub mod features;
+pub mod files;
 pub mod filter_eval;
 pub mod finetune;
 pub mod metrics;

@@ -528,9 +528,9 @@ enum Cmd {
     /// identify the lift scale, the flap-lift scale, a lift offset, the side force's two scales
     /// (its sideslip terms', and its surface and rate terms', from the rolling frames), the drag
     /// and the engine deck's thrust scales (the thrust carried when 2σ or more from 1) and the
-    /// roll and yaw moment scales (the gyros differentiated; carried when 2σ or more from 1, and
-    /// only over the model card) of the aircraft against the model the estimator knows (equation
-    /// error); writes calibration.json, calibration.md and aircraft.toml (a
+    /// roll and yaw moment scales (the gyros differentiated; only over the model card, or over the
+    /// moment card flown on a first calibrated aircraft; carried when 2σ or more from 1 and within
+    /// 0.75–1.33) of the aircraft against the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a
     /// scripts/airframe-variant spec of the calibrated aircraft) into --out. scripts/calibrate runs
     /// it and builds the rest.
     Calibrate {
@@ -829,17 +829,6 @@ fn check_outputs(cmd: &Cmd) -> Result<()> {
     Ok(())
 }
 
-/// Writes `text` to `path` through `tmp` (written whole, then renamed into place): a failure
-/// leaves neither a partial `path` nor `tmp`.
-fn write_via(tmp: &Path, path: &Path, text: &str) -> Result<()> {
-    let written = std::fs::write(tmp, text).and_then(|()| std::fs::rename(tmp, path));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(tmp);
-        return Err(e).with_context(|| format!("cannot write {}", path.display()));
-    }
-    Ok(())
-}
-
 /// This process's command line, for provenance and reports.
 fn command_line() -> String {
     std::env::args().collect::<Vec<_>>().join(" ")
@@ -998,7 +987,7 @@ fn write_force_frames(
             text.push('\n');
         }
     }
-    write_via(&path.with_extension("csv.tmp"), path, &text)
+    Ok(trainer::files::write_together(&[(path, &text)])?)
 }
 
 /// The dataset `trainer eval` reads: any dataset (a `fly` one holds a single test flight), with at
@@ -1223,9 +1212,7 @@ fn cmd_revector(weights: &Path, vectors: &Path) -> Result<()> {
     let changed = old.iter().zip(&new).filter(|(o, n)| o != n).count();
     let out = trainer::quant::format_vectors(&new, suite, &header.join("\n"));
     // Written aside and renamed into place: a failure leaves the old file.
-    let tmp = vectors.with_extension("txt.partial");
-    std::fs::write(&tmp, &out).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, vectors).with_context(|| format!("replacing {}", vectors.display()))?;
+    trainer::files::write_together(&[(vectors, &out)])?;
     println!(
         "wrote {}: {} vectors, {changed} with other expected outputs than before",
         vectors.display(),
@@ -1418,7 +1405,7 @@ fn cmd_fit_sigma(
         100.0 * cb.within_2sigma,
     );
     let text = rust_file(&alpha, &beta, &provenance, prov);
-    write_via(&out.with_extension("rs.tmp"), out, &text)?;
+    trainer::files::write_together(&[(out, &text)])?;
     if json {
         let v = serde_json::json!({"alpha": alpha, "beta": beta, "flights": flights, "datasets": each, "out": out.display().to_string()});
         println!("{}", serde_json::to_string(&v)?);
@@ -2934,13 +2921,6 @@ mod tests {
         );
         super::check_out_file("--weights-out", &dir.join("new/w.rs"), true).unwrap();
         super::check_out_file("--frames", &dir.join("f.csv"), false).unwrap();
-
-        // A write that fails leaves neither the file nor its temporary name.
-        let target = dir.join("sub");
-        std::fs::create_dir_all(&target).unwrap();
-        let tmp = dir.join("sub.rs.tmp");
-        assert!(super::write_via(&tmp, &target, "text").is_err());
-        assert!(!tmp.exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

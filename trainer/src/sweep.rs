@@ -85,11 +85,8 @@ pub fn result_path(dir: &Path, k: usize) -> PathBuf {
 pub fn write_result(dir: &Path, r: &JobResult) -> Result<PathBuf> {
     std::fs::create_dir_all(dir).map_err(crate::error::io("create", dir))?;
     let path = result_path(dir, r.job.index);
-    let tmp = path.with_extension("json.tmp");
     let text = serde_json::to_string_pretty(r).map_err(|e| Error::Sweep(e.to_string()))?;
-    std::fs::write(&tmp, text)
-        .and_then(|()| std::fs::rename(&tmp, &path))
-        .map_err(crate::error::io("write", &path))?;
+    crate::files::write_together(&[(&path, &text)])?;
     Ok(path)
 }
 
