@@ -371,6 +371,40 @@ pub struct ShardRecord {
     pub aircraft: Option<AircraftRecord>,
 }
 
+impl ShardRecord {
+    /// What makes this record another dataset's than the one of `plan`, `sensors` and `count`
+    /// shards (`theirs` names that one in the text, e.g. "this run"): its preset, seed, shard
+    /// count, the rest of its plan or its sensor config; `None` when they are one dataset's.
+    fn differs_in(
+        &self,
+        plan: &Plan,
+        sensors: &crate::sensors::SensorConfig,
+        count: usize,
+        theirs: &str,
+    ) -> Option<String> {
+        if self.plan.preset != plan.preset {
+            Some(format!(
+                "preset {} ({theirs}: {})",
+                self.plan.preset.name(),
+                plan.preset.name()
+            ))
+        } else if self.plan.seed != plan.seed {
+            Some(format!("seed {} ({theirs}: {})", self.plan.seed, plan.seed))
+        } else if self.shard.count != count {
+            Some(format!(
+                "shard count {} ({theirs}: {count})",
+                self.shard.count
+            ))
+        } else if self.plan != *plan {
+            Some("campaign, --test-only or --aircraft-dir".to_string())
+        } else if self.sensors != *sensors {
+            Some("sensor config (--sensors)".to_string())
+        } else {
+            None
+        }
+    }
+}
+
 /// What [`generate_shard`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShardOutcome {
@@ -464,27 +498,7 @@ fn check_shard_siblings(
         else {
             continue;
         };
-        let differs = if r.plan.preset != plan.preset {
-            Some(format!(
-                "preset {} (this run: {})",
-                r.plan.preset.name(),
-                plan.preset.name()
-            ))
-        } else if r.plan.seed != plan.seed {
-            Some(format!("seed {} (this run: {})", r.plan.seed, plan.seed))
-        } else if r.shard.count != shard.count {
-            Some(format!(
-                "shard count {} (this run: {})",
-                r.shard.count, shard.count
-            ))
-        } else if r.plan != *plan {
-            Some("campaign, --test-only or --aircraft-dir".to_string())
-        } else if r.sensors != *sensors {
-            Some("sensor config (--sensors)".to_string())
-        } else {
-            None
-        };
-        if let Some(what) = differs {
+        if let Some(what) = r.differs_in(plan, sensors, shard.count, "this run") {
             return Err(GenerateError::Shard(format!(
                 "{} is shard {} of another dataset, by its {what}: the shards of one dataset share \
                  them all. Give this shard another --out (or run it with the same settings)",
@@ -543,14 +557,8 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
                 first.shard
             ))
         };
-        if r.shard.count != n {
-            return Err(differs("shard count"));
-        }
-        if r.plan != first.plan {
-            return Err(differs("preset, seed or campaign"));
-        }
-        if r.sensors != first.sensors {
-            return Err(differs("sensor config"));
+        if let Some(what) = r.differs_in(&first.plan, &first.sensors, n, "the first shard") {
+            return Err(differs(&what));
         }
         if r.git_rev != first.git_rev {
             return Err(differs("git revision"));
