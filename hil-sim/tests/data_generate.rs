@@ -156,7 +156,7 @@ fn shards_merge_into_the_one_machine_dataset() {
     std::fs::write(&stray, text.replace("\"seed\": 4", "\"seed\": 5")).unwrap();
     let e = dataset::merge(&sh).unwrap_err();
     assert!(
-        matches!(&e, GenerateError::Shard(m) if m.contains("preset, seed or campaign") && m.contains("shard-")),
+        matches!(&e, GenerateError::Shard(m) if m.contains("in its seed") && m.contains("shard-")),
         "{e}"
     );
     assert!(

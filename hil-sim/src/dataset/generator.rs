@@ -539,6 +539,8 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
             records.push((p, r));
         }
     }
+    // In name order: the same set of records gives the same message on every file system.
+    records.sort_by(|a, b| a.0.cmp(&b.0));
     let Some((_, first)) = records.first() else {
         return Err(GenerateError::Shard(format!(
             "no shard records (shard-K-of-N.json) in {}: run `hil-sim generate --shard K/N --out {}` for every K first",
@@ -557,7 +559,8 @@ pub fn merge(out: &Path) -> Result<Manifest, GenerateError> {
                 first.shard
             ))
         };
-        if let Some(what) = r.differs_in(&first.plan, &first.sensors, n, "the first shard") {
+        let theirs = format!("shard {}", first.shard);
+        if let Some(what) = r.differs_in(&first.plan, &first.sensors, n, &theirs) {
             return Err(differs(&what));
         }
         if r.git_rev != first.git_rev {
