@@ -2126,10 +2126,15 @@ impl Report {
         carries: [f64; 2],
     ) -> Report {
         let model_card_seeds = model_cards.iter().map(|c| c.sensor_seed).collect();
-        let moment_card_seeds = moment_cards.iter().map(|c| c.sensor_seed).collect();
-        let (cards, moments) = (model_cards.len(), moment_cards.len());
+        let moment_card_seeds: Vec<_> = moment_cards.iter().map(|c| c.sensor_seed).collect();
+        let cards = model_cards.len();
         let model_card = pooled_card(model_cards);
-        let moment_card = pooled_card(moment_cards).filter(|_| model_card.is_some());
+        // Without a model card the moment cards are not used, and the report names none.
+        let (moment_card, moment_card_seeds, carries) =
+            match pooled_card(moment_cards).filter(|_| model_card.is_some()) {
+                Some(m) => (Some(m), moment_card_seeds, carries),
+                None => (None, Vec::new(), [1.0; 2]),
+            };
         let mut scales = match &model_card {
             Some(m) => flight_test.scales.over(&m.scales),
             // The moment scales mean something only over the model card's: alone they carry the
@@ -2174,12 +2179,8 @@ impl Report {
             model_card,
             model_cards: cards,
             model_card_seeds,
-            moment_cards: if moment_card.is_some() { moments } else { 0 },
-            moment_card_carries: if moment_card.is_some() {
-                carries
-            } else {
-                [1.0; 2]
-            },
+            moment_cards: moment_card_seeds.len(),
+            moment_card_carries: carries,
             moment_card,
             moment_card_seeds,
             flap_terms: flap_lift_terms().map(|t| t.name.to_string()).collect(),
@@ -2290,11 +2291,6 @@ fn moments_markdown(r: &Report) -> String {
         MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
     ));
     m.push_str(&if r.moment_card.is_some() {
-        let seeds: Vec<String> = r
-            .moment_card_seeds
-            .iter()
-            .map(|s| s.map_or("?".into(), |s| s.to_string()))
-            .collect();
         format!(
             "\nThe roll and yaw scales are the flight test's over the bias of the card flown on the \
              first calibrated aircraft (the forces, CG and moments identified over the model cards \
@@ -2302,7 +2298,7 @@ fn moments_markdown(r: &Report) -> String {
              that aircraft carries. The fit's bias depends on where the aircraft flies, and that \
              card flies where it does.\n",
             r.moment_cards,
-            seeds.join(", ")
+            seeds_text(&r.moment_card_seeds)
         )
     } else {
         "\nThe roll and yaw scales are the flight test's over the model card's.\n".to_string()
@@ -2368,6 +2364,15 @@ fn pitch_markdown(r: &Report) -> String {
     m
 }
 
+/// Cards' sensor seeds as `calibration.md` lists them (`?` where a manifest records none).
+fn seeds_text(seeds: &[Option<u64>]) -> String {
+    seeds
+        .iter()
+        .map(|s| s.map_or("?".into(), |s| s.to_string()))
+        .collect::<Vec<String>>()
+        .join(", ")
+}
+
 /// `calibration.md`: the identified parameters with their standard errors and the fits.
 pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> String {
     let c = &r.flight_test;
@@ -2417,26 +2422,21 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
         ));
     }
     if r.model_cards > 0 {
-        let seeds: Vec<String> = r
-            .model_card_seeds
-            .iter()
-            .map(|s| s.map_or("?".into(), |s| s.to_string()))
-            .collect();
+        let seeds = seeds_text(&r.model_card_seeds);
         let ft_seed = c
             .sensor_seed
             .map_or("not recorded".into(), |s| s.to_string());
         m.push_str(&if r.model_cards == 1 {
             format!(
                 "\nThe model card is flown on the sensor seed {} (the flight test's: {ft_seed}).\n",
-                seeds.join(", ")
+                seeds
             )
         } else {
             format!(
                 "\nThe model card's rows (here and below) pool {} cards flown on the sensor seeds \
                  {} (the flight test's: {ft_seed}): their mean, the 1σ raised to their spread; \
                  its flight-by-flight figures are the first card's.\n",
-                r.model_cards,
-                seeds.join(", "),
+                r.model_cards, seeds,
             )
         });
     }

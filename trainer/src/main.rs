@@ -530,9 +530,9 @@ enum Cmd {
     /// and the engine deck's thrust scales (the thrust carried when 2σ or more from 1) and the
     /// roll and yaw moment scales (the gyros differentiated; only over the model card, or over the
     /// moment card flown on a first calibrated aircraft; carried when 2σ or more from 1 and within
-    /// 0.75–1.33) of the aircraft against the model the estimator knows (equation error); writes calibration.json, calibration.md and aircraft.toml (a
-    /// scripts/airframe-variant spec of the calibrated aircraft) into --out. scripts/calibrate runs
-    /// it and builds the rest.
+    /// 0.75–1.33) of the aircraft against the model the estimator knows (equation error); writes
+    /// calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant spec of the
+    /// calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
     Calibrate {
         /// The flight-test dataset (`hil-sim generate --preset flight-test`).
         #[arg(long, value_name = "DIR")]
