@@ -31,8 +31,8 @@
 //!    ROLL and YAW axes (`aero::MOMENTS`) at the corrected boom's air data:
 //!    `C_l = k_roll·C_l,model + a_l·Y/(q̄Sb) + b_l`, `C_n` alike, the side force's arms a fitted
 //!    beside (the model's moments are about the aerodynamic reference point, the gyros turn about
-//!    the unknown CG). A moment scale joins the calibrated aircraft only when it differs from 1 by
-//!    [`SCALE_SIGNIFICANCE`]·1σ or more. The pitch moment alike, over q̄·S·c̄:
+//!    the unknown CG). The calibrated aircraft carries a moment scale drawn toward 1 by the
+//!    wind-tunnel model's prior ([`MOMENT_PRIOR_SD`], [`shrunk`]). The pitch moment alike, over q̄·S·c̄:
 //!    `C_m = k_pitch·C_m,model + x·Z/(q̄Sc̄) + z·X/(q̄Sc̄) + b_m`, X and Z the body forces the
 //!    accelerometers measure; x, the normal force's arm, is the CG's distance ahead of the
 //!    reference point, so over the model card's it gives the CG's shift from the model's. The CG
@@ -370,12 +370,26 @@ impl Scales {
     }
 }
 
-/// A moment or thrust scale joins the calibrated aircraft only when it differs from the model's 1
-/// by at least this many of its 1σ; otherwise the model's moment (engine deck) is kept. The yaw scale's 1σ, 0.04-0.09
-/// on the development variants, is set by the three flights' scatter, and its fit leans on the
-/// boom's β noise where the side force differs from the model's: a scale written from that alone
-/// would move a moment the flight test did not show wrong (docs/calibration.md).
+/// A thrust scale or a CG shift joins the calibrated aircraft only when it differs from the
+/// model's (1, 0) by at least this many of its 1σ; otherwise the engine deck (the model's CG) is
+/// kept. Their 1σ is small (0.004, 0.02 in), so any real change passes.
 pub const SCALE_SIGNIFICANCE: f64 = 2.0;
+
+/// The 1σ of a wind-tunnel model's roll or yaw moment scale before any flight test: such a model
+/// errs by 5–15 % per coefficient (docs/airframes.md), 0.10 the middle. The yaw fit's own 1σ
+/// (0.04–0.15: the flights' and the moment cards' scatter) is of that size, so the calibrated
+/// aircraft carries neither the fit alone nor the model alone but the fit drawn toward 1 by this
+/// prior ([`shrunk`]).
+pub const MOMENT_PRIOR_SD: f64 = 0.10;
+
+/// The scale a calibrated aircraft carries from a fit `k̂ ± σ` under the prior N(1, `prior_sd`²):
+/// the posterior mean, `1 + w·(k̂ − 1)` with `w = prior_sd² / (prior_sd² + σ²)` (Gaussian prior
+/// and likelihood). A fit as precise as the prior goes halfway; a fit ten times more precise, 99 %
+/// of the way. `None` for a 1σ that is not finite.
+pub fn shrunk(e: Estimate, prior_sd: f64) -> Option<f64> {
+    let w = prior_sd.powi(2) / (prior_sd.powi(2) + e.std_error.powi(2));
+    (e.std_error.is_finite() && e.value.is_finite()).then(|| 1.0 + w * (e.value - 1.0))
+}
 
 /// A roll or yaw moment scale outside this range is not a wind-tunnel model's error (those are
 /// 5–15 % per axis) but the fit's own: it is reported and the model's moment kept. On a randomised
@@ -391,14 +405,17 @@ fn plausible_moment(k: f64) -> bool {
 
 impl Scales {
     /// The roll and yaw moment scales the calibrated aircraft carries: each identified one that
-    /// differs from 1 by at least [`SCALE_SIGNIFICANCE`]·1σ and lies in
-    /// [`MOMENT_SCALE_PLAUSIBLE`]; `None` keeps the model's.
+    /// lies in [`MOMENT_SCALE_PLAUSIBLE`], drawn toward 1 by [`MOMENT_PRIOR_SD`] ([`shrunk`]);
+    /// `None` keeps the model's.
     pub fn applied_moments(&self) -> [Option<f64>; 2] {
-        [self.roll, self.yaw].map(|e| significant(e, 1.0).filter(|k| plausible_moment(*k)))
+        [self.roll, self.yaw].map(|e| {
+            e.filter(|e| plausible_moment(e.value))
+                .and_then(|e| shrunk(e, MOMENT_PRIOR_SD))
+        })
     }
 
-    /// The thrust scale the calibrated aircraft carries, by the same test: the engine deck is
-    /// kept unless the flight test shows it wrong.
+    /// The thrust scale the calibrated aircraft carries: the engine deck is kept unless the
+    /// flight test shows it wrong by [`SCALE_SIGNIFICANCE`]·1σ or more.
     pub fn applied_thrust(&self) -> Option<f64> {
         significant(self.thrust, 1.0)
     }
@@ -432,15 +449,15 @@ pub fn moments_line(r: &Report) -> String {
     let (s, applied) = (&r.scales, r.applied_moments);
     let one = |what: &str, e: Option<Estimate>, a: Option<f64>| match (e, a) {
         (None, _) => format!("{what} moment not identified"),
-        (Some(e), Some(_)) => format!(
-            "{what} moment scale {:.4} ± {:.4} (applied)",
+        (Some(e), Some(k)) => format!(
+            "{what} moment scale {:.4} ± {:.4} (applied, drawn toward 1 by the prior: {k:.4})",
             e.value, e.std_error
         ),
         (Some(e), None) => format!(
             "{what} moment scale {:.4} ± {:.4} ({}: the model's kept)",
             e.value,
             e.std_error,
-            kept_why(e)
+            moment_kept_why()
         ),
     };
     let pitch = s.pitch.map_or("pitch moment not identified".into(), |e| {
@@ -572,27 +589,22 @@ fn cell(e: Option<Estimate>) -> String {
     })
 }
 
-/// What the calibrated aircraft carries of a scale that passes [`SCALE_SIGNIFICANCE`] (`applied`)
-/// or not (the model's 1), as a table cell.
-fn carried_cell(e: Option<Estimate>, applied: Option<f64>) -> String {
+/// What the calibrated aircraft carries of a scale (`applied`) or not (the model's 1, `why`), as
+/// a table cell.
+fn carried_cell(e: Option<Estimate>, applied: Option<f64>, why: &str) -> String {
     match (applied, e) {
         (Some(k), _) => format!("**{k:.4}** (applied)"),
-        (None, Some(e)) => format!("1 (kept: {} is {})", cell(Some(e)), kept_why(e)),
+        (None, Some(e)) => format!("1 (kept: {} is {why})", cell(Some(e))),
         (None, None) => format!("1 (kept: {})", cell(e)),
     }
 }
 
-/// Why an identified scale was not carried: within [`SCALE_SIGNIFICANCE`]·1σ of 1, or (a moment's)
-/// outside [`MOMENT_SCALE_PLAUSIBLE`].
-fn kept_why(e: Estimate) -> String {
-    if significant(Some(e), 1.0).is_none() {
-        format!("within {SCALE_SIGNIFICANCE}σ of 1")
-    } else {
-        format!(
-            "outside {:.2}–{:.2}, more than a wind-tunnel moment errs: the fit's, not the aircraft's",
-            MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
-        )
-    }
+/// Why an identified moment scale was not carried: outside [`MOMENT_SCALE_PLAUSIBLE`].
+fn moment_kept_why() -> String {
+    format!(
+        "outside {:.2}–{:.2}, more than a wind-tunnel moment errs: the fit's, not the aircraft's",
+        MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
+    )
 }
 
 /// Least squares `y ≈ X·θ` (columns of `x`), with the autocorrelation-inflated standard errors.
@@ -2049,8 +2061,11 @@ pub struct Report {
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
     /// `None`: the model's).
     pub applied_moments: [Option<f64>; 2],
-    /// [`SCALE_SIGNIFICANCE`]: how many 1σ from 1 a moment or thrust scale must be to be carried.
+    /// [`SCALE_SIGNIFICANCE`]: how many 1σ from the model's a thrust scale or CG shift must be to
+    /// be carried.
     pub scale_significance: f64,
+    /// [`MOMENT_PRIOR_SD`]: the prior 1σ toward which the roll and yaw scales are drawn.
+    pub moment_prior_sd: f64,
     /// The thrust scale `aircraft.toml` carries ([`Scales::applied_thrust`]; `None`: the deck's).
     pub applied_thrust: Option<f64>,
     /// The empty aircraft's CG shift aft `aircraft.toml` carries, in
@@ -2174,6 +2189,7 @@ impl Report {
             applied_thrust: scales.applied_thrust(),
             applied_cg_shift_in: scales.applied_cg_shift_in(flight_test.moment_mass_kg),
             scale_significance: SCALE_SIGNIFICANCE,
+            moment_prior_sd: MOMENT_PRIOR_SD,
             scales,
             flight_test,
             model_card,
@@ -2277,17 +2293,18 @@ fn moments_markdown(r: &Report) -> String {
     let applied = r.applied_moments;
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
-        carried_cell(r.scales.roll, applied[0]),
-        carried_cell(r.scales.yaw, applied[1])
+        carried_cell(r.scales.roll, applied[0], &moment_kept_why()),
+        carried_cell(r.scales.yaw, applied[1], &moment_kept_why())
     ));
     m.push_str(&format!(
         "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
          the description's empty-aircraft inertia (Euler's equations), over q̄·S·b; the model's are \
          the ROLL and YAW axes at the corrected boom's air data. The side force's moment arm (the \
          aerodynamic reference point's height above the CG in roll, its distance ahead of the CG in \
-         yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale; the scale is written into the \
-         calibrated aircraft only when it differs from 1 by {SCALE_SIGNIFICANCE}σ or more and lies \
-         within {:.2}–{:.2}.\n",
+         yaw, negative when it lies aft; with the inertia's share) is fitted beside each scale. The calibrated \
+         aircraft carries a scale k̂ ± σ that lies within {:.2}–{:.2} drawn toward 1 by the \
+         wind-tunnel model's prior, 1σ {MOMENT_PRIOR_SD} per axis: 1 + w·(k̂ − 1), w = \
+         {MOMENT_PRIOR_SD}² / ({MOMENT_PRIOR_SD}² + σ²), the posterior mean.\n",
         MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
     ));
     m.push_str(&if r.moment_card.is_some() {
@@ -2610,7 +2627,11 @@ fn drag_markdown(r: &Report) -> String {
         "| **calibrated aircraft** (aircraft.toml) | **{:.4}** ± {:.4} | {} |\n",
         d.value,
         d.std_error,
-        carried_cell(r.scales.thrust, r.applied_thrust)
+        carried_cell(
+            r.scales.thrust,
+            r.applied_thrust,
+            &format!("within {SCALE_SIGNIFICANCE}σ of 1")
+        )
     ));
     let thrust = match ENGINE {
         Some(Engine::Propeller(_)) => {
@@ -3110,7 +3131,7 @@ mod tests {
     }
 
     #[test]
-    fn the_moment_fits_recover_scale_and_arm_and_only_a_clear_scale_is_applied() {
+    fn the_moment_fits_recover_scale_and_arm_and_the_scale_is_drawn_toward_one() {
         // Regressors that move independently (a doublet's model moment, a side force; in pitch
         // the normal and axial forces of a pull-up and a throttle step).
         let rows: Vec<MomentRow> = (0..400)
@@ -3166,14 +3187,40 @@ mod tests {
             cg_aft_in: yaw,
             stall: [None; STALL_PARAMS],
         };
-        // 2.5σ from 1: applied; 1.5σ: the model's kept; not identified: kept.
+        // Drawn toward 1 by the prior: w = 0.01 / (0.01 + σ²); a fit as precise as the prior goes
+        // halfway; not identified: kept.
+        let close = |a: [Option<f64>; 2], b: [Option<f64>; 2]| {
+            a.iter().zip(b).all(|(x, y)| match (x, y) {
+                (Some(x), Some(y)) => (x - y).abs() < 1e-12,
+                (x, y) => x.is_none() && y.is_none(),
+            })
+        };
+        let applied = scales(e(1.05, 0.02), e(1.10, 0.10)).applied_moments();
+        assert!(
+            close(applied, [Some(1.0 + 0.05 / 1.04), Some(1.05)]),
+            "{applied:?}"
+        );
+        let applied = scales(None, e(0.8, 0.05)).applied_moments();
+        assert!(close(applied, [None, Some(1.0 - 0.2 * 0.8)]), "{applied:?}");
         assert_eq!(
-            scales(e(1.05, 0.02), e(1.03, 0.02)).applied_moments(),
-            [Some(1.05), None]
+            shrunk(
+                Estimate {
+                    value: 1.2,
+                    std_error: f64::NAN
+                },
+                0.1
+            ),
+            None
         );
         assert_eq!(
-            scales(None, e(0.8, 0.05)).applied_moments(),
-            [None, Some(0.8)]
+            shrunk(
+                Estimate {
+                    value: 1.2,
+                    std_error: 0.0
+                },
+                0.1
+            ),
+            Some(1.2)
         );
         // Significant but beyond a wind-tunnel moment's error: the fit's, the model's kept, and
         // the report says which of the two reasons kept it.
@@ -3181,8 +3228,9 @@ mod tests {
             scales(e(1.40, 0.02), e(0.57, 0.04)).applied_moments(),
             [None, None]
         );
-        assert!(carried_cell(e(0.57, 0.04), None).contains("outside 0.75–1.33"));
-        assert!(carried_cell(e(1.03, 0.02), None).contains("within 2σ of 1"));
+        assert!(
+            carried_cell(e(0.57, 0.04), None, &moment_kept_why()).contains("outside 0.75–1.33")
+        );
         // Model cards pooled: one is itself; two, their mean with the 1σ raised to their spread.
         let a = scales(e(1.0, 0.01), e(0.9, 0.05));
         let b = scales(e(1.1, 0.03), e(0.9, 0.01));

@@ -529,8 +529,8 @@ enum Cmd {
     /// (its sideslip terms', and its surface and rate terms', from the rolling frames), the drag
     /// and the engine deck's thrust scales (the thrust carried when 2σ or more from 1) and the
     /// roll and yaw moment scales (the gyros differentiated; only over the model card, or over the
-    /// moment card flown on a first calibrated aircraft; carried when 2σ or more from 1 and within
-    /// 0.75–1.33) of the aircraft against the model the estimator knows (equation error); writes
+    /// moment card flown on a first calibrated aircraft; carried within 0.75–1.33, drawn toward 1
+    /// by a wind-tunnel prior of 1σ 0.10) of the aircraft against the model the estimator knows (equation error); writes
     /// calibration.json, calibration.md and aircraft.toml (a scripts/airframe-variant spec of the
     /// calibrated aircraft) into --out. scripts/calibrate runs it and builds the rest.
     Calibrate {
