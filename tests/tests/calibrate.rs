@@ -265,10 +265,10 @@ fn calibration_reads_no_truth_and_finds_the_variants_scales() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The roll and yaw moments over the card flown on the first calibrated aircraft (`cal`'s
-/// aircraft.toml, with the moments it carries): the scales are the flight test's over that card's
-/// fit divided by the carried scale, C's moments (the model's) come out 1 within 2σ, and the
-/// forces stay the model cards'. Moment cards without model cards, or without the first
+/// The roll and yaw moments and the side force over the card flown on the first calibrated
+/// aircraft (`cal`'s aircraft.toml, with the scales it carries): the scales are the flight test's
+/// over that card's fit divided by the carried scale, C's moments (the model's) come out 1 within
+/// 2σ, and the other forces stay the model cards'. Moment cards without model cards, or without the first
 /// calibration, are refused and nothing is written.
 fn moment_cards(dir: &Path, ft: &Path, models: &[PathBuf]) {
     let cal = dir.join("cal");
@@ -327,7 +327,7 @@ fn moment_cards(dir: &Path, ft: &Path, models: &[PathBuf]) {
     let v = |e: &serde_json::Value| e["value"].as_f64().unwrap();
     for (i, axis) in ["roll", "yaw"].into_iter().enumerate() {
         let carried = first["applied_moments"][i].as_f64().unwrap_or(1.0);
-        assert_eq!(r["moment_card_carries"][i].as_f64(), Some(carried));
+        assert_eq!(r["moment_card_carries"][axis].as_f64(), Some(carried));
         let (k, se) = (
             v(&r["scales"][axis]),
             r["scales"][axis]["std_error"].as_f64().unwrap(),
@@ -340,15 +340,17 @@ fn moment_cards(dir: &Path, ft: &Path, models: &[PathBuf]) {
             "{axis} scale {k} ± {se}, truth 1"
         );
     }
-    // The forces stay the model cards' identification.
-    for what in [
-        "lift",
-        "sideslip",
-        "side_controls",
-        "drag",
-        "pitch",
-        "cg_aft_in",
-    ] {
+    // The side force's two scales over the moment cards' bias too: each card's fit over the scale
+    // the first aircraft carries (its identification's).
+    for what in ["sideslip", "side_controls"] {
+        let carried = v(&first["scales"][what]);
+        assert_eq!(r["moment_card_carries"][what].as_f64(), Some(carried));
+        let over =
+            v(&r["flight_test"]["scales"][what]) / (v(&r["moment_card"]["scales"][what]) / carried);
+        assert!((v(&r["scales"][what]) - over).abs() < 1e-12, "{what}");
+    }
+    // The rest of the forces stay the model cards' identification.
+    for what in ["lift", "drag", "pitch", "cg_aft_in"] {
         assert_eq!(r["scales"][what], first["scales"][what], "{what}");
     }
 }

@@ -1617,9 +1617,9 @@ fn cmd_calibrate(
         );
     }
     let carries = match first {
-        Some(f) => trainer::calibrate::carried_moments(f)
+        Some(f) => trainer::calibrate::carried_scales(f)
             .with_context(|| format!("reading the first calibration {}", f.display()))?,
-        None => [1.0; 2],
+        None => trainer::calibrate::Carried::MODEL,
     };
     trainer::calibrate::check_model_cards(ft, model_ft)
         .with_context(|| format!("checking the model cards against {}", ft.display()))?;
