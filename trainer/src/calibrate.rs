@@ -48,10 +48,11 @@
 //!    and the boom of that flight, never its truth) measures this bias, and the scales reported are
 //!    the flight test's over the model card's. The moment scales need it most (0.72 roll, 0.82 yaw
 //!    on the model's own aircraft: the empty inertia, the gyros' filter); without it none is
-//!    reported. The roll and yaw fits' bias also depends on where the aircraft flies the card, so
-//!    with `--moment-flight-test` (the card flown on the calibrated aircraft of a first
-//!    identification) the roll and yaw scales are the flight test's over that card's fits divided
-//!    by the scales that aircraft carries ([`moment_bias`]).
+//!    reported. The roll, yaw and side-force fits' bias also depends on where the aircraft flies
+//!    the card, so with `--moment-flight-test` (the card flown on the calibrated aircraft of a
+//!    first identification) the roll and yaw scales and the side force's two scales are the
+//!    flight test's over that card's fits divided by the scales that aircraft carries
+//!    ([`moment_bias`]).
 //!
 //! Standard errors are least squares' σ²(XᵀX)⁻¹ inflated for the residuals' autocorrelation
 //! (effective sample size n·(1 − ρ₁)/(1 + ρ₁), ρ₁ the lag-1 autocorrelation), raised to the

@@ -526,7 +526,8 @@ enum Cmd {
     /// Flight-test calibration: from a `flight-test` dataset's production sensors, nose boom and
     /// engine channels (never its truth columns), check the boom against the inertial data and
     /// identify the lift scale, the flap-lift scale, a lift offset, the side force's two scales
-    /// (its sideslip terms', and its surface and rate terms', from the rolling frames), the drag
+    /// (its sideslip terms', and its surface and rate terms', from the rolling frames; over the
+    /// moment card when given, as the roll and yaw), the drag
     /// and the engine deck's thrust scales (the thrust carried when 2σ or more from 1) and the
     /// roll and yaw moment scales (the gyros differentiated; only over the model card, or over the
     /// moment card flown on a first calibrated aircraft; carried within 0.75–1.33, drawn toward 1
@@ -548,14 +549,14 @@ enum Cmd {
         /// The same test card flown on the calibrated aircraft of a first `trainer calibrate`
         /// with the model cards alone (its aircraft.toml made an aircraft by
         /// `scripts/airframe-variant`), on sensor seeds other than the flight test's. The roll and
-        /// yaw scales are then the flight test's over these cards' bias (their fit over the scale
-        /// that aircraft carries, pooled as the model cards): the moment fits' bias depends on
-        /// where the aircraft flies. Needs --model-flight-test and --first-calibration;
+        /// yaw scales and the side force's two scales are then the flight test's over these cards'
+        /// bias (their fit over the scale that aircraft carries, pooled as the model cards): those
+        /// fits' bias depends on where the aircraft flies. Needs --model-flight-test and --first-calibration;
         /// scripts/calibrate flies 8.
         #[arg(long, value_name = "DIR", requires = "first_calibration")]
         moment_flight_test: Vec<PathBuf>,
         /// The first calibration's calibration.json, whose aircraft the moment cards flew: the
-        /// roll and yaw scales that aircraft carries.
+        /// roll, yaw and side-force scales that aircraft carries.
         #[arg(long, value_name = "FILE", requires = "moment_flight_test")]
         first_calibration: Option<PathBuf>,
         /// Output directory.
@@ -1613,7 +1614,7 @@ fn cmd_calibrate(
     let t0 = std::time::Instant::now();
     if model_ft.is_empty() && !moment_ft.is_empty() {
         bail!(
-            "--moment-flight-test needs --model-flight-test: the aircraft the moment cards fly is the calibrated aircraft of a first trainer calibrate --model-flight-test CARD ..., and the forces stay over the model cards"
+            "--moment-flight-test needs --model-flight-test: the aircraft the moment cards fly is the calibrated aircraft of a first trainer calibrate --model-flight-test CARD ..., and the lift, drag and thrust stay over the model cards"
         );
     }
     let carries = match first {
