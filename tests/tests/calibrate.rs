@@ -348,9 +348,41 @@ fn moment_cards(dir: &Path, ft: &Path, models: &[PathBuf]) {
         let over =
             v(&r["flight_test"]["scales"][what]) / (v(&r["moment_card"]["scales"][what]) / carried);
         assert!((v(&r["scales"][what]) - over).abs() < 1e-12, "{what}");
+        // C's side force is the model's × 1.10, both parts.
+        let (k, se) = (
+            v(&r["scales"][what]),
+            r["scales"][what]["std_error"].as_f64().unwrap(),
+        );
+        assert!(
+            (k / 1.10 - 1.0).abs() < 0.05 && (k - 1.10).abs() <= 2.0 * se,
+            "{what} scale {k} ± {se}, truth 1.10"
+        );
     }
-    // The rest of the forces stay the model cards' identification.
-    for what in ["lift", "drag", "pitch", "cg_aft_in"] {
+    // The moments carried: each drawn toward 1 by the prior, 1 + w·(k − 1), w = τ²/(τ² + σ²).
+    let tau = r["moment_prior_sd"].as_f64().unwrap();
+    for (i, axis) in ["roll", "yaw"].into_iter().enumerate() {
+        let (k, se) = (
+            v(&r["scales"][axis]),
+            r["scales"][axis]["std_error"].as_f64().unwrap(),
+        );
+        let shrunk = 1.0 + tau * tau / (tau * tau + se * se) * (k - 1.0);
+        let applied = r["applied_moments"][i].as_f64().unwrap();
+        assert!(
+            (applied - shrunk).abs() < 1e-12,
+            "{axis}: {applied}, not {shrunk}"
+        );
+    }
+    // The rest stays the model cards' identification.
+    for what in [
+        "lift",
+        "flap",
+        "offset",
+        "drag",
+        "thrust",
+        "pitch",
+        "cg_aft_in",
+        "stall",
+    ] {
         assert_eq!(r["scales"][what], first["scales"][what], "{what}");
     }
 }

@@ -389,7 +389,7 @@ pub const MOMENT_PRIOR_SD: f64 = 0.10;
 /// of the way. `None` for a 1σ that is not finite.
 pub fn shrunk(e: Estimate, prior_sd: f64) -> Option<f64> {
     let w = prior_sd.powi(2) / (prior_sd.powi(2) + e.std_error.powi(2));
-    (e.std_error.is_finite() && e.value.is_finite()).then(|| 1.0 + w * (e.value - 1.0))
+    Some(1.0 + w * (e.value - 1.0)).filter(|k| k.is_finite() && e.std_error.is_finite())
 }
 
 /// A roll or yaw moment scale outside this range is not a wind-tunnel model's error (those are
@@ -458,7 +458,7 @@ pub fn moments_line(r: &Report) -> String {
             "{what} moment scale {:.4} ± {:.4} ({}: the model's kept)",
             e.value,
             e.std_error,
-            moment_kept_why()
+            moment_kept_why(e)
         ),
     };
     let pitch = s.pitch.map_or("pitch moment not identified".into(), |e| {
@@ -600,12 +600,17 @@ fn carried_cell(e: Option<Estimate>, applied: Option<f64>, why: &str) -> String 
     }
 }
 
-/// Why an identified moment scale was not carried: outside [`MOMENT_SCALE_PLAUSIBLE`].
-fn moment_kept_why() -> String {
-    format!(
-        "outside {:.2}–{:.2}, more than a wind-tunnel moment errs: the fit's, not the aircraft's",
-        MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
-    )
+/// Why an identified moment scale `e` was not carried: outside [`MOMENT_SCALE_PLAUSIBLE`], or a
+/// 1σ that is not a number ([`shrunk`]).
+fn moment_kept_why(e: Estimate) -> String {
+    if plausible_moment(e.value) {
+        "its 1σ is not a finite number".to_string()
+    } else {
+        format!(
+            "outside {:.2}–{:.2}, more than a wind-tunnel moment errs: the fit's, not the aircraft's",
+            MOMENT_SCALE_PLAUSIBLE[0], MOMENT_SCALE_PLAUSIBLE[1]
+        )
+    }
 }
 
 /// Least squares `y ≈ X·θ` (columns of `x`), with the autocorrelation-inflated standard errors.
@@ -1940,7 +1945,7 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         .map_or(String::new(), |e| format!(", flap lift x {:.5}", e.value));
     let drag = scales.drag.map(|d| d.value);
     let moment_text = if r.moment_card.is_some() {
-        "; roll and yaw over the same card flown on a first calibrated aircraft"
+        "; roll, yaw and side force over the same card flown on a first calibrated aircraft"
     } else {
         ""
     };
@@ -1958,7 +1963,7 @@ pub fn spec_toml(r: &Report, ft: &Path) -> String {
         + &r.applied_cg_shift_in.map_or(String::new(), |x| {
             format!(", empty-weight CG {x:+.3} in aft")
         });
-    // The moment scales that pass the significance test (none: the text is the forces' alone).
+    // The moment scales carried (none: the text is the forces' alone).
     let moments: Vec<(&str, f64)> = ["ROLL", "YAW"]
         .into_iter()
         .zip(r.applied_moments)
@@ -2076,7 +2081,7 @@ pub fn carried_scales(path: &Path) -> Result<Carried> {
             .filter(|k| k.is_finite() && *k > 0.0)
             .ok_or_else(|| {
                 fail(format!(
-                    "no positive `scales.{what}.value`: not a calibration.json"
+                    "`scales.{what}.value` missing or not a positive number: not a calibration.json"
                 ))
             })
     };
@@ -2094,8 +2099,8 @@ pub fn carried_scales(path: &Path) -> Result<Carried> {
 pub struct Report {
     /// The aircraft description whose model the identification evaluates (the build's).
     pub aircraft: &'static str,
-    /// The identified scales, over the model card's (roll and yaw over the moment card's bias when
-    /// given): the calibrated aircraft (`aircraft.toml`) carries the force scales and
+    /// The identified scales, over the model card's (roll, yaw and the side force over the moment
+    /// card's bias when given): the calibrated aircraft (`aircraft.toml`) carries the force scales and
     /// [`Report::applied_moments`].
     pub scales: Scales,
     /// The roll and yaw moment scales `aircraft.toml` carries ([`Scales::applied_moments`];
@@ -2121,12 +2126,12 @@ pub struct Report {
     /// Their sensor seeds, in the order given (each `None` where its manifest records none).
     pub model_card_seeds: Vec<Option<u64>>,
     /// The same card flown on the calibrated aircraft of a first identification (over the model
-    /// cards alone): the roll and yaw fits' bias where the aircraft flies, divided out of the roll
-    /// and yaw scales in place of the model card's. Its roll and yaw scales are its fits' raw
-    /// ones, pooled like the model cards'; `None` without one.
+    /// cards alone): the roll, yaw and side-force fits' bias where the aircraft flies, divided out
+    /// of those scales in place of the model card's. Its scales are its fits' raw ones, pooled
+    /// like the model cards'; `None` without one.
     pub moment_card: Option<Calibration>,
-    /// The roll and yaw moment scales that aircraft carries (1: the model's); the bias is the
-    /// moment card's scale over it.
+    /// The roll, yaw and side-force scales that aircraft carries (1: the model's); the bias is
+    /// the moment card's scale over it.
     pub moment_card_carries: Carried,
     /// How many moment cards were pooled, and their sensor seeds.
     pub moment_cards: usize,
@@ -2171,9 +2176,9 @@ fn pooled_card(cards: Vec<Calibration>) -> Option<Calibration> {
 
 impl Report {
     /// The flight test's identification over the model cards' (each a [`Calibration`] of the same
-    /// card flown on the model) and, for the roll and yaw moments, over the moment cards' (the card
-    /// flown on a first calibrated aircraft, which carries the roll and yaw scales `carries`;
-    /// none: the model cards' serve). Moment cards count only beside model cards.
+    /// card flown on the model) and, for the roll and yaw moments and the side force, over the
+    /// moment cards' (the card flown on a first calibrated aircraft, which carries the scales
+    /// `carries`; none: the model cards' serve). Moment cards count only beside model cards.
     pub fn new(
         flight_test: Calibration,
         model_cards: Vec<Calibration>,
@@ -2336,8 +2341,16 @@ fn moments_markdown(r: &Report) -> String {
     let applied = r.applied_moments;
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
-        carried_cell(r.scales.roll, applied[0], &moment_kept_why()),
-        carried_cell(r.scales.yaw, applied[1], &moment_kept_why())
+        carried_cell(
+            r.scales.roll,
+            applied[0],
+            &r.scales.roll.map(moment_kept_why).unwrap_or_default()
+        ),
+        carried_cell(
+            r.scales.yaw,
+            applied[1],
+            &r.scales.yaw.map(moment_kept_why).unwrap_or_default()
+        )
     ));
     m.push_str(&format!(
         "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
@@ -2642,7 +2655,7 @@ pub fn markdown(r: &Report, command: &str, machine: &str, seconds: f64) -> Strin
          scale multiplies the model's LIFT axis in aircraft.toml, the flap-lift scale the lift \
          terms driven by the trailing-edge flaps, and the offset joins the lift axis; the surface \
          side-force scale multiplies the SIDE axis and the sideslip terms carry their own scale \
-         over it; a moment scale that passes the significance test multiplies the ROLL or YAW \
+         over it; a moment scale, drawn toward 1 by the prior, multiplies the ROLL or YAW \
          axis; the drag scale multiplies the DRAG axis.\n",
     );
     m
@@ -3021,7 +3034,10 @@ mod tests {
             value: 0.891,
             std_error: 0.009,
         };
-        card.side_controls = card.sideslip;
+        card.side_controls = Estimate {
+            value: 0.95,
+            std_error: 0.02,
+        };
         let bias = moment_bias(&card, carried);
         assert!((bias.roll.unwrap().value - 0.8).abs() < 1e-12);
         assert!((bias.roll.unwrap().std_error - 0.01).abs() < 1e-12);
@@ -3031,6 +3047,12 @@ mod tests {
             (bias.yaw, bias.side_controls),
             (card.yaw, card.side_controls)
         );
+        // The flight test's side fits over it: its sideslip terms' 0.891 is the carried 0.9.
+        let mut ft_side = card;
+        ft_side.side_controls.value = 1.14;
+        let k = ft_side.over(&bias);
+        assert!((k.sideslip.value - 0.9).abs() < 1e-12);
+        assert!((k.side_controls.value - 1.2).abs() < 1e-12);
         assert_eq!((bias.lift, bias.pitch), (card.lift, card.pitch));
         // The flight test's 0.88 over it: the carried 1.1 (the card flew where the aircraft does).
         let ft = scales(e(0.88, 0.0), e(0.45, 0.0));
@@ -3309,15 +3331,25 @@ mod tests {
             ),
             Some(1.2)
         );
-        // Significant but beyond a wind-tunnel moment's error: the fit's, the model's kept, and
-        // the report says which of the two reasons kept it.
+        // Beyond a wind-tunnel moment's error: the fit's, the model's kept, and the report says
+        // why; a 1σ that is not a number keeps it too, for its own reason.
         assert_eq!(
             scales(e(1.40, 0.02), e(0.57, 0.04)).applied_moments(),
             [None, None]
         );
         assert!(
-            carried_cell(e(0.57, 0.04), None, &moment_kept_why()).contains("outside 0.75–1.33")
+            moment_kept_why(Estimate {
+                value: 0.57,
+                std_error: 0.04
+            })
+            .contains("outside 0.75–1.33")
         );
+        let unknown = Estimate {
+            value: 1.05,
+            std_error: f64::INFINITY,
+        };
+        assert_eq!(scales(None, Some(unknown)).applied_moments(), [None, None]);
+        assert!(moment_kept_why(unknown).contains("not a finite number"));
         // Model cards pooled: one is itself; two, their mean with the 1σ raised to their spread.
         let a = scales(e(1.0, 0.01), e(0.9, 0.05));
         let b = scales(e(1.1, 0.03), e(0.9, 0.01));

@@ -1675,10 +1675,11 @@ fn cmd_calibrate(
             sc.value,
             sc.std_error,
             r.flight_test.flights.len(),
-            if r.model_card.is_some() {
-                ", over the model card's"
-            } else {
-                ""
+            match (&r.model_card, &r.moment_card) {
+                (Some(_), Some(_)) =>
+                    ", over the model card's; the side force over the moment card's",
+                (Some(_), None) => ", over the model card's",
+                _ => "",
             },
             out.display()
         );
