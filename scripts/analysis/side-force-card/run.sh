@@ -13,7 +13,7 @@
 #
 # --out DIR copies side-force-card.md and .png there (docs/results for the committed page).
 # Needs the F-16's release build (cargo build --release -p hil-sim -p trainer) and the project's
-# .venv (scripts/bootstrap). Writes out/side-force-card/ (flights kept, about 5 GB for ten
+# .venv (scripts/bootstrap). Writes out/side-force-card/ (flights kept, about 7 GB for ten
 # airframes); about 25 min on 2 cores from an empty directory. Every step resumes: delete
 # out/side-force-card after changing the trainer or an airframe's spec.
 set -euo pipefail
