@@ -590,12 +590,12 @@ fn cell(e: Option<Estimate>) -> String {
     })
 }
 
-/// What the calibrated aircraft carries of a scale (`applied`) or not (the model's 1, `why`), as
-/// a table cell.
-fn carried_cell(e: Option<Estimate>, applied: Option<f64>, why: &str) -> String {
+/// What the calibrated aircraft carries of a scale (`applied`) or not (the model's 1, and `why`
+/// the identified one was kept out), as a table cell.
+fn carried_cell(e: Option<Estimate>, applied: Option<f64>, why: fn(Estimate) -> String) -> String {
     match (applied, e) {
         (Some(k), _) => format!("**{k:.4}** (applied)"),
-        (None, Some(e)) => format!("1 (kept: {} is {why})", cell(Some(e))),
+        (None, Some(e)) => format!("1 (kept: {} is {})", cell(Some(e)), why(e)),
         (None, None) => format!("1 (kept: {})", cell(e)),
     }
 }
@@ -2341,16 +2341,8 @@ fn moments_markdown(r: &Report) -> String {
     let applied = r.applied_moments;
     m.push_str(&format!(
         "| **calibrated aircraft** (aircraft.toml) | {} | {} | | |\n",
-        carried_cell(
-            r.scales.roll,
-            applied[0],
-            &r.scales.roll.map(moment_kept_why).unwrap_or_default()
-        ),
-        carried_cell(
-            r.scales.yaw,
-            applied[1],
-            &r.scales.yaw.map(moment_kept_why).unwrap_or_default()
-        )
+        carried_cell(r.scales.roll, applied[0], moment_kept_why),
+        carried_cell(r.scales.yaw, applied[1], moment_kept_why)
     ));
     m.push_str(&format!(
         "\nThe measured moments are the gyros differentiated across each frame's neighbours through \
@@ -2701,11 +2693,9 @@ fn drag_markdown(r: &Report) -> String {
         "| **calibrated aircraft** (aircraft.toml) | **{:.4}** ± {:.4} | {} |\n",
         d.value,
         d.std_error,
-        carried_cell(
-            r.scales.thrust,
-            r.applied_thrust,
-            &format!("within {SCALE_SIGNIFICANCE}σ of 1")
-        )
+        carried_cell(r.scales.thrust, r.applied_thrust, |_| format!(
+            "within {SCALE_SIGNIFICANCE}σ of 1"
+        ))
     ));
     let thrust = match ENGINE {
         Some(Engine::Propeller(_)) => {
